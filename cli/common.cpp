@@ -1,0 +1,30 @@
+// Global options and the shared device opening of the CLI.
+#include "common.hpp"
+
+#include <iostream>
+
+namespace mipnerf::cli {
+
+GlobalOptions& global_options() {
+  static GlobalOptions options;
+  return options;
+}
+
+void print_log(LogLevel level, const std::string& message) {
+  if (level == LogLevel::debug && !global_options().verbose) return;
+  const char* prefix = level == LogLevel::warning ? "warning: " : level == LogLevel::debug ? "debug: " : "";
+  std::cerr << "mipnerf-cl: " << prefix << message << "\n";
+}
+
+std::unique_ptr<ocl::Context> open_context(bool profiling) {
+  ocl::ContextOptions options;
+  options.device_selector = global_options().device;
+  options.profiling = profiling;
+  auto ctx = ocl::Context::create(options);
+  ctx->set_log(print_log);
+  ctx->log(LogLevel::debug, "using device [" + std::to_string(ctx->device_info().index) + "] " +
+                                ctx->device_info().name);
+  return ctx;
+}
+
+}  // namespace mipnerf::cli

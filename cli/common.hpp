@@ -1,0 +1,29 @@
+// What every subcommand shares: the global options, opening the device, and printing to the terminal.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "cl/context.hpp"
+
+namespace mipnerf::cli {
+
+struct GlobalOptions {
+  std::string device;    // --device: index or name substring
+  bool verbose = false;  // --verbose: debug messages and full build logs
+};
+
+GlobalOptions& global_options();
+
+// Opens the device chosen by --device, with the library's log routed to stderr.
+std::unique_ptr<ocl::Context> open_context(bool profiling = false);
+
+// Prints a library log message to stderr ("mipnerf-cl: warning: ...").
+void print_log(LogLevel level, const std::string& message);
+
+// Each subcommand registers itself on the app; main() calls them all.
+void register_devices(CLI::App& app);
+
+}  // namespace mipnerf::cli

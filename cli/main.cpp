@@ -1,0 +1,59 @@
+// mipnerf-cl: the command-line tool. Sets up the subcommands and turns every error into one line.
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "cl/error.hpp"
+#include "common.hpp"
+
+namespace mipnerf::cli {
+namespace {
+
+// CLI11 reports a mistyped command as "A subcommand is required"; name the word and the commands.
+std::string describe_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    for (const auto* sub : app.get_subcommands({})) names += (names.empty() ? "" : ", ") + sub->get_name();
+    return std::string("unknown command '") + argv[1] + "'; the commands are: " + names;
+  }
+  return std::string(e.what()) + " (see mipnerf-cl --help)";
+}
+
+}  // namespace
+}  // namespace mipnerf::cli
+
+int main(int argc, char** argv) {
+  using namespace mipnerf;
+  CLI::App app{"mipnerf-cl: anti-aliased neural radiance fields (mip-NeRF) on any OpenCL device"};
+  app.set_version_flag("--version", std::string("mipnerf-cl ") + MIPNERF_VERSION);
+  auto& global = cli::global_options();
+  app.add_option("--device", global.device, "OpenCL device: index or part of a name (default: first GPU, else CPU)");
+  app.add_flag("-v,--verbose", global.verbose, "Print debug messages and full kernel build logs");
+  app.require_subcommand(1);
+  // Global options may follow the subcommand: `mipnerf-cl devices --device 1`.
+  app.fallthrough();
+
+  cli::register_devices(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One line, like every other error: what was wrong, and where to look.
+    std::cerr << "mipnerf-cl: error: " << cli::describe_parse_error(app, e, argc, argv) << "\n";
+    return e.get_exit_code();
+  } catch (const Error& e) {
+    std::cerr << "mipnerf-cl: error: " << e.what() << "\n";
+    if (global.verbose && !e.details().empty()) std::cerr << e.details() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "mipnerf-cl: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,42 @@
+# Finds every dependency; a missing one stops the configure step with the Debian package to install.
+# scripts/install-deps.sh installs all of them at once.
+
+macro(mipnerf_require found_var what debian_package)
+  if(NOT ${found_var})
+    message(FATAL_ERROR
+      "mipnerf-cl: ${what} was not found. Install the Debian package '${debian_package}' "
+      "(or run scripts/install-deps.sh, which installs every dependency).")
+  endif()
+endmacro()
+
+find_package(Threads REQUIRED)
+
+find_package(OpenCL QUIET)
+mipnerf_require(OpenCL_FOUND "the OpenCL ICD loader and C headers" "ocl-icd-opencl-dev opencl-c-headers")
+
+find_path(MIPNERF_OPENCL_HPP CL/opencl.hpp)
+mipnerf_require(MIPNERF_OPENCL_HPP "the OpenCL C++ bindings (CL/opencl.hpp)" "opencl-clhpp-headers")
+if(NOT TARGET OpenCL::HeadersCpp)
+  add_library(OpenCL::HeadersCpp INTERFACE IMPORTED)
+  set_target_properties(OpenCL::HeadersCpp PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${MIPNERF_OPENCL_HPP}")
+endif()
+
+find_package(CLBlast QUIET)
+mipnerf_require(CLBlast_FOUND "CLBlast" "libclblast-dev")
+
+find_package(CLI11 CONFIG QUIET)
+mipnerf_require(CLI11_FOUND "CLI11" "libcli11-dev")
+
+find_package(nlohmann_json CONFIG QUIET)
+mipnerf_require(nlohmann_json_FOUND "nlohmann/json" "nlohmann-json3-dev")
+
+find_package(OpenEXR CONFIG QUIET)
+mipnerf_require(OpenEXR_FOUND "OpenEXR" "libopenexr-dev")
+
+find_package(PNG QUIET)
+mipnerf_require(PNG_FOUND "libpng" "libpng-dev")
+
+if(MIPNERF_BUILD_TESTS)
+  find_package(doctest CONFIG QUIET)
+  mipnerf_require(doctest_FOUND "doctest" "doctest-dev")
+endif()

@@ -1,0 +1,15 @@
+// Allocation checks for device arrays.
+#include "cl/buffer.hpp"
+
+namespace mipnerf::ocl {
+
+void check_allocation(const Context& ctx, size_t bytes, const std::string& name) {
+  const auto& device = ctx.device_info();
+  if (device.max_alloc_bytes != 0 && bytes > device.max_alloc_bytes) {
+    throw Error("buffer '" + name + "' needs " + std::to_string(bytes >> 20) + " MiB but '" + device.name +
+                "' allows at most " + std::to_string(device.max_alloc_bytes >> 20) +
+                " MiB per allocation: lower the batch size (--batch-size) or the chunk size (--chunk)");
+  }
+}
+
+}  // namespace mipnerf::ocl

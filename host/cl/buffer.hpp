@@ -1,0 +1,85 @@
+// Typed device arrays: an OpenCL buffer that knows its element type, count and name (for error messages).
+#pragma once
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "cl/context.hpp"
+#include "cl/error.hpp"
+
+namespace mipnerf::ocl {
+
+// Throws when `bytes` exceeds the device's single-allocation limit, naming the buffer and what to lower.
+void check_allocation(const Context& ctx, size_t bytes, const std::string& name);
+
+template <typename T>
+class DeviceArray {
+ public:
+  DeviceArray() = default;
+  // `name` should say what the buffer holds and its layout, e.g. "means [rays][samples][3]".
+  DeviceArray(Context& ctx, size_t count, std::string name) : count_(count), name_(std::move(name)) {
+    // OpenCL refuses zero-sized buffers; an empty array still owns one element's worth.
+    const size_t bytes = std::max<size_t>(1, count) * sizeof(T);
+    check_allocation(ctx, bytes, name_);
+    cl_int status = CL_SUCCESS;
+    buffer_ = ::cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, bytes, nullptr, &status);
+    check(status, "clCreateBuffer(" + name_ + ", " + std::to_string(bytes) + " bytes)");
+  }
+
+  size_t size() const { return count_; }
+  size_t bytes() const { return count_ * sizeof(T); }
+  const std::string& name() const { return name_; }
+  const ::cl::Buffer& buffer() const { return buffer_; }
+  cl_mem raw() const { return buffer_(); }
+  bool allocated() const { return buffer_() != nullptr; }
+
+  // Blocking copies. `offset` and `count` are in elements.
+  void upload(Context& ctx, const T* data, size_t count, size_t offset = 0) {
+    require_range(offset, count, "upload");
+    if (count == 0) return;
+    check(ctx.queue().enqueueWriteBuffer(buffer_, CL_TRUE, offset * sizeof(T), count * sizeof(T), data),
+          "clEnqueueWriteBuffer(" + name_ + ")");
+  }
+  void upload(Context& ctx, const std::vector<T>& data) { upload(ctx, data.data(), data.size()); }
+
+  void download(Context& ctx, T* data, size_t count, size_t offset = 0) const {
+    require_range(offset, count, "download");
+    if (count == 0) return;
+    check(ctx.queue().enqueueReadBuffer(buffer_, CL_TRUE, offset * sizeof(T), count * sizeof(T), data),
+          "clEnqueueReadBuffer(" + name_ + ")");
+  }
+  std::vector<T> download(Context& ctx) const {
+    std::vector<T> out(count_);
+    download(ctx, out.data(), count_);
+    return out;
+  }
+
+  // Sets every element to `value` (asynchronous, in queue order).
+  void fill(Context& ctx, T value) {
+    if (count_ == 0) return;
+    check(ctx.queue().enqueueFillBuffer(buffer_, value, 0, bytes()), "clEnqueueFillBuffer(" + name_ + ")");
+  }
+
+  // Throws unless the array holds at least `count` elements; `where` names the caller.
+  void require_size(size_t count, const std::string& where) const {
+    if (count_ < count) {
+      throw Error(where + ": buffer '" + name_ + "' holds " + std::to_string(count_) + " elements, needs " +
+                  std::to_string(count));
+    }
+  }
+
+ private:
+  void require_range(size_t offset, size_t count, const char* what) const {
+    if (offset + count > count_) {
+      throw Error(std::string(what) + " of " + std::to_string(count) + " elements at " + std::to_string(offset) +
+                  " overruns buffer '" + name_ + "' of " + std::to_string(count_));
+    }
+  }
+
+  ::cl::Buffer buffer_;
+  size_t count_ = 0;
+  std::string name_;
+};
+
+}  // namespace mipnerf::ocl

@@ -1,0 +1,58 @@
+// One long-lived OpenCL context, in-order queue and program cache for a run, on the chosen device.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cl/device.hpp"
+#include "cl/device_quirks.hpp"
+#include "cl/log.hpp"
+#include "cl/opencl.hpp"
+#include "cl/program.hpp"
+
+namespace mipnerf::ocl {
+
+struct ContextOptions {
+  std::string device_selector;  // --device: index or name substring; empty = first GPU, else first CPU
+  bool profiling = false;       // enable event profiling on the queue (benchmarks)
+};
+
+class Context {
+ public:
+  explicit Context(const DeviceInfo& device, bool profiling = false);
+  static std::unique_ptr<Context> create(const ContextOptions& options);
+
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  const DeviceInfo& device_info() const { return device_; }
+  const DeviceTraits& traits() const { return traits_; }
+  ::cl::Context& context() { return context_; }
+  ::cl::CommandQueue& queue() { return queue_; }
+  cl_command_queue raw_queue() { return queue_(); }
+  cl_device_id raw_device() const { return device_.device(); }
+
+  // The program made of embedded kernels/<files> built with `options` (plus the device's base options).
+  Program& program(const std::vector<std::string>& files, const BuildOptions& options = {});
+  // Same, from given sources (tests, tools).
+  Program& program_from_sources(const std::vector<SourceFile>& files, const BuildOptions& options = {});
+  const ProgramCache& program_cache() const { return programs_; }
+
+  void finish();  // clFinish, checked
+
+  void set_log(LogFn log) { log_ = std::move(log); }
+  void log(LogLevel level, const std::string& message) const {
+    if (log_) log_(level, message);
+  }
+
+ private:
+  DeviceInfo device_;
+  DeviceTraits traits_;
+  ::cl::Context context_;
+  ::cl::CommandQueue queue_;
+  ProgramCache programs_;
+  LogFn log_;
+};
+
+}  // namespace mipnerf::ocl

@@ -1,0 +1,135 @@
+// OpenCL platform/device enumeration and the --device choice rule.
+#include "cl/device.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+#include "cl/error.hpp"
+
+namespace mipnerf::ocl {
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// Device-info strings come back with a trailing NUL on some drivers; trim it and spaces.
+std::string clean(std::string s) {
+  while (!s.empty() && (s.back() == '\0' || std::isspace(static_cast<unsigned char>(s.back())))) s.pop_back();
+  return s;
+}
+
+template <cl_int Name, typename T>
+T query(const ::cl::Device& device, const char* what) {
+  cl_int status = CL_SUCCESS;
+  T value = device.getInfo<Name>(&status);
+  check(status, std::string("clGetDeviceInfo(") + what + ")");
+  return value;
+}
+
+DeviceInfo describe(const ::cl::Platform& platform, const ::cl::Device& device, int index) {
+  DeviceInfo info;
+  info.index = index;
+  info.device = device;
+  cl_int status = CL_SUCCESS;
+  info.platform_name = clean(platform.getInfo<CL_PLATFORM_NAME>(&status));
+  check(status, "clGetPlatformInfo(CL_PLATFORM_NAME)");
+  info.name = clean(query<CL_DEVICE_NAME, std::string>(device, "CL_DEVICE_NAME"));
+  info.vendor = clean(query<CL_DEVICE_VENDOR, std::string>(device, "CL_DEVICE_VENDOR"));
+  info.driver_version = clean(query<CL_DRIVER_VERSION, std::string>(device, "CL_DRIVER_VERSION"));
+  info.opencl_c_version =
+      clean(query<CL_DEVICE_OPENCL_C_VERSION, std::string>(device, "CL_DEVICE_OPENCL_C_VERSION"));
+  info.type = query<CL_DEVICE_TYPE, cl_device_type>(device, "CL_DEVICE_TYPE");
+  info.compute_units = query<CL_DEVICE_MAX_COMPUTE_UNITS, cl_uint>(device, "CL_DEVICE_MAX_COMPUTE_UNITS");
+  info.global_mem_bytes = query<CL_DEVICE_GLOBAL_MEM_SIZE, cl_ulong>(device, "CL_DEVICE_GLOBAL_MEM_SIZE");
+  info.max_alloc_bytes = query<CL_DEVICE_MAX_MEM_ALLOC_SIZE, cl_ulong>(device, "CL_DEVICE_MAX_MEM_ALLOC_SIZE");
+  info.max_work_group_size =
+      query<CL_DEVICE_MAX_WORK_GROUP_SIZE, size_t>(device, "CL_DEVICE_MAX_WORK_GROUP_SIZE");
+  // fp64 is reported either as a non-zero double config (1.2+) or through the cl_khr_fp64 extension.
+  cl_device_fp_config fp64 = 0;
+  status = clGetDeviceInfo(device(), CL_DEVICE_DOUBLE_FP_CONFIG, sizeof(fp64), &fp64, nullptr);
+  const std::string extensions = query<CL_DEVICE_EXTENSIONS, std::string>(device, "CL_DEVICE_EXTENSIONS");
+  info.has_fp64 = (status == CL_SUCCESS && fp64 != 0) || extensions.find("cl_khr_fp64") != std::string::npos;
+  return info;
+}
+
+}  // namespace
+
+std::string DeviceInfo::type_name() const {
+  if (type & CL_DEVICE_TYPE_GPU) return "GPU";
+  if (type & CL_DEVICE_TYPE_CPU) return "CPU";
+  if (type & CL_DEVICE_TYPE_ACCELERATOR) return "accelerator";
+  return "other";
+}
+
+bool DeviceInfo::is_pocl() const {
+  return lower(platform_name).find("portable computing language") != std::string::npos ||
+         lower(driver_version).find("pocl") != std::string::npos ||
+         lower(opencl_c_version).find("pocl") != std::string::npos;
+}
+
+std::vector<DeviceInfo> list_devices() {
+  std::vector<::cl::Platform> platforms;
+  const cl_int status = ::cl::Platform::get(&platforms);
+  if (status == -1001 /* CL_PLATFORM_NOT_FOUND_KHR */ || (status == CL_SUCCESS && platforms.empty())) {
+    throw Error(
+        "no OpenCL platform found: install the ICD loader 'ocl-icd-libopencl1' and a driver, e.g. PoCL for "
+        "CPUs ('pocl-opencl-icd'), or run scripts/install-deps.sh",
+        {}, -1001);
+  }
+  check(status, "clGetPlatformIDs");
+  std::vector<DeviceInfo> devices;
+  for (const auto& platform : platforms) {
+    std::vector<::cl::Device> platform_devices;
+    const cl_int device_status = platform.getDevices(CL_DEVICE_TYPE_ALL, &platform_devices);
+    if (device_status == CL_DEVICE_NOT_FOUND) continue;  // a platform with no device is not an error
+    check(device_status, "clGetDeviceIDs");
+    for (const auto& device : platform_devices) {
+      devices.push_back(describe(platform, device, static_cast<int>(devices.size())));
+    }
+  }
+  if (devices.empty()) {
+    throw Error("OpenCL platforms exist but none has a device: install a driver, e.g. 'pocl-opencl-icd' for CPUs");
+  }
+  return devices;
+}
+
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector) {
+  if (devices.empty()) throw Error("no OpenCL device to choose from");
+  if (selector.empty()) {
+    for (cl_device_type wanted : {cl_device_type(CL_DEVICE_TYPE_GPU), cl_device_type(CL_DEVICE_TYPE_CPU)}) {
+      for (const auto& d : devices) {
+        if (d.type & wanted) return d;
+      }
+    }
+    return devices.front();
+  }
+  const bool is_index = std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
+  if (is_index) {
+    const long index = std::stol(selector);
+    if (index >= 0 && index < static_cast<long>(devices.size())) return devices[static_cast<size_t>(index)];
+  } else {
+    const std::string needle = lower(selector);
+    for (const auto& d : devices) {
+      if (lower(d.name).find(needle) != std::string::npos || lower(d.platform_name).find(needle) != std::string::npos) {
+        return d;
+      }
+    }
+  }
+  throw Error("--device '" + selector + "' matches no OpenCL device; the devices are: " + describe_devices(devices) +
+              " (give an index or part of a name)");
+}
+
+std::string describe_devices(const std::vector<DeviceInfo>& devices) {
+  std::ostringstream out;
+  for (size_t i = 0; i < devices.size(); ++i) {
+    const auto& d = devices[i];
+    if (i) out << "; ";
+    out << "[" << d.index << "] " << d.name << " (" << d.type_name() << ", " << d.platform_name << ")";
+  }
+  return out.str();
+}
+
+}  // namespace mipnerf::ocl

@@ -1,0 +1,44 @@
+// OpenCL platform/device enumeration and the --device choice rule.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cl/opencl.hpp"
+
+namespace mipnerf::ocl {
+
+// What `mipnerf-cl devices` prints about one device, and what the library needs to size work.
+struct DeviceInfo {
+  int index = 0;                      // position in the flat list over all platforms
+  std::string platform_name;
+  std::string name;
+  std::string vendor;
+  std::string driver_version;
+  std::string opencl_c_version;       // e.g. "OpenCL C 1.2 PoCL"
+  cl_device_type type = 0;
+  cl_uint compute_units = 0;
+  cl_ulong global_mem_bytes = 0;
+  cl_ulong max_alloc_bytes = 0;
+  size_t max_work_group_size = 0;
+  bool has_fp64 = false;
+  ::cl::Device device;
+
+  std::string type_name() const;      // "GPU", "CPU", "accelerator", ...
+  bool is_pocl() const;               // PoCL: barriers in partial groups and a disk kernel cache to mind
+};
+
+// Every device of every platform. Throws when the ICD loader finds no platform at all, naming the
+// packages that provide one.
+std::vector<DeviceInfo> list_devices();
+
+// The --device rule: empty selector → the first GPU, else the first CPU, else the first device;
+// all digits → that index; otherwise the first device whose name or platform name contains the
+// selector (case-insensitive). No match → an error that lists every device.
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector);
+
+// One line per device, as the errors and `mipnerf-cl devices` show them.
+std::string describe_devices(const std::vector<DeviceInfo>& devices);
+
+}  // namespace mipnerf::ocl

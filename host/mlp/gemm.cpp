@@ -1,0 +1,42 @@
+// Row-major SGEMM through CLBlast, with shape checks that name the product.
+#include "mlp/gemm.hpp"
+
+#include <clblast.h>
+
+#include "cl/error.hpp"
+#include "mlp/clblast_check.hpp"
+
+namespace mipnerf::mlp {
+namespace {
+
+// Elements a row-major rows×cols matrix with leading dimension ld spans from its offset.
+size_t span(size_t rows, size_t cols, size_t ld) { return rows == 0 ? 0 : (rows - 1) * ld + cols; }
+
+void require_fits(const MatrixView& v, size_t rows, size_t cols, const char* which, const std::string& what) {
+  if (v.array == nullptr) throw Error("gemm(" + what + "): matrix " + which + " has no buffer");
+  if (v.ld < cols) {
+    throw Error("gemm(" + what + "): matrix " + which + " has leading dimension " + std::to_string(v.ld) +
+                " < its " + std::to_string(cols) + " columns");
+  }
+  v.array->require_size(v.offset + span(rows, cols, v.ld), "gemm(" + what + ") matrix " + which);
+}
+
+}  // namespace
+
+void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& a, const MatrixView& b, float beta,
+          const MatrixView& c, const std::string& what) {
+  if (s.m == 0 || s.n == 0) return;
+  require_fits(a, s.transpose_a ? s.k : s.m, s.transpose_a ? s.m : s.k, "A", what);
+  require_fits(b, s.transpose_b ? s.n : s.k, s.transpose_b ? s.k : s.n, "B", what);
+  require_fits(c, s.m, s.n, "C", what);
+  using clblast::Transpose;
+  cl_command_queue queue = ctx.raw_queue();
+  const auto status = clblast::Gemm<float>(
+      clblast::Layout::kRowMajor, s.transpose_a ? Transpose::kYes : Transpose::kNo,
+      s.transpose_b ? Transpose::kYes : Transpose::kNo, s.m, s.n, s.k, alpha, a.array->raw(), a.offset, a.ld,
+      b.array->raw(), b.offset, b.ld, beta, c.array->raw(), c.offset, c.ld, &queue, nullptr);
+  check_clblast(status, "clblast::Gemm(" + what + ", m=" + std::to_string(s.m) + " n=" + std::to_string(s.n) +
+                            " k=" + std::to_string(s.k) + ")");
+}
+
+}  // namespace mipnerf::mlp

@@ -1,0 +1,35 @@
+// Row-major SGEMM on the device through CLBlast: the only matrix product the MLP uses.
+#pragma once
+
+#include <string>
+
+#include "cl/buffer.hpp"
+#include "cl/context.hpp"
+
+namespace mipnerf::mlp {
+
+// C[m×n] = alpha · op(A) · op(B) + beta · C, all row-major. op(A) is m×k: A is stored m×k, or k×m
+// when transpose_a. op(B) is k×n: B is stored k×n, or n×k when transpose_b.
+struct GemmShape {
+  bool transpose_a = false;
+  bool transpose_b = false;
+  size_t m = 0, n = 0, k = 0;
+};
+
+// A row-major matrix inside a device buffer: element (r, c) is at buffer[offset + r·ld + c].
+struct MatrixView {
+  const ocl::DeviceArray<float>* array = nullptr;
+  size_t offset = 0;  // in elements
+  size_t ld = 0;      // leading dimension: elements between consecutive rows
+};
+
+inline MatrixView view(const ocl::DeviceArray<float>& array, size_t ld, size_t offset = 0) {
+  return MatrixView{&array, offset, ld};
+}
+
+// Enqueues the product (asynchronous, in queue order). `what` names the product in error messages
+// (e.g. "layer 3 forward"). Sizes are checked against the buffers before CLBlast is called.
+void gemm(ocl::Context& ctx, const GemmShape& shape, float alpha, const MatrixView& a, const MatrixView& b,
+          float beta, const MatrixView& c, const std::string& what);
+
+}  // namespace mipnerf::mlp

@@ -1,0 +1,16 @@
+# cmake -P script: runs EXE with ARGS (separated by '|'), expects a non-zero exit and exactly one line on
+# stderr, matching PATTERN. Used for the CLI's user-facing error messages.
+string(REPLACE "|" ";" ARGS "${ARGS}")
+execute_process(COMMAND ${EXE} ${ARGS} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "expected a non-zero exit from: ${EXE} ${ARGS}\nstdout: ${out}")
+endif()
+string(STRIP "${err}" stripped)
+string(FIND "${stripped}" "\n" newline)
+if(NOT newline EQUAL -1)
+  message(FATAL_ERROR "expected one line on stderr, got:\n${err}")
+endif()
+if(NOT stripped MATCHES "${PATTERN}")
+  message(FATAL_ERROR "stderr does not match '${PATTERN}':\n${err}")
+endif()
+message(STATUS "exit ${rc}: ${stripped}")
