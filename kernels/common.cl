@@ -16,4 +16,17 @@ inline void store3(__global float* p, size_t i, float3 v) {
   p[3 * i + 2] = v.z;
 }
 
+// Packed camera layout, [C][CAMERA_STRIDE] floats; mirrors host/data/camera.hpp (camera_layout).
+#define CAMERA_TO_WORLD 0 /* 12 floats, 3x4 row-major, OpenGL axes (camera looks down -z) */
+#define CAMERA_FOCAL_X 12 /* pixels */
+#define CAMERA_FOCAL_Y 13
+#define CAMERA_CENTER_X 14 /* principal point, pixels from the left edge */
+#define CAMERA_CENTER_Y 15 /* pixels from the top edge */
+#define CAMERA_WIDTH 16
+#define CAMERA_HEIGHT 17
+#define CAMERA_NEAR 18
+#define CAMERA_FAR 19
+#define CAMERA_LOSSMULT 20
+#define CAMERA_STRIDE 24
+
 #endif
