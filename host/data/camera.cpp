@@ -6,7 +6,7 @@ namespace mipnerf::data {
 std::vector<float> pack_cameras(const std::vector<Camera>& cameras) {
   namespace L = camera_layout;
   std::vector<float> packed(cameras.size() * L::stride, 0.0f);
-  for (size_t c = 0; c < cameras.size(); ++c) {
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
     float* out = packed.data() + c * L::stride;
     const Camera& cam = cameras[c];
     for (int i = 0; i < 12; ++i) out[L::camera_to_world + i] = static_cast<float>(cam.camera_to_world[i]);
