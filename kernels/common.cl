@@ -29,4 +29,31 @@ inline void store3(__global float* p, size_t i, float3 v) {
 #define CAMERA_LOSSMULT 20
 #define CAMERA_STRIDE 24
 
+// ---- Counter-based RNG: Philox4x32-10 (Salmon et al., SC'11) ----
+// Random numbers are a pure function of (seed, counter), so jittered sampling is reproducible across
+// runs, devices and chunkings. Counter = (item, step, slot, stream): `item` is the ray (or pixel),
+// `slot` a sample index within it, `stream` one of the RNG_STREAM_* purposes below, so the uses never
+// share numbers. host/ref/rng.hpp mirrors this bit for bit.
+#define RNG_STREAM_STRATIFIED 0u  /* jitter of stratified interval edges */
+#define RNG_STREAM_RESAMPLE 1u    /* jitter of inverse-CDF resampling */
+#define RNG_STREAM_BATCH 2u       /* choice of training pixels */
+#define RNG_STREAM_SUBPIXEL 3u    /* sub-pixel position of a ray (supersampling) */
+
+inline uint4 philox4x32_10(uint4 counter, uint2 key) {
+  for (int round = 0; round < 10; ++round) {
+    const uint hi0 = mul_hi(0xD2511F53u, counter.x), lo0 = 0xD2511F53u * counter.x;
+    const uint hi1 = mul_hi(0xCD9E8D57u, counter.z), lo1 = 0xCD9E8D57u * counter.z;
+    counter = (uint4)(hi1 ^ counter.y ^ key.x, lo1, hi0 ^ counter.w ^ key.y, lo0);
+    key += (uint2)(0x9E3779B9u, 0xBB67AE85u);
+  }
+  return counter;
+}
+
+// Four uniform floats in [0, 1): the top 24 bits of each word, so every value is exact in float32
+// and 1.0 is never returned.
+inline float4 rng_uniform4(ulong seed, uint item, uint step, uint slot, uint stream) {
+  const uint4 bits = philox4x32_10((uint4)(item, step, slot, stream), (uint2)((uint)seed, (uint)(seed >> 32)));
+  return convert_float4(bits >> 8) * (1.0f / 16777216.0f);
+}
+
 #endif

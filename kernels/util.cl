@@ -17,3 +17,20 @@ __kernel void axpy_f32(const float a, __global const float* x, __global float* y
   if (i >= n) return;
   y[i] += a * x[i];
 }
+
+// out[4i..4i+3] = rng_uniform4(seed, i, step, slot, stream): exposes the RNG for tests and benchmarks.
+__kernel void rng_uniform4_fill(const ulong seed, const uint step, const uint slot, const uint stream,
+                                __global float* out, const uint n_items) {
+  const uint i = get_global_id(0);
+  if (i >= n_items) return;
+  const float4 u = rng_uniform4(seed, i, step, slot, stream);
+  vstore4(u, i, out);
+}
+
+// Raw Philox words for the known-answer test: out[4i..] = philox4x32_10(counters[i], key).
+__kernel void philox_words(__global const uint* counters, const uint key0, const uint key1, __global uint* out,
+                           const uint n_items) {
+  const uint i = get_global_id(0);
+  if (i >= n_items) return;
+  vstore4(philox4x32_10(vload4(i, counters), (uint2)(key0, key1)), i, out);
+}
