@@ -1,0 +1,345 @@
+// The table of training settings, presets and variants, and their resolution into a TrainConfig.
+#include "train/config.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <sstream>
+#include <variant>
+
+#include <nlohmann/json.hpp>
+
+#include "cl/error.hpp"
+
+namespace mipnerf::train {
+namespace {
+
+using Member = std::variant<std::string TrainConfig::*, bool TrainConfig::*, int TrainConfig::*,
+                            int64_t TrainConfig::*, uint64_t TrainConfig::*, double TrainConfig::*>;
+
+struct Entry {
+  Setting setting;
+  Member member;
+  std::vector<std::string> choices;  // accepted values of a string setting; empty = any
+};
+
+const std::vector<Entry>& table() {
+  static const std::vector<Entry> entries = {
+      {{"background", "white | black | none: what shows where the scene is empty", "scene"},
+       &TrainConfig::background, {"white", "black", "none"}},
+      {{"multiscale", "build x2 x4 x8 box-downsampled copies of the data on the fly", "scene"},
+       &TrainConfig::multiscale, {}},
+      {{"area_loss", "weight each pixel's loss by its area relative to full resolution", "scene"},
+       &TrainConfig::area_loss, {}},
+      {{"near", "near bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::near, {}},
+      {{"far", "far bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::far, {}},
+      {{"ray_shape", "cone | cylinder", "scene"}, &TrainConfig::ray_shape, {"cone", "cylinder"}},
+      {{"lindisp", "sample linearly in disparity instead of depth", "scene"}, &TrainConfig::lindisp, {}},
+      {{"batching", "all_images | single_image", "scene"}, &TrainConfig::batching, {"all_images", "single_image"}},
+      {{"pixel_center", "offset of a pixel's ray inside the pixel (0.5 = centre)", "scene"},
+       &TrainConfig::pixel_center, {}},
+      {{"variant", "mipnerf | nerf", "model"}, &TrainConfig::variant, {"mipnerf", "nerf"}},
+      {{"num_samples", "intervals per level", "model"}, &TrainConfig::num_samples, {}},
+      {{"num_levels", "sampling levels (coarse + fine = 2)", "model"}, &TrainConfig::num_levels, {}},
+      {{"single_mlp", "one MLP shared by all levels", "model"}, &TrainConfig::single_mlp, {}},
+      {{"integrated_encoding", "IPE of frustum Gaussians (false: PE of their means)", "model"},
+       &TrainConfig::integrated_encoding, {}},
+      {{"pos_min_deg", "lowest positional-encoding degree", "model"}, &TrainConfig::pos_min_deg, {}},
+      {{"pos_max_deg", "positional-encoding degrees end before this", "model"}, &TrainConfig::pos_max_deg, {}},
+      {{"pos_identity", "append the raw position to its encoding", "model"}, &TrainConfig::pos_identity, {}},
+      {{"view_dependence", "condition colour on the view direction", "model"}, &TrainConfig::view_dependence, {}},
+      {{"view_max_deg", "view-direction encoding degrees end before this", "model"}, &TrainConfig::view_max_deg, {}},
+      {{"density_activation", "softplus | relu", "model"}, &TrainConfig::density_activation, {"softplus", "relu"}},
+      {{"density_bias", "added to the raw density before its activation", "model"}, &TrainConfig::density_bias, {}},
+      {{"rgb_padding", "epsilon of the widened colour sigmoid", "model"}, &TrainConfig::rgb_padding, {}},
+      {{"resample_padding", "alpha added to the weights before resampling", "model"},
+       &TrainConfig::resample_padding, {}},
+      {{"resample_blur", "blur-pool the weights before resampling", "model"}, &TrainConfig::resample_blur, {}},
+      {{"mlp_depth", "dense layers of the MLP trunk", "model"}, &TrainConfig::mlp_depth, {}},
+      {{"mlp_width", "width of the MLP trunk", "model"}, &TrainConfig::mlp_width, {}},
+      {{"mlp_skip", "trunk layer (0-based) after which the input is concatenated again", "model"},
+       &TrainConfig::mlp_skip, {}},
+      {{"view_branch_width", "width of the view-dependent colour branch", "model"},
+       &TrainConfig::view_branch_width, {}},
+      {{"batch_size", "rays per optimisation step", "optimisation"}, &TrainConfig::batch_size, {}},
+      {{"steps", "optimisation steps of the run", "optimisation"}, &TrainConfig::steps, {}},
+      {{"lr_init", "initial learning rate", "optimisation"}, &TrainConfig::lr_init, {}},
+      {{"lr_final", "final learning rate", "optimisation"}, &TrainConfig::lr_final, {}},
+      {{"lr_warmup_steps", "steps of the sine warm-up", "optimisation"}, &TrainConfig::lr_warmup_steps, {}},
+      {{"lr_warmup_mult", "learning-rate multiplier at step 0 of the warm-up", "optimisation"},
+       &TrainConfig::lr_warmup_mult, {}},
+      {{"grad_max_norm", "clip the global gradient norm (0 = off)", "optimisation"}, &TrainConfig::grad_max_norm, {}},
+      {{"coarse_loss_mult", "lambda: weight of the coarse level's loss", "optimisation"},
+       &TrainConfig::coarse_loss_mult, {}},
+      {{"randomized", "jitter samples during training", "optimisation"}, &TrainConfig::randomized, {}},
+      {{"seed", "seed of every random choice", "optimisation"}, &TrainConfig::seed, {}},
+      {{"chunk_rays", "rays per chunk of a training step (0 = from device memory)", "execution"},
+       &TrainConfig::chunk_rays, {}},
+      {{"render_chunk_rays", "rays per chunk when rendering", "execution"}, &TrainConfig::render_chunk_rays, {}},
+      {{"log_every", "steps between log rows", "execution"}, &TrainConfig::log_every, {}},
+      {{"checkpoint_every", "steps between checkpoints", "execution"}, &TrainConfig::checkpoint_every, {}},
+      {{"keep_checkpoints", "checkpoint files to keep", "execution"}, &TrainConfig::keep_checkpoints, {}},
+      {{"max_bad_steps", "consecutive non-finite steps before stopping", "execution"},
+       &TrainConfig::max_bad_steps, {}},
+      {{"val_views", "val views rendered after training (0 = all)", "execution"}, &TrainConfig::val_views, {}},
+  };
+  return entries;
+}
+
+const Entry& find(const std::string& name) {
+  for (const auto& e : table()) {
+    if (e.setting.name == name) return e;
+  }
+  std::string names;
+  for (const auto& e : table()) names += (names.empty() ? "" : ", ") + e.setting.name;
+  throw Error("unknown setting '" + name + "'; the settings are: " + names);
+}
+
+[[noreturn]] void bad_value(const std::string& name, const std::string& value, const std::string& expected) {
+  throw Error("setting '" + name + "' = '" + value + "': expected " + expected);
+}
+
+bool parse_bool(const std::string& name, const std::string& v) {
+  if (v == "true" || v == "1" || v == "yes" || v == "on") return true;
+  if (v == "false" || v == "0" || v == "no" || v == "off") return false;
+  bad_value(name, v, "true or false");
+}
+
+long long parse_integer(const std::string& name, const std::string& v) {
+  errno = 0;
+  char* end = nullptr;
+  const long long parsed = std::strtoll(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || errno == ERANGE) bad_value(name, v, "an integer");
+  return parsed;
+}
+
+double parse_double(const std::string& name, const std::string& v) {
+  errno = 0;
+  char* end = nullptr;
+  const double parsed = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(parsed)) bad_value(name, v, "a finite number");
+  return parsed;
+}
+
+std::string format_double(double v) {
+  std::ostringstream out;
+  out.precision(17);
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+const std::vector<Setting>& settings() {
+  static const std::vector<Setting> list = [] {
+    std::vector<Setting> out;
+    for (const auto& e : table()) out.push_back(e.setting);
+    return out;
+  }();
+  return list;
+}
+
+void set_value(TrainConfig& config, const std::string& name, const std::string& value) {
+  const Entry& e = find(name);
+  std::visit(
+      [&](auto member) {
+        using T = std::decay_t<decltype(config.*member)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          if (!e.choices.empty()) {
+            bool known = false;
+            std::string accepted;
+            for (const auto& c : e.choices) {
+              known = known || c == value;
+              accepted += (accepted.empty() ? "" : " | ") + c;
+            }
+            if (!known) bad_value(name, value, accepted);
+          }
+          config.*member = value;
+        } else if constexpr (std::is_same_v<T, bool>) {
+          config.*member = parse_bool(name, value);
+        } else if constexpr (std::is_same_v<T, double>) {
+          config.*member = parse_double(name, value);
+        } else if constexpr (std::is_same_v<T, uint64_t>) {
+          if (!value.empty() && value[0] == '-') bad_value(name, value, "a non-negative integer");
+          errno = 0;
+          char* end = nullptr;
+          const unsigned long long parsed = std::strtoull(value.c_str(), &end, 10);
+          if (value.empty() || *end != '\0' || errno == ERANGE) bad_value(name, value, "a non-negative integer");
+          config.*member = parsed;
+        } else {
+          const long long parsed = parse_integer(name, value);
+          if (parsed < static_cast<long long>(std::numeric_limits<T>::min()) ||
+              parsed > static_cast<long long>(std::numeric_limits<T>::max())) {
+            bad_value(name, value, "an integer in range");
+          }
+          config.*member = static_cast<T>(parsed);
+        }
+      },
+      e.member);
+}
+
+std::string get_value(const TrainConfig& config, const std::string& name) {
+  const Entry& e = find(name);
+  return std::visit(
+      [&](auto member) -> std::string {
+        using T = std::decay_t<decltype(config.*member)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          return config.*member;
+        } else if constexpr (std::is_same_v<T, bool>) {
+          return config.*member ? "true" : "false";
+        } else if constexpr (std::is_same_v<T, double>) {
+          return format_double(config.*member);
+        } else {
+          return std::to_string(config.*member);
+        }
+      },
+      e.member);
+}
+
+const std::map<std::string, Bundle>& presets() {
+  // Sizes and budgets. `paper` is exactly the paper's settings (the defaults); the others trade
+  // accuracy for time on small devices (see README: "Presets" for their measured cost).
+  static const std::map<std::string, Bundle> bundles = {
+      {"paper", {}},
+      {"tiny",  // the test suite's: trains a few hundred steps of a 64×64 scene in under a minute
+       {{"num_samples", "16"}, {"mlp_depth", "4"}, {"mlp_width", "64"}, {"mlp_skip", "2"},
+        {"view_branch_width", "32"}, {"pos_max_deg", "10"}, {"batch_size", "256"}, {"steps", "300"},
+        {"lr_init", "2e-3"}, {"lr_final", "2e-4"}, {"lr_warmup_steps", "20"}, {"log_every", "25"},
+        {"checkpoint_every", "100"}, {"val_views", "2"}}},
+      {"quick",  // the README's quick start: a few minutes on two CPU cores
+       {{"num_samples", "32"}, {"mlp_depth", "4"}, {"mlp_width", "128"}, {"mlp_skip", "2"},
+        {"view_branch_width", "64"}, {"pos_max_deg", "12"}, {"batch_size", "1024"}, {"steps", "1000"},
+        {"lr_init", "2e-3"}, {"lr_final", "5e-5"}, {"lr_warmup_steps", "100"}, {"log_every", "50"},
+        {"checkpoint_every", "250"}, {"val_views", "4"}}},
+      {"small",  // better quality in tens of minutes on two CPU cores
+       {{"num_samples", "64"}, {"mlp_depth", "8"}, {"mlp_width", "128"}, {"view_branch_width", "64"},
+        {"batch_size", "1024"}, {"steps", "5000"}, {"lr_init", "1e-3"}, {"lr_final", "1e-5"},
+        {"lr_warmup_steps", "250"}, {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "8"}}},
+  };
+  return bundles;
+}
+
+const std::map<std::string, Bundle>& variants() {
+  // Rows of the paper's tables. The NeRF baseline follows the original NeRF: point samples with PE of
+  // degree 0..9 plus identity, a coarse and a fine MLP, ReLU density, plain sigmoid, resampling without
+  // blur or padding, fine samples added to the coarse ones, corner-offset pixels, no area loss.
+  static const std::map<std::string, Bundle> bundles = {
+      {"mipnerf", {}},
+      {"nerf",
+       {{"variant", "nerf"}, {"single_mlp", "false"}, {"integrated_encoding", "false"}, {"pos_max_deg", "10"},
+        {"pos_identity", "true"}, {"density_activation", "relu"}, {"density_bias", "0"}, {"rgb_padding", "0"},
+        {"resample_padding", "0"}, {"resample_blur", "false"}, {"pixel_center", "0"}, {"area_loss", "false"}}},
+      {"mipnerf-no-ipe", {{"integrated_encoding", "false"}}},                  // w/o IPE
+      {"mipnerf-two-mlps", {{"single_mlp", "false"}}},                          // w/o the single MLP
+      {"mipnerf-no-misc", {{"density_activation", "relu"}, {"density_bias", "0"}, {"rgb_padding", "0"}}},  // w/o misc.
+      {"mipnerf-no-area-loss", {{"area_loss", "false"}}},                       // w/o the area loss
+  };
+  return bundles;
+}
+
+std::string describe_bundles() {
+  std::string out = "presets:";
+  for (const auto& [name, b] : presets()) out += " " + name;
+  out += "; variants:";
+  for (const auto& [name, b] : variants()) out += " " + name;
+  return out;
+}
+
+namespace {
+const Bundle& find_bundle(const std::map<std::string, Bundle>& bundles, const std::string& name, const char* kind) {
+  auto found = bundles.find(name);
+  if (found != bundles.end()) return found->second;
+  std::string names;
+  for (const auto& [n, b] : bundles) names += (names.empty() ? "" : ", ") + n;
+  throw Error(std::string("unknown ") + kind + " '" + name + "'; the " + kind + "s are: " + names);
+}
+}  // namespace
+
+TrainConfig resolve_config(const std::string& preset, const std::string& variant,
+                           const std::map<std::string, std::string>& explicit_settings) {
+  TrainConfig config;
+  for (const auto& [name, value] : find_bundle(presets(), preset, "preset")) set_value(config, name, value);
+  for (const auto& [name, value] : find_bundle(variants(), variant, "variant")) set_value(config, name, value);
+  for (const auto& [name, value] : explicit_settings) set_value(config, name, value);
+  validate(config);
+  return config;
+}
+
+void validate(const TrainConfig& c) {
+  auto require = [](bool ok, const std::string& message) {
+    if (!ok) throw Error("invalid configuration: " + message);
+  };
+  require(c.num_samples >= 2, "num_samples must be at least 2");
+  require(c.num_levels >= 1, "num_levels must be at least 1");
+  require(c.variant != "nerf" || c.num_samples % 2 == 0, "the nerf variant needs an even num_samples (coarse = half)");
+  require(c.pos_max_deg > c.pos_min_deg && c.pos_min_deg >= 0, "need 0 <= pos_min_deg < pos_max_deg");
+  require(c.pos_max_deg <= 24, "pos_max_deg above 24 makes 2^deg exceed float32's exact integers");
+  require(c.view_max_deg >= 1, "view_max_deg must be at least 1");
+  require(c.mlp_depth >= 1 && c.mlp_width >= 1 && c.view_branch_width >= 1, "MLP sizes must be positive");
+  require(c.mlp_skip >= 0, "mlp_skip must be >= 0 (use a value >= mlp_depth for no skip)");
+  require(c.batch_size >= 1, "batch_size must be positive");
+  require(c.steps >= 1, "steps must be positive");
+  require(c.lr_init > 0 && c.lr_final > 0, "learning rates must be positive");
+  require(c.lr_warmup_steps >= 0, "lr_warmup_steps must be >= 0");
+  require(c.lr_warmup_mult > 0 && c.lr_warmup_mult <= 1, "lr_warmup_mult must be in (0, 1]");
+  require(c.grad_max_norm >= 0, "grad_max_norm must be >= 0");
+  require(c.coarse_loss_mult >= 0, "coarse_loss_mult must be >= 0");
+  require(c.chunk_rays >= 0 && c.render_chunk_rays >= 1, "chunk sizes must be positive (chunk_rays 0 = auto)");
+  require(c.log_every >= 1 && c.checkpoint_every >= 1, "log_every and checkpoint_every must be positive");
+  require(c.keep_checkpoints >= 1, "keep_checkpoints must be at least 1");
+  require(c.max_bad_steps >= 1, "max_bad_steps must be at least 1");
+  require(c.val_views >= 0, "val_views must be >= 0");
+  require(c.resample_padding >= 0 && c.rgb_padding >= 0, "paddings must be >= 0");
+  require(c.pixel_center >= 0 && c.pixel_center < 1, "pixel_center must be in [0, 1)");
+  require(c.near >= 0 && c.far >= 0 && (c.far == 0 || c.far > c.near), "need 0 <= near < far (0 = from data)");
+}
+
+std::string to_json(const TrainConfig& config) {
+  nlohmann::ordered_json j;
+  for (const auto& e : table()) {
+    const std::string text = get_value(config, e.setting.name);
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(config.*member)>;
+          if constexpr (std::is_same_v<T, std::string>) {
+            j[e.setting.name] = text;
+          } else {
+            j[e.setting.name] = config.*member;
+          }
+        },
+        e.member);
+  }
+  return j.dump(2);
+}
+
+TrainConfig from_json(const std::string& json_text, const std::string& where) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(json_text);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(where + ": malformed configuration JSON: " + e.what());
+  }
+  if (!j.is_object()) throw Error(where + ": the configuration must be a JSON object");
+  TrainConfig config;
+  for (const auto& [name, value] : j.items()) {
+    try {
+      set_value(config, name, value.is_string() ? value.get<std::string>() : value.dump());
+    } catch (const Error& e) {
+      throw Error(where + ": " + e.what());
+    }
+  }
+  validate(config);
+  return config;
+}
+
+std::vector<std::string> differences(const TrainConfig& a, const TrainConfig& b) {
+  std::vector<std::string> out;
+  for (const auto& e : table()) {
+    const auto va = get_value(a, e.setting.name), vb = get_value(b, e.setting.name);
+    if (va != vb) out.push_back(e.setting.name + ": " + va + " -> " + vb);
+  }
+  return out;
+}
+
+}  // namespace mipnerf::train

@@ -1,0 +1,106 @@
+// The training configuration: typed fields with the paper's defaults, and the one table of settings
+// (name, help, parse, print) that flags, config files, presets, checkpoints and run records all use.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace mipnerf::train {
+
+// Every setting of a run. Defaults are the paper's (mip-NeRF, Blender); see presets() for smaller ones.
+struct TrainConfig {
+  // --- scene: what the data calls for (each switch compiles a path in or out of the kernels) ---
+  std::string background = "white";  // white | black | none; white for Blender scenes (paper §5)
+  bool multiscale = false;           // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
+  bool area_loss = true;             // weight each pixel's loss by its area (lossmult); the "w/o area loss" ablation turns it off
+  double near = 0.0;                 // sampling range in t; 0 takes the dataset's value (Blender: 2)
+  double far = 0.0;                  // 0 takes the dataset's value (Blender: 6)
+  std::string ray_shape = "cone";    // cone | cylinder (cylinder: forward-facing scenes in NDC)
+  bool lindisp = false;              // sample linearly in disparity instead of depth
+  std::string batching = "all_images";  // all_images | single_image: where a batch's rays come from
+  double pixel_center = 0.5;         // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
+
+  // --- model ---
+  std::string variant = "mipnerf";  // mipnerf | nerf: nerf = point samples, PE, two MLPs, union fine samples
+  int num_samples = 128;            // intervals per level (NeRF: coarse num_samples/2, fine num_samples on top)
+  int num_levels = 2;               // coarse + fine
+  bool single_mlp = true;           // one MLP shared by both levels (mip-NeRF) or one per level (NeRF)
+  bool integrated_encoding = true;  // IPE of the frustum Gaussian; false = PE of its mean (the "w/o IPE" ablation)
+  int pos_min_deg = 0;              // positional encoding degrees [min, max): L = 16 → 96 features
+  int pos_max_deg = 16;
+  bool pos_identity = false;        // append the raw position (NeRF does, mip-NeRF does not)
+  bool view_dependence = true;      // condition colour on the view direction (PE degrees 0..view_max_deg-1 + identity)
+  int view_max_deg = 4;
+  std::string density_activation = "softplus";  // softplus | relu
+  double density_bias = -1.0;       // added to the raw density before the activation
+  double rgb_padding = 0.001;       // ε of the widened sigmoid (1 + 2ε)·sigmoid − ε
+  double resample_padding = 0.01;   // α added to the blurred weights before resampling (mip-NeRF; NeRF: 0)
+  bool resample_blur = true;        // blur-pool (max of neighbours, mean of pairs) before resampling (NeRF: false)
+  int mlp_depth = 8;                // dense ReLU layers of the trunk
+  int mlp_width = 256;
+  int mlp_skip = 4;                 // the input is concatenated again after trunk layer index mlp_skip (0-based)
+  int view_branch_width = 128;
+
+  // --- optimisation ---
+  int batch_size = 4096;            // rays per step
+  int64_t steps = 1000000;          // optimisation steps of the run (the schedule spans them)
+  double lr_init = 5e-4;            // supplement eq. 24: log-linear from lr_init to lr_final ...
+  double lr_final = 5e-6;
+  int64_t lr_warmup_steps = 2500;   // ... times a sine warm-up from lr_warmup_mult over these steps
+  double lr_warmup_mult = 0.01;
+  double grad_max_norm = 0.0;       // clip the global gradient norm; 0 disables
+  double coarse_loss_mult = 0.1;    // λ on the coarse level's loss
+  bool randomized = true;           // jittered stratified sampling and resampling during training
+  uint64_t seed = 20200823;         // everything random is a function of (seed, step, ray)
+
+  // --- execution ---
+  int chunk_rays = 0;               // rays per chunk of a training step; 0 chooses from device memory
+  int render_chunk_rays = 4096;     // rays per chunk when rendering
+  int64_t log_every = 100;          // steps between CSV log rows and progress updates
+  int64_t checkpoint_every = 1000;  // steps between checkpoints (one is always written at the end)
+  int keep_checkpoints = 3;         // how many checkpoint files to keep
+  int max_bad_steps = 5;            // consecutive non-finite steps before the run stops
+  int val_views = 0;                // val views rendered at the end of training; 0 = all
+};
+
+// One named setting: how to read it from text and write it back, with its help line.
+struct Setting {
+  std::string name;
+  std::string help;
+  std::string group;  // "scene", "model", "optimisation", "execution"
+};
+
+// Every setting, in a stable order.
+const std::vector<Setting>& settings();
+
+// Sets `name` from text; throws mipnerf::Error naming the setting and the accepted values.
+void set_value(TrainConfig& config, const std::string& name, const std::string& value);
+// The setting's value as text (parsable by set_value).
+std::string get_value(const TrainConfig& config, const std::string& name);
+
+// Named bundles of settings, applied over the defaults: presets (sizes and budgets) and variants
+// (the rows of the paper's tables). Both are data: name → {setting → value}.
+using Bundle = std::map<std::string, std::string>;
+const std::map<std::string, Bundle>& presets();
+const std::map<std::string, Bundle>& variants();
+// A one-line description of each preset and variant, for --help.
+std::string describe_bundles();
+
+// defaults → preset → variant → explicit settings (config file, then flags). Unknown names and bad
+// values throw mipnerf::Error saying which and what is accepted.
+TrainConfig resolve_config(const std::string& preset, const std::string& variant,
+                           const std::map<std::string, std::string>& explicit_settings);
+
+// Checks the combination (positive sizes, known enum values, levels vs variant, ...).
+void validate(const TrainConfig& config);
+
+// All settings as a flat JSON object text, and back (unknown keys are refused).
+std::string to_json(const TrainConfig& config);
+TrainConfig from_json(const std::string& json_text, const std::string& where);
+
+// Settings that differ between two configs, "name: a → b" each (for resume checks).
+std::vector<std::string> differences(const TrainConfig& a, const TrainConfig& b);
+
+}  // namespace mipnerf::train
