@@ -129,7 +129,7 @@ bool close(double actual, double expected, double relative, double absolute = 0.
 
 }  // namespace
 
-TEST_CASE("loss: the device matches the double reference on 12,345 random rays, with and without lossmult") {
+TEST_CASE("loss stage: the device matches the double reference on 12,345 random rays, with and without lossmult") {
   auto& ctx = test::test_context();
   for (bool multiscale : {false, true}) {
     CAPTURE(multiscale);
@@ -166,7 +166,7 @@ TEST_CASE("loss: the device matches the double reference on 12,345 random rays, 
   }
 }
 
-TEST_CASE("loss: the gradient equals central finite differences of the reference two-level total") {
+TEST_CASE("loss stage: the gradient equals central finite differences of the reference two-level total") {
   // total = λ·loss_coarse + loss_fine, each level with its own colours, the same targets and lossmult.
   const size_t n = 300;
   const Batch coarse = random_batch(n, true, 21), fine = random_batch(n, true, 22);
@@ -208,7 +208,7 @@ TEST_CASE("loss: the gradient equals central finite differences of the reference
   for (size_t i = 0; i < 3 * n; ++i) CHECK(close(as_coarse[i], 0.1 * as_fine[i], 1e-15));
 }
 
-TEST_CASE("loss: chunked equals unchunked") {
+TEST_CASE("loss stage: chunked equals unchunked") {
   auto& ctx = test::test_context();
   ops::Loss loss(ctx, ops::LossOptions{true});
   const Batch b = random_batch(10000, true, 31);
@@ -231,7 +231,7 @@ TEST_CASE("loss: chunked equals unchunked") {
   CHECK(level.loss() != 0.0);
 }
 
-TEST_CASE("loss: lossmult weights each ray, normalised by the batch sum, and is not read without multiscale") {
+TEST_CASE("loss stage: lossmult weights each ray, normalised by the batch sum, and is not read without multiscale") {
   auto& ctx = test::test_context();
   ops::Loss multiscale(ctx, ops::LossOptions{true});
   ops::Loss plain(ctx, ops::LossOptions{false});
@@ -293,7 +293,7 @@ TEST_CASE("loss: lossmult weights each ray, normalised by the batch sum, and is 
   CHECK(partials.download(ctx2) == with_ones.partials);
 }
 
-TEST_CASE("loss: the official normalisation is 3x the per-channel MSE, reported separately as MSE and PSNR") {
+TEST_CASE("loss stage: the official normalisation is 3x the per-channel MSE, reported separately as MSE and PSNR") {
   auto& ctx = test::test_context();
   ops::Loss loss(ctx, ops::LossOptions{false});
   // Every channel of every ray off by exactly 0.125 (exact in float, and so is its square): per-channel
@@ -319,7 +319,7 @@ TEST_CASE("loss: the official normalisation is 3x the per-channel MSE, reported 
   CHECK(ops::loss_level_weight(2, 3) == 1.0f);
 }
 
-TEST_CASE("loss: the device reduction of the partials matches the double sum") {
+TEST_CASE("loss stage: the device reduction of the partials matches the double sum") {
   auto& ctx = test::test_context();
   ops::Loss loss(ctx, ops::LossOptions{true});
   const Batch b = random_batch(50000, true, 61);
@@ -350,7 +350,7 @@ TEST_CASE("loss: the device reduction of the partials matches the double sum") {
   CHECK(close(skewed_sums[1], exact, 2e-7));
 }
 
-TEST_CASE("loss: a NaN or Inf colour makes the loss non-finite for the host to detect, other rays unaffected") {
+TEST_CASE("loss stage: a NaN or Inf colour makes the loss non-finite for the host to detect, other rays unaffected") {
   auto& ctx = test::test_context();
   ops::Loss loss(ctx, ops::LossOptions{true});
   const Batch clean = random_batch(3000, true, 71);
@@ -388,7 +388,7 @@ TEST_CASE("loss: a NaN or Inf colour makes the loss non-finite for the host to d
   }
 }
 
-TEST_CASE("loss: bad arguments give errors that say what is wrong") {
+TEST_CASE("loss stage: bad arguments give errors that say what is wrong") {
   auto& ctx = test::test_context();
   ops::Loss multiscale(ctx, ops::LossOptions{true});
   ocl::DeviceArray<float> comp(ctx, 30, "comp_rgb"), target(ctx, 30, "target_rgb"), d_comp(ctx, 30, "d_comp_rgb");

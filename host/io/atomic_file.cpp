@@ -1,0 +1,100 @@
+// Atomic file output through a temporary file, fsync and rename.
+#include "io/atomic_file.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+
+#include "cl/error.hpp"
+
+namespace mipnerf::io {
+namespace fs = std::filesystem;
+namespace {
+
+std::string errno_text(int error) { return std::strerror(error); }
+
+// fsync of an open-able path; `directory` opens it read-only as a folder.
+int sync_path(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), directory ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
+  if (fd < 0) return errno;
+  const int result = ::fsync(fd) == 0 ? 0 : errno;
+  ::close(fd);
+  return result;
+}
+
+std::string unique_temporary(const fs::path& target) {
+  static std::atomic<unsigned long> counter{0};
+  const std::string name = "." + target.filename().string() + "." + std::to_string(::getpid()) + "." +
+                           std::to_string(counter++) + ".tmp";
+  return (target.parent_path() / name).string();
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
+  const fs::path target(path_);
+  if (target.filename().empty()) throw Error(path_ + ": not a file name (it ends in a folder separator)");
+  if (target.has_parent_path()) {
+    std::error_code ec;
+    fs::create_directories(target.parent_path(), ec);
+    if (ec || !fs::is_directory(target.parent_path())) {
+      throw Error(path_ + ": cannot create its folder '" + target.parent_path().string() + "' (" +
+                  (ec ? ec.message() : std::string("a file is in the way")) + ")");
+    }
+  }
+  temporary_ = unique_temporary(target);
+}
+
+AtomicFile::~AtomicFile() {
+  if (!committed_) {
+    std::error_code ignored;
+    fs::remove(temporary_, ignored);
+  }
+}
+
+void AtomicFile::commit() {
+  if (committed_) throw Error(path_ + ": already committed");
+  std::error_code ec;
+  if (!fs::is_regular_file(temporary_, ec)) {
+    throw Error(path_ + ": the writer produced no file at its temporary '" + temporary_ + "'");
+  }
+  // Data reaches the disk before the name does: after a crash the destination holds the old file or the
+  // whole new one, never a renamed but empty file.
+  if (const int error = sync_path(temporary_, false)) {
+    throw Error(path_ + ": cannot flush the written file to disk (" + errno_text(error) + "); is the disk full?");
+  }
+  fs::rename(temporary_, path_, ec);
+  if (ec) throw Error(path_ + ": cannot replace the file (" + ec.message() + ")");
+  committed_ = true;
+  // The rename itself is made durable by flushing the folder; some file systems refuse that (EINVAL),
+  // which costs durability after a power cut only, never atomicity, so it is not an error.
+  const fs::path folder = fs::path(path_).has_parent_path() ? fs::path(path_).parent_path() : fs::path(".");
+  sync_path(folder.string(), true);
+}
+
+void write_atomically(const std::string& path, const std::function<void(const std::string& temporary_path)>& produce) {
+  AtomicFile file(path);
+  produce(file.temporary_path());
+  file.commit();
+}
+
+void write_bytes_atomically(const std::string& path, std::string_view bytes) {
+  write_atomically(path, [&](const std::string& temporary) {
+    std::FILE* out = std::fopen(temporary.c_str(), "wb");
+    if (!out) throw Error(path + ": cannot write (" + errno_text(errno) + ")");
+    const bool written = bytes.empty() || std::fwrite(bytes.data(), 1, bytes.size(), out) == bytes.size();
+    const int write_error = errno;
+    const bool closed = std::fclose(out) == 0;
+    if (!written || !closed) {
+      throw Error(path + ": write failed (" + errno_text(written ? errno : write_error) + "); is the disk full?");
+    }
+  });
+}
+
+}  // namespace mipnerf::io
