@@ -27,6 +27,9 @@
 #ifndef LOSS_GROUP_SIZE
 #define LOSS_GROUP_SIZE 64
 #endif
+#if LOSS_GROUP_SIZE < 1 || (LOSS_GROUP_SIZE & (LOSS_GROUP_SIZE - 1)) != 0
+#error "LOSS_GROUP_SIZE must be a power of two (the tree reduction halves it)"
+#endif
 
 // Sums each group writes, at partials[group][LOSS_SUM_*].
 #define LOSS_SUM_WEIGHTED 0 /* Σ lossmult_r · Σ_c (comp − target)²: the numerator of loss_level */

@@ -283,14 +283,13 @@ TEST_CASE("loss stage: lossmult weights each ray, normalised by the batch sum, a
   for (auto& m : nan_mult.lossmult) m = std::numeric_limits<float>::quiet_NaN();
   Batch ones = b;
   for (auto& m : ones.lossmult) m = 1.0f;
-  auto& ctx2 = test::test_context();
-  auto comp = upload(ctx2, b.comp_rgb, "comp_rgb"), target = upload(ctx2, b.target_rgb, "target_rgb");
-  auto garbage = upload(ctx2, nan_mult.lossmult, "lossmult (NaN)");
-  ocl::DeviceArray<float> d_comp(ctx2, 3 * b.n_rays(), "d_comp_rgb"), partials(ctx2, 2 * plain.groups_for(2000), "p");
+  auto comp = upload(ctx, b.comp_rgb, "comp_rgb"), target = upload(ctx, b.target_rgb, "target_rgb");
+  auto garbage = upload(ctx, nan_mult.lossmult, "lossmult (NaN)");
+  ocl::DeviceArray<float> d_comp(ctx, 3 * b.n_rays(), "d_comp_rgb"), partials(ctx, 2 * plain.groups_for(2000), "p");
   plain.fwd_bwd(comp, target, &garbage, {1.0f, double(b.n_rays())}, d_comp, partials, {b.n_rays(), 0, 0});
   const auto with_ones = run_device(plain, ones, 1.0f);
-  CHECK(d_comp.download(ctx2) == with_ones.d_comp_rgb);
-  CHECK(partials.download(ctx2) == with_ones.partials);
+  CHECK(d_comp.download(ctx) == with_ones.d_comp_rgb);
+  CHECK(partials.download(ctx) == with_ones.partials);
 }
 
 TEST_CASE("loss stage: the official normalisation is 3x the per-channel MSE, reported separately as MSE and PSNR") {
