@@ -34,6 +34,9 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   cli::register_devices(app);
+  cli::register_dataset(app);
+  cli::register_make_scene(app);
+  cli::register_make_multiscale(app);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,115 @@
+// `mipnerf-cl dataset inspect DIR`: loads a dataset and prints what it holds, per split and scale, with the
+// camera geometry (centre bounds, look-at point) that makes a convention mistake visible at once.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "common.hpp"
+#include "data/dataset.hpp"
+#include "data/inspect.hpp"
+
+namespace mipnerf::cli {
+namespace {
+
+struct InspectArgs {
+  std::string path;
+  int scales = 1;
+  std::string background = "white";
+  double near = 0.0, far = 0.0;
+  std::vector<std::string> splits;
+};
+
+std::string num(double v, int precision = 3) {
+  char text[48];
+  std::snprintf(text, sizeof(text), "%.*g", precision, v);
+  return text;
+}
+
+// "a" when low == high (to the printed precision), else "a … b".
+std::string range(double low, double high, int precision = 4) {
+  const std::string a = num(low, precision), b = num(high, precision);
+  return a == b ? a : a + " .. " + b;
+}
+
+// Fixed decimals, so a look-at point at the origin reads (0.000, 0.000, 0.000) and not 1e-17s.
+std::string vec(const data::Vec3& v) {
+  auto unsigned_zero = [](double x) { return std::abs(x) < 5e-4 ? 0.0 : x; };  // no "-0.000"
+  char text[96];
+  std::snprintf(text, sizeof(text), "(%.3f, %.3f, %.3f)", unsigned_zero(v[0]), unsigned_zero(v[1]),
+                unsigned_zero(v[2]));
+  return text;
+}
+
+void print_split(const data::SplitSummary& s) {
+  std::cout << "split " << s.name << ": " << s.images << " images, " << num(s.pixels / 1e6) << " M pixels  ("
+            << s.source << ")\n";
+  for (const auto& level : s.scales) {
+    const std::string size = level.width_min == level.width_max && level.height_min == level.height_max
+                                 ? std::to_string(level.width_min) + "x" + std::to_string(level.height_min)
+                                 : std::to_string(level.width_min) + ".." + std::to_string(level.width_max) + "x" +
+                                       std::to_string(level.height_min) + ".." + std::to_string(level.height_max);
+    std::cout << "  scale " << level.level << " (/" << (1u << level.level) << "): " << level.images << " images "
+              << size << ", focal x " << range(level.focal_x_min, level.focal_x_max, 6) << " px, focal y "
+              << range(level.focal_y_min, level.focal_y_max, 6) << " px, lossmult "
+              << range(level.lossmult_min, level.lossmult_max) << "\n";
+  }
+  std::cout << "  near " << range(s.near_min, s.near_max) << ", far " << range(s.far_min, s.far_max) << "\n";
+  std::cout << "  camera centres: x " << range(s.center_min[0], s.center_max[0]) << ", y "
+            << range(s.center_min[1], s.center_max[1]) << ", z " << range(s.center_min[2], s.center_max[2])
+            << "; distance from the origin " << range(s.radius_min, s.radius_max) << "\n";
+  if (!s.look_at) {
+    std::cout << "  look-at centre: undefined (all optical axes are parallel)\n";
+  } else {
+    std::cout << "  look-at centre (closest to all optical axes): " << vec(*s.look_at) << ", in front of "
+              << s.cameras_facing << "/" << s.images << " cameras at depth "
+              << range(s.look_at_depth_min, s.look_at_depth_max) << ", every axis passes within "
+              << num(s.axis_miss_max) << " of it\n";
+    if (s.cameras_facing < s.images) {
+      std::cout << "  WARNING: " << s.images - s.cameras_facing
+                << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
+                   "axes (x right, y up, looking down -z)?\n";
+    } else if (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max) {
+      std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
+    }
+  }
+  std::cout << "  mean colour " << vec({s.mean_rgb[0], s.mean_rgb[1], s.mean_rgb[2]}) << "\n";
+}
+
+void run_inspect(const InspectArgs& args) {
+  data::LoadOptions options;
+  options.scales = args.scales;
+  options.background = data::parse_background(args.background);
+  if (args.near > 0.0) options.near = args.near;
+  if (args.far > 0.0) options.far = args.far;
+  options.splits = args.splits;
+  options.log = print_log;
+  const data::Dataset dataset = data::load_dataset(args.path, options);
+  std::cout << "dataset " << dataset.path << "\n"
+            << "format " << data::format_name(dataset.format) << ", background " << args.background
+            << (args.scales > 1 ? ", " + std::to_string(args.scales) + " scales built on the fly" : "") << "\n";
+  for (const auto& split : dataset.splits) print_split(data::summarize(split));
+}
+
+}  // namespace
+
+void register_dataset(CLI::App& app) {
+  auto* cmd = app.add_subcommand("dataset", "Datasets: inspect what a dataset folder holds");
+  cmd->require_subcommand(1);
+  auto args = std::make_shared<InspectArgs>();
+  auto* inspect = cmd->add_subcommand(
+      "inspect", "Load a dataset (Blender, multiscale Blender or transforms.json) and print its splits, image sizes "
+                 "per scale, focal lengths, near/far, camera-centre bounds and look-at centre");
+  inspect->add_option("DIR", args->path, "Dataset folder, transforms.json or metadata.json")->required();
+  inspect->add_option("--scales", args->scales, "Build this many scales on the fly (the paper's multiscale: 4)")
+      ->check(CLI::Range(1, 8));
+  inspect->add_option("--background", args->background, "Composite alpha onto white, black or none")
+      ->check(CLI::IsMember({"white", "black", "none"}));
+  inspect->add_option("--near", args->near, "Override near (depth along the optical axis)")
+      ->check(CLI::PositiveNumber);
+  inspect->add_option("--far", args->far, "Override far")->check(CLI::PositiveNumber);
+  inspect->add_option("--split", args->splits, "Only these splits (train, val, test); default: all present");
+  inspect->callback([args] { run_inspect(*args); });
+}
+
+}  // namespace mipnerf::cli

@@ -1,0 +1,153 @@
+// Parsers of the Blender format (transforms_<split>.json) and of the single-file transforms.json.
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+#include "cl/error.hpp"
+#include "data/frames.hpp"
+
+namespace mipnerf::data::detail {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  return text;
+}
+
+bool is_file(const fs::path& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
+
+// The frames of one transforms file (Blender or single-file): pose, file, intrinsics, near/far.
+std::vector<FrameSpec> parse_frames(const io::Json& root, const std::string& file, const LoadOptions& options) {
+  io::require_object(root, file);
+  const IntrinsicsSpec global = read_intrinsics(root, {}, file);
+  const auto& frames = io::require_array(root, "frames", file);
+  if (frames.empty()) throw Error(file + ": 'frames' is empty: the split has no images");
+  const std::string base_dir = fs::path(file).parent_path().string();
+  std::vector<FrameSpec> specs;
+  specs.reserve(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    FrameSpec spec;
+    spec.where = file + ": frames[" + std::to_string(i) + "]";
+    io::require_object(frames[i], spec.where);
+    spec.image_path = resolve_image_path(base_dir, io::require_string(frames[i], "file_path", spec.where), spec.where);
+    spec.camera_to_world = pose_from_json(io::require_key(frames[i], "transform_matrix", spec.where), spec.where);
+    spec.intrinsics = read_intrinsics(frames[i], global, spec.where);
+    apply_near_far(spec, root, frames[i], options);
+    specs.push_back(std::move(spec));
+  }
+  return specs;
+}
+
+bool has_near_far(const io::Json& root) {
+  if (root.contains("near") && root.contains("far")) return true;
+  const auto& frames = root.at("frames");
+  return !frames.empty() && frames[0].is_object() && frames[0].contains("near") && frames[0].contains("far");
+}
+
+}  // namespace
+
+std::string join_path(const std::string& dir, const std::string& name) {
+  return dir.empty() ? name : (fs::path(dir) / name).string();
+}
+
+std::vector<std::string> wanted_splits(const LoadOptions& options) {
+  if (!options.splits.empty()) return options.splits;
+  return {"train", "val", "test"};
+}
+
+std::string resolve_image_path(const std::string& base_dir, const std::string& file_path, const std::string& where) {
+  const fs::path given = fs::path(base_dir) / file_path;
+  const fs::path with_png = fs::path(given.string() + ".png");
+  const std::string extension = lower(given.extension().string());
+  static const char* const kOtherImageTypes[] = {".jpg", ".jpeg", ".exr", ".tif", ".tiff", ".bmp", ".webp", ".gif"};
+  for (const char* other : kOtherImageTypes) {
+    if (extension == other && !is_file(with_png)) {
+      throw Error(given.lexically_normal().string() + ": only PNG images are supported (" + where +
+                  "); convert the images to PNG and update file_path");
+    }
+  }
+  if (is_file(given) && extension == ".png") return given.lexically_normal().string();
+  if (is_file(with_png)) return with_png.lexically_normal().string();
+  if (is_file(given)) return given.lexically_normal().string();  // a PNG without extension: decoding will tell
+  const fs::path expected = extension == ".png" ? given : with_png;
+  throw Error(expected.lexically_normal().string() + ": no such file (listed by " + where + ")");
+}
+
+void apply_near_far(FrameSpec& frame, const io::Json& global, const io::Json& object, const LoadOptions& options) {
+  auto pick = [&](const char* key, const std::optional<double>& override_value, double fallback) {
+    if (override_value) return *override_value;
+    if (auto v = io::optional_number(object, key, frame.where)) return *v;
+    if (auto v = io::optional_number(global, key, frame.where)) return *v;
+    return fallback;
+  };
+  frame.near = pick("near", options.near, 2.0);
+  frame.far = pick("far", options.far, 6.0);
+  if (!(frame.near >= 0.0) || !(frame.far > frame.near)) {
+    throw Error(frame.where + ": near = " + std::to_string(frame.near) + ", far = " + std::to_string(frame.far) +
+                ": need 0 <= near < far");
+  }
+}
+
+std::vector<SplitSpec> parse_blender(const std::string& dir, const LoadOptions& options) {
+  std::vector<std::string> present;
+  for (const char* name : {"train", "val", "test"}) {
+    if (is_file(join_path(dir, std::string("transforms_") + name + ".json"))) present.push_back(name);
+  }
+  std::string present_text;
+  for (const auto& name : present) present_text += (present_text.empty() ? "" : ", ") + name;
+  std::vector<SplitSpec> splits;
+  for (const auto& name : wanted_splits(options)) {
+    const std::string file = join_path(dir, "transforms_" + name + ".json");
+    if (!is_file(file)) {
+      if (options.splits.empty()) continue;  // optional when not asked for
+      throw Error(file + ": no such file (this dataset has the splits: " +
+                  (present_text.empty() ? std::string("none") : present_text) + ")");
+    }
+    SplitSpec split;
+    split.name = name;
+    split.source = file;
+    split.uniform_size = true;
+    split.frames = parse_frames(io::read_json(file), file, options);
+    splits.push_back(std::move(split));
+  }
+  return splits;
+}
+
+std::vector<SplitSpec> parse_transforms_json(const std::string& file, const LoadOptions& options) {
+  const io::Json root = io::read_json(file);
+  auto frames = parse_frames(root, file, options);
+  if (!has_near_far(root) && !(options.near && options.far) && options.log) {
+    options.log(LogLevel::warning, file + " gives no near/far: using near " + std::to_string(frames[0].near) +
+                                       ", far " + std::to_string(frames[0].far) + " (set them with --near/--far)");
+  }
+  SplitSpec train, test;
+  train.name = "train";
+  test.name = "test";
+  train.source = test.source = file;
+  train.uniform_size = test.uniform_size = false;  // each frame may have its own w/h
+  if (options.holdout_every < 0) throw Error("holdout_every must be >= 0");
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const bool held_out = options.holdout_every > 0 && i % options.holdout_every == 0 && frames.size() > 1;
+    (held_out ? test : train).frames.push_back(std::move(frames[i]));
+  }
+  std::vector<SplitSpec> splits;
+  for (auto* split : {&train, &test}) {
+    const bool wanted = options.splits.empty() ||
+                        std::find(options.splits.begin(), options.splits.end(), split->name) != options.splits.end();
+    if (wanted && !split->frames.empty()) splits.push_back(std::move(*split));
+  }
+  for (const auto& name : options.splits) {
+    if (name != "train" && name != "test") {
+      throw Error(file + ": a single transforms.json has only the splits train and test (every " +
+                  std::to_string(options.holdout_every) + "th frame), not '" + name + "'");
+    }
+  }
+  return splits;
+}
+
+}  // namespace mipnerf::data::detail

@@ -1,0 +1,200 @@
+// Dataset format detection and loading: parse the file's frames, then read, check, (downsample,)
+// composite and pack every image of each split.
+#include "data/dataset.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "cl/error.hpp"
+#include "data/frames.hpp"
+
+namespace mipnerf::data {
+namespace fs = std::filesystem;
+
+const char* format_name(DatasetFormat format) {
+  switch (format) {
+    case DatasetFormat::blender:
+      return "Blender (transforms_<split>.json)";
+    case DatasetFormat::multiscale_blender:
+      return "multiscale Blender (metadata.json)";
+    default:
+      return "transforms.json";
+  }
+}
+
+int Split::num_scales() const {
+  uint32_t top = 0;
+  for (uint32_t level : scale_levels) top = std::max(top, level);
+  return cameras.empty() ? 0 : static_cast<int>(top) + 1;
+}
+
+bool Dataset::has_split(const std::string& name) const {
+  for (const auto& s : splits) {
+    if (s.name == name) return true;
+  }
+  return false;
+}
+
+std::string Dataset::split_names() const {
+  std::string names;
+  for (const auto& s : splits) names += (names.empty() ? "" : ", ") + s.name;
+  return names.empty() ? "none" : names;
+}
+
+const Split& Dataset::split(const std::string& name) const {
+  for (const auto& s : splits) {
+    if (s.name == name) return s;
+  }
+  throw Error(path + ": no split '" + name + "' (this dataset has: " + split_names() + ")");
+}
+
+DatasetFormat detect_format(const std::string& path) {
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) {
+    throw Error(path + ": no such file or folder (create a scene with `mipnerf-cl make-scene " + path + "`)");
+  }
+  if (fs::is_regular_file(status)) {
+    const auto name = fs::path(path).filename().string();
+    if (name == "metadata.json") return DatasetFormat::multiscale_blender;
+    if (fs::path(path).extension() == ".json") return DatasetFormat::transforms_json;
+    throw Error(path + ": not a dataset file: give a folder, a transforms.json or a metadata.json");
+  }
+  auto has = [&path](const char* name) { return fs::is_regular_file(fs::path(path) / name); };
+  if (has("metadata.json")) return DatasetFormat::multiscale_blender;
+  if (has("transforms_train.json") || has("transforms_val.json") || has("transforms_test.json")) {
+    return DatasetFormat::blender;
+  }
+  if (has("transforms.json")) return DatasetFormat::transforms_json;
+  throw Error(path + ": no dataset here: expected transforms_train.json (Blender), metadata.json (multiscale "
+                     "Blender) or transforms.json; `mipnerf-cl make-scene DIR` writes a procedural scene");
+}
+
+Camera scale_camera(const Camera& camera, uint32_t factor) {
+  if (factor == 1) return camera;
+  if (camera.width_px % factor != 0 || camera.height_px % factor != 0) {
+    throw Error("scale_camera: " + std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) +
+                " is not divisible by " + std::to_string(factor));
+  }
+  Camera scaled = camera;
+  const double f = factor;
+  scaled.focal_x_px /= f;
+  scaled.focal_y_px /= f;
+  scaled.center_x_px /= f;  // pixel k of the smaller image covers pixels [f·k, f·k + f) of the larger
+  scaled.center_y_px /= f;
+  scaled.width_px /= factor;
+  scaled.height_px /= factor;
+  scaled.lossmult *= f * f;
+  return scaled;
+}
+
+void append_image(Split& split, const RgbaImage& image, const Camera& camera, uint32_t base_level, int scales,
+                  Background background, const std::string& file) {
+  if (scales < 1 || scales > 8) throw Error("the number of scales must be 1 to 8, got " + std::to_string(scales));
+  const uint32_t divisor = 1u << (scales - 1);
+  if (image.width % divisor != 0 || image.height % divisor != 0) {
+    throw Error(file + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                " is not divisible by " + std::to_string(divisor) + " for " + std::to_string(scales) +
+                " scales; crop the images or use fewer scales");
+  }
+  RgbaImage smaller;
+  const RgbaImage* level_image = &image;
+  for (int j = 0; j < scales; ++j) {
+    if (j > 0) {
+      smaller = downsample2(*level_image);
+      level_image = &smaller;
+    }
+    const Camera level_camera = scale_camera(camera, 1u << j);
+    const uint64_t pixels = static_cast<uint64_t>(level_image->width) * level_image->height;
+    const uint64_t offset = split.pixel_offsets.back();
+    split.rgb.resize(3 * (offset + pixels));
+    composite(*level_image, background, split.rgb.data() + 3 * offset);
+    split.pixel_offsets.push_back(offset + pixels);
+    split.cameras.push_back(level_camera);
+    split.scale_levels.push_back(base_level + j);
+    split.files.push_back(file);
+  }
+}
+
+namespace detail {
+
+void SizeCheck::check(uint32_t width, uint32_t height, const std::string& file) {
+  if (first_file_.empty()) {
+    width_ = width;
+    height_ = height;
+    first_file_ = file;
+    return;
+  }
+  if (width != width_ || height != height_) {
+    throw Error(file + ": the image is " + std::to_string(width) + "x" + std::to_string(height) + " but " +
+                first_file_ + " is " + std::to_string(width_) + "x" + std::to_string(height_) +
+                "; every image of a Blender split must have the same size (resize or re-render it)");
+  }
+}
+
+}  // namespace detail
+
+namespace {
+
+Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
+  Split split;
+  split.name = spec.name;
+  split.source = spec.source;
+  detail::SizeCheck sizes;
+  for (const auto& frame : spec.frames) {
+    const RgbaImage image = load_rgba_png(frame.image_path);
+    if (spec.uniform_size) sizes.check(image.width, image.height, frame.image_path);
+    Camera camera;
+    camera.camera_to_world = frame.camera_to_world;
+    resolve_intrinsics(frame.intrinsics, image.width, image.height, camera, frame.where);
+    camera.near = frame.near;
+    camera.far = frame.far;
+    camera.lossmult = frame.lossmult;
+    if (split.rgb.empty()) {
+      // Reserve for the whole split from the first image (every level adds a quarter of the one before).
+      const double pyramid = (1.0 - std::pow(0.25, options.scales)) / 0.75;
+      split.rgb.reserve(static_cast<size_t>(3.0 * image.width * image.height * spec.frames.size() * pyramid) + 3);
+    }
+    append_image(split, image, camera, frame.scale_level, options.scales, options.background, frame.image_path);
+  }
+  return split;
+}
+
+}  // namespace
+
+Dataset load_dataset(const std::string& path, const LoadOptions& options) {
+  if (options.scales < 1 || options.scales > 8) {
+    throw Error("the number of scales must be 1 to 8 (the paper's multiscale Blender uses 4), got " +
+                std::to_string(options.scales));
+  }
+  Dataset dataset;
+  dataset.path = path;
+  dataset.format = detect_format(path);
+  dataset.background = options.background;
+  std::vector<detail::SplitSpec> specs;
+  switch (dataset.format) {
+    case DatasetFormat::blender:
+      specs = detail::parse_blender(path, options);
+      break;
+    case DatasetFormat::multiscale_blender: {
+      if (options.scales > 1) {
+        throw Error(path + ": is already multiscale (metadata.json); load it with 1 scale, or build scales on the "
+                           "fly from the full-resolution Blender folder");
+      }
+      const bool is_file = fs::is_regular_file(path);
+      specs = detail::parse_multiscale_metadata(is_file ? path : detail::join_path(path, "metadata.json"), options);
+      break;
+    }
+    case DatasetFormat::transforms_json: {
+      const bool is_file = fs::is_regular_file(path);
+      specs = detail::parse_transforms_json(is_file ? path : detail::join_path(path, "transforms.json"), options);
+      break;
+    }
+  }
+  if (specs.empty()) throw Error(path + ": the dataset has none of the requested splits");
+  for (const auto& spec : specs) dataset.splits.push_back(load_split(spec, options));
+  return dataset;
+}
+
+}  // namespace mipnerf::data

@@ -1,0 +1,25 @@
+// Uploading a split to the device.
+#include "data/device_dataset.hpp"
+
+#include "cl/error.hpp"
+
+namespace mipnerf::data {
+
+DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
+    : host_cameras_(split.cameras), num_pixels_(split.num_pixels()) {
+  if (split.cameras.empty()) throw Error("split '" + split.name + "' has no images to upload");
+  if (num_pixels_ >= (uint64_t{1} << 32)) {
+    throw Error("split '" + split.name + "' has " + std::to_string(num_pixels_) +
+                " pixels; the device indexes pixels with 32 bits: use fewer images or a lower resolution");
+  }
+  const auto packed = pack_cameras(split.cameras);
+  cameras_ = ocl::DeviceArray<float>(ctx, packed.size(), "cameras [C][24] of " + split.name);
+  cameras_.upload(ctx, packed);
+  pixels_rgb_ = ocl::DeviceArray<float>(ctx, split.rgb.size(), "pixels_rgb [pixels][3] of " + split.name);
+  pixels_rgb_.upload(ctx, split.rgb);
+  std::vector<uint32_t> offsets(split.pixel_offsets.begin(), split.pixel_offsets.end());
+  pixel_offsets_ = ocl::DeviceArray<uint32_t>(ctx, offsets.size(), "pixel_offsets [C+1] of " + split.name);
+  pixel_offsets_.upload(ctx, offsets);
+}
+
+}  // namespace mipnerf::data

@@ -1,0 +1,61 @@
+// Host images: loading, the ×2 box filter and compositing.
+#include "data/image.hpp"
+
+#include "cl/error.hpp"
+#include "io/png.hpp"
+
+namespace mipnerf::data {
+
+RgbaImage load_rgba_png(const std::string& path) {
+  io::PngImage png = io::read_png(path);
+  return RgbaImage{png.width, png.height, std::move(png.rgba)};
+}
+
+RgbaImage downsample2(const RgbaImage& image) {
+  if (image.width % 2 != 0 || image.height % 2 != 0) {
+    throw Error("box downsampling needs even sizes, got " + std::to_string(image.width) + "x" +
+                std::to_string(image.height));
+  }
+  RgbaImage out{image.width / 2, image.height / 2, {}};
+  out.rgba.resize(static_cast<size_t>(out.width) * out.height * 4);
+  const size_t in_row = static_cast<size_t>(image.width) * 4;
+  for (uint32_t y = 0; y < out.height; ++y) {
+    for (uint32_t x = 0; x < out.width; ++x) {
+      const float* top = image.rgba.data() + (2 * y) * in_row + (2 * x) * 4;
+      const float* bottom = top + in_row;
+      float* dst = out.rgba.data() + (static_cast<size_t>(y) * out.width + x) * 4;
+      for (int c = 0; c < 4; ++c) dst[c] = 0.25f * (top[c] + top[4 + c] + bottom[c] + bottom[4 + c]);
+    }
+  }
+  return out;
+}
+
+Background parse_background(const std::string& name) {
+  if (name == "white") return Background::white;
+  if (name == "black") return Background::black;
+  if (name == "none") return Background::none;
+  throw Error("unknown background '" + name + "': use white, black or none");
+}
+
+const char* background_name(Background background) {
+  switch (background) {
+    case Background::white:
+      return "white";
+    case Background::black:
+      return "black";
+    default:
+      return "none";
+  }
+}
+
+void composite(const RgbaImage& image, Background background, float* rgb_out) {
+  const size_t pixels = static_cast<size_t>(image.width) * image.height;
+  const float bg = background == Background::white ? 1.0f : 0.0f;
+  for (size_t i = 0; i < pixels; ++i) {
+    const float* in = image.rgba.data() + 4 * i;
+    const float alpha = background == Background::none ? 1.0f : in[3];
+    for (int c = 0; c < 3; ++c) rgb_out[3 * i + c] = in[c] * alpha + bg * (1.0f - alpha);
+  }
+}
+
+}  // namespace mipnerf::data

@@ -1,0 +1,38 @@
+// Images of a dataset on the host: straight-alpha RGBA as read from a PNG, the official ×2 box
+// downsampling, and compositing onto the background.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mipnerf::data {
+
+// Straight (not premultiplied) RGBA, [height][width][4], values in [0, 1]: the stored 8- or 16-bit
+// values / 255 (or / 65535), no gamma conversion. Like the official NeRF and mip-NeRF code we train on
+// these sRGB-encoded values directly.
+struct RgbaImage {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<float> rgba;
+};
+
+// Reads a PNG as RGBA (RGB files get alpha 1). Errors name the file.
+RgbaImage load_rgba_png(const std::string& path);
+
+// One ×2 step of the multiscale pyramid, as the official mip-NeRF script (scripts/convert_blender_data.py,
+// `down2`) builds it: every output pixel is the plain mean of a 2×2 block of the straight RGBA values,
+// alpha included (not premultiplied). Width and height must be even.
+RgbaImage downsample2(const RgbaImage& image);
+
+// What transparent pixels show: the paper composites Blender scenes onto white.
+enum class Background { white, black, none };
+// "white" | "black" | "none"; throws mipnerf::Error naming the accepted values.
+Background parse_background(const std::string& name);
+const char* background_name(Background background);
+
+// rgb_out [height][width][3] = rgb · α + background · (1 − α), in the stored (sRGB-encoded) values, as the
+// official code does; Background::none drops alpha and keeps rgb as stored.
+void composite(const RgbaImage& image, Background background, float* rgb_out);
+
+}  // namespace mipnerf::data

@@ -1,0 +1,145 @@
+// Pose reading, validation and geometry.
+#include "data/pose.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "cl/error.hpp"
+
+namespace mipnerf::data {
+namespace {
+
+std::string number_text(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3g", v);
+  return text;
+}
+
+Vec3 normalized(const Vec3& v) {
+  const double length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  return {v[0] / length, v[1] / length, v[2] / length};
+}
+
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+}  // namespace
+
+Matrix34 pose_from_json(const io::Json& value, const std::string& where) {
+  const std::string shape_error = where + ": the pose must be a 4x4 (or 3x4) array of rows of numbers";
+  if (!value.is_array() || (value.size() != 4 && value.size() != 3)) throw Error(shape_error);
+  Matrix34 m{};
+  for (size_t row = 0; row < value.size(); ++row) {
+    const auto& r = value[row];
+    if (!r.is_array() || r.size() != 4) throw Error(shape_error);
+    for (size_t col = 0; col < 4; ++col) {
+      if (!r[col].is_number()) throw Error(shape_error + " (row " + std::to_string(row) + " holds a " +
+                                           io::json_type_name(r[col]) + ")");
+      const double v = r[col].get<double>();
+      if (!std::isfinite(v)) {
+        throw Error(where + ": the pose has a non-finite entry at row " + std::to_string(row) + ", column " +
+                    std::to_string(col) + "; fix or drop this frame");
+      }
+      if (row < 3) m[row * 4 + col] = v;
+      else if (std::abs(v - (col == 3 ? 1.0 : 0.0)) > 1e-6) {
+        throw Error(where + ": the pose's last row must be 0 0 0 1 (a rigid camera-to-world matrix), got " +
+                    number_text(r[0].get<double>()) + " " + number_text(r[1].get<double>()) + " " +
+                    number_text(r[2].get<double>()) + " " + number_text(r[3].get<double>()));
+      }
+    }
+  }
+  check_rigid_pose(m, where);
+  return m;
+}
+
+io::Json pose_to_json(const Matrix34& m) {
+  io::Json rows = io::Json::array();
+  for (int row = 0; row < 3; ++row) rows.push_back({m[row * 4], m[row * 4 + 1], m[row * 4 + 2], m[row * 4 + 3]});
+  rows.push_back({0.0, 0.0, 0.0, 1.0});
+  return rows;
+}
+
+void check_rigid_pose(const Matrix34& m, const std::string& where) {
+  for (double v : m) {
+    if (!std::isfinite(v)) throw Error(where + ": the pose has a non-finite entry; fix or drop this frame");
+  }
+  auto r = [&m](int row, int col) { return m[row * 4 + col]; };
+  double deviation = 0.0;  // max |RᵀR − I|
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const double dot = r(0, i) * r(0, j) + r(1, i) * r(1, j) + r(2, i) * r(2, j);
+      deviation = std::max(deviation, std::abs(dot - (i == j ? 1.0 : 0.0)));
+    }
+  }
+  const double det = r(0, 0) * (r(1, 1) * r(2, 2) - r(1, 2) * r(2, 1)) -
+                     r(0, 1) * (r(1, 0) * r(2, 2) - r(1, 2) * r(2, 0)) +
+                     r(0, 2) * (r(1, 0) * r(2, 1) - r(1, 1) * r(2, 0));
+  if (deviation > kRigidTolerance) {
+    throw Error(where + ": the pose's rotation is not orthonormal (max |R^T R - I| = " + number_text(deviation) +
+                ", tolerance " + number_text(kRigidTolerance) +
+                "): the matrix is scaled or sheared; scale the scene through the translations only");
+  }
+  if (std::abs(det - 1.0) > kRigidTolerance) {
+    throw Error(where + ": the pose's rotation has determinant " + number_text(det) +
+                " instead of +1: it is a reflection (a left-handed or mirrored axis convention); "
+                "convert it to OpenGL/Blender axes (x right, y up, camera looking down -z)");
+  }
+}
+
+Matrix34 look_at_pose(const Vec3& eye, const Vec3& target, const Vec3& up) {
+  const Vec3 forward = normalized({target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]});
+  const Vec3 right = normalized(cross(forward, up));
+  const Vec3 up_camera = cross(right, forward);
+  // Columns: x_camera = right, y_camera = up, z_camera = −forward (the camera looks down −z).
+  return {right[0], up_camera[0], -forward[0], eye[0],  //
+          right[1], up_camera[1], -forward[1], eye[1],  //
+          right[2], up_camera[2], -forward[2], eye[2]};
+}
+
+Vec3 camera_center(const Camera& camera) {
+  const auto& m = camera.camera_to_world;
+  return {m[3], m[7], m[11]};
+}
+
+Vec3 optical_axis(const Camera& camera) {
+  const auto& m = camera.camera_to_world;
+  return normalized({-m[2], -m[6], -m[10]});
+}
+
+std::optional<Vec3> closest_point_to_axes(const std::vector<Camera>& cameras) {
+  double a[3][3] = {};
+  double b[3] = {};
+  for (const auto& camera : cameras) {
+    const Vec3 d = optical_axis(camera);
+    const Vec3 o = camera_center(camera);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        const double p = (i == j ? 1.0 : 0.0) - d[i] * d[j];
+        a[i][j] += p;
+        b[i] += p * o[j];
+      }
+    }
+  }
+  // Cramer's rule; the system is singular when all axes are parallel (or there are none).
+  const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                     a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                     a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  const double scale = cameras.size() * cameras.size() * cameras.size();
+  if (cameras.empty() || std::abs(det) < 1e-9 * scale) return std::nullopt;
+  Vec3 p{};
+  for (int k = 0; k < 3; ++k) {
+    double m[3][3];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) m[i][j] = j == k ? b[i] : a[i][j];
+    }
+    p[k] = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+            m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])) /
+           det;
+  }
+  return p;
+}
+
+}  // namespace mipnerf::data
+

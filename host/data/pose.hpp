@@ -1,0 +1,43 @@
+// Camera poses: reading a camera-to-world matrix from JSON with validation (finite, rigid, right-handed),
+// building look-at poses, and the point closest to all optical axes (where a capture looks).
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "data/camera.hpp"
+#include "io/json.hpp"
+
+namespace mipnerf::data {
+
+using Vec3 = std::array<double, 3>;
+using Matrix34 = std::array<double, 12>;  // row-major 3×4, as Camera::camera_to_world
+
+// Rotation tolerance of check_rigid_pose: max |RᵀR − I| and |det R − 1|. Poses exported as float32 (Blender's
+// JSON) are orthonormal to ~1e-7; a scaled or sheared matrix is off by far more than 1e-3.
+constexpr double kRigidTolerance = 1e-3;
+
+// A 4×4 (or 3×4) camera-to-world matrix, given as an array of rows. Throws mipnerf::Error naming `where` when
+// it has the wrong shape, a non-number or non-finite entry, a last row other than 0 0 0 1, or is not rigid.
+Matrix34 pose_from_json(const io::Json& value, const std::string& where);
+// The same matrix as a 4×4 JSON array (for writing transforms files).
+io::Json pose_to_json(const Matrix34& camera_to_world);
+
+// Throws unless every entry is finite and the rotation is orthonormal with determinant +1 (within
+// kRigidTolerance); the message gives the deviation and what it likely means.
+void check_rigid_pose(const Matrix34& camera_to_world, const std::string& where);
+
+// A camera at `eye` looking at `target` with world `up` roughly up in the image (OpenGL axes: −z forward).
+Matrix34 look_at_pose(const Vec3& eye, const Vec3& target, const Vec3& up);
+
+Vec3 camera_center(const Camera& camera);
+// Unit direction the camera looks along (−z_camera in world).
+Vec3 optical_axis(const Camera& camera);
+
+// The least-squares point closest to every camera's optical axis (line through the centre along the axis):
+// solves Σ (I − d dᵀ) p = Σ (I − d dᵀ) o. Empty when the axes are (nearly) parallel or there are none.
+std::optional<Vec3> closest_point_to_axes(const std::vector<Camera>& cameras);
+
+}  // namespace mipnerf::data
