@@ -33,6 +33,9 @@ mipnerf_require(nlohmann_json_FOUND "nlohmann/json" "nlohmann-json3-dev")
 find_package(OpenEXR CONFIG QUIET)
 mipnerf_require(OpenEXR_FOUND "OpenEXR" "libopenexr-dev")
 
+find_package(ZLIB QUIET)
+mipnerf_require(ZLIB_FOUND "zlib" "zlib1g-dev")
+
 find_package(PNG QUIET)
 mipnerf_require(PNG_FOUND "libpng" "libpng-dev")
 

@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
-  nlohmann-json3-dev libpng-dev
+  nlohmann-json3-dev libpng-dev zlib1g-dev
   libopenblas-dev   # the GEMM benchmark's CPU BLAS only
 )
 
