@@ -1,0 +1,47 @@
+// Host wrapper of kernels/activations.cl.
+#include "ops/activations.hpp"
+
+#include "cl/launch.hpp"
+#include "ops/stage_checks.hpp"
+
+namespace mipnerf::ops {
+
+ocl::BuildOptions activation_build_options(const ActivationOptions& options) {
+  return ocl::BuildOptions()
+      .define("DENSITY_ACTIVATION", static_cast<int>(options.density))
+      .define_float("DENSITY_BIAS", options.density_bias)
+      .define_float("RGB_PADDING", options.rgb_padding);
+}
+
+Activations::Activations(ocl::Context& ctx, const ActivationOptions& options) : ctx_(&ctx), options_(options) {
+  auto& program = ctx.program({"common.cl", "activations.cl"}, activation_build_options(options_));
+  fwd_ = &program.kernel("activations_fwd");
+  bwd_ = &program.kernel("activations_bwd");
+}
+
+void Activations::fwd(const ActivationInputs& in, const ActivationOutputs& out) {
+  const std::string where = "activations_fwd";
+  detail::require(in.raw_density, in.n_rows, where);
+  detail::require(in.raw_rgb, 3 * in.n_rows, where);
+  detail::require(out.density, in.n_rows, where);
+  detail::require(out.rgb, 3 * in.n_rows, where);
+  ocl::set_args(*fwd_, where, in.raw_density, in.raw_rgb, out.density, out.rgb,
+                detail::to_uint(in.n_rows, where, "rows"));
+  ocl::launch_1d(*ctx_, *fwd_, in.n_rows, where);
+}
+
+void Activations::bwd(const ActivationInputs& in, const ActivationGradients& grads,
+                      const ActivationRawGradients& out) {
+  const std::string where = "activations_bwd";
+  detail::require(in.raw_density, in.n_rows, where);
+  detail::require(in.raw_rgb, 3 * in.n_rows, where);
+  detail::require(grads.d_density, in.n_rows, where);
+  detail::require(grads.d_rgb, 3 * in.n_rows, where);
+  detail::require(out.d_raw_density, in.n_rows, where);
+  detail::require(out.d_raw_rgb, 3 * in.n_rows, where);
+  ocl::set_args(*bwd_, where, in.raw_density, in.raw_rgb, grads.d_density, grads.d_rgb, out.d_raw_density,
+                out.d_raw_rgb, detail::to_uint(in.n_rows, where, "rows"));
+  ocl::launch_1d(*ctx_, *bwd_, in.n_rows, where);
+}
+
+}  // namespace mipnerf::ops

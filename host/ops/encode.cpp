@@ -1,0 +1,71 @@
+// Host wrapper of kernels/encode.cl.
+#include "ops/encode.hpp"
+
+#include "cl/launch.hpp"
+#include "ops/stage_checks.hpp"
+
+namespace mipnerf::ops {
+namespace {
+
+void check_degrees(const EncodingOptions& options, const std::string& where, bool allow_empty) {
+  if (options.min_deg < 0 || options.max_deg > 60 || options.max_deg < options.min_deg ||
+      (!allow_empty && options.max_deg == options.min_deg)) {
+    throw Error(where + ": degrees [" + std::to_string(options.min_deg) + ", " + std::to_string(options.max_deg) +
+                ") are not a valid range (0 ≤ min_deg " + (allow_empty ? "≤" : "<") + " max_deg ≤ 60)");
+  }
+}
+
+}  // namespace
+
+Encode::Encode(ocl::Context& ctx, const GaussianOptions& options) : ctx_(&ctx), gaussian_options_(options) {
+  auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"}, gaussian_build_options(options));
+  ipe_ = &program.kernel("ipe_fwd");
+  pe_ = &program.kernel("pe_fwd");
+  gaussian_ipe_ = &program.kernel("gaussian_ipe_fwd");
+}
+
+void Encode::ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features) {
+  const std::string where = "ipe_fwd";
+  check_degrees(options, where, false);
+  detail::require(in.means, 3 * in.n_rows, where);
+  detail::require(in.covs, 3 * in.n_rows, where);
+  detail::require(features, in.n_rows * options.ipe_width(), where);
+  const size_t items = in.n_rows * options.degrees();
+  ocl::set_args(*ipe_, where, in.means, in.covs, features, detail::to_uint(in.n_rows, where, "rows"),
+                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
+  detail::to_uint(items, where, "items");
+  ocl::launch_1d(*ctx_, *ipe_, items, where);
+}
+
+void Encode::pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceArray<float>& features) {
+  const std::string where = "pe_fwd";
+  check_degrees(options, where, options.append_identity);
+  detail::require(in.x, 3 * in.n_rows, where);
+  detail::require(features, in.n_rows * options.pe_width(), where);
+  const size_t items = in.n_rows * std::max(1, options.degrees());
+  ocl::set_args(*pe_, where, in.x, features, detail::to_uint(in.n_rows, where, "rows"),
+                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg),
+                static_cast<cl_uint>(options.append_identity ? 1 : 0));
+  detail::to_uint(items, where, "items");
+  ocl::launch_1d(*ctx_, *pe_, items, where);
+}
+
+void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& in,
+                          ocl::DeviceArray<float>& features) {
+  const std::string where = "gaussian_ipe_fwd";
+  check_degrees(options, where, false);
+  detail::require(in.origins, 3 * in.n_rays, where);
+  detail::require(in.directions, 3 * in.n_rays, where);
+  detail::require(in.radii, in.n_rays, where);
+  detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
+  const size_t rows = in.n_rays * in.n_samples;
+  detail::require(features, rows * options.ipe_width(), where);
+  const size_t items = rows * options.degrees();
+  detail::to_uint(items, where, "items");
+  ocl::set_args(*gaussian_ipe_, where, in.origins, in.directions, in.radii, in.t_edges, features,
+                detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
+                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
+  ocl::launch_1d(*ctx_, *gaussian_ipe_, items, where);
+}
+
+}  // namespace mipnerf::ops

@@ -1,0 +1,48 @@
+// Host wrapper of kernels/encode.cl: integrated positional encoding (IPE), positional encoding (PE), and the
+// fused Gaussian + IPE. Feature order (docs/ARCHITECTURE.md): [identity (PE only)] [3L sines] [3L cosines],
+// index (l − min_deg)·3 + axis inside each block.
+#pragma once
+
+#include <cstddef>
+
+#include "cl/buffer.hpp"
+#include "cl/context.hpp"
+#include "cl/program.hpp"
+#include "ops/gaussian.hpp"
+#include "ops/ray_options.hpp"
+
+namespace mipnerf::ops {
+
+struct IpeInputs {
+  const ocl::DeviceArray<float>& means;  // [rows][3]
+  const ocl::DeviceArray<float>& covs;   // [rows][3] diagonal
+  size_t n_rows;
+};
+
+struct PeInputs {
+  const ocl::DeviceArray<float>& x;  // [rows][3] (view directions: [R][3])
+  size_t n_rows;
+};
+
+// Degrees are kernel arguments (EncodingOptions per call: positions and view directions differ); the program is
+// the one specialisation of RAY_SHAPE that the fused gaussian_ipe needs.
+class Encode {
+ public:
+  Encode(ocl::Context& ctx, const GaussianOptions& options);
+
+  // Enqueues ipe_fwd: features [rows][options.ipe_width()].
+  void ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features);
+  // Enqueues pe_fwd: features [rows][options.pe_width()].
+  void pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceArray<float>& features);
+  // Enqueues gaussian_ipe_fwd: the same features as Gaussian::fwd then ipe(), without the means/covs buffers.
+  void gaussian_ipe(const EncodingOptions& options, const GaussianInputs& in, ocl::DeviceArray<float>& features);
+
+ private:
+  ocl::Context* ctx_;
+  GaussianOptions gaussian_options_;
+  ::cl::Kernel* ipe_;
+  ::cl::Kernel* pe_;
+  ::cl::Kernel* gaussian_ipe_;
+};
+
+}  // namespace mipnerf::ops

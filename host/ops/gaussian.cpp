@@ -1,0 +1,46 @@
+// Host wrapper of kernels/gaussian.cl.
+#include "ops/gaussian.hpp"
+
+#include "cl/launch.hpp"
+#include "ops/stage_checks.hpp"
+
+namespace mipnerf::ops {
+
+ocl::BuildOptions gaussian_build_options(const GaussianOptions& options) {
+  return ocl::BuildOptions().define("RAY_SHAPE", static_cast<int>(options.ray_shape));
+}
+
+Gaussian::Gaussian(ocl::Context& ctx, const GaussianOptions& options) : ctx_(&ctx), options_(options) {
+  auto& program = ctx.program({"common.cl", "gaussian.cl"}, gaussian_build_options(options_));
+  fwd_ = &program.kernel("gaussian_fwd");
+  points_ = &program.kernel("gaussian_points_fwd");
+}
+
+void Gaussian::check(const GaussianInputs& in, const GaussianOutputs& out, const std::string& where,
+                     bool radii) const {
+  detail::require(in.origins, 3 * in.n_rays, where);
+  detail::require(in.directions, 3 * in.n_rays, where);
+  if (radii) detail::require(in.radii, in.n_rays, where);
+  detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
+  detail::require(out.means, 3 * in.n_rays * in.n_samples, where);
+  detail::require(out.covs, 3 * in.n_rays * in.n_samples, where);
+  detail::to_uint(in.n_rays * in.n_samples, where, "rows");
+}
+
+void Gaussian::fwd(const GaussianInputs& in, const GaussianOutputs& out) {
+  const std::string where = "gaussian_fwd";
+  check(in, out, where, true);
+  ocl::set_args(*fwd_, where, in.origins, in.directions, in.radii, in.t_edges, out.means, out.covs,
+                detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
+  ocl::launch_1d(*ctx_, *fwd_, in.n_rays * in.n_samples, where);
+}
+
+void Gaussian::points(const GaussianInputs& in, const GaussianOutputs& out) {
+  const std::string where = "gaussian_points_fwd";
+  check(in, out, where, false);
+  ocl::set_args(*points_, where, in.origins, in.directions, in.t_edges, out.means, out.covs,
+                detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
+  ocl::launch_1d(*ctx_, *points_, in.n_rays * in.n_samples, where);
+}
+
+}  // namespace mipnerf::ops

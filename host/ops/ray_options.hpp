@@ -1,0 +1,82 @@
+// Options of the ray-math stages (rays, sampling, resampling, Gaussians, encodings, rendering, activations):
+// plain structs with the paper's defaults, shared by the OpenCL wrappers (host/ops) and the CPU reference
+// (host/ref), so both always run the same specialisation. Compile-time options become -D defines; the rest are
+// kernel arguments.
+#pragma once
+
+#include <cstdint>
+
+namespace mipnerf::ops {
+
+// RAY_SHAPE: how an interval of a ray becomes a Gaussian (and, for rays, which space they live in).
+enum class RayShape : int {
+  cone = 0,      // conical frustums of the pixel's footprint (mip-NeRF)
+  cylinder = 1,  // cylinders, rays in NDC space (forward-facing scenes, official LLFF)
+};
+
+// BACKGROUND: what shows through where acc < 1.
+enum class Background : int {
+  none = 0,   // nothing added: a premultiplied colour (the caller composites with acc); same values as black
+  black = 1,  // + 0·(1 − acc)
+  white = 2,  // + 1·(1 − acc) (Blender scenes, paper §5)
+};
+
+enum class DensityActivation : int {
+  softplus = 0,  // mip-NeRF
+  relu = 1,      // NeRF baseline
+};
+
+// Everything random is a function of (seed, step, ray): the ray's index in its batch is first_ray + (index in
+// the launch), so a batch gives the same numbers however it is split into chunks.
+struct RngKey {
+  uint64_t seed = 0;
+  uint32_t step = 0;
+  uint32_t first_ray = 0;  // batch index of the launch's first ray
+};
+
+struct RaysOptions {
+  RayShape ray_shape = RayShape::cone;  // RAY_SHAPE; cylinder → NDC rays (forward-facing scenes)
+  float pixel_center_offset = 0.5f;     // PIXEL_CENTER_OFFSET: pixel (x, y) is sampled at (x + o, y + o)
+  bool jitter_subpixel = false;         // SUBPIXEL_JITTER: a uniform position in the pixel instead (RngKey)
+  bool view_dependence = true;          // VIEW_DEPENDENCE: off, viewdirs are not computed
+  float ndc_near_plane = 1.0f;          // NDC_NEAR_PLANE (cylinder only), official 1
+};
+
+struct SampleOptions {
+  bool lindisp = false;    // SAMPLE_LINDISP: edges linear in disparity (needs near > 0) instead of depth
+  bool randomized = true;  // jittered edges (training) or the deterministic bin edges (evaluation)
+};
+
+struct ResampleOptions {
+  float padding = 0.01f;   // α added to every (blurred) weight (paper: 0.01; NeRF: 0)
+  bool blur = true;        // blur-pool the weights first (mip-NeRF; NeRF: off)
+  bool randomized = true;  // stratified u (training) or linspace u (evaluation)
+};
+
+struct GaussianOptions {
+  RayShape ray_shape = RayShape::cone;  // RAY_SHAPE
+};
+
+// Degrees min_deg..max_deg−1 of a (integrated) positional encoding.
+struct EncodingOptions {
+  int min_deg = 0;
+  int max_deg = 16;              // paper: IPE over 0..15 (96 features)
+  bool append_identity = false;  // PE only: the raw input first (views: 0..3 + identity = 27 features)
+
+  int degrees() const { return max_deg - min_deg; }
+  // Features per row: 6L for IPE (identity never), 3·identity + 6L for PE.
+  int ipe_width() const { return 6 * degrees(); }
+  int pe_width() const { return (append_identity ? 3 : 0) + 6 * degrees(); }
+};
+
+struct RenderOptions {
+  Background background = Background::white;  // BACKGROUND
+};
+
+struct ActivationOptions {
+  DensityActivation density = DensityActivation::softplus;  // DENSITY_ACTIVATION
+  float density_bias = -1.0f;                               // DENSITY_BIAS (mip-NeRF −1; NeRF 0)
+  float rgb_padding = 0.001f;                               // RGB_PADDING ε (mip-NeRF 0.001; NeRF 0: plain sigmoid)
+};
+
+}  // namespace mipnerf::ops

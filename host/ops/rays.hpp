@@ -1,0 +1,50 @@
+// Host wrapper of kernels/rays.cl: camera rays with cone (or NDC) radii for a batch of (camera, pixel) pairs.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "cl/buffer.hpp"
+#include "cl/context.hpp"
+#include "cl/program.hpp"
+#include "ops/ray_options.hpp"
+
+namespace mipnerf::ops {
+
+// RAY_SHAPE, PIXEL_CENTER_OFFSET, SUBPIXEL_JITTER, VIEW_DEPENDENCE, NDC_NEAR_PLANE.
+ocl::BuildOptions rays_build_options(const RaysOptions& options);
+
+struct RaysInputs {
+  const ocl::DeviceArray<float>& cameras;        // [C][24] packed (data::pack_cameras)
+  const ocl::DeviceArray<uint32_t>& camera_ids;  // [R]
+  const ocl::DeviceArray<uint32_t>& pixel_ids;   // [R] y·width + x
+  size_t n_rays;
+};
+
+struct RaysOutputs {
+  ocl::DeviceArray<float>& origins;     // [R][3] world (NDC for cylinder rays)
+  ocl::DeviceArray<float>& directions;  // [R][3] unnormalised, camera-frame z = −1 (NDC direction for cylinder)
+  ocl::DeviceArray<float>& viewdirs;    // [R][3] unit world direction; not written without view dependence
+  ocl::DeviceArray<float>& radii;       // [R] cone radius at t = 1 (cylinder: radius in NDC)
+  ocl::DeviceArray<float>& near;        // [R]
+  ocl::DeviceArray<float>& far;         // [R]
+  ocl::DeviceArray<float>& lossmult;    // [R]
+};
+
+// The ray stage for one specialisation (built on construction).
+class Rays {
+ public:
+  Rays(ocl::Context& ctx, const RaysOptions& options);
+  const RaysOptions& options() const { return options_; }
+
+  // Enqueues rays_fwd. `key` matters only with jitter_subpixel. A camera id ≥ C or a pixel id outside its image
+  // gives NaN in every output of that ray. Throws mipnerf::Error for undersized buffers.
+  void fwd(const RaysInputs& in, const RaysOutputs& out, const RngKey& key = {});
+
+ private:
+  ocl::Context* ctx_;
+  RaysOptions options_;
+  ::cl::Kernel* fwd_;
+};
+
+}  // namespace mipnerf::ops

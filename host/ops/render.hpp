@@ -1,0 +1,72 @@
+// Host wrapper of kernels/render.cl: volume rendering forward and backward, plain or fused with the activations.
+#pragma once
+
+#include <cstddef>
+
+#include "cl/buffer.hpp"
+#include "cl/context.hpp"
+#include "cl/program.hpp"
+#include "ops/ray_options.hpp"
+
+namespace mipnerf::ops {
+
+ocl::BuildOptions render_build_options(const RenderOptions& options, const ActivationOptions& activation);
+
+// For fwd/bwd the activated values; for raw_fwd/raw_bwd the MLP's raw outputs in the same layouts.
+struct RenderInputs {
+  const ocl::DeviceArray<float>& rgb;         // [R][N][3]
+  const ocl::DeviceArray<float>& density;     // [R][N]
+  const ocl::DeviceArray<float>& t_edges;     // [R][N+1]
+  const ocl::DeviceArray<float>& directions;  // [R][3] unnormalised (δ = Δt·|d|)
+  size_t n_rays;
+  size_t n_samples;  // N
+};
+
+struct RenderOutputs {
+  ocl::DeviceArray<float>& comp_rgb;  // [R][3]
+  ocl::DeviceArray<float>& acc;       // [R]
+  ocl::DeviceArray<float>& distance;  // [R] expected distance in t, clipped to [t_0, t_N]
+  ocl::DeviceArray<float>& weights;   // [R][N]: resampling's input, and what the backward needs besides the inputs
+};
+
+struct RenderGradients {
+  const ocl::DeviceArray<float>& d_comp_rgb;  // [R][3] ∂L/∂comp_rgb
+  const ocl::DeviceArray<float>* d_acc;       // [R] ∂L/∂acc, or nullptr when the loss does not use acc
+};
+
+struct RenderInputGradients {
+  ocl::DeviceArray<float>& d_rgb;      // [R][N][3] (∂L/∂raw_rgb for raw_bwd); overwritten
+  ocl::DeviceArray<float>& d_density;  // [R][N]    (∂L/∂raw_density for raw_bwd); overwritten
+};
+
+// Rendering for one BACKGROUND (and, for the fused kernels, one set of activations).
+class Render {
+ public:
+  Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation = {});
+  const RenderOptions& options() const { return options_; }
+
+  // Enqueues render_fwd.
+  void fwd(const RenderInputs& in, const RenderOutputs& out);
+  // Enqueues render_bwd. `weights` is the forward's output for these inputs (what the forward saves).
+  void bwd(const RenderInputs& in, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
+           const RenderInputGradients& out);
+  // The fused activations_fwd + render_fwd, on raw MLP outputs (in.rgb, in.density hold raw values).
+  void raw_fwd(const RenderInputs& raw, const RenderOutputs& out);
+  // The fused render_bwd + activations_bwd: gradients with respect to the raw outputs.
+  void raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
+               const RenderInputGradients& out);
+
+ private:
+  void launch_fwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in, const RenderOutputs& out);
+  void launch_bwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in,
+                  const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
+                  const RenderInputGradients& out);
+  ocl::Context* ctx_;
+  RenderOptions options_;
+  ::cl::Kernel* fwd_;
+  ::cl::Kernel* bwd_;
+  ::cl::Kernel* raw_fwd_;
+  ::cl::Kernel* raw_bwd_;
+};
+
+}  // namespace mipnerf::ops

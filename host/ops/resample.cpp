@@ -1,0 +1,29 @@
+// Host wrapper of kernels/resample.cl.
+#include "ops/resample.hpp"
+
+#include "cl/launch.hpp"
+#include "ops/stage_checks.hpp"
+
+namespace mipnerf::ops {
+
+Resample::Resample(ocl::Context& ctx) : ctx_(&ctx) {
+  fwd_ = &ctx.program({"common.cl", "resample.cl"}).kernel("resample_fwd");
+}
+
+void Resample::fwd(const ResampleOptions& options, const ResampleInputs& in, ocl::DeviceArray<float>& t_new,
+                   const RngKey& key) {
+  const std::string where = "resample_fwd";
+  if (in.n_samples == 0) throw Error(where + ": n_samples must be at least 1");
+  if (!(options.padding >= 0.0f)) throw Error(where + ": padding must be ≥ 0, got " + std::to_string(options.padding));
+  detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
+  detail::require(in.weights, in.n_rays * in.n_samples, where);
+  detail::require(t_new, in.n_rays * (in.n_samples + 1), where);
+  ocl::set_args(*fwd_, where, in.t_edges, in.weights, t_new, detail::to_uint(in.n_rays, where, "rays"),
+                detail::to_uint(in.n_samples, where, "samples"), options.padding,
+                static_cast<cl_uint>(options.blur ? 1 : 0), static_cast<cl_uint>(options.randomized ? 1 : 0),
+                static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step),
+                static_cast<cl_uint>(key.first_ray));
+  ocl::launch_1d(*ctx_, *fwd_, in.n_rays, where);
+}
+
+}  // namespace mipnerf::ops

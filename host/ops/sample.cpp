@@ -1,0 +1,43 @@
+// Host wrapper of kernels/sample.cl.
+#include "ops/sample.hpp"
+
+#include "cl/launch.hpp"
+#include "ops/stage_checks.hpp"
+
+namespace mipnerf::ops {
+
+ocl::BuildOptions sample_build_options(const SampleOptions& options) {
+  return ocl::BuildOptions().define("SAMPLE_LINDISP", options.lindisp ? 1 : 0);
+}
+
+Sample::Sample(ocl::Context& ctx, const SampleOptions& options) : ctx_(&ctx), options_(options) {
+  auto& program = ctx.program({"common.cl", "sample.cl"}, sample_build_options(options_));
+  stratified_ = &program.kernel("sample_stratified_fwd");
+  merge_ = &program.kernel("sample_merge_fwd");
+}
+
+void Sample::stratified(const StratifiedInputs& in, ocl::DeviceArray<float>& t_edges, const RngKey& key) {
+  const std::string where = "sample_stratified_fwd";
+  if (in.n_samples == 0) throw Error(where + ": n_samples must be at least 1");
+  detail::require(in.near, in.n_rays, where);
+  detail::require(in.far, in.n_rays, where);
+  detail::require(t_edges, in.n_rays * (in.n_samples + 1), where);
+  ocl::set_args(*stratified_, where, in.near, in.far, t_edges, detail::to_uint(in.n_rays, where, "rays"),
+                detail::to_uint(in.n_samples, where, "samples"), static_cast<cl_uint>(options_.randomized ? 1 : 0),
+                static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step),
+                static_cast<cl_uint>(key.first_ray));
+  const size_t groups = (in.n_samples + 1 + 3) / 4;  // one item per 4 edges of a ray
+  ocl::launch_1d(*ctx_, *stratified_, in.n_rays * groups, where);
+}
+
+void Sample::merge(const MergeInputs& in, ocl::DeviceArray<float>& t_out) {
+  const std::string where = "sample_merge_fwd";
+  detail::require(in.t_a, in.n_rays * in.len_a, where);
+  detail::require(in.t_b, in.n_rays * in.len_b, where);
+  detail::require(t_out, in.n_rays * (in.len_a + in.len_b), where);
+  ocl::set_args(*merge_, where, in.t_a, in.t_b, t_out, detail::to_uint(in.n_rays, where, "rays"),
+                detail::to_uint(in.len_a, where, "len_a"), detail::to_uint(in.len_b, where, "len_b"));
+  ocl::launch_1d(*ctx_, *merge_, in.n_rays, where);
+}
+
+}  // namespace mipnerf::ops

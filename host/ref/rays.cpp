@@ -1,0 +1,130 @@
+// CPU reference of kernels/rays.cl.
+#include "ref/rays.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "data/camera.hpp"
+#include "ref/rng.hpp"
+
+namespace mipnerf::ref {
+namespace {
+
+constexpr double kRadiusPerPixelWidth = 0.57735026918962576451;  // 2/√12
+
+data::Camera unpack_camera(const std::vector<double>& cameras, size_t id) {
+  namespace L = data::camera_layout;
+  const double* p = cameras.data() + id * L::stride;
+  data::Camera cam;
+  for (int k = 0; k < 12; ++k) cam.camera_to_world[k] = p[L::camera_to_world + k];
+  cam.focal_x_px = p[L::focal_x];
+  cam.focal_y_px = p[L::focal_y];
+  cam.center_x_px = p[L::center_x];
+  cam.center_y_px = p[L::center_y];
+  cam.width_px = static_cast<uint32_t>(p[L::width]);
+  cam.height_px = static_cast<uint32_t>(p[L::height]);
+  cam.near = p[L::near];
+  cam.far = p[L::far];
+  cam.lossmult = p[L::lossmult];
+  return cam;
+}
+
+double distance3(const double a[3], const double b[3]) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+struct RayOut {
+  double origin[3], direction[3], viewdir[3], radius;
+};
+
+RayOut cone_ray(const data::Camera& cam, double x, double y, uint32_t px) {
+  const data::Ray ray = data::camera_ray(cam, x, y);
+  // The horizontal neighbour: the next pixel, the previous one in the last column (as official's edge padding).
+  const double step = px + 1 < cam.width_px ? 1.0 : -1.0;
+  const data::Ray neighbour = data::camera_ray(cam, x + step, y);
+  RayOut out;
+  for (int a = 0; a < 3; ++a) {
+    out.origin[a] = ray.origin_world[a];
+    out.direction[a] = ray.direction_world[a];
+  }
+  out.radius = distance3(ray.direction_world.data(), neighbour.direction_world.data()) * kRadiusPerPixelWidth;
+  return out;
+}
+
+RayOut ndc_ray(const data::Camera& cam, double x, double y, uint32_t px, uint32_t py, double near_plane) {
+  const auto ndc_origin = [&](double xx, double yy, double o_ndc[3], double d_ndc[3]) {
+    const data::Ray r = data::camera_ray(cam, xx, yy);
+    convert_to_ndc(r.origin_world.data(), r.direction_world.data(), cam.focal_x_px, cam.focal_y_px, cam.width_px,
+                   cam.height_px, near_plane, o_ndc, d_ndc);
+  };
+  RayOut out;
+  ndc_origin(x, y, out.origin, out.direction);
+  double o_h[3], o_v[3], unused[3];
+  ndc_origin(x + (px + 1 < cam.width_px ? 1.0 : -1.0), y, o_h, unused);
+  ndc_origin(x, y + (py + 1 < cam.height_px ? 1.0 : -1.0), o_v, unused);
+  out.radius = 0.5 * (distance3(out.origin, o_h) + distance3(out.origin, o_v)) * kRadiusPerPixelWidth;
+  return out;
+}
+
+}  // namespace
+
+void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width,
+                    double height, double near_plane, double o_ndc[3], double d_ndc[3]) {
+  const double t = -(near_plane + o[2]) / d[2];
+  const double o_near[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+  const double ax = -2.0 * focal_x / width, ay = -2.0 * focal_y / height;
+  o_ndc[0] = ax * o_near[0] / o_near[2];
+  o_ndc[1] = ay * o_near[1] / o_near[2];
+  o_ndc[2] = 1.0 + 2.0 * near_plane / o_near[2];
+  d_ndc[0] = ax * (d[0] / d[2] - o_near[0] / o_near[2]);
+  d_ndc[1] = ay * (d[1] / d[2] - o_near[1] / o_near[2]);
+  d_ndc[2] = -2.0 * near_plane / o_near[2];
+}
+
+void rays_fwd(const ops::RaysOptions& options, const std::vector<double>& cameras,
+              const std::vector<uint32_t>& camera_ids, const std::vector<uint32_t>& pixel_ids,
+              std::vector<double>& origins, std::vector<double>& directions, std::vector<double>& viewdirs,
+              std::vector<double>& radii, std::vector<double>& near, std::vector<double>& far,
+              std::vector<double>& lossmult, size_t n_rays, size_t n_cameras, const ops::RngKey& key) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  origins.assign(3 * n_rays, nan);
+  directions.assign(3 * n_rays, nan);
+  viewdirs.assign(3 * n_rays, nan);
+  radii.assign(n_rays, nan);
+  near.assign(n_rays, nan);
+  far.assign(n_rays, nan);
+  lossmult.assign(n_rays, nan);
+  for (size_t i = 0; i < n_rays; ++i) {
+    if (camera_ids[i] >= n_cameras) continue;
+    const data::Camera cam = unpack_camera(cameras, camera_ids[i]);
+    if (cam.width_px == 0 || pixel_ids[i] / cam.width_px >= cam.height_px) continue;
+    const uint32_t px = pixel_ids[i] % cam.width_px, py = pixel_ids[i] / cam.width_px;
+    double offset_x = options.pixel_center_offset, offset_y = options.pixel_center_offset;
+    if (options.jitter_subpixel) {
+      const auto xi = rng_uniform4(key.seed, key.first_ray + static_cast<uint32_t>(i), key.step, 0,
+                                   rng_stream_subpixel);
+      offset_x = xi[0];
+      offset_y = xi[1];
+    }
+    const double x = px + offset_x, y = py + offset_y;
+    const RayOut ray = options.ray_shape == ops::RayShape::cylinder
+                           ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
+                           : cone_ray(cam, x, y, px);
+    // viewdirs: the unit world direction (in NDC scenes too, where `directions` holds the NDC direction).
+    const data::Ray world = data::camera_ray(cam, x, y);
+    const double norm = std::sqrt(world.direction_world[0] * world.direction_world[0] +
+                                  world.direction_world[1] * world.direction_world[1] +
+                                  world.direction_world[2] * world.direction_world[2]);
+    for (int a = 0; a < 3; ++a) {
+      origins[3 * i + a] = ray.origin[a];
+      directions[3 * i + a] = ray.direction[a];
+      viewdirs[3 * i + a] = world.direction_world[a] / norm;
+    }
+    radii[i] = ray.radius;
+    near[i] = cam.near;
+    far[i] = cam.far;
+    lossmult[i] = cam.lossmult;
+  }
+}
+
+}  // namespace mipnerf::ref

@@ -1,0 +1,111 @@
+// CPU reference of kernels/render.cl.
+#include "ref/render.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ref/activations.hpp"
+
+namespace mipnerf::ref {
+namespace {
+
+double norm3(const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// s_i = σ_i·δ_i, 0 for an empty interval (as the kernel: σ = ∞ with δ = 0 is no NaN).
+double thickness(double density, double t0, double t1, double dir_norm) {
+  const double delta = (t1 - t0) * dir_norm;
+  return delta > 0 ? density * delta : 0.0;
+}
+
+}  // namespace
+
+void render_fwd(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+                const std::vector<double>& t_edges, const std::vector<double>& directions,
+                std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
+                std::vector<double>& weights, size_t n_rays, size_t n_samples) {
+  comp_rgb.assign(3 * n_rays, 0.0);
+  acc.assign(n_rays, 0.0);
+  distance.assign(n_rays, 0.0);
+  weights.assign(n_rays * n_samples, 0.0);
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    const double* t = t_edges.data() + ray * (n_samples + 1);
+    const double dir_norm = norm3(directions.data() + 3 * ray);
+    double optical_depth = 0.0, t_weighted = 0.0, sum = 0.0;
+    for (size_t i = 0; i < n_samples; ++i) {
+      const size_t at = ray * n_samples + i;
+      const double s = thickness(density[at], t[i], t[i + 1], dir_norm);
+      const double w = -std::expm1(-s) * std::exp(-optical_depth);
+      weights[at] = w;
+      for (int c = 0; c < 3; ++c) comp_rgb[3 * ray + c] += w * rgb[3 * at + c];
+      sum += w;
+      t_weighted += w * 0.5 * (t[i] + t[i + 1]);
+      optical_depth += s;
+    }
+    acc[ray] = sum;
+    distance[ray] = std::clamp(sum > 0 ? t_weighted / sum : t[0], t[0], t[n_samples]);
+    if (options.background == ops::Background::white) {
+      for (int c = 0; c < 3; ++c) comp_rgb[3 * ray + c] += 1.0 - sum;
+    }
+  }
+}
+
+void render_bwd(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+                const std::vector<double>& t_edges, const std::vector<double>& directions,
+                const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
+                const std::vector<double>* d_acc, std::vector<double>& d_rgb, std::vector<double>& d_density,
+                size_t n_rays, size_t n_samples) {
+  d_rgb.assign(3 * n_rays * n_samples, 0.0);
+  d_density.assign(n_rays * n_samples, 0.0);
+  std::vector<double> g(n_samples), trans_next(n_samples), delta(n_samples);
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    const double* t = t_edges.data() + ray * (n_samples + 1);
+    const double* d_comp = d_comp_rgb.data() + 3 * ray;
+    const double dir_norm = norm3(directions.data() + 3 * ray);
+    double d_acc_total = d_acc ? (*d_acc)[ray] : 0.0;
+    if (options.background == ops::Background::white) d_acc_total -= d_comp[0] + d_comp[1] + d_comp[2];
+    double optical_depth = 0.0;
+    for (size_t i = 0; i < n_samples; ++i) {
+      const size_t at = ray * n_samples + i;
+      delta[i] = (t[i + 1] - t[i]) * dir_norm;
+      optical_depth += thickness(density[at], t[i], t[i + 1], dir_norm);
+      trans_next[i] = std::exp(-optical_depth);  // T_{i+1}
+      g[i] = d_acc_total;
+      for (int c = 0; c < 3; ++c) {
+        g[i] += d_comp[c] * rgb[3 * at + c];
+        d_rgb[3 * at + c] = d_comp[c] * weights[at];
+      }
+    }
+    double suffix = 0.0;  // Σ_{k>i} g_k·w_k
+    for (size_t r = 0; r < n_samples; ++r) {
+      const size_t i = n_samples - 1 - r, at = ray * n_samples + i;
+      d_density[at] = delta[i] > 0 ? delta[i] * (g[i] * trans_next[i] - suffix) : 0.0;
+      suffix += g[i] * weights[at];
+    }
+  }
+}
+
+void render_raw_fwd(const ops::RenderOptions& options, const ops::ActivationOptions& activation,
+                    const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
+                    const std::vector<double>& t_edges, const std::vector<double>& directions,
+                    std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
+                    std::vector<double>& weights, size_t n_rays, size_t n_samples) {
+  std::vector<double> density, rgb;
+  activations_fwd(activation, raw_density, raw_rgb, density, rgb, n_rays * n_samples);
+  render_fwd(options, rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, n_rays, n_samples);
+}
+
+void render_raw_bwd(const ops::RenderOptions& options, const ops::ActivationOptions& activation,
+                    const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
+                    const std::vector<double>& t_edges, const std::vector<double>& directions,
+                    const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
+                    const std::vector<double>* d_acc, std::vector<double>& d_raw_rgb,
+                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples) {
+  const size_t rows = n_rays * n_samples;
+  std::vector<double> density, rgb, d_rgb, d_density;
+  activations_fwd(activation, raw_density, raw_rgb, density, rgb, rows);
+  render_bwd(options, rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, d_rgb, d_density, n_rays,
+             n_samples);
+  activations_bwd(activation, raw_density, raw_rgb, d_density, d_rgb, d_raw_density, d_raw_rgb, rows);
+}
+
+}  // namespace mipnerf::ref

@@ -1,0 +1,20 @@
+// CPU reference of kernels/resample.cl in double precision: hierarchical resampling of interval edges.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "ops/ray_options.hpp"
+
+namespace mipnerf::ref {
+
+// Mirror of resample_fwd (official resample_along_rays + sorted_piecewise_constant_pdf; mip-NeRF §3.2):
+// blur-pool the weights [R][N] (max of neighbours, then mean of pairs), add the padding α, normalise (with the
+// official 1e-5 floor on the sum), and invert the piecewise-constant CDF over the edges t_edges [R][N+1] at
+// N + 1 sorted u (linspace(0, 1 − ε) or stratified with RNG_STREAM_RESAMPLE) → t_new [R][N+1].
+// Written as the official code: the whole CDF, then a search per u (not the kernel's merge walk).
+void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>& t_edges,
+                  const std::vector<double>& weights, std::vector<double>& t_new, size_t n_rays, size_t n_samples,
+                  const ops::RngKey& key);
+
+}  // namespace mipnerf::ref

@@ -1,0 +1,87 @@
+// Activations of the MLP's raw outputs, forward and backward (stage 7), as inline functions that other
+// kernels share (render.cl's fused render_raw_* kernels) and as two element-wise kernels.
+//
+//   density = softplus(raw + DENSITY_BIAS)            mip-NeRF (official: density_bias = −1)
+//           = relu(raw + DENSITY_BIAS)                NeRF baseline (bias 0)
+//   rgb     = (1 + 2ε)·sigmoid(raw) − ε, ε = RGB_PADDING   mip-NeRF's widened sigmoid (ε = 0.001);
+//                                                     ε = 0 is NeRF's plain sigmoid.
+// Layouts: raw_density, density [rows]; raw_rgb, rgb [rows][3] (docs/ARCHITECTURE.md).
+
+#ifndef MIPNERF_ACTIVATIONS_CL
+#define MIPNERF_ACTIVATIONS_CL
+
+#define DENSITY_ACTIVATION_SOFTPLUS 0
+#define DENSITY_ACTIVATION_RELU 1
+#ifndef DENSITY_ACTIVATION
+#define DENSITY_ACTIVATION DENSITY_ACTIVATION_SOFTPLUS
+#endif
+#ifndef DENSITY_BIAS
+#define DENSITY_BIAS -1.0f
+#endif
+#ifndef RGB_PADDING
+#define RGB_PADDING 0.001f
+#endif
+
+// sigmoid(x) = 1/(1 + e^−x), evaluated through e = exp(−|x|) ≤ 1 so nothing overflows at |x| = 1e4 and the
+// small side keeps its relative accuracy (e/(1 + e) instead of 1 − 1/(1 + e^|x|)).
+inline float stable_sigmoid(float x) {
+  const float e = exp(-fabs(x));
+  return x >= 0.0f ? 1.0f / (1.0f + e) : e / (1.0f + e);
+}
+
+// sigmoid'(x) = sigmoid(x)·(1 − sigmoid(x)) = e/(1 + e)², e = exp(−|x|): even in x, finite everywhere, and
+// accurate where 1 − sigmoid(x) would round to 0 (x > 17).
+inline float stable_sigmoid_grad(float x) {
+  const float e = exp(-fabs(x));
+  const float one_plus_e = 1.0f + e;
+  return e / (one_plus_e * one_plus_e);
+}
+
+// softplus(x) = log(1 + e^x) = max(x, 0) + log1p(e^−|x|): no overflow for large x (official uses
+// jax.nn.softplus, which is computed the same way), no cancellation for very negative x.
+inline float stable_softplus(float x) { return fmax(x, 0.0f) + log1p(exp(-fabs(x))); }
+
+inline float density_activation(float raw) {
+  const float x = raw + DENSITY_BIAS;
+#if DENSITY_ACTIVATION == DENSITY_ACTIVATION_RELU
+  return fmax(x, 0.0f);
+#else
+  return stable_softplus(x);
+#endif
+}
+
+// d density / d raw: softplus' = sigmoid; relu' = 1 for x > 0 and 0 otherwise (0 at x = 0, as JAX's relu).
+inline float density_activation_grad(float raw) {
+  const float x = raw + DENSITY_BIAS;
+#if DENSITY_ACTIVATION == DENSITY_ACTIVATION_RELU
+  return x > 0.0f ? 1.0f : 0.0f;
+#else
+  return stable_sigmoid(x);
+#endif
+}
+
+inline float rgb_activation(float raw) { return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid(raw) - RGB_PADDING; }
+
+inline float rgb_activation_grad(float raw) { return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid_grad(raw); }
+
+// density[i] = density_activation(raw_density[i]); rgb[i][c] = rgb_activation(raw_rgb[i][c]). One item per row.
+__kernel void activations_fwd(__global const float* raw_density, __global const float* raw_rgb,
+                              __global float* density, __global float* rgb, const uint n_rows) {
+  const size_t i = get_global_id(0);
+  if (i >= n_rows) return;
+  density[i] = density_activation(raw_density[i]);
+  for (int c = 0; c < 3; ++c) rgb[3 * i + c] = rgb_activation(raw_rgb[3 * i + c]);
+}
+
+// Backward: the forward saves nothing beyond its inputs (the raw values), from which each derivative is
+// recomputed. d_raw_density [rows], d_raw_rgb [rows][3].
+__kernel void activations_bwd(__global const float* raw_density, __global const float* raw_rgb,
+                              __global const float* d_density, __global const float* d_rgb,
+                              __global float* d_raw_density, __global float* d_raw_rgb, const uint n_rows) {
+  const size_t i = get_global_id(0);
+  if (i >= n_rows) return;
+  d_raw_density[i] = d_density[i] * density_activation_grad(raw_density[i]);
+  for (int c = 0; c < 3; ++c) d_raw_rgb[3 * i + c] = d_rgb[3 * i + c] * rgb_activation_grad(raw_rgb[3 * i + c]);
+}
+
+#endif

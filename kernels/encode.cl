@@ -1,0 +1,98 @@
+// Integrated positional encoding (stage 4; mip-NeRF eq. 14, official integrated_pos_enc with diag = True),
+// NeRF's positional encoding, and the fused Gaussian + IPE kernel. Needs gaussian.cl before it in the program.
+//
+// For each degree l = min_deg..max_deg−1 (L = max_deg − min_deg) and axis a:
+//   y = 2^l·μ_a,  v = 4^l·σ²_a,  features exp(−v/2)·sin(y) and exp(−v/2)·cos(y)
+// Feature order (docs/ARCHITECTURE.md; official order, which the MLP's weights depend on):
+//   ipe_features [rows][6L]: the 3L sines, then the 3L cosines; inside each block index (l − min_deg)·3 + a.
+//   pe features  [rows][F]:  with append_identity the 3 raw values first, then the 3L sines, then the 3L cosines
+//                            (F = 3·append_identity + 6L); view directions use degrees 0..3 + identity = 27,
+//                            the NeRF baseline's positions degrees 0..9 + identity = 63.
+// The official code gets the cosines as sin(y + π/2); we call cos(y), the same value without the rounding of
+// y + π/2 (which for |y| ~ 1e5 alone moves the argument by ~4e-3).
+//
+// Accuracy of large arguments (|y| up to 2^15·|μ|):
+//  - y = 2^l·μ and v = 4^l·σ² are exact in float32: scaling by a power of two only changes the exponent.
+//  - sin and cos are OpenCL's built-ins, which the OpenCL C specification bounds to 4 ulp over the whole float
+//    range; implementations meet that with an exact (Payne–Hanek style) range reduction for large arguments. It
+//    does not hold under -cl-fast-relaxed-math or with native_sin, which mipnerf-cl never uses. The test suite
+//    checks the features against a long-double reference for |y| up to 2^15·100 on the test device.
+//  - What remains is the error of μ itself: a float μ is within half an ulp of the true mean, and the feature is
+//    exact for that float. At degree 15 one ulp of μ ~ 1 moves y by 2^15·2^−23 ≈ 0.004 rad; that is a
+//    property of float32 inputs, not of the encoding, and exp(−v/2) makes those features vanish for any frustum
+//    wider than ~2^−15.
+// A feature whose attenuation underflows to 0 is written as 0 without evaluating sin/cos (exactly what the
+// product would give for finite y, and a saving: most high-degree features of wide frustums are 0).
+
+#ifndef MIPNERF_ENCODE_CL
+#define MIPNERF_ENCODE_CL
+
+// Writes degree `degree`'s 3 sines at sin_out[0..2] and 3 cosines at cos_out[0..2] for mean μ, variance σ².
+inline void encode_degree(float3 mean, float3 var, int degree, __global float* sin_out, __global float* cos_out) {
+  const float scale = ldexp(1.0f, degree);  // 2^l, exact
+  const float3 y = mean * scale;            // exact: a power-of-two scaling
+  const float3 atten = exp(-0.5f * (var * (scale * scale)));
+  const float a[3] = {atten.x, atten.y, atten.z};
+  const float yy[3] = {y.x, y.y, y.z};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (a[axis] == 0.0f) {
+      sin_out[axis] = 0.0f;
+      cos_out[axis] = 0.0f;
+    } else {
+      sin_out[axis] = a[axis] * sin(yy[axis]);
+      cos_out[axis] = a[axis] * cos(yy[axis]);
+    }
+  }
+}
+
+// One item per (row, degree index l): ipe_features [rows][6L] from means, covs [rows][3].
+__kernel void ipe_fwd(__global const float* means, __global const float* covs, __global float* features,
+                      const uint n_rows, const int min_deg, const int max_deg) {
+  const uint n_degrees = (uint)(max_deg - min_deg);
+  const size_t item = get_global_id(0);
+  if (item >= (size_t)n_rows * n_degrees) return;
+  const size_t row = item / n_degrees;
+  const uint l = (uint)(item % n_degrees);
+  __global float* out = features + row * 6 * n_degrees;
+  encode_degree(load3(means, row), load3(covs, row), min_deg + (int)l, out + 3 * l, out + 3 * (n_degrees + l));
+}
+
+// One item per (row, degree index l), or per row when L = 0 (identity only): features [rows][F] from x [rows][3].
+// The identity is written by the item of l = 0.
+__kernel void pe_fwd(__global const float* x, __global float* features, const uint n_rows, const int min_deg,
+                     const int max_deg, const uint append_identity) {
+  const uint n_degrees = (uint)(max_deg - min_deg);
+  const uint items_per_row = n_degrees > 0 ? n_degrees : 1;
+  const size_t item = get_global_id(0);
+  if (item >= (size_t)n_rows * items_per_row) return;
+  const size_t row = item / items_per_row;
+  const uint l = (uint)(item % items_per_row);
+  const uint identity = append_identity ? 3 : 0;
+  __global float* out = features + row * (identity + 6 * n_degrees);
+  const float3 value = load3(x, row);
+  if (identity && l == 0) store3(out, 0, value);
+  if (n_degrees == 0) return;
+  // A zero variance makes every attenuation exp(0) = 1 exactly: PE is IPE with σ² = 0, bit for bit.
+  encode_degree(value, (float3)(0.0f), min_deg + (int)l, out + identity + 3 * l,
+                out + identity + 3 * (n_degrees + l));
+}
+
+// Fused gaussian_fwd + ipe_fwd: ipe_features [R·N][6L] straight from the rays and edges, without writing the
+// means and covariances. One item per (row, degree index l); each recomputes its row's Gaussian (a few
+// flops against three sin/cos pairs) so every item is independent.
+__kernel void gaussian_ipe_fwd(__global const float* origins, __global const float* directions,
+                               __global const float* radii, __global const float* t_edges,
+                               __global float* features, const uint n_rays, const uint n_samples,
+                               const int min_deg, const int max_deg) {
+  const uint n_degrees = (uint)(max_deg - min_deg);
+  const size_t item = get_global_id(0);
+  if (item >= (size_t)n_rays * n_samples * n_degrees) return;
+  const size_t row = item / n_degrees;
+  const uint l = (uint)(item % n_degrees);
+  float3 mean, cov;
+  row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
+  __global float* out = features + row * 6 * n_degrees;
+  encode_degree(mean, cov, min_deg + (int)l, out + 3 * l, out + 3 * (n_degrees + l));
+}
+
+#endif

@@ -1,0 +1,112 @@
+// Conical frustum (or cylinder) → Gaussian with diagonal covariance (stage 3; mip-NeRF §3.1, supplement
+// eq. 23), and point samples at interval midpoints (NeRF baseline). The inline functions are shared with
+// encode.cl's fused gaussian_ipe_fwd, which must produce exactly what gaussian_fwd then ipe_fwd produce.
+//
+// Layouts: origins, directions [R][3]; radii [R]; t_edges [R][N+1]; means, covs [R][N][3] (rows = R·N).
+// Conventions (official mip.py): `directions` are not normalised, t is measured along them, and `radii` is the
+// cone's radius at t = 1 (cone) or the cylinder's radius (cylinder).
+
+#ifndef MIPNERF_GAUSSIAN_CL
+#define MIPNERF_GAUSSIAN_CL
+
+// Contraction of a*b + c into an fma is left to the compiler by default and may differ between kernels that
+// inline the same function; IPE scales means by up to 2^15, so a one-ulp difference would be visible in the
+// features. Off, the Gaussian is bit-identical in gaussian_fwd and gaussian_ipe_fwd.
+#pragma OPENCL FP_CONTRACT OFF
+
+#define RAY_SHAPE_CONE 0
+#define RAY_SHAPE_CYLINDER 1
+#ifndef RAY_SHAPE
+#define RAY_SHAPE RAY_SHAPE_CONE
+#endif
+
+// Moments along the ray: (t_mean, t_var, r_var) of one interval.
+//
+// Cone (supplement eq. 23), with t_μ = (t0 + t1)/2 and t_δ = (t1 − t0)/2:
+//   t_mean = t_μ + 2·t_μ·t_δ² / (3t_μ² + t_δ²)
+//   t_var  = t_δ²/3 − (4/15)·t_δ⁴·(12t_μ² − t_δ²) / (3t_μ² + t_δ²)²
+//   r_var  = r²·(t_μ²/4 + (5/12)·t_δ² − (4/15)·t_δ⁴ / (3t_μ² + t_δ²))
+// written with ratio = t_δ²/(3t_μ² + t_δ²) ∈ [0, 1] and q = (12t_μ² − t_δ²)/(3t_μ² + t_δ²) ∈ [−1, 4] so no
+// intermediate (t_δ⁴, the squared denominator) overflows or underflows before the result does:
+//   t_mean = t_μ·(1 + 2·ratio),  t_var = t_δ²·(1/3 − (4/15)·ratio·q),  r_var = r²·(t_μ²/4 + t_δ²·(5/12 − (4/15)·ratio))
+// For t0 ≥ 0 the bracket of t_var lies in [3/20, 1/3], so there is no cancellation anywhere: the relative error is
+// a few ulp whatever the width (unlike eqs. 20–22, which subtract nearly equal powers of t0 and t1).
+// The denominator is 0 only for t0 = t1 = 0, where every term it divides is 0 too; the guard makes that 0/0 a 0.
+inline float3 conical_frustum_moments(float t0, float t1, float radius) {
+  const float mu = 0.5f * (t0 + t1);
+  const float hw = 0.5f * (t1 - t0);
+  const float mu2 = mu * mu, hw2 = hw * hw;
+  const float denom = fmax(3.0f * mu2 + hw2, FLT_MIN);
+  const float ratio = hw2 / denom;
+  const float q = (12.0f * mu2 - hw2) / denom;
+  const float t_mean = mu * (1.0f + 2.0f * ratio);
+  const float t_var = hw2 * (1.0f / 3.0f - (4.0f / 15.0f) * ratio * q);
+  const float r_var = radius * radius * (0.25f * mu2 + hw2 * (5.0f / 12.0f - (4.0f / 15.0f) * ratio));
+  return (float3)(t_mean, t_var, r_var);
+}
+
+// Cylinder of radius r (official cylinder_to_gaussian): uniform along t, uniform disc across.
+inline float3 cylinder_moments(float t0, float t1, float radius) {
+  const float width = t1 - t0;
+  return (float3)(0.5f * (t0 + t1), width * width / 12.0f, 0.25f * radius * radius);
+}
+
+// Lifts the moments along the ray to a diagonal 3-D covariance (official lift_gaussian, diag = True):
+//   mean = o + t_mean·d,   cov = t_var·d² + r_var·(1 − d²/|d|²)   (element-wise squares).
+// 1 − d_x²/|d|² is written (d_y² + d_z²)/|d|², its exact equal without the cancellation when d is close to the
+// x axis. |d|² ≥ 1e-10 as the official code clamps it (a zero direction gives a finite 0 covariance).
+inline void lift_gaussian(float3 origin, float3 dir, float3 moments, float3* mean, float3* cov) {
+  const float3 d2 = dir * dir;
+  const float d_mag_sq = fmax(1e-10f, d2.x + d2.y + d2.z);
+  const float3 null_outer = (float3)(d2.y + d2.z, d2.x + d2.z, d2.x + d2.y) / d_mag_sq;
+  *mean = origin + moments.x * dir;
+  *cov = moments.y * d2 + moments.z * null_outer;
+}
+
+// The Gaussian of interval [t0, t1] of a ray, for the RAY_SHAPE this program is built with.
+inline void interval_gaussian(float3 origin, float3 dir, float radius, float t0, float t1, float3* mean,
+                              float3* cov) {
+#if RAY_SHAPE == RAY_SHAPE_CYLINDER
+  const float3 moments = cylinder_moments(t0, t1, radius);
+#else
+  const float3 moments = conical_frustum_moments(t0, t1, radius);
+#endif
+  lift_gaussian(origin, dir, moments, mean, cov);
+}
+
+// The Gaussian of row = ray·N + i (interval i of `ray`).
+inline void row_gaussian(__global const float* origins, __global const float* directions,
+                         __global const float* radii, __global const float* t_edges, size_t row, uint n_samples,
+                         float3* mean, float3* cov) {
+  const size_t ray = row / n_samples, i = row % n_samples;
+  __global const float* t = t_edges + ray * (n_samples + 1);
+  interval_gaussian(load3(origins, ray), load3(directions, ray), radii[ray], t[i], t[i + 1], mean, cov);
+}
+
+// One item per row: means [R][N][3], covs [R][N][3].
+__kernel void gaussian_fwd(__global const float* origins, __global const float* directions,
+                           __global const float* radii, __global const float* t_edges, __global float* means,
+                           __global float* covs, const uint n_rays, const uint n_samples) {
+  const size_t row = get_global_id(0);
+  if (row >= (size_t)n_rays * n_samples) return;
+  float3 mean, cov;
+  row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
+  store3(means, row, mean);
+  store3(covs, row, cov);
+}
+
+// NeRF's point samples: mean = o + t_mid·d at the interval midpoint t_mid = (t0 + t1)/2, covariance 0 (so the
+// IPE of these rows is NeRF's PE). One item per row.
+__kernel void gaussian_points_fwd(__global const float* origins, __global const float* directions,
+                                  __global const float* t_edges, __global float* means, __global float* covs,
+                                  const uint n_rays, const uint n_samples) {
+  const size_t row = get_global_id(0);
+  if (row >= (size_t)n_rays * n_samples) return;
+  const size_t ray = row / n_samples, i = row % n_samples;
+  __global const float* t = t_edges + ray * (n_samples + 1);
+  const float t_mid = 0.5f * (t[i] + t[i + 1]);
+  store3(means, row, load3(origins, ray) + t_mid * load3(directions, ray));
+  store3(covs, row, (float3)(0.0f));
+}
+
+#endif

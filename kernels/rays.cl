@@ -1,0 +1,155 @@
+// Camera rays (stage 1): for each (camera, pixel) of a batch its origin, direction, unit view direction, cone
+// radius, sampling range and loss weight. Cameras are packed [C][CAMERA_STRIDE] (common.cl, host/data/camera.hpp).
+//
+// Conventions (official mip-NeRF datasets.py; host/data/camera.hpp's camera_ray is the same math in double):
+//  - Blender/OpenGL axes: the camera looks down −z_camera, y_camera is up; camera_to_world is Blender's
+//    transform_matrix. pixel_ids[i] = y·width + x, y counted from the top row.
+//  - Pixel (x, y) is sampled at image position (x + PIXEL_CENTER_OFFSET, y + PIXEL_CENTER_OFFSET) (official
+//    and paper: 0.5, the pixel centre; original NeRF: 0), or with SUBPIXEL_JITTER at (x + ξ0, y + ξ1), ξ uniform
+//    in [0, 1) from rng_uniform4(seed, first_ray + i, step, 0, RNG_STREAM_SUBPIXEL) (supersampling baselines).
+//  - Camera-frame direction ((px − cx)/fx, −(py − cy)/fy, −1): not normalised, so t is depth along the optical
+//    axis and near/far are depths. `viewdirs` is the unit world direction.
+//  - Cone radius at t = 1 (RAY_SHAPE_CONE): the distance between the directions of horizontally neighbouring
+//    pixels, times 2/√12, so the cone's disc has the per-axis variance r²/4 = w²/12 of the pixel's square
+//    footprint of width w (paper §3.1). Those directions differ by camera_to_world·(1/fx, 0, 0) whatever the
+//    pixel, so the distance is |column 0 of the rotation|/fx, computed without subtracting two nearby vectors.
+//    (The official code differences the array along its first image axis, i.e. vertical neighbours, |col 1|/fy,
+//    despite its comment; the two agree whenever fx = fy, as in every dataset it loads.)
+//  - RAY_SHAPE_CYLINDER: forward-facing scenes in normalised device coordinates (official LLFF, convert_to_ndc
+//    with near plane NDC_NEAR_PLANE = 1): origin and direction are the NDC ray, t ∈ [0, 1] spans the near plane
+//    to infinity, and the radius is the mean of the distances from the pixel's NDC origin to its horizontal and
+//    vertical neighbours' (the next pixel; the previous one in the last column/row, as official), times 2/√12.
+//    The dataset packs near = 0, far = 1 for these scenes; this kernel copies near/far from the camera either way.
+//  - Invalid input (camera id ≥ n_cameras, pixel id ≥ width·height) gives NaN in every output of that ray, so
+//    it cannot pass unnoticed downstream.
+
+#ifndef MIPNERF_RAYS_CL
+#define MIPNERF_RAYS_CL
+
+#define RAY_SHAPE_CONE 0
+#define RAY_SHAPE_CYLINDER 1
+#ifndef RAY_SHAPE
+#define RAY_SHAPE RAY_SHAPE_CONE
+#endif
+#ifndef PIXEL_CENTER_OFFSET
+#define PIXEL_CENTER_OFFSET 0.5f
+#endif
+#ifndef SUBPIXEL_JITTER
+#define SUBPIXEL_JITTER 0
+#endif
+#ifndef VIEW_DEPENDENCE
+#define VIEW_DEPENDENCE 1
+#endif
+#ifndef NDC_NEAR_PLANE
+#define NDC_NEAR_PLANE 1.0f
+#endif
+
+#define RADIUS_PER_PIXEL_WIDTH 0.577350269189625764f /* 2/√12 = 1/√3 */
+
+// camera_to_world's rotation applied to a camera-frame vector.
+inline float3 camera_rotate(__global const float* cam, float3 v) {
+  __global const float* m = cam + CAMERA_TO_WORLD;
+  return (float3)(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+                  m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+
+inline float3 camera_origin(__global const float* cam) {
+  return (float3)(cam[CAMERA_TO_WORLD + 3], cam[CAMERA_TO_WORLD + 7], cam[CAMERA_TO_WORLD + 11]);
+}
+
+// Change of the NDC origin between the ray of world direction `dir` and its neighbour of direction dir + step
+// (both from world origin o). NDC origin: o_near = o + t·d on the plane z = −n, o_ndc = (2fx/(w·n)·o_near.x,
+// 2fy/(h·n)·o_near.y, −1), o_near.x = o.x − (n + o.z)·d.x/d.z. The difference of d.x/d.z between the two rays is
+// written (step.x·d.z − d.x·step.z)/(d.z·(d.z + step.z)), which does not cancel.
+inline float ndc_neighbour_distance(float3 o, float3 dir, float3 step, float sx, float sy) {
+  const float n = NDC_NEAR_PLANE;
+  const float scale = -(n + o.z) / (dir.z * (dir.z + step.z));
+  const float dx = scale * (step.x * dir.z - dir.x * step.z);
+  const float dy = scale * (step.y * dir.z - dir.y * step.z);
+  const float ex = sx / n * dx, ey = sy / n * dy;
+  return sqrt(ex * ex + ey * ey);
+}
+
+inline void write_nan_ray(size_t i, __global float* origins, __global float* directions, __global float* viewdirs,
+                          __global float* radii, __global float* near, __global float* far,
+                          __global float* lossmult) {
+  const float3 nan3 = (float3)(NAN);
+  store3(origins, i, nan3);
+  store3(directions, i, nan3);
+#if VIEW_DEPENDENCE
+  store3(viewdirs, i, nan3);
+#endif
+  radii[i] = NAN;
+  near[i] = NAN;
+  far[i] = NAN;
+  lossmult[i] = NAN;
+}
+
+// One item per ray. cameras [C][CAMERA_STRIDE], camera_ids, pixel_ids [R] → origins, directions, viewdirs [R][3],
+// radii, near, far, lossmult [R]. Without VIEW_DEPENDENCE `viewdirs` is never written (any buffer may be passed).
+__kernel void rays_fwd(__global const float* cameras, __global const uint* camera_ids,
+                       __global const uint* pixel_ids, __global float* origins, __global float* directions,
+                       __global float* viewdirs, __global float* radii, __global float* near, __global float* far,
+                       __global float* lossmult, const uint n_rays, const uint n_cameras, const ulong seed,
+                       const uint step, const uint first_ray) {
+  const size_t i = get_global_id(0);
+  if (i >= n_rays) return;
+  const uint camera_id = camera_ids[i];
+  if (camera_id >= n_cameras) {
+    write_nan_ray(i, origins, directions, viewdirs, radii, near, far, lossmult);
+    return;
+  }
+  __global const float* cam = cameras + (size_t)camera_id * CAMERA_STRIDE;
+  const uint width = (uint)cam[CAMERA_WIDTH], height = (uint)cam[CAMERA_HEIGHT];
+  const uint pixel = pixel_ids[i];
+  if (width == 0 || pixel / width >= height) {
+    write_nan_ray(i, origins, directions, viewdirs, radii, near, far, lossmult);
+    return;
+  }
+  const uint px = pixel % width, py = pixel / width;
+#if SUBPIXEL_JITTER
+  const float4 xi = rng_uniform4(seed, first_ray + (uint)i, step, 0, RNG_STREAM_SUBPIXEL);
+  const float offset_x = xi.x, offset_y = xi.y;
+#else
+  const float offset_x = PIXEL_CENTER_OFFSET, offset_y = PIXEL_CENTER_OFFSET;
+#endif
+  // px − cx is exact for integer pixels and principal points on a half-pixel grid (< 2^22), so the one rounding
+  // is in adding the sub-pixel offset, relative to the (small) distance from the principal point.
+  const float fx = cam[CAMERA_FOCAL_X], fy = cam[CAMERA_FOCAL_Y];
+  const float x_from_center = ((float)px - cam[CAMERA_CENTER_X]) + offset_x;
+  const float y_from_center = ((float)py - cam[CAMERA_CENTER_Y]) + offset_y;
+  const float3 dir = camera_rotate(cam, (float3)(x_from_center / fx, -y_from_center / fy, -1.0f));
+  const float3 origin = camera_origin(cam);
+#if VIEW_DEPENDENCE
+  store3(viewdirs, i, dir / sqrt(dot(dir, dir)));
+#endif
+#if RAY_SHAPE == RAY_SHAPE_CYLINDER
+  const float n = NDC_NEAR_PLANE;
+  const float w = cam[CAMERA_WIDTH], h = cam[CAMERA_HEIGHT];
+  // Official convert_to_ndc. The shifted origin's z is −n by construction and is used exactly.
+  const float t_shift = -(n + origin.z) / dir.z;
+  const float3 o_near = origin + t_shift * dir;
+  const float ax = -2.0f * fx / w, ay = -2.0f * fy / h;
+  store3(origins, i, (float3)(ax * o_near.x / -n, ay * o_near.y / -n, -1.0f));
+  store3(directions, i, (float3)(ax * (dir.x / dir.z - o_near.x / -n), ay * (dir.y / dir.z - o_near.y / -n), 2.0f));
+  // Neighbours: the next pixel, or the previous one in the last column / row.
+  const float step_x = px + 1 < width ? 1.0f : -1.0f, step_y = py + 1 < height ? 1.0f : -1.0f;
+  const float3 step_h = camera_rotate(cam, (float3)(step_x / fx, 0.0f, 0.0f));
+  const float3 step_v = camera_rotate(cam, (float3)(0.0f, -step_y / fy, 0.0f));
+  const float sx = 2.0f * fx / w, sy = 2.0f * fy / h;
+  const float dist_h = ndc_neighbour_distance(origin, dir, step_h, sx, sy);
+  const float dist_v = ndc_neighbour_distance(origin, dir, step_v, sx, sy);
+  radii[i] = 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
+#else
+  store3(origins, i, origin);
+  store3(directions, i, dir);
+  __global const float* m = cam + CAMERA_TO_WORLD;
+  const float column0 = sqrt(m[0] * m[0] + m[4] * m[4] + m[8] * m[8]);
+  radii[i] = column0 / fx * RADIUS_PER_PIXEL_WIDTH;
+#endif
+  near[i] = cam[CAMERA_NEAR];
+  far[i] = cam[CAMERA_FAR];
+  lossmult[i] = cam[CAMERA_LOSSMULT];
+}
+
+#endif

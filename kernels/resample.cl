@@ -1,0 +1,79 @@
+// Hierarchical resampling (stage 6; mip-NeRF §3.2 and official mip.py resample_along_rays +
+// math.py sorted_piecewise_constant_pdf): new sorted edges t_new [R][N+1] drawn from the coarse weights.
+//
+// Per ray, with coarse edges t [N+1] and weights w [N]:
+//  1. blur-pool (blur != 0): w'_i = (max(w_{i−1}, w_i) + max(w_i, w_{i+1}))/2, with w_{−1} = w_0, w_N = w_{N−1}
+//     (official: a 2-tap max filter, then a 2-tap mean filter, on the edge-padded weights);
+//  2. w'_i += padding (α = 0.01 in the paper; blur = 0, padding = 0 for the NeRF baseline);
+//  3. if Σ w' < 1e-5, add (1e-5 − Σ w')/N to every w' (official eps: an all-zero histogram becomes uniform instead
+//     of 0/0);
+//  4. cdf_0 = 0, cdf_k = min(1, Σ_{i<k} w'_i / Σ w') for k = 1..N−1, cdf_N = 1;
+//  5. N + 1 sorted u_j in [0, 1): deterministic u_j = j·(1 − ε)/N (numpy's linspace(0, 1 − ε, N + 1)), or
+//     stratified u_j = j/(N + 1) + ξ_j·(1/(N + 1) − ε), then min(u_j, 1 − ε), with ε = 2^−23 (float32 eps) and
+//     ξ_j the (j mod 4)-th value of rng_uniform4(seed, first_ray + ray, step, j / 4, RNG_STREAM_RESAMPLE);
+//  6. for each u_j, k = the last index with cdf_k ≤ u_j (official: the last True of u ≥ cdf) and
+//     t_new_j = t_k + clamp((u_j − cdf_k)/(cdf_{k+1} − cdf_k), 0, 1)·(t_{k+1} − t_k).
+// Since u and cdf are both non-decreasing, one merge-like walk finds every k: O(N) per ray, without storing the
+// CDF. The result is clamped to [t_k, t_{k+1}] so rounding cannot break sortedness. Resampling is a constant for
+// the gradient (stop-gradient, as the official stop_grad = True): there is no backward.
+
+#ifndef MIPNERF_RESAMPLE_CL
+#define MIPNERF_RESAMPLE_CL
+
+#define RESAMPLE_WEIGHT_EPS 1e-5f /* official sorted_piecewise_constant_pdf eps */
+
+// Step 1–2 for interval i of n weights w.
+inline float resample_weight(__global const float* w, uint i, uint n, const uint blur, const float padding) {
+  if (!blur) return w[i] + padding;
+  const float left = w[i > 0 ? i - 1 : 0], mid = w[i], right = w[i + 1 < n ? i + 1 : n - 1];
+  return 0.5f * (fmax(left, mid) + fmax(mid, right)) + padding;
+}
+
+// One item per ray. t_edges [R][N+1], weights [R][N] → t_new [R][N+1].
+__kernel void resample_fwd(__global const float* t_edges, __global const float* weights, __global float* t_new,
+                           const uint n_rays, const uint n_samples, const float padding, const uint blur,
+                           const uint randomized, const ulong seed, const uint step, const uint first_ray) {
+  const size_t ray = get_global_id(0);
+  if (ray >= n_rays || n_samples == 0) return;
+  const uint n = n_samples, n_out = n_samples + 1;
+  __global const float* t = t_edges + ray * n_out;
+  __global const float* w = weights + ray * n;
+  __global float* out = t_new + ray * n_out;
+
+  float sum = 0.0f;
+  for (uint i = 0; i < n; ++i) sum += resample_weight(w, i, n, blur, padding);
+  const float extra = fmax(0.0f, RESAMPLE_WEIGHT_EPS - sum);
+  const float add = extra / (float)n;
+  sum += extra;
+
+  // The walk: interval k spans [cdf_lo, cdf_hi]; partial = Σ_{i≤k} w'_i / Σ w' (unclamped).
+  uint k = 0;
+  float partial = (resample_weight(w, 0, n, blur, padding) + add) / sum;
+  float cdf_lo = 0.0f;
+  float cdf_hi = n == 1 ? 1.0f : fmin(1.0f, partial);
+  const float eps = FLT_EPSILON;
+  const float stratum = 1.0f / (float)n_out;
+  float xi[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  for (uint j = 0; j < n_out; ++j) {
+    float u;
+    if (randomized) {
+      if (j % 4 == 0) vstore4(rng_uniform4(seed, first_ray + (uint)ray, step, j / 4, RNG_STREAM_RESAMPLE), 0, xi);
+      u = (float)j * stratum + xi[j % 4] * (stratum - eps);
+    } else {
+      u = (float)j * ((1.0f - eps) / (float)n);
+    }
+    u = fmin(u, 1.0f - eps);
+    while (k + 1 < n && cdf_hi <= u) {
+      ++k;
+      cdf_lo = cdf_hi;
+      partial += (resample_weight(w, k, n, blur, padding) + add) / sum;
+      cdf_hi = k + 1 == n ? 1.0f : fmin(1.0f, partial);
+    }
+    const float t_lo = t[k], t_hi = t[k + 1];
+    // cdf_hi > u ≥ cdf_lo here, except at the last interval where cdf_hi = 1 > u too: the ratio is finite.
+    const float frac = clamp((u - cdf_lo) / (cdf_hi - cdf_lo), 0.0f, 1.0f);
+    out[j] = clamp(t_lo + frac * (t_hi - t_lo), t_lo, t_hi);
+  }
+}
+
+#endif

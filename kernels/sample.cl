@@ -1,0 +1,79 @@
+// Stratified sampling of interval edges along each ray (stage 2; official mip.py sample_along_rays), and the
+// sorted union of two edge sets per ray (NeRF baseline's fine pass: coarse ∪ fine samples).
+//
+// t_edges [R][N+1]: edge k of N + 1 before jitter is
+//   t_k = near·(1 − s) + far·s                    (linear in depth), or
+//   t_k = 1 / ((1 − s)/near + s/far)              (SAMPLE_LINDISP: linear in disparity; needs near > 0)
+// with s = k/N. Jittered (randomized != 0), edge k is drawn uniformly between the midpoints of its neighbours:
+//   lower_k = k = 0 ? t_0 : (t_{k−1} + t_k)/2,   upper_k = k = N ? t_N : (t_k + t_{k+1})/2
+//   edge_k = lower_k + (upper_k − lower_k)·u_k
+// so the edges stay sorted and t_0, t_N stay inside [near, far]. u_k is the (k mod 4)-th value of
+// rng_uniform4(seed, first_ray + ray, step, k / 4, RNG_STREAM_STRATIFIED): a function of (seed, step, ray),
+// whatever the chunking or device. Sampling is a constant for the gradient (no backward).
+
+#ifndef MIPNERF_SAMPLE_CL
+#define MIPNERF_SAMPLE_CL
+
+#ifndef SAMPLE_LINDISP
+#define SAMPLE_LINDISP 0
+#endif
+
+// Deterministic edge k of n_samples intervals between near and far.
+inline float stratified_edge(float near, float far, uint k, uint n_samples) {
+  const float s = (float)k / (float)n_samples;
+#if SAMPLE_LINDISP
+  return 1.0f / ((1.0f - s) / near + s / far);
+#else
+  return near * (1.0f - s) + far * s;
+#endif
+}
+
+// One item per (ray, group of 4 edges): one Philox call gives the 4 jitters of a group.
+__kernel void sample_stratified_fwd(__global const float* near, __global const float* far,
+                                    __global float* t_edges, const uint n_rays, const uint n_samples,
+                                    const uint randomized, const ulong seed, const uint step,
+                                    const uint first_ray) {
+  const uint n_edges = n_samples + 1;
+  const uint groups = (n_edges + 3) / 4;
+  const size_t item = get_global_id(0);
+  if (item >= (size_t)n_rays * groups) return;
+  const size_t ray = item / groups;
+  const uint group = (uint)(item % groups);
+  const float t_near = near[ray], t_far = far[ray];
+  float u[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  if (randomized) vstore4(rng_uniform4(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED), 0, u);
+  __global float* out = t_edges + ray * n_edges;
+  for (uint j = 0; j < 4; ++j) {
+    const uint k = 4 * group + j;
+    if (k >= n_edges) break;
+    const float t_k = stratified_edge(t_near, t_far, k, n_samples);
+    if (!randomized) {
+      out[k] = t_k;
+      continue;
+    }
+    const float lower = k == 0 ? t_k : 0.5f * (stratified_edge(t_near, t_far, k - 1, n_samples) + t_k);
+    const float upper = k == n_samples ? t_k : 0.5f * (t_k + stratified_edge(t_near, t_far, k + 1, n_samples));
+    out[k] = lower + (upper - lower) * u[j];
+  }
+}
+
+// Sorted union of two sorted sets per ray: t_out [R][len_a + len_b] from t_a [R][len_a] and t_b [R][len_b]
+// (a stable merge: on ties the value from t_a comes first; the values are the same either way). One item per
+// ray, O(len_a + len_b).
+__kernel void sample_merge_fwd(__global const float* t_a, __global const float* t_b, __global float* t_out,
+                               const uint n_rays, const uint len_a, const uint len_b) {
+  const size_t ray = get_global_id(0);
+  if (ray >= n_rays) return;
+  __global const float* a = t_a + ray * len_a;
+  __global const float* b = t_b + ray * len_b;
+  __global float* out = t_out + ray * (len_a + len_b);
+  uint i = 0, j = 0;
+  while (i < len_a || j < len_b) {
+    const int take_a = j >= len_b || (i < len_a && a[i] <= b[j]);
+    out[i + j] = take_a ? a[i] : b[j];
+    if (take_a) ++i;
+    else ++j;
+  }
+}
+
+#endif
