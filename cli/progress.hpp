@@ -1,0 +1,39 @@
+// A progress line for long work (train, render, eval, tune): redrawn in place on a terminal, printed
+// as plain lines (every few seconds) when stderr is a file or a pipe, so logs stay readable.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+namespace mipnerf::cli {
+
+class Progress {
+ public:
+  // `what` prefixes the line ("train", "render val"); `total` is the number of units of work.
+  Progress(std::string what, int64_t total);
+  ~Progress();
+
+  // Reports `done` units finished, with extra text (e.g. "loss 0.012 psnr 24.1 dB 1840 rays/s").
+  void update(int64_t done, const std::string& detail = {});
+  // Ends the line (keeps the last state on screen).
+  void finish(const std::string& detail = {});
+
+  double elapsed_seconds() const;
+
+ private:
+  void draw(int64_t done, const std::string& detail, bool force);
+
+  std::string what_;
+  int64_t total_;
+  int64_t start_done_ = -1;  // units already done when this run started (resume)
+  bool tty_;
+  bool finished_ = false;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_draw_;
+};
+
+// "1h02m", "3m07s", "12s": a duration for humans.
+std::string format_duration(double seconds);
+
+}  // namespace mipnerf::cli
