@@ -10,12 +10,14 @@
 namespace mipnerf::io {
 namespace {
 
-// nlohmann's message without its "[json.exception.parse_error.101] parse error at line 1, column 2: "
-// prefix (we give the position ourselves), on one line.
+// nlohmann's message without its "[json.exception.parse_error.101] " prefix and without the "parse error at
+// line 1, column 2: " it repeats (we give the position ourselves), on one line.
 std::string parse_reason(const std::string& what) {
   std::string reason = what;
+  const auto bracket = reason.find("] ");
+  if (reason.rfind("[json.exception.", 0) == 0 && bracket != std::string::npos) reason = reason.substr(bracket + 2);
   const auto colon = reason.find(": ");
-  if (reason.rfind("[json.exception.", 0) == 0 && colon != std::string::npos) reason = reason.substr(colon + 2);
+  if (reason.rfind("parse error", 0) == 0 && colon != std::string::npos) reason = reason.substr(colon + 2);
   std::replace(reason.begin(), reason.end(), '\n', ' ');
   return reason;
 }
@@ -52,6 +54,23 @@ Json parse_json(const std::string& text, const std::string& name) {
     }
     throw Error(name + ": malformed JSON at line " + std::to_string(line) + ", column " + std::to_string(column) +
                 ": " + parse_reason(e.what()) + "; " + hint);
+  } catch (const Json::out_of_range& e) {
+    // A number too large for a double (e.g. 1e999) would be infinite. nlohmann gives no position, only the
+    // text ("number overflow parsing '1e999'"): find it in the file to give one.
+    const std::string what = e.what();
+    const auto open = what.find('\''), close = what.rfind('\'');
+    std::string where_text;
+    if (open != std::string::npos && close > open) {
+      const auto at = text.find(what.substr(open + 1, close - open - 1));
+      if (at != std::string::npos) {
+        const auto [line, column] = line_column(text, at + 1);
+        where_text = " at line " + std::to_string(line) + ", column " + std::to_string(column);
+      }
+    }
+    throw Error(name + ": malformed JSON" + where_text + ": " + parse_reason(what) +
+                "; the number is not finite as a double: regenerate the file with finite values");
+  } catch (const Json::exception& e) {
+    throw Error(name + ": malformed JSON: " + parse_reason(e.what()));
   }
 }
 

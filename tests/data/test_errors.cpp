@@ -1,0 +1,180 @@
+// Every kind of bad input gives a one-line mipnerf::Error that names the file and says what is wrong:
+// missing files, malformed JSON, missing keys, images of differing size, non-finite or non-rigid poses,
+// unreadable PNGs, lens distortion, other image types, inconsistent intrinsics and near/far.
+#include <doctest/doctest.h>
+
+#include <fstream>
+
+#include "data/dataset.hpp"
+#include "data/multiscale.hpp"
+#include "data/pose.hpp"
+#include "data_fixtures.hpp"
+
+using namespace mipnerf;
+using test::contains;
+using test::error_of;
+
+namespace {
+
+// A valid 2-frame Blender split in a fresh folder; `edit` changes its transforms JSON before loading.
+struct BrokenSet {
+  test::TempDir dir;
+  BrokenSet() { test::write_blender_split(dir.path(), "train", 2, 4, 4); }
+  std::string json_path() const { return dir / "transforms_train.json"; }
+  io::Json json() const { return io::read_json(json_path()); }
+  void write(const io::Json& value) const { io::write_json(json_path(), value); }
+  void write_text(const std::string& text) const { std::ofstream(json_path()) << text; }
+  // The error of loading the folder; checks it is one line.
+  std::string load_error() const {
+    const std::string message = error_of([this] { data::load_dataset(dir.path()); });
+    CHECK(message.find('\n') == std::string::npos);
+    return message;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("errors: missing folder, folder without a dataset, missing image") {
+  BrokenSet set;
+  CHECK(contains(error_of([&] { data::load_dataset(set.dir / "nowhere"); }),
+                 "nowhere: no such file or folder (create a scene with `mipnerf-cl make-scene"));
+  std::filesystem::create_directories(set.dir / "empty");
+  CHECK(contains(error_of([&] { data::load_dataset(set.dir / "empty"); }),
+                 "empty: no dataset here: expected transforms_train.json (Blender), metadata.json"));
+  std::filesystem::remove(set.dir / "train/r_1.png");
+  CHECK(set.load_error() == set.dir / "train/r_1.png: no such file (listed by " + set.json_path() + ": frames[1])");
+}
+
+TEST_CASE("errors: malformed JSON and numbers that overflow give the file and the position") {
+  BrokenSet set;
+  set.write_text("{\"camera_angle_x\": 0.69,\n \"frames\": [}\n");
+  CHECK(contains(set.load_error(), set.json_path() + ": malformed JSON at line 2, column 13: syntax error"));
+  set.write_text("{\"camera_angle_x\": 0.69,\n \"frames\": [{\"file_path\": \"./train/r_0\", \"transform_matrix\": "
+                 "[[NaN, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}]}");
+  CHECK(contains(set.load_error(), "malformed JSON at line 2, column 64"));
+  CHECK(contains(set.load_error(), "non-finite"));
+  set.write_text("{\"camera_angle_x\": 0.69,\n \"frames\": [{\"file_path\": \"./train/r_0\", \"transform_matrix\": "
+                 "[[1e999, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]}]}");
+  CHECK(contains(set.load_error(), set.json_path() + ": malformed JSON at line 2, column 64: number overflow"));
+  CHECK(contains(set.load_error(), "not finite"));
+}
+
+TEST_CASE("errors: missing keys name the key and the frame") {
+  BrokenSet set;
+  auto json = set.json();
+  json["frames"][1].erase("transform_matrix");
+  set.write(json);
+  CHECK(set.load_error() == set.json_path() + ": frames[1]: missing key 'transform_matrix'");
+  json = set.json();
+  json.erase("frames");
+  set.write(json);
+  CHECK(set.load_error() == set.json_path() + ": missing key 'frames'");
+  set.write({{"camera_angle_x", 0.7}, {"frames", {{{"transform_matrix", data::pose_to_json(test::test_pose(0))}}}}});
+  CHECK(set.load_error() == set.json_path() + ": frames[0]: missing key 'file_path'");
+  set.write({{"frames", {{{"file_path", "./train/r_0"}, {"transform_matrix", data::pose_to_json(test::test_pose(0))}}}}});
+  CHECK(set.load_error() == set.json_path() + ": frames[0]: no focal length: give 'fl_x' (pixels) or "
+                                              "'camera_angle_x' (radians)");
+  set.write({{"camera_angle_x", "wide"}, {"frames", io::Json::array()}});
+  CHECK(set.load_error() == set.json_path() + ": 'camera_angle_x' must be a number, got string");
+}
+
+TEST_CASE("errors: images of differing size in a Blender split") {
+  BrokenSet set;
+  const auto rgba = test::test_rgba8(0, 6, 4);
+  io::write_png8(set.dir / "train/r_1.png", 6, 4, 4, rgba.data());
+  CHECK(set.load_error() == set.dir / "train/r_1.png: the image is 6x4 but " + set.dir / "train/r_0.png is 4x4; "
+                                      "every image of a Blender split must have the same size (resize or re-render it)");
+}
+
+TEST_CASE("errors: non-rigid, mirrored, malformed and non-finite poses") {
+  BrokenSet set;
+  auto json = set.json();
+  // Scaled by 1.01: |RᵀR − I| = 0.0201.
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) json["frames"][1]["transform_matrix"][r][c] = json["frames"][1]["transform_matrix"][r][c].get<double>() * 1.01;
+  set.write(json);
+  CHECK(contains(set.load_error(), set.json_path() + ": frames[1]: the pose's rotation is not orthonormal (max "
+                                                     "|R^T R - I| = 0.0201, tolerance 0.001)"));
+  json = set.json();
+  for (int r = 0; r < 3; ++r) json["frames"][0]["transform_matrix"][r][0] = -json["frames"][0]["transform_matrix"][r][0].get<double>();
+  set.write(json);
+  CHECK(contains(set.load_error(), set.json_path() + ": frames[0]: the pose's rotation has determinant -1 instead "
+                                                     "of +1: it is a reflection"));
+  json = set.json();
+  json["frames"][0]["transform_matrix"][3][0] = 0.5;
+  set.write(json);
+  CHECK(contains(set.load_error(), "frames[0]: the pose's last row must be 0 0 0 1"));
+  json = set.json();
+  json["frames"][0]["transform_matrix"] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  set.write(json);
+  CHECK(contains(set.load_error(), "frames[0]: the pose must be a 4x4 (or 3x4) array of rows of numbers"));
+  json["frames"][0]["transform_matrix"] = {{1, 0, 0, "x"}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+  set.write(json);
+  CHECK(contains(set.load_error(), "(row 0 holds a string)"));
+  // A pose built in memory (not through JSON, which cannot hold NaN) is checked for finiteness too.
+  data::Matrix34 nan_pose = test::test_pose(0);
+  nan_pose[7] = std::nan("");
+  CHECK(error_of([&] { data::check_rigid_pose(nan_pose, "mem"); }) ==
+        "mem: the pose has a non-finite entry; fix or drop this frame");
+  // The tolerance accepts float32-rounded rotations (Blender's files).
+  data::Matrix34 rounded = test::test_pose(2);
+  for (double& v : rounded) v = static_cast<float>(v);
+  CHECK(error_of([&] { data::check_rigid_pose(rounded, "ok"); }).empty());
+}
+
+TEST_CASE("errors: unreadable PNGs and other image types") {
+  BrokenSet set;
+  { std::ofstream(set.dir / "train/r_1.png") << "GIF89a not a png"; }
+  CHECK(set.load_error() == set.dir / "train/r_1.png: unreadable PNG (not a PNG file: the signature is missing); "
+                                      "re-export it as an 8- or 16-bit PNG");
+  const auto rgba = test::test_rgba8(0, 4, 4);
+  auto bytes = io::encode_png8(4, 4, 4, rgba.data());
+  bytes.resize(bytes.size() - 20);  // cut inside the image data / end chunk
+  {
+    std::ofstream out(set.dir / "train/r_1.png", std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  }
+  CHECK(contains(set.load_error(), set.dir / "train/r_1.png: unreadable PNG ("));
+  auto json = set.json();
+  json["frames"][1]["file_path"] = "./train/photo.jpg";
+  { std::ofstream(set.dir / "train/photo.jpg") << "jpeg"; }
+  set.write(json);
+  CHECK(set.load_error() == set.dir / "train/photo.jpg: only PNG images are supported (" + set.json_path() +
+                                      ": frames[1]); convert the images to PNG and update file_path");
+}
+
+TEST_CASE("errors: transforms.json lens distortion, inconsistent w/h, near/far") {
+  BrokenSet set;
+  const auto frames = set.json()["frames"];
+  const std::string file = set.dir / "transforms.json";
+  auto load = [&](const io::Json& root) {
+    io::write_json(file, root);
+    return error_of([&] { data::load_dataset(file); });
+  };
+  CHECK(load({{"fl_x", 5.0}, {"k1", -0.05}, {"frames", frames}}) ==
+        file + ": lens distortion k1 = -0.050000 is not supported (pinhole cameras only): undistort the images first "
+               "(e.g. COLMAP's image_undistorter) and remove the distortion keys");
+  auto with_frame_p2 = io::Json{{"fl_x", 5.0}, {"frames", frames}};
+  with_frame_p2["frames"][1]["p2"] = 0.001;
+  CHECK(contains(load(with_frame_p2), file + ": frames[1]: lens distortion p2 = 0.001000 is not supported"));
+  CHECK(contains(load({{"fl_x", 5.0}, {"camera_model", "OPENCV_FISHEYE"}, {"frames", frames}}),
+                 "camera_model 'OPENCV_FISHEYE' is not supported"));
+  // Frame 0 is held out for "test", so frames[1] (the first of "train") is read first.
+  CHECK(load({{"fl_x", 5.0}, {"w", 8}, {"h", 4}, {"frames", frames}}) ==
+        file + ": frames[1]: the image is 4x4 but w/h say 8x4; the intrinsics must describe the image as stored "
+               "(rescale fl_x, fl_y, cx, cy with it)");
+  CHECK(load({{"fl_x", -5.0}, {"frames", frames}}) == file + ": 'fl_x' must be positive, got -5.000000");
+  CHECK(load({{"fl_x", 5.0}, {"near", 3.0}, {"far", 3.0}, {"frames", frames}}) ==
+        file + ": frames[0]: near = 3.000000, far = 3.000000: need 0 <= near < far");
+  CHECK(load({{"fl_x", 5.0}, {"frames", io::Json::array()}}) == file + ": 'frames' is empty: the split has no images");
+}
+
+TEST_CASE("errors: multiscale metadata.json with inconsistent columns") {
+  BrokenSet set;
+  data::write_multiscale(set.dir.path(), set.dir / "ms", 2);
+  auto meta = io::read_json(set.dir / "ms/metadata.json");
+  meta["train"]["lossmult"].erase(meta["train"]["lossmult"].size() - 1);
+  io::write_json(set.dir / "ms/metadata.json", meta);
+  CHECK(error_of([&] { data::load_dataset(set.dir / "ms"); }) ==
+        set.dir / "ms/metadata.json: train: 'lossmult' has 3 entries but 'file_path' has 4");
+}
