@@ -42,7 +42,8 @@ std::string vec(const data::Vec3& v) {
 }
 
 void print_split(const data::SplitSummary& s) {
-  std::cout << "split " << s.name << ": " << s.images << " images, " << num(s.pixels / 1e6) << " M pixels  ("
+  const std::string pixels = s.pixels < 1000000 ? std::to_string(s.pixels) : num(s.pixels / 1e6) + " M";
+  std::cout << "split " << s.name << ": " << s.images << " images, " << pixels << " pixels  ("
             << s.source << ")\n";
   for (const auto& level : s.scales) {
     const std::string size = level.width_min == level.width_max && level.height_min == level.height_max

@@ -34,10 +34,12 @@ std::vector<FrameSpec> parse_frames(const io::Json& root, const std::string& fil
     FrameSpec spec;
     spec.where = file + ": frames[" + std::to_string(i) + "]";
     io::require_object(frames[i], spec.where);
-    spec.image_path = resolve_image_path(base_dir, io::require_string(frames[i], "file_path", spec.where), spec.where);
+    // Everything the JSON says is checked before the file system is asked for the image.
+    const std::string file_path = io::require_string(frames[i], "file_path", spec.where);
     spec.camera_to_world = pose_from_json(io::require_key(frames[i], "transform_matrix", spec.where), spec.where);
     spec.intrinsics = read_intrinsics(frames[i], global, spec.where);
     apply_near_far(spec, root, frames[i], options);
+    spec.image_path = resolve_image_path(base_dir, file_path, spec.where);
     specs.push_back(std::move(spec));
   }
   return specs;

@@ -86,7 +86,6 @@ std::vector<SplitSpec> parse_multiscale_metadata(const std::string& file, const 
       FrameSpec frame;
       frame.where = where + "[" + std::to_string(i) + "]";
       if (!paths[i].is_string()) throw Error(frame.where + ": 'file_path' entries must be strings");
-      frame.image_path = resolve_image_path(base_dir, paths[i].get<std::string>(), frame.where);
       frame.camera_to_world = pose_from_json((*cam2world)[i], frame.where);
       frame.intrinsics.width_px = array_number(*width, i, "width", frame.where);
       frame.intrinsics.height_px = array_number(*height, i, "height", frame.where);
@@ -107,6 +106,7 @@ std::vector<SplitSpec> parse_multiscale_metadata(const std::string& file, const 
       frame.near = options.near ? *options.near : near ? array_number(*near, i, "near", frame.where) : 2.0;
       frame.far = options.far ? *options.far : far ? array_number(*far, i, "far", frame.where) : 6.0;
       if (!(frame.near >= 0.0) || !(frame.far > frame.near)) throw Error(frame.where + ": need 0 <= near < far");
+      frame.image_path = resolve_image_path(base_dir, paths[i].get<std::string>(), frame.where);
       split.frames.push_back(std::move(frame));
     }
     splits.push_back(std::move(split));
