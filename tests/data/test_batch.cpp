@@ -12,6 +12,7 @@
 #include "data/procedural.hpp"
 #include "data_fixtures.hpp"
 #include "ops/batch.hpp"
+#include "ops/rays.hpp"
 #include "ref/batch.hpp"
 #include "support/test_context.hpp"
 
@@ -176,4 +177,46 @@ TEST_CASE("batch sampler: single_image picks images uniformly and pixels uniform
   // About 600 steps land on a 2×2 image, 8 rays each: ~1200 per pixel, sd ≈ 30 (plus the step count's spread).
   const double total = pixels_of_smallest[0] + pixels_of_smallest[1] + pixels_of_smallest[2] + pixels_of_smallest[3];
   for (double n : pixels_of_smallest) CHECK(std::abs(n - total / 4) < 6 * std::sqrt(total * 0.25 * 0.75));
+}
+
+TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match data::camera_ray at every scale") {
+  auto& ctx = test::test_context();
+  const auto& split = fixture_split();
+  const data::DeviceDataset device(ctx, split);
+  const size_t rays = 700;
+  ops::BatchArrays batch(ctx, rays);
+  ops::batch_sample(ctx, device, {77, ops::Batching::all_images}, 5, batch);
+  ocl::DeviceArray<float> origins(ctx, 3 * rays, "origins [R][3]"), directions(ctx, 3 * rays, "directions [R][3]"),
+      viewdirs(ctx, 3 * rays, "viewdirs [R][3]"), radii(ctx, rays, "radii [R]"), near(ctx, rays, "near [R]"),
+      far(ctx, rays, "far [R]"), lossmult(ctx, rays, "lossmult [R]");
+  ops::Rays stage(ctx, ops::RaysOptions{});
+  stage.fwd({device.cameras(), batch.camera_ids, batch.pixel_ids, rays},
+            {origins, directions, viewdirs, radii, near, far, lossmult});
+  const auto camera_ids = batch.camera_ids.download(ctx), pixel_ids = batch.pixel_ids.download(ctx);
+  const auto o = origins.download(ctx), d = directions.download(ctx), r = radii.download(ctx),
+             n = near.download(ctx), f = far.download(ctx), l = lossmult.download(ctx),
+             batch_lossmult = batch.lossmult.download(ctx);
+  std::map<uint32_t, int> levels_seen;
+  for (size_t i = 0; i < rays; ++i) {
+    const auto& cam = split.cameras[camera_ids[i]];
+    const uint32_t x = pixel_ids[i] % cam.width_px, y = pixel_ids[i] / cam.width_px;
+    const auto expected = data::camera_ray(cam, x + 0.5, y + 0.5);
+    // float32 on the device: origins are copied (|o| = 4, ulp 5e-7); directions are ~1 in size, computed from
+    // float-rounded cameras in a few operations: 1e-5 absolute is ~40 ulps.
+    for (int k = 0; k < 3; ++k) {
+      REQUIRE(std::abs(o[3 * i + k] - expected.origin_world[k]) < 1e-5);
+      REQUIRE(std::abs(d[3 * i + k] - expected.direction_world[k]) < 1e-5);
+    }
+    // The cone radius follows the image's pixel size: the distance to the next pixel's direction, times 2/√12.
+    const auto next = data::camera_ray(cam, x + 1.5, y + 0.5);
+    double step = 0;
+    for (int k = 0; k < 3; ++k) step += std::pow(next.direction_world[k] - expected.direction_world[k], 2);
+    REQUIRE(r[i] == doctest::Approx(std::sqrt(step) * 2.0 / std::sqrt(12.0)).epsilon(1e-5));
+    REQUIRE(n[i] == 2.0f);
+    REQUIRE(f[i] == 6.0f);
+    REQUIRE(l[i] == static_cast<float>(cam.lossmult));
+    REQUIRE(batch_lossmult[i] == l[i]);
+    ++levels_seen[split.scale_levels[camera_ids[i]]];
+  }
+  CHECK(levels_seen.size() == 4);  // every scale was exercised
 }
