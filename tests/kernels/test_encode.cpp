@@ -1,0 +1,255 @@
+// Encodings (kernels/encode.cl): IPE and PE against the reference, large arguments against long double, the
+// feature order written out, σ² = 0 ≡ PE, σ² = 1e12 → 0, IPE against Monte Carlo, and the fused Gaussian + IPE.
+#include <doctest/doctest.h>
+
+#include <cfloat>
+
+#include "kernel_checks.hpp"
+#include "ops/encode.hpp"
+#include "ops/gaussian.hpp"
+#include "ref/encode.hpp"
+#include "ref/gaussian.hpp"
+#include "support/test_context.hpp"
+
+using namespace mipnerf;
+using test::kUnitRoundoff;
+
+namespace {
+
+std::vector<float> run_ipe(const ops::EncodingOptions& options, const std::vector<float>& means,
+                           const std::vector<float>& covs) {
+  auto& ctx = test::test_context();
+  const size_t rows = means.size() / 3;
+  auto means_dev = test::upload(ctx, means, "means"), covs_dev = test::upload(ctx, covs, "covs");
+  auto features = test::filled(ctx, rows * options.ipe_width(), 7.0f, "ipe_features");
+  ops::Encode(ctx, {}).ipe(options, {means_dev, covs_dev, rows}, features);
+  return features.download(ctx);
+}
+
+std::vector<float> run_pe(const ops::EncodingOptions& options, const std::vector<float>& x) {
+  auto& ctx = test::test_context();
+  const size_t rows = x.size() / 3;
+  auto x_dev = test::upload(ctx, x, "x");
+  auto features = test::filled(ctx, rows * options.pe_width(), 7.0f, "pe_features");
+  ops::Encode(ctx, {}).pe(options, {x_dev, rows}, features);
+  return features.download(ctx);
+}
+
+// Tolerance of one feature a·sin(y) (or cos): sin/cos within 4 ulp and exp within 3 ulp of their results (OpenCL
+// C 1.2 §7.4), y and the exponent exact (power-of-two scalings of float inputs), one product: ≤ 16u relative;
+// twice that. The absolute floor 1e-37 covers attenuations that underflow (or flush) to 0 near FLT_MIN.
+double feature_tolerance(double reference) { return 32 * kUnitRoundoff * std::abs(reference) + 1e-37; }
+
+}  // namespace
+
+TEST_CASE("encode: IPE matches the CPU reference on 10,000 rows over degrees 0-15") {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> position(-4.0, 4.0);
+  const size_t rows = 10000;
+  std::vector<float> means(3 * rows), covs(3 * rows);
+  for (auto& m : means) m = static_cast<float>(position(rng));
+  for (size_t i = 0; i < covs.size(); ++i) {
+    covs[i] = i % 97 == 0 ? 0.0f : static_cast<float>(test::log_uniform(rng, 1e-12, 10.0));
+  }
+  const ops::EncodingOptions options;  // 0..15, the paper's L = 16
+  REQUIRE(options.ipe_width() == 96);
+  const auto dev = run_ipe(options, means, covs);
+  std::vector<double> features;
+  ref::ipe_fwd(options, test::to_double(means), test::to_double(covs), features, rows);
+  MIPNERF_CHECK_CLOSE("ipe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
+}
+
+TEST_CASE("encode: IPE of large arguments (up to 2^15 x 100) is accurate against long double") {
+  // σ² = 0 so every feature is a bare sin/cos of y = 2^l·μ: the hardest case for range reduction. |μ| up to 100
+  // gives |y| up to 3.3e6 (a Blender scene's |μ| ≤ 4 reaches 1.3e5).
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<double> magnitude(-2.0, 2.0);
+  const size_t rows = 4000;
+  std::vector<float> means(3 * rows), covs(3 * rows, 0.0f);
+  for (size_t i = 0; i < means.size(); ++i) {
+    const double sign = i % 2 ? 1.0 : -1.0;
+    means[i] = static_cast<float>(sign * std::pow(10.0, magnitude(rng)));
+  }
+  const ops::EncodingOptions options;
+  const auto dev = run_ipe(options, means, covs);
+  const int n_degrees = options.degrees();
+  double worst_ulps = 0;
+  size_t failures = 0;
+  for (size_t row = 0; row < rows; ++row) {
+    for (int l = 0; l < n_degrees; ++l) {
+      for (int a = 0; a < 3; ++a) {
+        long double s, c;
+        ref::ipe_pair<long double>(means[3 * row + a], 0.0L, l, s, c);
+        const float got[2] = {dev[row * 96 + 3 * l + a], dev[row * 96 + 48 + 3 * l + a]};
+        const long double want[2] = {s, c};
+        for (int k = 0; k < 2; ++k) {
+          REQUIRE(std::isfinite(got[k]));
+          const double ulp = std::nextafter(std::abs(float(want[k])), INFINITY) - std::abs(float(want[k]));
+          const double ulps = static_cast<double>(std::abs(got[k] - want[k])) / ulp;
+          worst_ulps = std::max(worst_ulps, ulps);
+          if (ulps > 4.0) ++failures;  // the OpenCL bound for sin and cos
+        }
+      }
+    }
+  }
+  if (std::getenv("MIPNERF_TEST_VERBOSE")) MESSAGE("worst error " << worst_ulps << " ulp");
+  INFO("worst error " << worst_ulps << " ulp of the long-double sin/cos of the exact float argument");
+  CHECK(failures == 0);
+}
+
+TEST_CASE("encode: feature order is sines then cosines, index l times 3 plus axis") {
+  const std::vector<float> mean = {0.3f, -1.1f, 2.5f}, var = {0.01f, 0.02f, 0.04f};
+  ops::EncodingOptions options;
+  options.min_deg = 1;
+  options.max_deg = 3;  // degrees 1 and 2: L = 2, 12 features
+  const auto ipe = run_ipe(options, mean, var);
+  REQUIRE(ipe.size() == 12);
+  for (int l = 0; l < 2; ++l) {
+    for (int a = 0; a < 3; ++a) {
+      const double scale = std::ldexp(1.0, options.min_deg + l);
+      const double atten = std::exp(-0.5 * var[a] * scale * scale);
+      CHECK(ipe[3 * l + a] == doctest::Approx(atten * std::sin(scale * mean[a])).epsilon(1e-6));
+      CHECK(ipe[6 + 3 * l + a] == doctest::Approx(atten * std::cos(scale * mean[a])).epsilon(1e-6));
+    }
+  }
+  options.append_identity = true;
+  const auto pe = run_pe(options, mean);
+  REQUIRE(pe.size() == 15);
+  for (int a = 0; a < 3; ++a) CHECK(pe[a] == mean[a]);
+  CHECK(pe[3 + 3 * 1 + 2] == doctest::Approx(std::sin(4.0 * mean[2])).epsilon(1e-6));  // l = 1 (degree 2), z
+  CHECK(pe[3 + 6 + 0] == doctest::Approx(std::cos(2.0 * mean[0])).epsilon(1e-6));      // l = 0 (degree 1), x
+}
+
+TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 features) match the reference") {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const size_t rows = 10000;
+  std::vector<float> dirs(3 * rows), positions(3 * rows);
+  for (size_t r = 0; r < rows; ++r) {
+    double d[3] = {normal(rng), normal(rng), normal(rng)};
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int a = 0; a < 3; ++a) {
+      dirs[3 * r + a] = static_cast<float>(d[a] / len);
+      positions[3 * r + a] = static_cast<float>(2 * normal(rng));
+    }
+  }
+  for (const auto& [max_deg, x] : {std::pair{4, &dirs}, std::pair{10, &positions}}) {
+    ops::EncodingOptions options;
+    options.max_deg = max_deg;
+    options.append_identity = true;
+    REQUIRE(options.pe_width() == (max_deg == 4 ? 27 : 63));
+    const auto dev = run_pe(options, *x);
+    std::vector<double> features;
+    ref::pe_fwd(options, test::to_double(*x), features, rows);
+    MIPNERF_CHECK_CLOSE("pe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
+  }
+  // Identity only (no degrees) is a copy.
+  ops::EncodingOptions identity_only;
+  identity_only.max_deg = 0;
+  identity_only.append_identity = true;
+  CHECK(run_pe(identity_only, dirs) == dirs);
+}
+
+TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge variance gives 0 not NaN") {
+  std::mt19937 rng(24);
+  std::uniform_real_distribution<float> position(-50.0f, 50.0f);
+  const size_t rows = 2000;
+  std::vector<float> means(3 * rows);
+  for (auto& m : means) m = position(rng);
+  const ops::EncodingOptions options;
+  const auto ipe = run_ipe(options, means, std::vector<float>(3 * rows, 0.0f));
+  const auto pe = run_pe(options, means);  // no identity: the same 96 features
+  CHECK(ipe == pe);
+  // σ² = 1e12 (4^l·σ² up to 1e21) and σ² = +∞: every attenuation is exactly 0.
+  for (float var : {1e12f, INFINITY}) {
+    const auto wide = run_ipe(options, means, std::vector<float>(3 * rows, var));
+    for (float f : wide) REQUIRE(f == 0.0f);
+  }
+  // A wide but finite variance attenuates the high degrees to exactly 0 and keeps the low ones.
+  const auto mid = run_ipe(options, means, std::vector<float>(3 * rows, 1.0f));
+  CHECK(test::all_finite(mid));
+  CHECK(mid[3 * 15] == 0.0f);  // degree 15: exp(−0.5·4^15) = 0
+}
+
+TEST_CASE("encode: IPE is the expectation of sin and cos under the Gaussian (Monte Carlo)") {
+  // E[sin(2^l·z)] for z ~ N(μ, σ²) is exp(−4^l·σ²/2)·sin(2^l·μ) (mip-NeRF eq. 14).
+  std::mt19937_64 rng(25);
+  const std::vector<float> mean = {0.7f, -0.2f, 1.3f}, var = {0.05f, 0.002f, 0.3f};
+  ops::EncodingOptions options;
+  options.max_deg = 4;
+  const auto dev = run_ipe(options, mean, var);
+  const size_t samples = 400000;
+  for (int a = 0; a < 3; ++a) {
+    std::normal_distribution<double> z(mean[a], std::sqrt(double(var[a])));
+    std::vector<double> sum_sin(4, 0.0), sum_cos(4, 0.0);
+    for (size_t s = 0; s < samples; ++s) {
+      const double x = z(rng);
+      for (int l = 0; l < 4; ++l) {
+        sum_sin[l] += std::sin(std::ldexp(x, l));
+        sum_cos[l] += std::cos(std::ldexp(x, l));
+      }
+    }
+    for (int l = 0; l < 4; ++l) {
+      // Standard error of a mean of values in [−1, 1]: ≤ 1/sqrt(M) = 1.6e-3; 5 standard errors, fixed seed.
+      const double tol = 5.0 / std::sqrt(double(samples));
+      CHECK(std::abs(dev[3 * l + a] - sum_sin[l] / samples) <= tol);
+      CHECK(std::abs(dev[12 + 3 * l + a] - sum_cos[l] / samples) <= tol);
+    }
+  }
+}
+
+TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ipe_fwd") {
+  auto& ctx = test::test_context();
+  std::mt19937 rng(26);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
+  const size_t n_rays = 100, n_samples = 48;
+  std::vector<float> origins, directions, radii, t_edges;
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    for (int a = 0; a < 3; ++a) {
+      origins.push_back(static_cast<float>(3 * signed_unit(rng)));
+      directions.push_back(static_cast<float>(signed_unit(rng)));
+    }
+    radii.push_back(static_cast<float>(test::log_uniform(rng, 1e-4, 1e-2)));
+    float t = static_cast<float>(2 + unit(rng));
+    for (size_t k = 0; k <= n_samples; ++k) {
+      t_edges.push_back(t);
+      t += static_cast<float>(test::log_uniform(rng, 1e-4, 0.1));
+    }
+  }
+  auto o = test::upload(ctx, origins, "origins"), d = test::upload(ctx, directions, "directions");
+  auto r = test::upload(ctx, radii, "radii"), t = test::upload(ctx, t_edges, "t_edges");
+  const size_t rows = n_rays * n_samples;
+  const ops::EncodingOptions options;
+  for (auto shape : {ops::RayShape::cone, ops::RayShape::cylinder}) {
+    INFO("ray shape " << static_cast<int>(shape));
+    ocl::DeviceArray<float> means(ctx, 3 * rows, "means"), covs(ctx, 3 * rows, "covs");
+    ocl::DeviceArray<float> separate(ctx, rows * 96, "separate"), fused(ctx, rows * 96, "fused");
+    const ops::GaussianInputs in{o, d, r, t, n_rays, n_samples};
+    ops::Gaussian(ctx, {shape}).fwd(in, {means, covs});
+    ops::Encode encode(ctx, {shape});
+    encode.ipe(options, {means, covs, rows}, separate);
+    encode.gaussian_ipe(options, in, fused);
+    // The same inline functions with contraction off (gaussian.cl): bit-identical.
+    CHECK(fused.download(ctx) == separate.download(ctx));
+    // And both match the reference composition.
+    std::vector<double> features;
+    ref::gaussian_ipe_fwd({shape}, options, test::to_double(origins), test::to_double(directions),
+                          test::to_double(radii), test::to_double(t_edges), features, n_rays, n_samples);
+    // Here the float Gaussian's own error (≤ 12u of t_mean·|d| + 2u·|o|, see test_gaussian) is multiplied by 2^l
+    // in the argument: the tolerance adds 2^l·|Δmean| to the feature tolerance (|d sin(y)/dy| ≤ 1), and the
+    // variance error (≤ 35u relative) times 4^l·σ²/2 through the attenuation.
+    const auto fused_values = fused.download(ctx);
+    std::vector<double> means_ref, covs_ref;
+    ref::gaussian_fwd({shape}, test::to_double(origins), test::to_double(directions), test::to_double(radii),
+                      test::to_double(t_edges), means_ref, covs_ref, n_rays, n_samples);
+    MIPNERF_CHECK_CLOSE("gaussian_ipe features", fused_values, features, [&](size_t i) {
+      const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
+      const double scale = std::ldexp(1.0, static_cast<int>(l));
+      const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
+                              12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
+      const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
+      const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
+      return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err);
+    });
+  }
+}

@@ -1,0 +1,424 @@
+// Volume rendering (kernels/render.cl): forward and backward against the double reference with derived float32
+// bounds, the backward against central finite differences, the hard cases (σ = 0, σ = 1e10, δ = 0, acc = 0),
+// every background, and the fused activation + render kernels against the composition.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+
+#include "kernel_checks.hpp"
+#include "ops/activations.hpp"
+#include "ops/render.hpp"
+#include "ref/render.hpp"
+#include "support/test_context.hpp"
+
+using namespace mipnerf;
+using test::kUnitRoundoff;
+
+namespace {
+
+// One batch of rendering inputs, float as uploaded.
+struct Batch {
+  size_t n_rays = 0, n_samples = 0;
+  std::vector<float> rgb, density, t_edges, directions, d_comp_rgb, d_acc;
+};
+
+// Edges from t_0 ∈ [0.5, 3] with log-uniform gaps (and some empty intervals), directions of norm 0.5..2,
+// densities log-uniform over `density_lo..density_hi` with 20 % zeros, colours in [0, 1], and random upstream
+// gradients.
+Batch random_batch(size_t n_rays, size_t n_samples, unsigned seed, double density_lo = 1e-3,
+                   double density_hi = 1e3) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
+  Batch b;
+  b.n_rays = n_rays;
+  b.n_samples = n_samples;
+  for (size_t r = 0; r < n_rays; ++r) {
+    float t = static_cast<float>(0.5 + 2.5 * unit(rng));
+    b.t_edges.push_back(t);
+    for (size_t i = 0; i < n_samples; ++i) {
+      if (unit(rng) > 0.05) t += static_cast<float>(test::log_uniform(rng, 1e-3, 0.5));
+      b.t_edges.push_back(t);
+      b.density.push_back(unit(rng) < 0.2 ? 0.0f : static_cast<float>(test::log_uniform(rng, density_lo, density_hi)));
+      for (int c = 0; c < 3; ++c) b.rgb.push_back(static_cast<float>(unit(rng)));
+    }
+    const double norm = 0.5 + 1.5 * unit(rng);
+    double d[3] = {signed_unit(rng), signed_unit(rng), signed_unit(rng) - 0.1};
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (double v : d) b.directions.push_back(static_cast<float>(v / len * norm));
+    for (int c = 0; c < 3; ++c) b.d_comp_rgb.push_back(static_cast<float>(signed_unit(rng)));
+    b.d_acc.push_back(static_cast<float>(signed_unit(rng)));
+  }
+  return b;
+}
+
+struct DeviceResult {
+  std::vector<float> comp_rgb, acc, distance, weights, d_rgb, d_density;
+};
+
+// Runs Render::fwd and ::bwd (or the fused raw_* kernels, on raw inputs) for one batch.
+DeviceResult run_device(const ops::RenderOptions& options, const Batch& b, bool with_d_acc, bool raw = false,
+                        const ops::ActivationOptions& activation = {}) {
+  auto& ctx = test::test_context();
+  auto rgb = test::upload(ctx, b.rgb, "rgb"), density = test::upload(ctx, b.density, "density");
+  auto t_edges = test::upload(ctx, b.t_edges, "t_edges"), directions = test::upload(ctx, b.directions, "directions");
+  auto d_comp = test::upload(ctx, b.d_comp_rgb, "d_comp_rgb"), d_acc = test::upload(ctx, b.d_acc, "d_acc");
+  const size_t rows = b.n_rays * b.n_samples;
+  ocl::DeviceArray<float> comp(ctx, 3 * b.n_rays, "comp_rgb"), acc(ctx, b.n_rays, "acc");
+  ocl::DeviceArray<float> distance(ctx, b.n_rays, "distance"), weights(ctx, rows, "weights");
+  ocl::DeviceArray<float> d_rgb(ctx, 3 * rows, "d_rgb"), d_density(ctx, rows, "d_density");
+  ops::Render render(ctx, options, activation);
+  const ops::RenderInputs in{rgb, density, t_edges, directions, b.n_rays, b.n_samples};
+  const ops::RenderOutputs out{comp, acc, distance, weights};
+  const ops::RenderGradients grads{d_comp, with_d_acc ? &d_acc : nullptr};
+  if (raw) {
+    render.raw_fwd(in, out);
+    render.raw_bwd(in, weights, grads, {d_rgb, d_density});
+  } else {
+    render.fwd(in, out);
+    render.bwd(in, weights, grads, {d_rgb, d_density});
+  }
+  return {comp.download(ctx), acc.download(ctx), distance.download(ctx), weights.download(ctx), d_rgb.download(ctx),
+          d_density.download(ctx)};
+}
+
+struct RefResult {
+  std::vector<double> comp_rgb, acc, distance, weights, d_rgb, d_density;
+};
+
+RefResult run_ref(const ops::RenderOptions& options, const Batch& b, bool with_d_acc) {
+  RefResult r;
+  const auto rgb = test::to_double(b.rgb), density = test::to_double(b.density);
+  const auto t_edges = test::to_double(b.t_edges), directions = test::to_double(b.directions);
+  const auto d_acc = test::to_double(b.d_acc);
+  ref::render_fwd(options, rgb, density, t_edges, directions, r.comp_rgb, r.acc, r.distance, r.weights, b.n_rays,
+                  b.n_samples);
+  ref::render_bwd(options, rgb, density, t_edges, directions, r.weights, test::to_double(b.d_comp_rgb),
+                  with_d_acc ? &d_acc : nullptr, r.d_rgb, r.d_density, b.n_rays, b.n_samples);
+  return r;
+}
+
+// Float32 error bounds of the forward and backward, per element, from the exact (double) quantities.
+//  - s_i = σ_i·δ_i: δ = (t1 − t0)·sqrt(d·d) is ≤ 13 roundoffs (subtraction; dot product; sqrt ≤ 3 ulp = 6u;
+//    two products), so |Δs|/s ≤ 16u.
+//  - S_i = Σ_{j<i} s_j summed in order: |ΔS_i| ≤ (16 + i)·u·S_i (positive terms).
+//  - T_i = exp(−S_i): relative error |ΔS_i| + 6u (exp ≤ 3 ulp). α_i = −expm1(−s_i): 6u + 16u (its condition
+//    number s·e^−s/α ≤ 1). So e_w,i = (30 + (16 + N)·S_i)·u bounds the relative error of w_i (+1u product).
+//  - Sums over N terms add N·u relative to the sum of magnitudes.
+// Every tolerance below is twice the bound, so the tests fail on a real error, not on a tight estimate.
+struct Bounds {
+  std::vector<double> weights, comp_rgb, acc, distance, d_rgb, d_density;
+};
+
+Bounds float_bounds(const ops::RenderOptions& options, const Batch& b, const RefResult& r, bool with_d_acc) {
+  const size_t n = b.n_samples;
+  const double u = kUnitRoundoff;
+  const double tiny = 1e-43;  // a few float denormal ulps, for values that underflow
+  const bool white = options.background == ops::Background::white;
+  Bounds out;
+  out.weights.resize(b.n_rays * n);
+  out.comp_rgb.resize(3 * b.n_rays);
+  out.acc.resize(b.n_rays);
+  out.distance.resize(b.n_rays);
+  out.d_rgb.resize(3 * b.n_rays * n);
+  out.d_density.resize(b.n_rays * n);
+  std::vector<double> e_w(n), prefix(n + 1), delta(n), g(n), g_mag(n);
+  for (size_t ray = 0; ray < b.n_rays; ++ray) {
+    const float* dir = b.directions.data() + 3 * ray;
+    const double dir_norm = std::sqrt(double(dir[0]) * dir[0] + double(dir[1]) * dir[1] + double(dir[2]) * dir[2]);
+    const float* t = b.t_edges.data() + ray * (n + 1);
+    const float* d_comp = b.d_comp_rgb.data() + 3 * ray;
+    const double d_comp_sum = double(d_comp[0]) + d_comp[1] + d_comp[2];
+    const double d_comp_mag = std::abs(d_comp[0]) + std::abs(d_comp[1]) + std::abs(d_comp[2]);
+    const double d_acc_total = (with_d_acc ? b.d_acc[ray] : 0.0) - (white ? d_comp_sum : 0.0);
+    const double d_acc_mag = (with_d_acc ? std::abs(b.d_acc[ray]) : 0.0) + (white ? d_comp_mag : 0.0);
+    double acc_err = 0.0, comp_err[3] = {0, 0, 0}, comp_mag[3] = {0, 0, 0};
+    prefix[0] = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const size_t at = ray * n + i;
+      delta[i] = (double(t[i + 1]) - t[i]) * dir_norm;
+      prefix[i + 1] = prefix[i] + (delta[i] > 0 ? b.density[at] * delta[i] : 0.0);
+      e_w[i] = (30.0 + (16.0 + n) * prefix[i]) * u;
+      const double w = r.weights[at];
+      out.weights[at] = 2 * e_w[i] * w + tiny;
+      acc_err += e_w[i] * w;
+      g[i] = d_acc_total;
+      g_mag[i] = d_acc_mag;
+      for (int c = 0; c < 3; ++c) {
+        const double color = b.rgb[3 * at + c];
+        g[i] += d_comp[c] * color;
+        g_mag[i] += std::abs(d_comp[c] * color);
+        comp_err[c] += e_w[i] * w * std::abs(color);
+        comp_mag[c] += w * std::abs(color);
+        out.d_rgb[3 * at + c] = 2 * (e_w[i] + u) * w * std::abs(d_comp[c]) + tiny;
+      }
+    }
+    const double acc = r.acc[ray];
+    out.acc[ray] = 2 * (acc_err + n * u * acc) + tiny;
+    for (int c = 0; c < 3; ++c) {
+      out.comp_rgb[3 * ray + c] =
+          2 * (comp_err[c] + n * u * comp_mag[c] + (white ? acc_err + n * u * acc + u : 0.0)) + tiny;
+    }
+    // distance = Σ w·t_mid / Σ w: relative weight errors ε_i move it by Σ w_i·ε_i·|t_mid_i − distance| / acc.
+    double dist_err = (n + 4) * u * std::abs(double(t[n]));
+    if (acc > 0) {
+      for (size_t i = 0; i < n; ++i) {
+        const double mid = 0.5 * (double(t[i]) + t[i + 1]);
+        dist_err += r.weights[ray * n + i] * e_w[i] * std::abs(mid - r.distance[ray]) / acc;
+      }
+    }
+    out.distance[ray] = 2 * dist_err;
+    // Backward, reverse sweep as the kernel: T_{i+1} = T_N + A_i, A_i = Σ_{k>i} w_k, B_i = Σ_{k>i} g_k·w_k, each
+    // with its float error from the weights' (e_w), g's (4 roundoffs of its magnitude) and the running sums (N·u).
+    const double trans_last = std::exp(-prefix[n]);
+    const double trans_last_err = ((16.0 + n) * prefix[n] + 6.0) * u * trans_last;
+    double a = 0.0, a_err = 0.0, bsum = 0.0, b_err = 0.0;
+    for (size_t rr = 0; rr < n; ++rr) {
+      const size_t i = n - 1 - rr, at = ray * n + i;
+      const double trans_next = trans_last + a;
+      const double trans_next_err = trans_last_err + a_err + n * u * a + u * trans_next;
+      const double d_s = g[i] * trans_next - bsum;
+      const double d_s_err = std::abs(g[i]) * trans_next_err + 4 * u * g_mag[i] * trans_next + b_err +
+                             n * u * std::abs(bsum) + u * (std::abs(g[i]) * trans_next + std::abs(bsum));
+      out.d_density[at] = delta[i] > 0 ? 2 * (delta[i] * d_s_err + 16 * u * delta[i] * std::abs(d_s)) + tiny : tiny;
+      const double w = r.weights[at];
+      a += w;
+      a_err += e_w[i] * w;
+      bsum += g[i] * w;
+      b_err += (std::abs(g[i]) * e_w[i] + 4 * u * g_mag[i]) * w;
+    }
+  }
+  return out;
+}
+
+std::function<double(size_t)> from(const std::vector<double>& bounds) {
+  return [&bounds](size_t i) { return bounds[i]; };
+}
+
+void check_against_reference(const ops::RenderOptions& options, const Batch& b, bool with_d_acc) {
+  const auto dev = run_device(options, b, with_d_acc);
+  const auto r = run_ref(options, b, with_d_acc);
+  const auto bounds = float_bounds(options, b, r, with_d_acc);
+  MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
+  MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
+  MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
+  MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
+  MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
+  MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+}
+
+const ops::Background kBackgrounds[] = {ops::Background::none, ops::Background::black, ops::Background::white};
+
+// L = Σ_c d_comp_c·comp_rgb_c + d_acc·acc of one ray through the reference forward, with the ray's inputs in
+// double (perturbed by the caller).
+double ray_loss(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+                const std::vector<double>& t_edges, const std::vector<double>& direction, const double* d_comp,
+                const double* d_acc, size_t n_samples) {
+  std::vector<double> comp, acc, distance, weights;
+  ref::render_fwd(options, rgb, density, t_edges, direction, comp, acc, distance, weights, 1, n_samples);
+  double loss = d_acc ? *d_acc * acc[0] : 0.0;
+  for (int c = 0; c < 3; ++c) loss += d_comp[c] * comp[c];
+  return loss;
+}
+
+// Central finite differences of ray_loss for every colour and density of every ray.
+void finite_differences(const ops::RenderOptions& options, const Batch& b, bool with_d_acc,
+                        std::vector<double>& fd_rgb, std::vector<double>& fd_density) {
+  const size_t n = b.n_samples;
+  fd_rgb.assign(3 * b.n_rays * n, 0.0);
+  fd_density.assign(b.n_rays * n, 0.0);
+  for (size_t ray = 0; ray < b.n_rays; ++ray) {
+    std::vector<double> rgb(b.rgb.begin() + 3 * ray * n, b.rgb.begin() + 3 * (ray + 1) * n);
+    std::vector<double> density(b.density.begin() + ray * n, b.density.begin() + (ray + 1) * n);
+    const std::vector<double> t(b.t_edges.begin() + ray * (n + 1), b.t_edges.begin() + (ray + 1) * (n + 1));
+    const std::vector<double> dir(b.directions.begin() + 3 * ray, b.directions.begin() + 3 * ray + 3);
+    const double d_comp[3] = {b.d_comp_rgb[3 * ray], b.d_comp_rgb[3 * ray + 1], b.d_comp_rgb[3 * ray + 2]};
+    const double d_acc = b.d_acc[ray];
+    const auto loss = [&] {
+      return ray_loss(options, rgb, density, t, dir, d_comp, with_d_acc ? &d_acc : nullptr, n);
+    };
+    for (size_t i = 0; i < n; ++i) {
+      const double sigma = density[i], h = 1e-6 * std::max(sigma, 1.0);
+      density[i] = sigma + h;
+      const double up = loss();
+      density[i] = sigma - h;
+      const double down = loss();
+      density[i] = sigma;
+      fd_density[ray * n + i] = (up - down) / (2 * h);
+      for (int c = 0; c < 3; ++c) {
+        const double x = rgb[3 * i + c], hc = 1e-6;
+        rgb[3 * i + c] = x + hc;
+        const double up_c = loss();
+        rgb[3 * i + c] = x - hc;
+        const double down_c = loss();
+        rgb[3 * i + c] = x;
+        fd_rgb[3 * (ray * n + i) + c] = (up_c - down_c) / (2 * hc);
+      }
+    }
+  }
+}
+
+size_t count_outside(const std::vector<double>& a, const std::vector<double>& b,
+                     const std::function<double(size_t)>& tol) {
+  size_t failures = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!(std::abs(a[i] - b[i]) <= tol(i))) ++failures;
+  }
+  return failures;
+}
+
+}  // namespace
+
+TEST_CASE("render: forward and backward match the CPU reference on 10,000 random rays, every background") {
+  const Batch b = random_batch(10000, 32, 101);
+  for (auto background : kBackgrounds) {
+    for (bool with_d_acc : {false, true}) {
+      INFO("background " << static_cast<int>(background) << ", d_acc " << with_d_acc);
+      check_against_reference({background}, b, with_d_acc);
+    }
+  }
+}
+
+TEST_CASE("render: the backward matches central finite differences of the reference forward") {
+  // Densities 1e-2..1e2 over gaps up to 0.5: optical thicknesses around 1, where the gradient is informative.
+  const Batch b = random_batch(300, 16, 202, 1e-2, 1e2);
+  for (auto background : kBackgrounds) {
+    for (bool with_d_acc : {false, true}) {
+      INFO("background " << static_cast<int>(background) << ", d_acc " << with_d_acc);
+      const ops::RenderOptions options{background};
+      std::vector<double> fd_rgb, fd_density;
+      finite_differences(options, b, with_d_acc, fd_rgb, fd_density);
+      const auto r = run_ref(options, b, with_d_acc);
+      const auto dev = run_device(options, b, with_d_acc);
+      const auto bounds = float_bounds(options, b, r, with_d_acc);
+      // Finite-difference error with h = 1e-6·max(σ, 1): truncation h²/6 times the third derivative (each weight
+      // is a product of exponentials of σ·δ, δ ≤ 1: |L'''| ≤ ~10) plus rounding 1e-16/h: below 1e-9 here. The
+      // reference backward must agree to 1e-8 + 1e-7 relative; the device backward to its float32 bound plus that.
+      const auto fd_tol = [](const std::vector<double>& fd) {
+        return std::function<double(size_t)>([&fd](size_t i) { return 1e-8 + 1e-7 * std::abs(fd[i]); });
+      };
+      CHECK(count_outside(r.d_rgb, fd_rgb, fd_tol(fd_rgb)) == 0);
+      CHECK(count_outside(r.d_density, fd_density, fd_tol(fd_density)) == 0);
+      MIPNERF_CHECK_CLOSE("device d_rgb vs finite differences", dev.d_rgb, fd_rgb,
+                          [&](size_t i) { return bounds.d_rgb[i] + fd_tol(fd_rgb)(i); });
+      MIPNERF_CHECK_CLOSE("device d_density vs finite differences", dev.d_density, fd_density,
+                          [&](size_t i) { return bounds.d_density[i] + fd_tol(fd_density)(i); });
+    }
+  }
+}
+
+TEST_CASE("render: hard cases stay finite - sigma 0, sigma 1e10, empty intervals, zero accumulation") {
+  const size_t n_rays = 6, n = 8;
+  Batch b = random_batch(n_rays, n, 303);
+  // Ray 0: σ = 0 everywhere (acc = 0). Ray 1: σ = 1e10 everywhere. Ray 2: every interval empty (t constant) with
+  // σ = 1e10. Ray 3: empty intervals with σ = +∞ (∞·0 must not make a NaN). Ray 4: clear, then one opaque sample.
+  // Ray 5: densities of 1e-38, whose weights are denormal or zero.
+  for (size_t i = 0; i < n; ++i) {
+    b.density[0 * n + i] = 0.0f;
+    b.density[1 * n + i] = 1e10f;
+    b.density[2 * n + i] = 1e10f;
+    b.density[3 * n + i] = INFINITY;
+    b.density[4 * n + i] = i == 5 ? 1e10f : 0.0f;
+    b.density[5 * n + i] = 1e-38f;
+  }
+  for (size_t ray : {size_t(2), size_t(3)}) {
+    for (size_t k = 0; k <= n; ++k) b.t_edges[ray * (n + 1) + k] = 4.0f;
+  }
+  for (size_t k = 0; k <= n; ++k) b.t_edges[4 * (n + 1) + k] = 2.0f + 0.25f * k;  // no empty interval on ray 4
+  for (auto background : kBackgrounds) {
+    INFO("background " << static_cast<int>(background));
+    const ops::RenderOptions options{background};
+    const auto dev = run_device(options, b, true);
+    for (const auto* v : {&dev.comp_rgb, &dev.acc, &dev.distance, &dev.weights, &dev.d_rgb, &dev.d_density}) {
+      CHECK(test::all_finite(*v));
+    }
+    const float bg = background == ops::Background::white ? 1.0f : 0.0f;
+    const auto t_at = [&](size_t ray, size_t k) { return b.t_edges[ray * (n + 1) + k]; };
+    // σ = 0: nothing accumulates; the background shows; distance = t_0 (official nan_to_num + clip).
+    CHECK(dev.acc[0] == 0.0f);
+    for (int c = 0; c < 3; ++c) CHECK(dev.comp_rgb[c] == bg);
+    CHECK(dev.distance[0] == t_at(0, 0));
+    // σ = 1e10: the first non-empty sample takes all the weight.
+    size_t first = 0;
+    while (t_at(1, first + 1) == t_at(1, first)) ++first;
+    CHECK(dev.weights[1 * n + first] == 1.0f);
+    CHECK(dev.acc[1] == 1.0f);
+    for (int c = 0; c < 3; ++c) CHECK(dev.comp_rgb[3 + c] == b.rgb[3 * (1 * n + first) + c]);
+    CHECK(dev.distance[1] == doctest::Approx(0.5 * (t_at(1, first) + t_at(1, first + 1))).epsilon(1e-6));
+    // Behind an opaque sample nothing changes the colour: the density gradients there are 0.
+    for (size_t i = first + 1; i < n; ++i) CHECK(dev.d_density[1 * n + i] == 0.0f);
+    // Empty intervals: no weight whatever σ (even ∞), distance = the common t, zero density gradients.
+    for (size_t ray : {size_t(2), size_t(3)}) {
+      CHECK(dev.acc[ray] == 0.0f);
+      CHECK(dev.distance[ray] == 4.0f);
+      for (size_t i = 0; i < n; ++i) CHECK(dev.d_density[ray * n + i] == 0.0f);
+    }
+    // One opaque sample behind clear space takes all the weight; behind it the gradients vanish.
+    CHECK(dev.acc[4] == 1.0f);
+    CHECK(dev.weights[4 * n + 5] == 1.0f);
+    for (size_t i = 6; i < n; ++i) CHECK(dev.d_density[4 * n + i] == 0.0f);
+    // Everything but ray 3 (σ = ∞ is outside the reference's domain) also matches the reference bounds.
+    Batch finite = b;
+    for (size_t i = 0; i < n; ++i) finite.density[3 * n + i] = 1e10f;
+    check_against_reference(options, finite, true);
+  }
+}
+
+TEST_CASE("render: black and none composite the same; white adds 1 - acc") {
+  const Batch b = random_batch(2000, 24, 404);
+  const auto none = run_device({ops::Background::none}, b, false);
+  const auto black = run_device({ops::Background::black}, b, false);
+  const auto white = run_device({ops::Background::white}, b, false);
+  CHECK(none.comp_rgb == black.comp_rgb);
+  CHECK(none.weights == black.weights);
+  CHECK(white.acc == black.acc);
+  // white = black + (1 − acc), one rounding each for 1 − acc and the sum: ≤ 2 roundoffs of values ≤ 2.
+  for (size_t ray = 0; ray < b.n_rays; ++ray) {
+    for (int c = 0; c < 3; ++c) {
+      const double expected = double(black.comp_rgb[3 * ray + c]) + (1.0 - double(black.acc[ray]));
+      CHECK(std::abs(white.comp_rgb[3 * ray + c] - expected) <= 4 * kUnitRoundoff * 2.0);
+    }
+  }
+}
+
+TEST_CASE("render: the fused activation and render kernels equal activations then render") {
+  auto& ctx = test::test_context();
+  Batch raw = random_batch(3000, 24, 505);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> normal(0.0f, 4.0f);
+  for (auto& x : raw.density) x = normal(rng);
+  for (auto& x : raw.rgb) x = normal(rng);
+  ops::ActivationOptions nerf;
+  nerf.density = ops::DensityActivation::relu;
+  nerf.density_bias = 0.0f;
+  nerf.rgb_padding = 0.0f;
+  for (const auto& activation : {ops::ActivationOptions{}, nerf}) {
+    for (auto background : kBackgrounds) {
+      INFO("density activation " << static_cast<int>(activation.density) << ", background "
+                                 << static_cast<int>(background));
+      const ops::RenderOptions options{background};
+      const auto fused = run_device(options, raw, true, true, activation);
+      // The composition on the device: activations_fwd, render_fwd, render_bwd, activations_bwd.
+      const size_t rows = raw.n_rays * raw.n_samples;
+      auto raw_density = test::upload(ctx, raw.density, "raw_density");
+      auto raw_rgb = test::upload(ctx, raw.rgb, "raw_rgb");
+      ocl::DeviceArray<float> density(ctx, rows, "density"), rgb(ctx, 3 * rows, "rgb");
+      ops::Activations act(ctx, activation);
+      act.fwd({raw_density, raw_rgb, rows}, {density, rgb});
+      Batch activated = raw;
+      activated.density = density.download(ctx);
+      activated.rgb = rgb.download(ctx);
+      const auto composed = run_device(options, activated, true);
+      auto d_density = test::upload(ctx, composed.d_density, "d_density");
+      auto d_rgb = test::upload(ctx, composed.d_rgb, "d_rgb");
+      ocl::DeviceArray<float> d_raw_density(ctx, rows, "d_raw_density"), d_raw_rgb(ctx, 3 * rows, "d_raw_rgb");
+      act.bwd({raw_density, raw_rgb, rows}, {d_density, d_rgb}, {d_raw_density, d_raw_rgb});
+      // The same inline functions in the same order: bit-identical results.
+      CHECK(fused.comp_rgb == composed.comp_rgb);
+      CHECK(fused.acc == composed.acc);
+      CHECK(fused.distance == composed.distance);
+      CHECK(fused.weights == composed.weights);
+      CHECK(fused.d_density == d_raw_density.download(ctx));
+      CHECK(fused.d_rgb == d_raw_rgb.download(ctx));
+    }
+  }
+}
