@@ -1,15 +1,10 @@
-// Whole-file reading and atomic writing.
+// Whole-file reading and folder creation.
 #include "io/file.hpp"
 
-#include <atomic>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <system_error>
-
-#include <unistd.h>
 
 #include "cl/error.hpp"
 
@@ -39,29 +34,6 @@ void make_directories(const std::string& path) {
   fs::create_directories(path, ec);
   if (ec || !fs::is_directory(path)) {
     throw Error(path + ": cannot create folder (" + (ec ? ec.message() : std::string("a file is in the way")) + ")");
-  }
-}
-
-void write_file_atomic(const std::string& path, const void* bytes, size_t size) {
-  const fs::path target(path);
-  if (target.has_parent_path()) make_directories(target.parent_path().string());
-  // A name unique to this process and call, so concurrent writers never share a temporary.
-  static std::atomic<unsigned> counter{0};
-  const std::string temp = path + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
-  std::FILE* file = std::fopen(temp.c_str(), "wb");
-  if (!file) throw Error(path + ": cannot write (" + std::strerror(errno) + ")");
-  const bool written = size == 0 || std::fwrite(bytes, 1, size, file) == size;
-  const int saved_errno = errno;
-  const bool closed = std::fclose(file) == 0;
-  if (!written || !closed) {
-    std::remove(temp.c_str());
-    throw Error(path + ": write failed (" + std::strerror(written ? errno : saved_errno) + "); is the disk full?");
-  }
-  std::error_code ec;
-  fs::rename(temp, target, ec);
-  if (ec) {
-    std::remove(temp.c_str());
-    throw Error(path + ": cannot replace the file (" + ec.message() + ")");
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "cl/error.hpp"
+#include "io/atomic_file.hpp"
 #include "io/file.hpp"
 
 namespace mipnerf::io {
@@ -77,7 +78,7 @@ Json parse_json(const std::string& text, const std::string& name) {
 Json read_json(const std::string& path) { return parse_json(read_file_text(path), path); }
 
 void write_json(const std::string& path, const Json& value, int indent) {
-  write_file_atomic(path, value.dump(indent) + "\n");
+  write_bytes_atomically(path, value.dump(indent) + "\n");
 }
 
 std::string json_type_name(const Json& value) {

@@ -14,6 +14,7 @@
 #include <cstring>
 
 #include "cl/error.hpp"
+#include "io/atomic_file.hpp"
 #include "io/file.hpp"
 
 namespace mipnerf::io {
@@ -206,12 +207,12 @@ std::vector<unsigned char> encode_png16(uint32_t width, uint32_t height, int cha
 
 void write_png8(const std::string& path, uint32_t width, uint32_t height, int channels, const uint8_t* samples) {
   const auto bytes = encode_png8(width, height, channels, samples);
-  write_file_atomic(path, bytes.data(), bytes.size());
+  write_bytes_atomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 void write_png16(const std::string& path, uint32_t width, uint32_t height, int channels, const uint16_t* samples) {
   const auto bytes = encode_png16(width, height, channels, samples);
-  write_file_atomic(path, bytes.data(), bytes.size());
+  write_bytes_atomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 void write_png(const std::string& path, uint32_t width, uint32_t height, int channels, const float* samples,

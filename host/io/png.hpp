@@ -24,7 +24,7 @@ PngImage read_png(const std::string& path);
 // Same, from bytes in memory; `name` is used in error messages.
 PngImage decode_png(const unsigned char* bytes, size_t size, const std::string& name);
 
-// Writes samples [height][width][channels] (channels 3 = RGB or 4 = RGBA) atomically (io/file.hpp).
+// Writes samples [height][width][channels] (channels 3 = RGB or 4 = RGBA) atomically (io/atomic_file.hpp).
 void write_png8(const std::string& path, uint32_t width, uint32_t height, int channels, const uint8_t* samples);
 void write_png16(const std::string& path, uint32_t width, uint32_t height, int channels, const uint16_t* samples);
 // Float samples in [0, 1] (clamped, rounded to nearest) written with bit_depth 8 or 16.
