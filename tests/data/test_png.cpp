@@ -4,6 +4,8 @@
 
 #include <fstream>
 
+#include <png.h>
+
 #include "data_fixtures.hpp"
 #include "io/file.hpp"
 #include "io/png.hpp"
@@ -96,4 +98,49 @@ TEST_CASE("png: corrupted bytes anywhere either decode or throw mipnerf::Error, 
   }
   // CRCs catch nearly every flip: most of these must have been reported, not silently accepted.
   CHECK(errors > static_cast<int>(good.size()));
+}
+
+TEST_CASE("png: grey, grey+alpha and palette files are expanded to RGBA") {
+  // Written with libpng's simplified API (8-bit formats are stored as given, no gamma change).
+  auto encode = [](uint32_t format, const std::vector<uint8_t>& pixels, uint32_t w, uint32_t h,
+                   const std::vector<uint8_t>* colormap = nullptr) {
+    png_image image{};
+    image.version = PNG_IMAGE_VERSION;
+    image.width = w;
+    image.height = h;
+    image.format = format;
+    if (colormap) image.colormap_entries = static_cast<png_uint_32>(colormap->size() / 4);
+    png_alloc_size_t size = 0;
+    REQUIRE(png_image_write_to_memory(&image, nullptr, &size, 0, pixels.data(), 0,
+                                      colormap ? colormap->data() : nullptr));
+    std::vector<unsigned char> bytes(size);
+    REQUIRE(png_image_write_to_memory(&image, bytes.data(), &size, 0, pixels.data(), 0,
+                                      colormap ? colormap->data() : nullptr));
+    bytes.resize(size);
+    return bytes;
+  };
+  const std::vector<uint8_t> grey = {0, 17, 128, 255, 3, 250};
+  auto bytes = encode(PNG_FORMAT_GRAY, grey, 3, 2);
+  auto image = io::decode_png(bytes.data(), bytes.size(), "grey.png");
+  CHECK_FALSE(image.has_alpha);
+  for (size_t p = 0; p < 6; ++p) {
+    for (int c = 0; c < 3; ++c) CHECK(image.rgba[4 * p + c] == grey[p] / 255.0f);
+    CHECK(image.rgba[4 * p + 3] == 1.0f);
+  }
+  const std::vector<uint8_t> grey_alpha = {10, 0, 20, 128, 30, 255, 40, 7};
+  bytes = encode(PNG_FORMAT_GA, grey_alpha, 2, 2);
+  image = io::decode_png(bytes.data(), bytes.size(), "ga.png");
+  CHECK(image.has_alpha);
+  for (size_t p = 0; p < 4; ++p) {
+    for (int c = 0; c < 3; ++c) CHECK(image.rgba[4 * p + c] == grey_alpha[2 * p] / 255.0f);
+    CHECK(image.rgba[4 * p + 3] == grey_alpha[2 * p + 1] / 255.0f);
+  }
+  const std::vector<uint8_t> colormap = {255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0};  // RGBA entries
+  const std::vector<uint8_t> indices = {0, 1, 2, 1};
+  bytes = encode(PNG_FORMAT_RGBA_COLORMAP, indices, 2, 2, &colormap);
+  image = io::decode_png(bytes.data(), bytes.size(), "palette.png");
+  CHECK(image.has_alpha);
+  for (size_t p = 0; p < 4; ++p) {
+    for (int c = 0; c < 4; ++c) CHECK(image.rgba[4 * p + c] == colormap[4 * indices[p] + c] / 255.0f);
+  }
 }
