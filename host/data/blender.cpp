@@ -121,6 +121,13 @@ std::vector<SplitSpec> parse_blender(const std::string& dir, const LoadOptions& 
 }
 
 std::vector<SplitSpec> parse_transforms_json(const std::string& file, const LoadOptions& options) {
+  for (const auto& name : options.splits) {
+    if (name != "train" && name != "test") {
+      throw Error(file + ": a single transforms.json has only the splits train and test (every " +
+                  std::to_string(options.holdout_every) + "th frame held out), not '" + name + "'");
+    }
+  }
+  if (options.holdout_every < 0) throw Error("holdout_every must be >= 0");
   const io::Json root = io::read_json(file);
   auto frames = parse_frames(root, file, options);
   if (!has_near_far(root) && !(options.near && options.far) && options.log) {
@@ -132,7 +139,6 @@ std::vector<SplitSpec> parse_transforms_json(const std::string& file, const Load
   test.name = "test";
   train.source = test.source = file;
   train.uniform_size = test.uniform_size = false;  // each frame may have its own w/h
-  if (options.holdout_every < 0) throw Error("holdout_every must be >= 0");
   for (size_t i = 0; i < frames.size(); ++i) {
     const bool held_out = options.holdout_every > 0 && i % options.holdout_every == 0 && frames.size() > 1;
     (held_out ? test : train).frames.push_back(std::move(frames[i]));
@@ -142,12 +148,6 @@ std::vector<SplitSpec> parse_transforms_json(const std::string& file, const Load
     const bool wanted = options.splits.empty() ||
                         std::find(options.splits.begin(), options.splits.end(), split->name) != options.splits.end();
     if (wanted && !split->frames.empty()) splits.push_back(std::move(*split));
-  }
-  for (const auto& name : options.splits) {
-    if (name != "train" && name != "test") {
-      throw Error(file + ": a single transforms.json has only the splits train and test (every " +
-                  std::to_string(options.holdout_every) + "th frame), not '" + name + "'");
-    }
   }
   return splits;
 }

@@ -46,7 +46,7 @@ std::vector<std::string> wanted_splits(const LoadOptions& options);
 // The near/far for a frame: the option if set, else the file's value, else Blender's 2 and 6.
 void apply_near_far(FrameSpec& frame, const io::Json& global, const io::Json& object, const LoadOptions& options);
 
-// "path" → "folder/path" relative display; the JSON file path for `dir` and `name`.
+// `dir`/`name` (just `name` when dir is empty).
 std::string join_path(const std::string& dir, const std::string& name);
 
 }  // namespace mipnerf::data::detail
