@@ -30,8 +30,7 @@ void Activations::fwd(const ActivationInputs& in, const ActivationOutputs& out) 
   ocl::launch_1d(*ctx_, *fwd_, in.n_rows, where);
 }
 
-void Activations::bwd(const ActivationInputs& in, const ActivationGradients& grads,
-                      const ActivationRawGradients& out) {
+void Activations::bwd(const ActivationInputs& in, const ActivationGradients& grads, const ActivationRawGradients& out) {
   const std::string where = "activations_bwd";
   detail::require(in.raw_density, in.n_rows, where);
   detail::require(in.raw_rgb, 3 * in.n_rows, where);

@@ -50,8 +50,7 @@ void Encode::pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceA
   ocl::launch_1d(*ctx_, *pe_, items, where);
 }
 
-void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& in,
-                          ocl::DeviceArray<float>& features) {
+void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& in, ocl::DeviceArray<float>& features) {
   const std::string where = "gaussian_ipe_fwd";
   check_degrees(options, where, false);
   detail::require(in.origins, 3 * in.n_rays, where);

@@ -16,8 +16,7 @@ Gaussian::Gaussian(ocl::Context& ctx, const GaussianOptions& options) : ctx_(&ct
   points_ = &program.kernel("gaussian_points_fwd");
 }
 
-void Gaussian::check(const GaussianInputs& in, const GaussianOutputs& out, const std::string& where,
-                     bool radii) const {
+void Gaussian::check(const GaussianInputs& in, const GaussianOutputs& out, const std::string& where, bool radii) const {
   detail::require(in.origins, 3 * in.n_rays, where);
   detail::require(in.directions, 3 * in.n_rays, where);
   if (radii) detail::require(in.radii, in.n_rays, where);

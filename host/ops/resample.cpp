@@ -21,8 +21,7 @@ void Resample::fwd(const ResampleOptions& options, const ResampleInputs& in, ocl
   ocl::set_args(*fwd_, where, in.t_edges, in.weights, t_new, detail::to_uint(in.n_rays, where, "rays"),
                 detail::to_uint(in.n_samples, where, "samples"), options.padding,
                 static_cast<cl_uint>(options.blur ? 1 : 0), static_cast<cl_uint>(options.randomized ? 1 : 0),
-                static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step),
-                static_cast<cl_uint>(key.first_ray));
+                static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));
   ocl::launch_1d(*ctx_, *fwd_, in.n_rays, where);
 }
 

@@ -24,8 +24,7 @@ void Sample::stratified(const StratifiedInputs& in, ocl::DeviceArray<float>& t_e
   detail::require(t_edges, in.n_rays * (in.n_samples + 1), where);
   ocl::set_args(*stratified_, where, in.near, in.far, t_edges, detail::to_uint(in.n_rays, where, "rays"),
                 detail::to_uint(in.n_samples, where, "samples"), static_cast<cl_uint>(options_.randomized ? 1 : 0),
-                static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step),
-                static_cast<cl_uint>(key.first_ray));
+                static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));
   const size_t groups = (in.n_samples + 1 + 3) / 4;  // one item per 4 edges of a ray
   ocl::launch_1d(*ctx_, *stratified_, in.n_rays * groups, where);
 }

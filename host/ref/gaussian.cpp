@@ -31,7 +31,8 @@ void gaussian_points_fwd(const std::vector<double>& origins, const std::vector<d
     const double* t = t_edges.data() + ray * (n_samples + 1);
     for (size_t i = 0; i < n_samples; ++i) {
       const double t_mid = 0.5 * (t[i] + t[i + 1]);
-      for (int a = 0; a < 3; ++a) means[3 * (ray * n_samples + i) + a] = origins[3 * ray + a] + t_mid * directions[3 * ray + a];
+      for (int a = 0; a < 3; ++a)
+        means[3 * (ray * n_samples + i) + a] = origins[3 * ray + a] + t_mid * directions[3 * ray + a];
     }
   }
 }

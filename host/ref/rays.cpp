@@ -68,8 +68,8 @@ RayOut ndc_ray(const data::Camera& cam, double x, double y, uint32_t px, uint32_
 
 }  // namespace
 
-void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width,
-                    double height, double near_plane, double o_ndc[3], double d_ndc[3]) {
+void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width, double height,
+                    double near_plane, double o_ndc[3], double d_ndc[3]) {
   const double t = -(near_plane + o[2]) / d[2];
   const double o_near[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
   const double ax = -2.0 * focal_x / width, ay = -2.0 * focal_y / height;
@@ -101,15 +101,14 @@ void rays_fwd(const ops::RaysOptions& options, const std::vector<double>& camera
     const uint32_t px = pixel_ids[i] % cam.width_px, py = pixel_ids[i] / cam.width_px;
     double offset_x = options.pixel_center_offset, offset_y = options.pixel_center_offset;
     if (options.jitter_subpixel) {
-      const auto xi = rng_uniform4(key.seed, key.first_ray + static_cast<uint32_t>(i), key.step, 0,
-                                   rng_stream_subpixel);
+      const auto xi =
+          rng_uniform4(key.seed, key.first_ray + static_cast<uint32_t>(i), key.step, 0, rng_stream_subpixel);
       offset_x = xi[0];
       offset_y = xi[1];
     }
     const double x = px + offset_x, y = py + offset_y;
-    const RayOut ray = options.ray_shape == ops::RayShape::cylinder
-                           ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
-                           : cone_ray(cam, x, y, px);
+    const RayOut ray = options.ray_shape == ops::RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
+                                                                    : cone_ray(cam, x, y, px);
     // viewdirs: the unit world direction (in NDC scenes too, where `directions` holds the NDC direction).
     const data::Ray world = data::camera_ray(cam, x, y);
     const double norm = std::sqrt(world.direction_world[0] * world.direction_world[0] +

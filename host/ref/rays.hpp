@@ -22,7 +22,7 @@ void rays_fwd(const ops::RaysOptions& options, const std::vector<double>& camera
 
 // Official convert_to_ndc for one ray (world origin o, direction d) with the given focal lengths, image size and
 // near plane: the ray shifted to the plane z = −near, then projected. Writes the NDC origin and direction.
-void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width,
-                    double height, double near_plane, double o_ndc[3], double d_ndc[3]);
+void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width, double height,
+                    double near_plane, double o_ndc[3], double d_ndc[3]);
 
 }  // namespace mipnerf::ref

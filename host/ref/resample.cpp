@@ -8,6 +8,34 @@
 
 namespace mipnerf::ref {
 
+std::vector<double> resample_cdf(const ops::ResampleOptions& options, const double* raw, size_t n) {
+  std::vector<double> w(n), cdf(n + 1);
+  double sum = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    if (options.blur) {
+      // Official blur-pool: max over each pair of neighbours of the edge-padded weights, then the mean of pairs.
+      const double left = raw[i > 0 ? i - 1 : 0], right = raw[i + 1 < n ? i + 1 : n - 1];
+      w[i] = 0.5 * (std::max(left, raw[i]) + std::max(raw[i], right));
+    } else {
+      w[i] = raw[i];
+    }
+    w[i] += options.padding;
+    sum += w[i];
+  }
+  // Official sorted_piecewise_constant_pdf: pad the sum up to 1e-5 (an all-zero histogram becomes uniform).
+  const double extra = std::max(0.0, 1e-5 - sum);
+  for (auto& v : w) v += extra / static_cast<double>(n);
+  sum += extra;
+  cdf[0] = 0.0;
+  double partial = 0.0;
+  for (size_t k = 1; k < n; ++k) {
+    partial += w[k - 1] / sum;
+    cdf[k] = std::min(1.0, partial);
+  }
+  cdf[n] = 1.0;
+  return cdf;
+}
+
 void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>& t_edges,
                   const std::vector<double>& weights, std::vector<double>& t_new, size_t n_rays, size_t n_samples,
                   const ops::RngKey& key) {
@@ -15,31 +43,9 @@ void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>
   const double eps = std::numeric_limits<float>::epsilon();  // official jnp.finfo('float32').eps
   t_new.assign(n_rays * n_out, 0.0);
   if (n == 0) return;
-  std::vector<double> w(n), cdf(n + 1);
   for (size_t ray = 0; ray < n_rays; ++ray) {
     const double* t = t_edges.data() + ray * n_out;
-    const double* raw = weights.data() + ray * n;
-    double sum = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-      if (options.blur) {
-        const double left = raw[i > 0 ? i - 1 : 0], right = raw[i + 1 < n ? i + 1 : n - 1];
-        w[i] = 0.5 * (std::max(left, raw[i]) + std::max(raw[i], right));
-      } else {
-        w[i] = raw[i];
-      }
-      w[i] += options.padding;
-      sum += w[i];
-    }
-    const double extra = std::max(0.0, 1e-5 - sum);
-    for (auto& v : w) v += extra / static_cast<double>(n);
-    sum += extra;
-    cdf[0] = 0.0;
-    double partial = 0.0;
-    for (size_t k = 1; k < n; ++k) {
-      partial += w[k - 1] / sum;
-      cdf[k] = std::min(1.0, partial);
-    }
-    cdf[n] = 1.0;
+    const std::vector<double> cdf = resample_cdf(options, weights.data() + ray * n, n);
     for (size_t j = 0; j < n_out; ++j) {
       double u;
       if (options.randomized) {

@@ -8,6 +8,10 @@
 
 namespace mipnerf::ref {
 
+// Steps 1–4 of resample_fwd for one ray's weights w [N]: cdf [N+1] with cdf[0] = 0 and cdf[N] = 1 (official
+// blur-pool, padding, 1e-5 floor on the sum, min(1, cumsum) between).
+std::vector<double> resample_cdf(const ops::ResampleOptions& options, const double* weights, size_t n_samples);
+
 // Mirror of resample_fwd (official resample_along_rays + sorted_piecewise_constant_pdf; mip-NeRF §3.2):
 // blur-pool the weights [R][N] (max of neighbours, then mean of pairs), add the padding α, normalise (with the
 // official 1e-5 floor on the sum), and invert the piecewise-constant CDF over the edges t_edges [R][N+1] at

@@ -78,18 +78,18 @@ inline Comparison compare(const std::vector<float>& device, const std::vector<do
 }
 
 // CHECKs that every element is within tolerance; prints the worst element either way (INFO on failure).
-#define MIPNERF_CHECK_CLOSE(what, device, reference, ...)                                                    \
-  do {                                                                                                       \
-    REQUIRE((device).size() >= (reference).size());                                                          \
-    const auto cmp_ = ::mipnerf::test::compare((device), (reference), (__VA_ARGS__));                        \
-    INFO(what << ": worst element " << cmp_.worst_index << " device " << (device)[cmp_.worst_index]          \
-              << " reference " << (reference)[cmp_.worst_index] << " error " << cmp_.worst_error << " = "    \
-              << cmp_.worst_ratio << " x tolerance; " << cmp_.non_finite << " non-finite");                  \
-    if (std::getenv("MIPNERF_TEST_VERBOSE")) {                                                               \
-      MESSAGE(what << ": worst error " << cmp_.worst_error << " = " << cmp_.worst_ratio << " x tolerance");   \
-    }                                                                                                        \
-    CHECK(cmp_.non_finite == 0);                                                                             \
-    CHECK(cmp_.failures == 0);                                                                               \
+#define MIPNERF_CHECK_CLOSE(what, device, reference, ...)                                                            \
+  do {                                                                                                               \
+    REQUIRE((device).size() >= (reference).size());                                                                  \
+    const auto cmp_ = ::mipnerf::test::compare((device), (reference), (__VA_ARGS__));                                \
+    INFO(what << ": worst element " << cmp_.worst_index << " device " << (device)[cmp_.worst_index] << " reference " \
+              << (reference)[cmp_.worst_index] << " error " << cmp_.worst_error << " = " << cmp_.worst_ratio         \
+              << " x tolerance; " << cmp_.non_finite << " non-finite");                                              \
+    if (std::getenv("MIPNERF_TEST_VERBOSE")) {                                                                       \
+      MESSAGE(what << ": worst error " << cmp_.worst_error << " = " << cmp_.worst_ratio << " x tolerance");          \
+    }                                                                                                                \
+    CHECK(cmp_.non_finite == 0);                                                                                     \
+    CHECK(cmp_.failures == 0);                                                                                       \
   } while (0)
 
 inline bool all_finite(const std::vector<float>& v) {

@@ -75,15 +75,17 @@ TEST_CASE("activations: forward and backward match the CPU reference on 30,000 r
     const double pad = options.rgb_padding;
     const auto x_of = [&](size_t i) { return static_cast<double>(raw_density[i]) + options.density_bias; };
     const auto argument_error = [&](size_t i, double slope) { return kUnitRoundoff * std::abs(x_of(i)) * slope; };
-    const auto sigmoid_grad = [](double x) { const double e = std::exp(-std::abs(x)); return e / ((1 + e) * (1 + e)); };
+    const auto sigmoid_grad = [](double x) {
+      const double e = std::exp(-std::abs(x));
+      return e / ((1 + e) * (1 + e));
+    };
     const bool relu = options.density == ops::DensityActivation::relu;
     MIPNERF_CHECK_CLOSE("density", dev.density, density, [&](size_t i) {
       return 16 * kUnitRoundoff * std::abs(density[i]) +
              argument_error(i, relu ? 1.0 : ref::density_activation_grad(options, raw_density[i])) + 1e-38;
     });
-    MIPNERF_CHECK_CLOSE("rgb", dev.rgb, rgb, [&](size_t i) {
-      return 16 * kUnitRoundoff * (std::abs(rgb[i]) + 2 * pad) + 1e-38;
-    });
+    MIPNERF_CHECK_CLOSE("rgb", dev.rgb, rgb,
+                        [&](size_t i) { return 16 * kUnitRoundoff * (std::abs(rgb[i]) + 2 * pad) + 1e-38; });
     MIPNERF_CHECK_CLOSE("d_raw_density", dev.d_raw_density, d_raw_density, [&](size_t i) {
       return 16 * kUnitRoundoff * std::abs(d_raw_density[i]) +
              std::abs(d_density[i]) * argument_error(i, relu ? 0.0 : sigmoid_grad(x_of(i))) + 1e-38;
@@ -137,7 +139,8 @@ TEST_CASE("activations: the device backward matches finite differences of the re
     // Float32 derivative (16u relative, as above) plus the finite difference's own error (≤ 1e-8, see the
     // previous test); ReLU's kink is never hit by a float within 1e-5 of −bias in this sample (checked).
     for (size_t i = 0; i < rows; ++i) {
-      if (options.density == ops::DensityActivation::relu) REQUIRE(std::abs(raw_density[i] + options.density_bias) > 1e-5);
+      if (options.density == ops::DensityActivation::relu)
+        REQUIRE(std::abs(raw_density[i] + options.density_bias) > 1e-5);
     }
     MIPNERF_CHECK_CLOSE("d density / d raw", dev.d_raw_density, fd_density,
                         [&](size_t i) { return 16 * kUnitRoundoff * std::abs(fd_density[i]) + 1e-8; });

@@ -192,7 +192,7 @@ TEST_CASE("gaussian: frustum moments stay accurate from t0 = 0.1 to 1e4 and widt
                                              << "; eq. 23 in long double " << worst_ref);
   }
   INFO("worst relative error of the float32 kernel: t_mean " << worst[0] << ", t_var " << worst[1] << ", r_var "
-                                                               << worst[2] << "; eq. 23 in long double " << worst_ref);
+                                                             << worst[2] << "; eq. 23 in long double " << worst_ref);
   // ≤ 10u for t_mean and ≤ 25u for the variances (see the previous test): 1e-6 ≈ 17u covers t_mean with margin,
   // 3e-6 ≈ 50u the variances.
   CHECK(worst[0] <= 1e-6);
@@ -286,8 +286,8 @@ TEST_CASE("gaussian: point samples sit at interval midpoints with zero covarianc
   const Rays r = random_rays(200, 64, 41);
   const auto dev = run_device({ops::RayShape::cone}, r, true);
   std::vector<double> means, covs;
-  ref::gaussian_points_fwd(test::to_double(r.origins), test::to_double(r.directions), test::to_double(r.t_edges),
-                           means, covs, r.n_rays, r.n_samples);
+  ref::gaussian_points_fwd(test::to_double(r.origins), test::to_double(r.directions), test::to_double(r.t_edges), means,
+                           covs, r.n_rays, r.n_samples);
   // mean_a = o_a + t_mid·d_a: t_mid is one sum and a halving (exact), then a product and a sum: ≤ 3u of the terms.
   MIPNERF_CHECK_CLOSE("means", dev.means, means, [&](size_t i) {
     const size_t ray = i / 3 / r.n_samples, a = i % 3;

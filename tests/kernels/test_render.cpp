@@ -25,8 +25,7 @@ struct Batch {
 // Edges from t_0 ∈ [0.5, 3] with log-uniform gaps (and some empty intervals), directions of norm 0.5..2,
 // densities log-uniform over `density_lo..density_hi` with 20 % zeros, colours in [0, 1], and random upstream
 // gradients.
-Batch random_batch(size_t n_rays, size_t n_samples, unsigned seed, double density_lo = 1e-3,
-                   double density_hi = 1e3) {
+Batch random_batch(size_t n_rays, size_t n_samples, unsigned seed, double density_lo = 1e-3, double density_hi = 1e3) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
   Batch b;
@@ -77,8 +76,8 @@ DeviceResult run_device(const ops::RenderOptions& options, const Batch& b, bool 
     render.fwd(in, out);
     render.bwd(in, weights, grads, {d_rgb, d_density});
   }
-  return {comp.download(ctx), acc.download(ctx), distance.download(ctx), weights.download(ctx), d_rgb.download(ctx),
-          d_density.download(ctx)};
+  return {comp.download(ctx),    acc.download(ctx),   distance.download(ctx),
+          weights.download(ctx), d_rgb.download(ctx), d_density.download(ctx)};
 }
 
 struct RefResult {
@@ -221,8 +220,8 @@ double ray_loss(const ops::RenderOptions& options, const std::vector<double>& rg
 }
 
 // Central finite differences of ray_loss for every colour and density of every ray.
-void finite_differences(const ops::RenderOptions& options, const Batch& b, bool with_d_acc,
-                        std::vector<double>& fd_rgb, std::vector<double>& fd_density) {
+void finite_differences(const ops::RenderOptions& options, const Batch& b, bool with_d_acc, std::vector<double>& fd_rgb,
+                        std::vector<double>& fd_density) {
   const size_t n = b.n_samples;
   fd_rgb.assign(3 * b.n_rays * n, 0.0);
   fd_density.assign(b.n_rays * n, 0.0);
@@ -233,9 +232,7 @@ void finite_differences(const ops::RenderOptions& options, const Batch& b, bool 
     const std::vector<double> dir(b.directions.begin() + 3 * ray, b.directions.begin() + 3 * ray + 3);
     const double d_comp[3] = {b.d_comp_rgb[3 * ray], b.d_comp_rgb[3 * ray + 1], b.d_comp_rgb[3 * ray + 2]};
     const double d_acc = b.d_acc[ray];
-    const auto loss = [&] {
-      return ray_loss(options, rgb, density, t, dir, d_comp, with_d_acc ? &d_acc : nullptr, n);
-    };
+    const auto loss = [&] { return ray_loss(options, rgb, density, t, dir, d_comp, with_d_acc ? &d_acc : nullptr, n); };
     for (size_t i = 0; i < n; ++i) {
       const double sigma = density[i], h = 1e-6 * std::max(sigma, 1.0);
       density[i] = sigma + h;
@@ -363,7 +360,7 @@ TEST_CASE("render: hard cases stay finite - sigma 0, sigma 1e10, empty intervals
   }
 }
 
-TEST_CASE("render: black and none composite the same; white adds 1 - acc") {
+TEST_CASE("render: black and none composite the same, white adds 1 - acc") {
   const Batch b = random_batch(2000, 24, 404);
   const auto none = run_device({ops::Background::none}, b, false);
   const auto black = run_device({ops::Background::black}, b, false);

@@ -1,0 +1,277 @@
+// Camera rays (kernels/rays.cl): cone and NDC rays against the reference (which differences neighbouring pixels
+// literally, as the official code), pixel-centre offset, sub-pixel jitter and its reproducibility, view
+// dependence off, and invalid ids.
+#include <doctest/doctest.h>
+
+#include <array>
+
+#include "data/camera.hpp"
+#include "kernel_checks.hpp"
+#include "ops/rays.hpp"
+#include "ref/rays.hpp"
+#include "support/test_context.hpp"
+
+using namespace mipnerf;
+using test::kUnitRoundoff;
+
+namespace {
+
+// A rotation from a random unit quaternion; `max_angle` < π limits it to a cone around the identity (forward-facing
+// scenes look down −z, like the unrotated camera).
+std::array<double, 9> random_rotation(std::mt19937& rng, double max_angle) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double axis[3] = {normal(rng), normal(rng), normal(rng)};
+  const double len = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+  const double angle = max_angle * unit(rng), s = std::sin(angle / 2);
+  const double w = std::cos(angle / 2), x = axis[0] / len * s, y = axis[1] / len * s, z = axis[2] / len * s;
+  return {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
+          2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+          2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+}
+
+struct Scene {
+  std::vector<data::Camera> cameras;
+  std::vector<uint32_t> camera_ids, pixel_ids;
+};
+
+// `forward_facing`: small rotations and origins near z = 0, so every ray crosses the NDC near plane z = −1 ahead.
+Scene random_scene(size_t n_cameras, size_t n_rays, unsigned seed, bool forward_facing) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
+  Scene s;
+  for (size_t c = 0; c < n_cameras; ++c) {
+    data::Camera cam;
+    const auto rot = random_rotation(rng, forward_facing ? 0.3 : M_PI);
+    const double spread = forward_facing ? 0.3 : 4.0;
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) cam.camera_to_world[row * 4 + col] = rot[row * 3 + col];
+      cam.camera_to_world[row * 4 + 3] = spread * signed_unit(rng);
+    }
+    cam.width_px = 1 + static_cast<uint32_t>(800 * unit(rng));
+    cam.height_px = 1 + static_cast<uint32_t>(800 * unit(rng));
+    cam.focal_x_px = forward_facing ? 300 + 700 * unit(rng) : 50 + 1500 * unit(rng);
+    cam.focal_y_px = cam.focal_x_px * (c % 3 == 0 ? 1.0 : 0.9 + 0.2 * unit(rng));  // some cameras with fx ≠ fy
+    cam.center_x_px = 0.5 * cam.width_px + (c % 2 ? 0.0 : std::round(8 * signed_unit(rng)) / 2);
+    cam.center_y_px = 0.5 * cam.height_px;
+    cam.near = forward_facing ? 0.0 : 0.5 + unit(rng);
+    cam.far = forward_facing ? 1.0 : 4.0 + 4 * unit(rng);
+    cam.lossmult = std::pow(4.0, static_cast<int>(4 * unit(rng)));
+    s.cameras.push_back(cam);
+  }
+  for (size_t i = 0; i < n_rays; ++i) {
+    const uint32_t c = static_cast<uint32_t>(rng() % n_cameras);
+    s.camera_ids.push_back(c);
+    s.pixel_ids.push_back(static_cast<uint32_t>(rng() % (s.cameras[c].width_px * s.cameras[c].height_px)));
+  }
+  return s;
+}
+
+struct RayArrays {
+  std::vector<float> origins, directions, viewdirs, radii, near, far, lossmult;
+};
+
+RayArrays run_device(const ops::RaysOptions& options, const Scene& s, const ops::RngKey& key = {}) {
+  auto& ctx = test::test_context();
+  const size_t n = s.camera_ids.size();
+  const auto packed = data::pack_cameras(s.cameras);
+  auto cameras = test::upload(ctx, packed, "cameras");
+  auto camera_ids = test::upload(ctx, s.camera_ids, "camera_ids"),
+       pixel_ids = test::upload(ctx, s.pixel_ids, "pixel_ids");
+  auto origins = test::filled(ctx, 3 * n, 7.0f, "origins"), directions = test::filled(ctx, 3 * n, 7.0f, "directions");
+  auto viewdirs = test::filled(ctx, 3 * n, 7.0f, "viewdirs"), radii = test::filled(ctx, n, 7.0f, "radii");
+  auto near = test::filled(ctx, n, 7.0f, "near"), far = test::filled(ctx, n, 7.0f, "far");
+  auto lossmult = test::filled(ctx, n, 7.0f, "lossmult");
+  ops::Rays(ctx, options)
+      .fwd({cameras, camera_ids, pixel_ids, n}, {origins, directions, viewdirs, radii, near, far, lossmult}, key);
+  return {origins.download(ctx), directions.download(ctx), viewdirs.download(ctx), radii.download(ctx),
+          near.download(ctx),    far.download(ctx),        lossmult.download(ctx)};
+}
+
+struct RefArrays {
+  std::vector<double> origins, directions, viewdirs, radii, near, far, lossmult;
+};
+
+RefArrays run_ref(const ops::RaysOptions& options, const Scene& s, const ops::RngKey& key = {}) {
+  RefArrays r;
+  const auto packed = test::to_double(data::pack_cameras(s.cameras));
+  ref::rays_fwd(options, packed, s.camera_ids, s.pixel_ids, r.origins, r.directions, r.viewdirs, r.radii, r.near, r.far,
+                r.lossmult, s.camera_ids.size(), s.cameras.size(), key);
+  return r;
+}
+
+// Tolerance of a world direction component: the camera-frame direction ((p − c) + o)/f is ≤ 2 roundings and a
+// 2.5-ulp division, the rotation 3 products and 2 sums of terms bounded by |dir_camera|: ≤ 8u·‖dir_camera‖₁ per
+// component, twice that.
+std::function<double(size_t)> direction_tolerance(const std::vector<double>& directions) {
+  return [&directions](size_t i) {
+    const size_t ray = i / 3;
+    double norm1 = 0;
+    for (int a = 0; a < 3; ++a) norm1 += std::abs(directions[3 * ray + a]);
+    return 2 * 8 * kUnitRoundoff * norm1 * 1.8;  // ‖R·v‖₁ ≥ ‖v‖₁/√3 for a rotation: 1.8 > √3 converts the norms
+  };
+}
+
+void check_cone_rays(const ops::RaysOptions& options, const Scene& s, const ops::RngKey& key = {}) {
+  const auto dev = run_device(options, s, key);
+  const auto r = run_ref(options, s, key);
+  const auto exact = [](size_t) { return 0.0; };
+  MIPNERF_CHECK_CLOSE("origins (copied)", dev.origins, r.origins, exact);
+  MIPNERF_CHECK_CLOSE("near (copied)", dev.near, r.near, exact);
+  MIPNERF_CHECK_CLOSE("far (copied)", dev.far, r.far, exact);
+  MIPNERF_CHECK_CLOSE("lossmult (copied)", dev.lossmult, r.lossmult, exact);
+  MIPNERF_CHECK_CLOSE("directions", dev.directions, r.directions, direction_tolerance(r.directions));
+  // Unit view direction: the direction's error (above, relative to its norm) plus the norm (3 roundings, sqrt
+  // ≤ 3 ulp) and the division (2.5 ulp): 16u·1.8 + 12u ≤ 48u absolute; twice that.
+  MIPNERF_CHECK_CLOSE("viewdirs", dev.viewdirs, r.viewdirs, [](size_t) { return 2 * 48 * kUnitRoundoff; });
+  // Radius |R column 0|/fx·(2/√12): three squares, two sums, sqrt ≤ 3 ulp, a division ≤ 2.5 ulp, a product:
+  // ≤ 16u relative (the reference's literal neighbour difference in double is exact to 1e-12); twice that.
+  MIPNERF_CHECK_CLOSE("radii", dev.radii, r.radii, [&](size_t i) { return 2 * 16 * kUnitRoundoff * r.radii[i]; });
+}
+
+}  // namespace
+
+TEST_CASE("rays: cone rays match the CPU reference on 10,000 random pixels of 40 cameras") {
+  const Scene s = random_scene(40, 10000, 51, false);
+  check_cone_rays({}, s);
+}
+
+TEST_CASE("rays: the cone radius is the neighbouring-pixel distance times 2 over sqrt 12") {
+  // An unrotated camera with fx = 500: neighbouring directions differ by exactly 1/500, so r = 1/(500·√3).
+  Scene s;
+  data::Camera cam;
+  cam.focal_x_px = cam.focal_y_px = 500;
+  cam.width_px = 400;
+  cam.height_px = 300;
+  cam.center_x_px = 200;
+  cam.center_y_px = 150;
+  s.cameras = {cam};
+  s.camera_ids = {0, 0, 0};
+  s.pixel_ids = {0, 399, 300 * 400 - 1};  // first pixel, last of a row, last pixel
+  const auto dev = run_device({}, s);
+  for (float r : dev.radii) CHECK(r == doctest::Approx(1.0 / (500.0 * std::sqrt(3.0))).epsilon(1e-6));
+  // Pixel (0, 0) is sampled at its centre (0.5, 0.5): direction ((0.5 − 200)/500, −(0.5 − 150)/500, −1).
+  CHECK(dev.directions[0] == doctest::Approx(-199.5 / 500).epsilon(1e-7));
+  CHECK(dev.directions[1] == doctest::Approx(149.5 / 500).epsilon(1e-7));
+  CHECK(dev.directions[2] == -1.0f);
+}
+
+TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official conversion") {
+  const Scene s = random_scene(20, 10000, 52, true);
+  ops::RaysOptions options;
+  options.ray_shape = ops::RayShape::cylinder;
+  const auto dev = run_device(options, s);
+  const auto r = run_ref(options, s);
+  // NDC origin (2f/(w·n))·o_near.x with o_near = o + t·d: t = −(n + o_z)/d_z, a few roundings of terms bounded by
+  // |o| + |t·d|, then a product with 2f/w (≤ 2·1000/1 here): ≤ 10u·(2f/w)·(|o| + |t·d|) per component. The
+  // NDC direction subtracts o_near/o_z from d/d_z likewise. The reference converts the float camera exactly.
+  std::vector<double> origin_tol(r.origins.size()), direction_tol(r.directions.size());
+  for (size_t i = 0; i < s.camera_ids.size(); ++i) {
+    const auto& cam = s.cameras[s.camera_ids[i]];
+    const data::Ray ray =
+        data::camera_ray(cam, s.pixel_ids[i] % cam.width_px + 0.5, s.pixel_ids[i] / cam.width_px + 0.5);
+    const double t = std::abs((1.0 + ray.origin_world[2]) / ray.direction_world[2]);
+    for (int a = 0; a < 3; ++a) {
+      const double scale = 2 * (a == 0 ? cam.focal_x_px / cam.width_px : cam.focal_y_px / cam.height_px);
+      const double terms = std::abs(ray.origin_world[a]) + t * std::abs(ray.direction_world[a]);
+      const double slope = std::abs(ray.direction_world[a] / ray.direction_world[2]);
+      origin_tol[3 * i + a] = 2 * 10 * kUnitRoundoff * scale * (terms + 1);
+      direction_tol[3 * i + a] = 2 * 10 * kUnitRoundoff * scale * (terms + slope + 1);
+    }
+  }
+  MIPNERF_CHECK_CLOSE("NDC origins", dev.origins, r.origins, [&](size_t i) { return origin_tol[i]; });
+  MIPNERF_CHECK_CLOSE("NDC directions", dev.directions, r.directions, [&](size_t i) { return direction_tol[i]; });
+  // The radius, from the kernel's closed form of the neighbour differences (no cancellation): its terms are
+  // ≤ 12 roundings of themselves; the reference subtracts neighbouring NDC origins in double (1e-12 relative).
+  MIPNERF_CHECK_CLOSE("NDC radii", dev.radii, r.radii, [&](size_t i) { return 2 * 24 * kUnitRoundoff * r.radii[i]; });
+  MIPNERF_CHECK_CLOSE("viewdirs", dev.viewdirs, r.viewdirs, [](size_t) { return 2 * 48 * kUnitRoundoff; });
+  for (size_t i = 0; i < s.camera_ids.size(); ++i) {
+    REQUIRE(dev.origins[3 * i + 2] == -1.0f);    // every NDC ray starts on the near plane z = −1 ...
+    REQUIRE(dev.directions[3 * i + 2] == 2.0f);  // ... and reaches z = 1 (infinity) at t = 1
+  }
+}
+
+TEST_CASE("rays: pixel-centre offset 0 and sub-pixel jitter match the reference") {
+  const Scene s = random_scene(10, 10000, 53, false);
+  ops::RaysOptions corners;
+  corners.pixel_center_offset = 0.0f;  // original NeRF's convention
+  check_cone_rays(corners, s);
+  ops::RaysOptions jitter;
+  jitter.jitter_subpixel = true;
+  check_cone_rays(jitter, s, {12345, 7, 1000});
+}
+
+TEST_CASE("rays: jittered positions stay inside their pixel and depend only on seed, step and ray") {
+  // An unrotated camera at the origin: the image position is recovered exactly as x = d_x·fx + cx.
+  Scene s;
+  data::Camera cam;
+  cam.focal_x_px = cam.focal_y_px = 100;
+  cam.width_px = 64;
+  cam.height_px = 48;
+  cam.center_x_px = 32;
+  cam.center_y_px = 24;
+  s.cameras = {cam};
+  for (uint32_t i = 0; i < 3000; ++i) {
+    s.camera_ids.push_back(0);
+    s.pixel_ids.push_back(i % (64 * 48));
+  }
+  ops::RaysOptions options;
+  options.jitter_subpixel = true;
+  const ops::RngKey key{99, 5, 0};
+  const auto a = run_device(options, s, key);
+  double min_offset = 1, max_offset = 0;
+  for (size_t i = 0; i < s.pixel_ids.size(); ++i) {
+    const double x = a.directions[3 * i] * 100.0 + 32.0, y = -a.directions[3 * i + 1] * 100.0 + 24.0;
+    const double ox = x - s.pixel_ids[i] % 64, oy = y - s.pixel_ids[i] / 64;
+    // Inside the pixel, up to the float rounding of the direction (1e-5 px).
+    REQUIRE(ox > -1e-5);
+    REQUIRE(ox < 1 + 1e-5);
+    REQUIRE(oy > -1e-5);
+    REQUIRE(oy < 1 + 1e-5);
+    min_offset = std::min({min_offset, ox, oy});
+    max_offset = std::max({max_offset, ox, oy});
+  }
+  CHECK(min_offset < 0.01);  // 3000 pairs of uniforms cover the pixel
+  CHECK(max_offset > 0.99);
+  // The same key gives the same rays; another step gives others.
+  CHECK(run_device(options, s, key).directions == a.directions);
+  CHECK(run_device(options, s, {99, 6, 0}).directions != a.directions);
+  // Chunking: rays 1000.. launched on their own with first_ray = 1000 are the same rays.
+  Scene tail = s;
+  tail.camera_ids.erase(tail.camera_ids.begin(), tail.camera_ids.begin() + 1000);
+  tail.pixel_ids.erase(tail.pixel_ids.begin(), tail.pixel_ids.begin() + 1000);
+  const auto b = run_device(options, tail, {99, 5, 1000});
+  CHECK(std::vector<float>(a.directions.begin() + 3000, a.directions.end()) == b.directions);
+}
+
+TEST_CASE("rays: without view dependence the viewdirs buffer is never written") {
+  const Scene s = random_scene(5, 1000, 54, false);
+  ops::RaysOptions options;
+  options.view_dependence = false;
+  const auto dev = run_device(options, s);
+  for (float v : dev.viewdirs) REQUIRE(v == 7.0f);  // the sentinel run_device filled it with
+  const auto with = run_device({}, s);
+  CHECK(dev.directions == with.directions);
+  CHECK(dev.radii == with.radii);
+}
+
+TEST_CASE("rays: an unknown camera or a pixel outside the image gives NaN, not a wrong ray") {
+  Scene s = random_scene(3, 4, 55, false);
+  s.camera_ids[1] = 3;  // one past the last camera
+  s.pixel_ids[2] = s.cameras[s.camera_ids[2]].width_px * s.cameras[s.camera_ids[2]].height_px;
+  const auto dev = run_device({}, s);
+  for (size_t i : {size_t(1), size_t(2)}) {
+    CHECK(std::isnan(dev.origins[3 * i]));
+    CHECK(std::isnan(dev.directions[3 * i + 2]));
+    CHECK(std::isnan(dev.radii[i]));
+    CHECK(std::isnan(dev.near[i]));
+  }
+  for (size_t i : {size_t(0), size_t(3)}) CHECK(std::isfinite(dev.radii[i]));
+  // A cameras buffer that is not whole cameras is refused before the launch.
+  auto& ctx = test::test_context();
+  ocl::DeviceArray<float> cameras(ctx, 25, "cameras [25]"), out(ctx, 12, "out");
+  ocl::DeviceArray<uint32_t> ids(ctx, 4, "ids");
+  ops::Rays rays(ctx, {});
+  CHECK_THROWS_WITH_AS(rays.fwd({cameras, ids, ids, 4}, {out, out, out, out, out, out, out}),
+                       doctest::Contains("cameras [25]"), Error);
+}
