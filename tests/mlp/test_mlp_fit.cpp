@@ -143,7 +143,7 @@ TEST_CASE("mlp fit: Adam with the eq. 24 schedule fits a view-dependent function
                                << initial_held_out / final_held_out << "x) in " << steps << " steps");
   // Stated target: the training loss falls by more than 1000x and the held-out loss by more than 300x (the
   // function is smooth, so what is learnt carries over to new samples of it). Measured here: ≈ 4400x and
-  // ≈ 2500x; a wrong gradient anywhere in the network stalls well above these.
+  // ≈ 2500x.
   CHECK(final_loss < initial / 1000.0);
   CHECK(final_held_out < initial_held_out / 300.0);
   CHECK(std::isfinite(last));
