@@ -1,5 +1,6 @@
 // Hierarchical resampling (stage 6; mip-NeRF §3.2 and official mip.py resample_along_rays +
-// math.py sorted_piecewise_constant_pdf): new sorted edges t_new [R][N+1] drawn from the coarse weights.
+// math.py sorted_piecewise_constant_pdf): new sorted edges t_new [R][M+1] drawn from the coarse weights
+// (M = n_new intervals; mip-NeRF draws M = N, the NeRF baseline draws its own count and merges).
 //
 // Per ray, with coarse edges t [N+1] and weights w [N]:
 //  1. blur-pool (blur != 0): w'_i = (max(w_{i−1}, w_i) + max(w_i, w_{i+1}))/2, with w_{−1} = w_0, w_N = w_{N−1}
@@ -8,8 +9,8 @@
 //  3. if Σ w' < 1e-5, add (1e-5 − Σ w')/N to every w' (official eps: an all-zero histogram becomes uniform instead
 //     of 0/0);
 //  4. cdf_0 = 0, cdf_k = min(1, Σ_{i<k} w'_i / Σ w') for k = 1..N−1, cdf_N = 1;
-//  5. N + 1 sorted u_j in [0, 1): deterministic u_j = j·(1 − ε)/N (numpy's linspace(0, 1 − ε, N + 1)), or
-//     stratified u_j = j/(N + 1) + ξ_j·(1/(N + 1) − ε), then min(u_j, 1 − ε), with ε = 2^−23 (float32 eps) and
+//  5. M + 1 sorted u_j in [0, 1): deterministic u_j = j·(1 − ε)/M (numpy's linspace(0, 1 − ε, M + 1)), or
+//     stratified u_j = j/(M + 1) + ξ_j·(1/(M + 1) − ε), then min(u_j, 1 − ε), with ε = 2^−23 (float32 eps) and
 //     ξ_j the (j mod 4)-th value of rng_uniform4(seed, first_ray + ray, step, j / 4, RNG_STREAM_RESAMPLE);
 //  6. for each u_j, k = the last index with cdf_k ≤ u_j (official: the last True of u ≥ cdf) and
 //     t_new_j = t_k + clamp((u_j − cdf_k)/(cdf_{k+1} − cdf_k), 0, 1)·(t_{k+1} − t_k).
@@ -29,14 +30,15 @@ inline float resample_weight(__global const float* w, uint i, uint n, const uint
   return 0.5f * (fmax(left, mid) + fmax(mid, right)) + padding;
 }
 
-// One item per ray. t_edges [R][N+1], weights [R][N] → t_new [R][N+1].
+// One item per ray. t_edges [R][N+1], weights [R][N] → t_new [R][M+1] (M = n_new ≥ 1).
 __kernel void resample_fwd(__global const float* t_edges, __global const float* weights, __global float* t_new,
-                           const uint n_rays, const uint n_samples, const float padding, const uint blur,
-                           const uint randomized, const ulong seed, const uint step, const uint first_ray) {
+                           const uint n_rays, const uint n_samples, const uint n_new, const float padding,
+                           const uint blur, const uint randomized, const ulong seed, const uint step,
+                           const uint first_ray) {
   const size_t ray = get_global_id(0);
-  if (ray >= n_rays || n_samples == 0) return;
-  const uint n = n_samples, n_out = n_samples + 1;
-  __global const float* t = t_edges + ray * n_out;
+  if (ray >= n_rays || n_samples == 0 || n_new == 0) return;
+  const uint n = n_samples, n_out = n_new + 1;
+  __global const float* t = t_edges + ray * (n + 1);
   __global const float* w = weights + ray * n;
   __global float* out = t_new + ray * n_out;
 
@@ -60,7 +62,7 @@ __kernel void resample_fwd(__global const float* t_edges, __global const float* 
       if (j % 4 == 0) vstore4(rng_uniform4(seed, first_ray + (uint)ray, step, j / 4, RNG_STREAM_RESAMPLE), 0, xi);
       u = (float)j * stratum + xi[j % 4] * (stratum - eps);
     } else {
-      u = (float)j * ((1.0f - eps) / (float)n);
+      u = (float)j * ((1.0f - eps) / (float)n_new);
     }
     u = fmin(u, 1.0f - eps);
     while (k + 1 < n && cdf_hi <= u) {

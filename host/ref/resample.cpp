@@ -38,13 +38,13 @@ std::vector<double> resample_cdf(const ops::ResampleOptions& options, const doub
 
 void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>& t_edges,
                   const std::vector<double>& weights, std::vector<double>& t_new, size_t n_rays, size_t n_samples,
-                  const ops::RngKey& key) {
-  const size_t n = n_samples, n_out = n_samples + 1;
+                  size_t n_new, const ops::RngKey& key) {
+  const size_t n = n_samples, n_out = n_new + 1;
   const double eps = std::numeric_limits<float>::epsilon();  // official jnp.finfo('float32').eps
   t_new.assign(n_rays * n_out, 0.0);
-  if (n == 0) return;
+  if (n == 0 || n_new == 0) return;
   for (size_t ray = 0; ray < n_rays; ++ray) {
-    const double* t = t_edges.data() + ray * n_out;
+    const double* t = t_edges.data() + ray * (n + 1);
     const std::vector<double> cdf = resample_cdf(options, weights.data() + ray * n, n);
     for (size_t j = 0; j < n_out; ++j) {
       double u;
@@ -54,7 +54,7 @@ void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>
                                      static_cast<uint32_t>(j / 4), rng_stream_resample);
         u = static_cast<double>(j) * stratum + xi[j % 4] * (stratum - eps);
       } else {
-        u = static_cast<double>(j) * (1.0 - eps) / static_cast<double>(n);
+        u = static_cast<double>(j) * (1.0 - eps) / static_cast<double>(n_new);
       }
       u = std::min(u, 1.0 - eps);
       // The last k with cdf[k] ≤ u (official: the final True of u >= cdf); cdf[n] = 1 > u bounds it by n − 1.

@@ -15,10 +15,11 @@ std::vector<double> resample_cdf(const ops::ResampleOptions& options, const doub
 // Mirror of resample_fwd (official resample_along_rays + sorted_piecewise_constant_pdf; mip-NeRF §3.2):
 // blur-pool the weights [R][N] (max of neighbours, then mean of pairs), add the padding α, normalise (with the
 // official 1e-5 floor on the sum), and invert the piecewise-constant CDF over the edges t_edges [R][N+1] at
-// N + 1 sorted u (linspace(0, 1 − ε) or stratified with RNG_STREAM_RESAMPLE) → t_new [R][N+1].
+// M + 1 sorted u (linspace(0, 1 − ε) or stratified with RNG_STREAM_RESAMPLE) → t_new [R][M+1], M = n_new
+// (official num_samples = M + 1; mip-NeRF uses M = N).
 // Written as the official code: the whole CDF, then a search per u (not the kernel's merge walk).
 void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>& t_edges,
                   const std::vector<double>& weights, std::vector<double>& t_new, size_t n_rays, size_t n_samples,
-                  const ops::RngKey& key);
+                  size_t n_new, const ops::RngKey& key);
 
 }  // namespace mipnerf::ref

@@ -62,28 +62,30 @@ Histograms random_histograms(size_t n_rays, size_t n, unsigned seed, bool positi
   return h;
 }
 
+// Resamples rays first .. first + count − 1 of `h` into m intervals (m = 0: as many as h has).
 std::vector<float> run_device(const ops::ResampleOptions& options, const Histograms& h, const ops::RngKey& key,
-                              size_t first = 0, size_t count = SIZE_MAX) {
+                              size_t first = 0, size_t count = SIZE_MAX, size_t m = 0) {
   auto& ctx = test::test_context();
   count = std::min(count, h.n_rays - first);
   const size_t n = h.n_samples;
   const std::vector<float> t(h.t_edges.begin() + first * (n + 1), h.t_edges.begin() + (first + count) * (n + 1));
   const std::vector<float> w(h.weights.begin() + first * n, h.weights.begin() + (first + count) * n);
   auto t_dev = test::upload(ctx, t, "t_edges"), w_dev = test::upload(ctx, w, "weights");
-  auto out = test::filled(ctx, count * (n + 1), 7.0f, "t_new");
-  ops::Resample(ctx).fwd(options, {t_dev, w_dev, count, n}, out, key);
+  if (m == 0) m = n;
+  auto out = test::filled(ctx, count * (m + 1), 7.0f, "t_new");
+  ops::Resample(ctx).fwd(options, {t_dev, w_dev, count, n, m}, out, key);
   return out.download(ctx);
 }
 
-// Every row sorted, finite and inside [t_0, t_N] of its coarse edges.
-void check_sorted_inside(const std::vector<float>& t_new, const Histograms& h) {
+// Every row of m + 1 new edges sorted, finite and inside [t_0, t_N] of its coarse edges.
+void check_sorted_inside(const std::vector<float>& t_new, const Histograms& h, size_t m) {
   const size_t n = h.n_samples;
   for (size_t ray = 0; ray < h.n_rays; ++ray) {
-    const float* t = t_new.data() + ray * (n + 1);
-    for (size_t j = 0; j <= n; ++j) REQUIRE(std::isfinite(t[j]));
-    REQUIRE(std::is_sorted(t, t + n + 1));
+    const float* t = t_new.data() + ray * (m + 1);
+    for (size_t j = 0; j <= m; ++j) REQUIRE(std::isfinite(t[j]));
+    REQUIRE(std::is_sorted(t, t + m + 1));
     REQUIRE(t[0] >= h.t_edges[ray * (n + 1)]);
-    REQUIRE(t[n] <= h.t_edges[ray * (n + 1) + n]);
+    REQUIRE(t[m] <= h.t_edges[ray * (n + 1) + n]);
   }
 }
 
@@ -97,12 +99,14 @@ TEST_CASE("resample: new edges match the CPU reference on 10,000 rays, mip-NeRF 
   const ops::RngKey key{77, 12, 4000};
   for (bool nerf : {false, true}) {
     const Histograms h = random_histograms(10000, n, 71, nerf);
+    // mip-NeRF draws as many intervals as the coarse level has; the NeRF baseline its own count (here 48).
+    const size_t m = nerf ? 48 : n;
     for (bool randomized : {false, true}) {
       INFO(std::string(nerf ? "NeRF" : "mip-NeRF") << ", randomized " << randomized);
       const auto options = nerf ? nerf_options(randomized) : mipnerf_options(randomized);
-      const auto dev = run_device(options, h, key);
+      const auto dev = run_device(options, h, key, 0, SIZE_MAX, m);
       std::vector<double> t_new;
-      ref::resample_fwd(options, test::to_double(h.t_edges), test::to_double(h.weights), t_new, h.n_rays, n, key);
+      ref::resample_fwd(options, test::to_double(h.t_edges), test::to_double(h.weights), t_new, h.n_rays, n, m, key);
       // Tolerance. The kernel's CDF is a float running sum of N terms w_i/Σw: |Δcdf| ≤ (2N + 3)·u (the sum and each
       // quotient), and u_j is ≤ 3 roundings: |Δ(u − cdf)| ≤ (2N + 6)·u. The inverse CDF moves by that times its slope
       // (t_{k+1} − t_k)/(cdf_{k+1} − cdf_k), where the interval may be the reference's k or a neighbour; the final
@@ -116,16 +120,16 @@ TEST_CASE("resample: new edges match the CPU reference on 10,000 rays, mip-NeRF 
         const auto slope = [&](size_t k) {
           return k < n && cdf[k + 1] > cdf[k] ? (double(t[k + 1]) - t[k]) / (cdf[k + 1] - cdf[k]) : 0.0;
         };
-        for (size_t j = 0; j <= n; ++j) {
-          const double value = t_new[ray * (n + 1) + j];
+        for (size_t j = 0; j <= m; ++j) {
+          const double value = t_new[ray * (m + 1) + j];
           size_t k = 0;
           while (k + 1 < n && double(t[k + 1]) <= value && cdf[k + 1] < 1) ++k;
           const double max_slope = std::max({slope(k), k > 0 ? slope(k - 1) : 0.0, slope(k + 1)});
-          tol[ray * (n + 1) + j] = 2 * ((2 * n + 6) * kUnitRoundoff * max_slope + 4 * kUnitRoundoff * std::abs(value));
+          tol[ray * (m + 1) + j] = 2 * ((2 * n + 6) * kUnitRoundoff * max_slope + 4 * kUnitRoundoff * std::abs(value));
         }
       }
       MIPNERF_CHECK_CLOSE("t_new", dev, t_new, [&](size_t i) { return tol[i]; });
-      check_sorted_inside(dev, h);
+      check_sorted_inside(dev, h, m);
     }
   }
 }
@@ -160,7 +164,9 @@ TEST_CASE("resample: all-zero weights, repeated edges and extreme weights stay s
       INFO(std::string(nerf ? "NeRF" : "mip-NeRF") << ", randomized " << randomized);
       const auto options = nerf ? nerf_options(randomized) : mipnerf_options(randomized);
       const auto dev = run_device(options, h, {1, 2, 3});
-      check_sorted_inside(dev, h);
+      check_sorted_inside(dev, h, n);
+      check_sorted_inside(run_device(options, h, {1, 2, 3}, 0, SIZE_MAX, 3 * n), h, 3 * n);
+      check_sorted_inside(run_device(options, h, {1, 2, 3}, 0, SIZE_MAX, 1), h, 1);
       // Every edge equal: every sample is that value.
       for (size_t j = 0; j <= n; ++j) CHECK(dev[3 * (n + 1) + j] == 5.0f);
       if (!randomized) {
@@ -185,6 +191,10 @@ TEST_CASE("resample: jitter depends only on seed, step and ray, not on the chunk
   chunked.insert(chunked.end(), tail.begin(), tail.end());
   CHECK(chunked == whole);
   CHECK(run_device(options, h, {8, 2, 0}) != whole);
+  // Asking for no new intervals is refused with a message saying what to pass.
+  auto& ctx = test::test_context();
+  ocl::DeviceArray<float> t(ctx, 2 * (n + 1), "t"), w(ctx, 2 * n, "w"), out(ctx, 2 * (n + 1), "out");
+  CHECK_THROWS_WITH_AS(ops::Resample(ctx).fwd(options, {t, w, 2, n, 0}, out), doctest::Contains("new_samples"), Error);
   // The deterministic setting ignores the key.
   CHECK(run_device(mipnerf_options(false), h, {8, 1, 0}) == run_device(mipnerf_options(false), h, {9, 3, 0}));
 }

@@ -127,9 +127,9 @@ void run_resample(const ops::ResampleOptions& options) {
   auto t = test::upload(ctx, s.t_edges, "t_edges"), w = test::upload(ctx, s.weights, "weights");
   ocl::DeviceArray<float> out(ctx, s.n_rays * (s.n + 1), "t_new");
   const ops::RngKey key{1, 2, 3};
-  ops::Resample(ctx).fwd(options, {t, w, s.n_rays, s.n}, out, key);
+  ops::Resample(ctx).fwd(options, {t, w, s.n_rays, s.n, s.n}, out, key);
   std::vector<double> expected;
-  ref::resample_fwd(options, test::to_double(s.t_edges), test::to_double(s.weights), expected, s.n_rays, s.n, key);
+  ref::resample_fwd(options, test::to_double(s.t_edges), test::to_double(s.weights), expected, s.n_rays, s.n, s.n, key);
   check_matches("t_new", out.download(ctx), expected);
 }
 
