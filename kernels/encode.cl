@@ -73,21 +73,34 @@ __kernel void pe_fwd(__global const float* x, __global float* features, const ui
 }
 
 // Fused gaussian_fwd + ipe_fwd: ipe_features [R·N][6L] straight from the rays and edges, without writing the
-// means and covariances. One item per (row, degree index l); each recomputes its row's Gaussian (a few
-// flops against three sin/cos pairs) so every item is independent.
+// means and covariances. Tunable GAUSSIAN_IPE_PER_ROW: 1 = one item per row, which computes the Gaussian once and
+// loops over the degrees (on PoCL's CPU device 2x faster than the alternative, which defeats its vectoriser);
+// 0 = one item per (row, degree), each recomputing its row's Gaussian (a few flops against three sincos) for
+// more, independent items with neighbouring writes (GPUs). The host picks it per device class (ops/encode.cpp).
+#ifndef GAUSSIAN_IPE_PER_ROW
+#define GAUSSIAN_IPE_PER_ROW 1
+#endif
 __kernel void gaussian_ipe_fwd(__global const float* origins, __global const float* directions,
                                __global const float* radii, __global const float* t_edges,
                                __global float* features, const uint n_rays, const uint n_samples,
                                const int min_deg, const int max_deg) {
   const uint n_degrees = (uint)(max_deg - min_deg);
   const size_t item = get_global_id(0);
+#if GAUSSIAN_IPE_PER_ROW
+  if (item >= (size_t)n_rays * n_samples) return;
+  const size_t row = item;
+  const uint l_begin = 0, l_end = n_degrees;
+#else
   if (item >= (size_t)n_rays * n_samples * n_degrees) return;
   const size_t row = item / n_degrees;
-  const uint l = (uint)(item % n_degrees);
+  const uint l_begin = (uint)(item % n_degrees), l_end = l_begin + 1;
+#endif
   float3 mean, cov;
   row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
   __global float* out = features + row * 6 * n_degrees;
-  encode_degree(mean, cov, min_deg + (int)l, out + 3 * l, out + 3 * (n_degrees + l));
+  for (uint l = l_begin; l < l_end; ++l) {
+    encode_degree(mean, cov, min_deg + (int)l, out + 3 * l, out + 3 * (n_degrees + l));
+  }
 }
 
 #endif

@@ -15,10 +15,23 @@ void check_degrees(const EncodingOptions& options, const std::string& where, boo
   }
 }
 
+bool choose_fused_per_row(const ocl::Context& ctx, const EncodeTuning& tuning) {
+  switch (tuning.fused_items) {
+    case EncodeTuning::FusedItems::per_row:
+      return true;
+    case EncodeTuning::FusedItems::per_row_and_degree:
+      return false;
+    default:
+      return (ctx.device_info().type & CL_DEVICE_TYPE_CPU) != 0;
+  }
+}
+
 }  // namespace
 
-Encode::Encode(ocl::Context& ctx, const GaussianOptions& options) : ctx_(&ctx), gaussian_options_(options) {
-  auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"}, gaussian_build_options(options));
+Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning)
+    : ctx_(&ctx), gaussian_options_(options), fused_per_row_(choose_fused_per_row(ctx, tuning)) {
+  auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"},
+                              gaussian_build_options(options).define("GAUSSIAN_IPE_PER_ROW", fused_per_row_ ? 1 : 0));
   ipe_ = &program.kernel("ipe_fwd");
   pe_ = &program.kernel("pe_fwd");
   gaussian_ipe_ = &program.kernel("gaussian_ipe_fwd");
@@ -59,7 +72,7 @@ void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& 
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
   const size_t rows = in.n_rays * in.n_samples;
   detail::require(features, rows * options.ipe_width(), where);
-  const size_t items = rows * options.degrees();
+  const size_t items = fused_per_row_ ? rows : rows * options.degrees();
   detail::to_uint(items, where, "items");
   ocl::set_args(*gaussian_ipe_, where, in.origins, in.directions, in.radii, in.t_edges, features,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),

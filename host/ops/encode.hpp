@@ -24,11 +24,18 @@ struct PeInputs {
   size_t n_rows;
 };
 
+// How gaussian_ipe_fwd spreads its work (the GAUSSIAN_IPE_PER_ROW tunable of encode.cl).
+struct EncodeTuning {
+  enum class FusedItems { device_default, per_row, per_row_and_degree };
+  FusedItems fused_items = FusedItems::device_default;  // default: per row on CPUs, per (row, degree) elsewhere
+};
+
 // Degrees are kernel arguments (EncodingOptions per call: positions and view directions differ); the program is
 // the one specialisation of RAY_SHAPE that the fused gaussian_ipe needs.
 class Encode {
  public:
-  Encode(ocl::Context& ctx, const GaussianOptions& options);
+  Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning = {});
+  bool fused_per_row() const { return fused_per_row_; }
 
   // Enqueues ipe_fwd: features [rows][options.ipe_width()].
   void ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features);
@@ -40,6 +47,7 @@ class Encode {
  private:
   ocl::Context* ctx_;
   GaussianOptions gaussian_options_;
+  bool fused_per_row_;
   ::cl::Kernel* ipe_;
   ::cl::Kernel* pe_;
   ::cl::Kernel* gaussian_ipe_;

@@ -229,8 +229,15 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
     ops::Encode encode(ctx, {shape});
     encode.ipe(options, {means, covs, rows}, separate);
     encode.gaussian_ipe(options, in, fused);
-    // The same inline functions with contraction off (gaussian.cl): bit-identical.
+    // The same inline functions with contraction off (gaussian.cl): bit-identical, with either spread of the work.
     CHECK(fused.download(ctx) == separate.download(ctx));
+    for (auto items : {ops::EncodeTuning::FusedItems::per_row, ops::EncodeTuning::FusedItems::per_row_and_degree}) {
+      ops::Encode tuned(ctx, {shape}, {items});
+      CHECK(tuned.fused_per_row() == (items == ops::EncodeTuning::FusedItems::per_row));
+      auto other = test::filled(ctx, rows * 96, 7.0f, "fused (tuned)");
+      tuned.gaussian_ipe(options, in, other);
+      CHECK(other.download(ctx) == separate.download(ctx));
+    }
     // And both match the reference composition.
     std::vector<double> features;
     ref::gaussian_ipe_fwd({shape}, options, test::to_double(origins), test::to_double(directions),
