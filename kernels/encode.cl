@@ -1,5 +1,6 @@
-// Integrated positional encoding (stage 4; mip-NeRF eq. 14, official integrated_pos_enc with diag = True),
-// NeRF's positional encoding, and the fused Gaussian + IPE kernel. Needs gaussian.cl before it in the program.
+// Integrated positional encoding (stage 4; mip-NeRF §3.1: E[sin(y)] = exp(−σ_y²/2)·sin(μ_y) per coordinate;
+// official integrated_pos_enc with diag = True), NeRF's positional encoding, and the fused Gaussian + IPE kernel.
+// Needs gaussian.cl before it in the program.
 //
 // For each degree l = min_deg..max_deg−1 (L = max_deg − min_deg) and axis a:
 //   y = 2^l·μ_a,  v = 4^l·σ²_a,  features exp(−v/2)·sin(y) and exp(−v/2)·cos(y)

@@ -10,7 +10,8 @@
 
 namespace mipnerf::ref {
 
-// One IPE feature pair of degree l (mip-NeRF eq. 14, official expected_sin): for y = 2^l·μ, v = 4^l·σ²,
+// One IPE feature pair of degree l (mip-NeRF §3.1: the expectation of sin and cos under a
+// Gaussian, E[sin(y)] = exp(−σ_y²/2)·sin(μ_y); official expected_sin): for y = 2^l·μ, v = 4^l·σ²,
 // exp(−v/2)·sin(y) and exp(−v/2)·cos(y). σ² = 0 gives NeRF's PE.
 template <typename T>
 void ipe_pair(T mean, T var, int degree, T& sin_feature, T& cos_feature) {

@@ -12,7 +12,8 @@ namespace mipnerf::ref {
 // blur-pool, padding, 1e-5 floor on the sum, min(1, cumsum) between).
 std::vector<double> resample_cdf(const ops::ResampleOptions& options, const double* weights, size_t n_samples);
 
-// Mirror of resample_fwd (official resample_along_rays + sorted_piecewise_constant_pdf; mip-NeRF §3.2):
+// Mirror of resample_fwd (mip-NeRF §3.2's blurred, α-padded weights; official resample_along_rays +
+// sorted_piecewise_constant_pdf):
 // blur-pool the weights [R][N] (max of neighbours, then mean of pairs), add the padding α, normalise (with the
 // official 1e-5 floor on the sum), and invert the piecewise-constant CDF over the edges t_edges [R][N+1] at
 // M + 1 sorted u (linspace(0, 1 − ε) or stratified with RNG_STREAM_RESAMPLE) → t_new [R][M+1], M = n_new

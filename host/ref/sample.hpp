@@ -8,9 +8,10 @@
 
 namespace mipnerf::ref {
 
-// Mirror of sample_stratified_fwd (official sample_along_rays): t_edges [R][N+1] between near [R] and far [R],
-// linear in depth or disparity, deterministic or jittered within the midpoints of neighbouring edges, with the
-// kernel's uniforms (ref::rng_uniform4, RNG_STREAM_STRATIFIED, keyed by (seed, step, first_ray + ray)).
+// Mirror of sample_stratified_fwd (NeRF eq. 2's stratified sampling, official sample_along_rays): t_edges [R][N+1]
+// between near [R] and far [R], linear in depth or disparity, deterministic or jittered within the midpoints of
+// neighbouring edges, with the kernel's uniforms (ref::rng_uniform4, RNG_STREAM_STRATIFIED, keyed by (seed, step,
+// first_ray + ray)).
 void sample_stratified_fwd(const ops::SampleOptions& options, const std::vector<double>& near,
                            const std::vector<double>& far, std::vector<double>& t_edges, size_t n_rays,
                            size_t n_samples, const ops::RngKey& key);

@@ -172,7 +172,7 @@ TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge vari
 }
 
 TEST_CASE("encode: IPE is the expectation of sin and cos under the Gaussian (Monte Carlo)") {
-  // E[sin(2^l·z)] for z ~ N(μ, σ²) is exp(−4^l·σ²/2)·sin(2^l·μ) (mip-NeRF eq. 14).
+  // E[sin(2^l·z)] for z ~ N(μ, σ²) is exp(−4^l·σ²/2)·sin(2^l·μ) (mip-NeRF §3.1).
   std::mt19937_64 rng(25);
   const std::vector<float> mean = {0.7f, -0.2f, 1.3f}, var = {0.05f, 0.002f, 0.3f};
   ops::EncodingOptions options;
@@ -202,7 +202,7 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
   auto& ctx = test::test_context();
   std::mt19937 rng(26);
   std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
-  const size_t n_rays = 100, n_samples = 48;
+  const size_t n_rays = 220, n_samples = 48;  // 10,560 rows
   std::vector<float> origins, directions, radii, t_edges;
   for (size_t ray = 0; ray < n_rays; ++ray) {
     for (int a = 0; a < 3; ++a) {
