@@ -5,6 +5,7 @@
 
 #include "cl/error.hpp"
 #include "mlp/clblast_check.hpp"
+#include "mlp/gemm_tuning.hpp"
 
 namespace mipnerf::mlp {
 namespace {
@@ -29,6 +30,8 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
   require_fits(a, s.transpose_a ? s.k : s.m, s.transpose_a ? s.m : s.k, "A", what);
   require_fits(b, s.transpose_b ? s.n : s.k, s.transpose_b ? s.k : s.n, "B", what);
   require_fits(c, s.m, s.n, "C", what);
+  // Tuned parameters may differ per product kind (see gemm_tuning.hpp); a no-op when none are installed.
+  select_gemm_kind(ctx, gemm_kind(s));
   using clblast::Transpose;
   cl_command_queue queue = ctx.raw_queue();
   const auto status = clblast::Gemm<float>(

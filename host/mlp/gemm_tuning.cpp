@@ -1,0 +1,364 @@
+// Per-device CLBlast GEMM parameters: problems, the tuning store, and installing it.
+#include "mlp/gemm_tuning.hpp"
+
+#include <clblast.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <unordered_map>
+
+#include <nlohmann/json.hpp>
+
+#include "cl/error.hpp"
+#include "mlp/clblast_check.hpp"
+
+namespace mipnerf::mlp {
+namespace {
+
+// ---- what is installed, per device (CLBlast's own parameter cache is process-wide per device too) ----
+
+struct DeviceState {
+  GemmTuning tuning;
+  bool installed = false;
+  ParameterSet originals;  // CLBlast's database values of every kernel this process overrode
+  ParameterSet applied;    // what CLBlast holds now for those kernels
+  bool told_to_tune = false;
+};
+
+std::mutex& registry_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+std::map<cl_device_id, DeviceState>& registry() {
+  static std::map<cl_device_id, DeviceState> states;
+  return states;
+}
+
+std::unordered_map<std::string, size_t> to_clblast(const KernelParameters& p) { return {p.begin(), p.end()}; }
+
+KernelParameters retrieve(cl_device_id device, const std::string& kernel) {
+  std::unordered_map<std::string, size_t> values;
+  check_clblast(clblast::RetrieveParameters(device, kernel, clblast::Precision::kSingle, values),
+                "clblast::RetrieveParameters(" + kernel + ")");
+  return {values.begin(), values.end()};
+}
+
+// Overrides one kernel's parameters unless CLBlast already holds exactly these.
+void apply(cl_device_id device, DeviceState& state, const std::string& kernel, const KernelParameters& values) {
+  if (!state.originals.count(kernel)) state.originals[kernel] = retrieve(device, kernel);
+  auto it = state.applied.find(kernel);
+  if (it != state.applied.end() && it->second == values) return;
+  check_clblast(clblast::OverrideParameters(device, kernel, clblast::Precision::kSingle, to_clblast(values)),
+                "clblast::OverrideParameters(" + kernel + ")");
+  state.applied[kernel] = values;
+}
+
+// The values `kernel` should have for products of `kind`: the kind's set, else common, else the default.
+const KernelParameters& wanted(const DeviceState& state, GemmKind kind, const std::string& kernel) {
+  const auto kind_it = state.tuning.per_kind.find(kind);
+  if (kind_it != state.tuning.per_kind.end()) {
+    auto it = kind_it->second.find(kernel);
+    if (it != kind_it->second.end()) return it->second;
+  }
+  auto it = state.tuning.common.find(kernel);
+  if (it != state.tuning.common.end()) return it->second;
+  return state.originals.at(kernel);
+}
+
+void restore_originals(cl_device_id device, DeviceState& state) {
+  for (const auto& [kernel, values] : state.originals) {
+    clblast::OverrideParameters(device, kernel, clblast::Precision::kSingle, to_clblast(values));
+  }
+  state.applied.clear();
+  state.installed = false;
+  state.tuning = GemmTuning{};
+}
+
+std::string sanitize(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    const bool safe = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+                      c == '-' || c == '+';
+    out += safe ? c : '_';
+  }
+  // Runs of '_' collapse, so "pthread-haswell-AMD EPYC 7B13" stays readable.
+  std::string collapsed;
+  for (char c : out) {
+    if (c == '_' && !collapsed.empty() && collapsed.back() == '_') continue;
+    collapsed += c;
+  }
+  return collapsed;
+}
+
+void make_folders(const std::string& folder) {
+  std::string partial;
+  std::stringstream parts(folder);
+  std::string part;
+  if (!folder.empty() && folder[0] == '/') partial = "/";
+  while (std::getline(parts, part, '/')) {
+    if (part.empty()) continue;
+    partial += part + "/";
+    if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST) {
+      throw Error("cannot create the folder " + partial + " for the GEMM tuning file; set XDG_CACHE_HOME to a "
+                  "writable folder");
+    }
+  }
+}
+
+void add_problem(std::vector<GemmProblem>& problems, size_t m, size_t n, size_t k, bool ta, bool tb, size_t count) {
+  if (count == 0) return;
+  for (auto& p : problems) {
+    if (p.shape.m == m && p.shape.n == n && p.shape.k == k && p.shape.transpose_a == ta && p.shape.transpose_b == tb) {
+      p.count += count;
+      return;
+    }
+  }
+  GemmProblem p;
+  p.shape.m = m;
+  p.shape.n = n;
+  p.shape.k = k;
+  p.shape.transpose_a = ta;
+  p.shape.transpose_b = tb;
+  p.count = count;
+  p.label = std::string(gemm_kind_name(p.kind())) + " " + std::to_string(m) + "x" + std::to_string(n) + "x" +
+            std::to_string(k);
+  problems.push_back(p);
+}
+
+const std::map<GemmKind, std::string>& kind_names() {
+  static const std::map<GemmKind, std::string> names = {{GemmKind::forward, "forward"},
+                                                        {GemmKind::backward_data, "backward_data"},
+                                                        {GemmKind::backward_weights, "backward_weights"},
+                                                        {GemmKind::other, "other"}};
+  return names;
+}
+
+nlohmann::json set_to_json(const ParameterSet& set) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [kernel, values] : set) j[kernel] = values;
+  return j;
+}
+
+ParameterSet set_from_json(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_object()) throw Error(where + ": a parameter set must be an object of kernels");
+  ParameterSet set;
+  for (const auto& [kernel, values] : j.items()) {
+    if (!values.is_object()) throw Error(where + ": kernel " + kernel + " must map parameter names to numbers");
+    for (const auto& [name, value] : values.items()) {
+      if (!value.is_number_unsigned()) throw Error(where + ": " + kernel + "." + name + " is not a whole number");
+      set[kernel][name] = value.get<size_t>();
+    }
+  }
+  return set;
+}
+
+}  // namespace
+
+GemmKind gemm_kind(const GemmShape& s) {
+  if (!s.transpose_a && !s.transpose_b) return GemmKind::forward;
+  if (!s.transpose_a && s.transpose_b) return GemmKind::backward_data;
+  if (s.transpose_a && !s.transpose_b) return GemmKind::backward_weights;
+  return GemmKind::other;
+}
+
+const char* gemm_kind_name(GemmKind kind) { return kind_names().at(kind).c_str(); }
+
+std::vector<GemmProblem> mlp_gemm_problems(const MlpConfig& c, size_t rows) {
+  c.validate();
+  std::vector<GemmProblem> problems;
+  const size_t W = c.width;
+  for (size_t i = 0; i < c.depth; ++i) {
+    const bool from_features = i == 0;
+    const bool skip = i > 0 && skip_after(c, i - 1);
+    if (!from_features) {
+      add_problem(problems, rows, W, W, false, false, 1);  // forward
+      add_problem(problems, rows, W, W, false, true, 1);   // ∂act_{i−1}
+      add_problem(problems, W, W, rows, true, false, 1);   // ∂W
+    }
+    if (from_features || skip) {
+      add_problem(problems, rows, W, c.input_width, false, false, 1);
+      add_problem(problems, c.input_width, W, rows, true, false, 1);
+    }
+  }
+  if (c.view_dependence) {
+    const size_t Wb = c.bottleneck_width, Wv = c.view_branch_width;
+    add_problem(problems, rows, Wb, W, false, false, 1);
+    add_problem(problems, rows, W, Wb, false, true, 1);
+    add_problem(problems, W, Wb, rows, true, false, 1);
+    add_problem(problems, rows, Wv, Wb, false, false, 1);
+    add_problem(problems, rows, Wb, Wv, false, true, 1);
+    add_problem(problems, Wb, Wv, rows, true, false, 1);
+  }
+  return problems;
+}
+
+std::string tuning_cache_dir() {
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg && *xdg == '/') return std::string(xdg) + "/mipnerf-cl";
+  const char* home = std::getenv("HOME");
+  if (!home || !*home) throw Error("neither XDG_CACHE_HOME nor HOME is set: no folder for the GEMM tuning file");
+  return std::string(home) + "/.cache/mipnerf-cl";
+}
+
+std::string tuning_file_path(const ocl::DeviceInfo& device) {
+  return tuning_cache_dir() + "/gemm-" + sanitize(device.name) + "-" + sanitize(device.driver_version) +
+         "-clblast-" + clblast_version() + ".json";
+}
+
+std::string to_json(const GemmTuning& t) {
+  nlohmann::json j;
+  j["format"] = "mipnerf-cl gemm tuning 1";
+  j["device_name"] = t.device_name;
+  j["driver_version"] = t.driver_version;
+  j["clblast_version"] = t.clblast_version;
+  j["common"] = set_to_json(t.common);
+  nlohmann::json per_kind = nlohmann::json::object();
+  for (const auto& [kind, set] : t.per_kind) per_kind[gemm_kind_name(kind)] = set_to_json(set);
+  j["per_kind"] = per_kind;
+  j["report"] = nlohmann::json::parse(t.report_json.empty() ? "{}" : t.report_json);
+  return j.dump(2) + "\n";
+}
+
+GemmTuning tuning_from_json(const std::string& text, const std::string& where) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const std::exception& e) {
+    throw Error(where + ": not valid JSON (" + e.what() + "); delete it and run `mipnerf-cl tune` again");
+  }
+  if (!j.is_object() || j.value("format", "") != "mipnerf-cl gemm tuning 1") {
+    throw Error(where + ": not a mipnerf-cl GEMM tuning file");
+  }
+  GemmTuning t;
+  t.device_name = j.value("device_name", "");
+  t.driver_version = j.value("driver_version", "");
+  t.clblast_version = j.value("clblast_version", "");
+  t.common = set_from_json(j.value("common", nlohmann::json::object()), where);
+  const nlohmann::json per_kind = j.value("per_kind", nlohmann::json::object());
+  if (!per_kind.is_object()) throw Error(where + ": per_kind must be an object");
+  for (const auto& [name, set] : per_kind.items()) {
+    bool known = false;
+    for (const auto& [kind, kind_name] : kind_names()) {
+      if (kind_name == name) {
+        t.per_kind[kind] = set_from_json(set, where + " per_kind." + name);
+        known = true;
+      }
+    }
+    if (!known) throw Error(where + ": unknown product kind '" + name + "'");
+  }
+  t.report_json = j.value("report", nlohmann::json::object()).dump();
+  return t;
+}
+
+void save_tuning(const std::string& path, const GemmTuning& tuning) {
+  const auto slash = path.find_last_of('/');
+  if (slash != std::string::npos) make_folders(path.substr(0, slash));
+  const std::string temporary = path + "." + std::to_string(::getpid()) + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << to_json(tuning);
+    out.flush();
+    if (!out) throw Error("cannot write the GEMM tuning file " + temporary);
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    std::remove(temporary.c_str());
+    throw Error("cannot rename " + temporary + " to " + path);
+  }
+}
+
+std::optional<GemmTuning> read_tuning(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::stringstream text;
+  text << in.rdbuf();
+  return tuning_from_json(text.str(), path);
+}
+
+void install_gemm_tuning(ocl::Context& ctx, const GemmTuning& tuning) {
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  const cl_device_id device = ctx.raw_device();
+  DeviceState& state = registry()[device];
+  restore_originals(device, state);
+  state.tuning = tuning;
+  state.installed = true;
+  try {
+    // Validate every set now (CLBlast checks kernel names and completeness), then leave `common` applied.
+    for (const auto& [kind, set] : tuning.per_kind) {
+      for (const auto& [kernel, values] : set) apply(device, state, kernel, values);
+    }
+    for (const auto& [kernel, values] : tuning.common) apply(device, state, kernel, values);
+    for (const auto& [kernel, values] : state.originals) apply(device, state, kernel, wanted(state, GemmKind::other, kernel));
+  } catch (const Error&) {
+    restore_originals(device, state);
+    throw;
+  }
+}
+
+void clear_gemm_tuning(ocl::Context& ctx) {
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  auto it = registry().find(ctx.raw_device());
+  if (it != registry().end()) restore_originals(ctx.raw_device(), it->second);
+}
+
+bool gemm_tuning_installed(const ocl::Context& ctx) {
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  auto it = registry().find(ctx.raw_device());
+  return it != registry().end() && it->second.installed;
+}
+
+void select_gemm_kind(ocl::Context& ctx, GemmKind kind) {
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  auto it = registry().find(ctx.raw_device());
+  if (it == registry().end() || !it->second.installed || it->second.tuning.per_kind.empty()) return;
+  DeviceState& state = it->second;
+  for (const auto& [kernel, values] : state.originals) {
+    (void)values;
+    apply(ctx.raw_device(), state, kernel, wanted(state, kind, kernel));
+  }
+}
+
+bool load_gemm_tuning(ocl::Context& ctx) {
+  const ocl::DeviceInfo& device = ctx.device_info();
+  const std::string path = tuning_file_path(device);
+  std::optional<GemmTuning> tuning;
+  try {
+    tuning = read_tuning(path);
+  } catch (const Error& e) {
+    ctx.log(LogLevel::warning, std::string(e.what()) + "; using CLBlast's default GEMM parameters");
+    return false;
+  }
+  if (tuning && (tuning->device_name != device.name || tuning->driver_version != device.driver_version ||
+                 tuning->clblast_version != clblast_version())) {
+    ctx.log(LogLevel::warning, path + " was written for another device, driver or CLBlast version; ignoring it "
+                               "(run `mipnerf-cl tune` again)");
+    tuning.reset();
+  }
+  if (tuning) {
+    try {
+      install_gemm_tuning(ctx, *tuning);
+      ctx.log(LogLevel::info, "GEMM parameters tuned for " + device.name + " loaded from " + path);
+      return true;
+    } catch (const Error& e) {
+      ctx.log(LogLevel::warning, path + " was refused by CLBlast (" + e.what() +
+                                     "); using its default GEMM parameters; run `mipnerf-cl tune` again");
+    }
+  }
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  DeviceState& state = registry()[ctx.raw_device()];
+  if (!state.told_to_tune) {
+    state.told_to_tune = true;
+    ctx.log(LogLevel::info, "no tuned GEMM parameters for " + device.name +
+                                "; CLBlast's defaults are used (`mipnerf-cl tune` measures better ones for this "
+                                "device, which can speed training up several times on a CPU)");
+  }
+  return false;
+}
+
+}  // namespace mipnerf::mlp
