@@ -6,8 +6,10 @@
 // SELECTOR is --device's rule (index or part of the name; MIPNERF_DEVICE is read when the flag is absent).
 // Defaults are the paper's batch: R = 4096 rays, N = 128 samples per ray. Each stage is called once to warm up
 // (the program was built before, timed separately as "first build"; PoCL's on-disk cache may serve it — run with
-// POCL_KERNEL_CACHE=0 for a cold compile), then K timed calls, each followed by clFinish; the table shows the
-// median wall time per call, so it includes launch overhead as the host graph sees it. Prints markdown.
+// POCL_KERNEL_CACHE=0 for a cold compile), then K timed calls, each followed by clFinish: wall time per call, so
+// launch overhead is included as the host graph sees it. Throughput uses the best of the K calls (robust to other
+// processes on a shared machine); the median is shown beside it. The CPU reference runs twice, best kept.
+// Prints markdown.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -79,7 +81,7 @@ std::vector<double> download_double(ocl::Context& ctx, const ocl::DeviceArray<fl
 struct Row {
   std::string stage, unit;
   size_t items;
-  double device_s, ref_s;
+  double device_best_s, device_median_s, ref_s;
 };
 
 }  // namespace
@@ -275,26 +277,35 @@ int main(int argc, char** argv) try {
       times.push_back(seconds_since(start));
     }
     std::sort(times.begin(), times.end());
-    const auto ref_start = Clock::now();
-    stage.reference();
-    const double ref_s = seconds_since(ref_start);
-    table.push_back({stage.name, stage.unit, stage.items, times[times.size() / 2], ref_s});
+    double ref_s = 1e30;
+    for (int k = 0; k < 2; ++k) {
+      const auto ref_start = Clock::now();
+      stage.reference();
+      ref_s = std::min(ref_s, seconds_since(ref_start));
+    }
+    table.push_back({stage.name, stage.unit, stage.items, times.front(), times[times.size() / 2], ref_s});
   }
 
   const auto& info = ctx.device_info();
   std::printf("## Ray-math kernels: %s\n\n", info.name.c_str());
   std::printf(
-      "Device: %s (%s, %s), %u compute units. Batch: %zu rays x %zu samples. Device: median of %zu calls "
-      "after a warm-up, wall time with clFinish. CPU reference: host/ref in double, one thread, one call.\n\n",
+      "Device: %s (%s, %s), %u compute units. Batch: %zu rays x %zu samples. Device: best and median of %zu "
+      "calls after a warm-up, wall time with clFinish; items/s from the best. CPU reference: host/ref in "
+      "double, one thread, best of 2 calls.\n\n",
       info.name.c_str(), info.platform_name.c_str(), info.type_name().c_str(), info.compute_units, R, N, args.reps);
-  std::printf("| stage | items | device ms | device items/s | CPU ref ms | CPU ref items/s | device / ref |\n");
+  std::printf(
+      "| stage | items | device ms best (median) | device items/s | CPU ref ms | CPU ref items/s | "
+      "device / ref |\n");
   std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& row : table) {
-    std::printf("| %s | %zu %s | %.3f | %.3g | %.1f | %.3g | %.1fx |\n", row.stage.c_str(), row.items, row.unit.c_str(),
-                1e3 * row.device_s, row.items / row.device_s, 1e3 * row.ref_s, row.items / row.ref_s,
-                row.ref_s / row.device_s);
+    std::printf("| %s | %zu %s | %.3f (%.3f) | %.3g | %.1f | %.3g | %.1fx |\n", row.stage.c_str(), row.items,
+                row.unit.c_str(), 1e3 * row.device_best_s, 1e3 * row.device_median_s, row.items / row.device_best_s,
+                1e3 * row.ref_s, row.items / row.ref_s, row.ref_s / row.device_best_s);
   }
-  std::printf("\nFirst build of each program (compile, or PoCL's on-disk cache when it holds the program):\n\n");
+  std::printf(
+      "\nFirst build of each program: clBuildProgram, served from PoCL's on-disk cache when it holds the program "
+      "(POCL_KERNEL_CACHE=0 for a cold compile); PoCL generates each kernel's work-group code at its first "
+      "launch, which the warm-up call absorbs.\n\n");
   std::printf("| program | first build s |\n|---|---:|\n");
   for (const auto& [name, s] : builds) std::printf("| %s | %.2f |\n", name.c_str(), s);
   return 0;
