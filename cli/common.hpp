@@ -26,6 +26,7 @@ void print_log(LogLevel level, const std::string& message);
 // Each subcommand registers itself on the app; main() calls them all.
 void register_devices(CLI::App& app);
 void register_tune(CLI::App& app);
+void register_train(CLI::App& app);
 void register_dataset(CLI::App& app);
 void register_make_scene(CLI::App& app);
 void register_make_multiscale(CLI::App& app);

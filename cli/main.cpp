@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
 
   cli::register_devices(app);
   cli::register_tune(app);
+  cli::register_train(app);
   cli::register_dataset(app);
   cli::register_make_scene(app);
   cli::register_make_multiscale(app);

@@ -82,4 +82,17 @@ class DeviceArray {
   std::string name_;
 };
 
+// Enqueues dst[dst_offset .. + count) = src[src_offset .. + count) on the device (asynchronous, in queue
+// order); offsets and count in elements, both ranges checked.
+template <typename T>
+void copy(Context& ctx, const DeviceArray<T>& src, size_t src_offset, DeviceArray<T>& dst, size_t dst_offset,
+          size_t count) {
+  if (count == 0) return;
+  src.require_size(src_offset + count, "copy from");
+  dst.require_size(dst_offset + count, "copy to");
+  check(ctx.queue().enqueueCopyBuffer(src.buffer(), dst.buffer(), src_offset * sizeof(T), dst_offset * sizeof(T),
+                                      count * sizeof(T)),
+        "clEnqueueCopyBuffer(" + src.name() + " -> " + dst.name() + ")");
+}
+
 }  // namespace mipnerf::ocl

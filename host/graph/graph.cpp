@@ -1,0 +1,296 @@
+// The host graph: one loop over levels, one chunk of rays at a time.
+#include "graph/graph.hpp"
+
+#include "cl/error.hpp"
+
+namespace mipnerf::graph {
+namespace {
+
+// Element counts of every buffer the graph allocates, computed in one place for allocation and estimates.
+struct BufferPlan {
+  size_t rays = 0;       // R: rays per chunk
+  size_t samples = 0;    // S: R · max intervals
+  size_t view_width = 0;
+  size_t feature_width = 0;
+  bool needs_points = false;  // a PE encoding needs means/covs buffers
+  size_t drawn_edges = 0;     // union levels: R · (new + 1)
+  std::vector<size_t> level_intervals;
+  size_t partial_slots = 0;   // per level (training)
+  bool training = false;
+
+  size_t float_count() const {
+    size_t n = rays * (3 * 3 + 4) + rays * view_width + samples * feature_width + samples * 4 + drawn_edges;
+    if (needs_points) n += 2 * 3 * samples;
+    if (training) n += rays * 3 + samples * 4;
+    for (size_t intervals : level_intervals) {
+      n += rays * (2 * intervals + 1) + rays * 5 + (training ? 2 * partial_slots : 0);
+    }
+    return n;
+  }
+};
+
+BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays,
+                    size_t loss_group_size) {
+  BufferPlan plan;
+  plan.rays = max_chunk_rays;
+  plan.samples = max_chunk_rays * spec.max_intervals();
+  plan.view_width = spec.rays.view_dependence ? static_cast<size_t>(spec.view_encoding.pe_width()) : 0;
+  plan.level_intervals = spec.intervals_per_level();
+  plan.training = mode == GraphMode::training;
+  for (const auto& level : spec.levels) {
+    const size_t width = level.encoding == Encoding::integrated ? spec.position_encoding.ipe_width()
+                                                                : spec.position_encoding.pe_width();
+    plan.feature_width = std::max(plan.feature_width, width);
+    plan.needs_points = plan.needs_points || level.encoding != Encoding::integrated;
+    if (level.sampling == Sampling::resample_union) {
+      plan.drawn_edges = std::max(plan.drawn_edges, max_chunk_rays * (level.new_samples + 1));
+    }
+  }
+  // Each chunk of n rays writes ceil(n / group) slots: at most batch/group + one partial group per chunk.
+  const size_t chunks = max_chunk_rays ? (max_batch_rays + max_chunk_rays - 1) / max_chunk_rays : 0;
+  plan.partial_slots = max_batch_rays / loss_group_size + chunks + 1;
+  return plan;
+}
+
+size_t max_rows(const GraphSpec& spec, size_t mlp_index, size_t max_chunk_rays) {
+  const auto intervals = spec.intervals_per_level();
+  size_t rows = 0;
+  for (size_t l = 0; l < spec.levels.size(); ++l) {
+    if (spec.levels[l].mlp_index == mlp_index) rows = std::max(rows, max_chunk_rays * intervals[l]);
+  }
+  return rows;
+}
+
+mlp::WorkspaceMode workspace_mode(GraphMode mode) {
+  return mode == GraphMode::training ? mlp::WorkspaceMode::training : mlp::WorkspaceMode::inference;
+}
+
+// Estimates assume the smallest loss work-group any device gets (more partial slots: an upper bound).
+constexpr size_t kSmallestLossGroup = 64;
+
+}  // namespace
+
+size_t Graph::bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays) {
+  size_t bytes =
+      plan_for(spec, mode, max_chunk_rays, max_batch_rays, kSmallestLossGroup).float_count() * sizeof(float);
+  bytes += 2 * max_chunk_rays * sizeof(uint32_t);
+  for (size_t i = 0; i < spec.mlps.size(); ++i) {
+    bytes += mlp::Workspace::bytes_for(spec.mlps[i], std::max<size_t>(1, max_rows(spec, i, max_chunk_rays)),
+                                       max_chunk_rays, workspace_mode(mode));
+  }
+  return bytes;
+}
+
+Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> networks, GraphMode mode,
+             size_t max_chunk_rays, size_t max_batch_rays)
+    : ctx_(&ctx),
+      spec_(spec),
+      networks_(std::move(networks)),
+      mode_(mode),
+      max_chunk_rays_(max_chunk_rays),
+      max_batch_rays_(max_batch_rays) {
+  spec_.validate();
+  if (networks_.size() != spec_.mlps.size()) {
+    throw Error("graph: " + std::to_string(spec_.mlps.size()) + " networks in the spec, " +
+                std::to_string(networks_.size()) + " given");
+  }
+  if (max_chunk_rays_ == 0) throw Error("graph: the chunk size must be at least one ray");
+  const bool training = mode_ == GraphMode::training;
+  if (training && max_batch_rays_ == 0) throw Error("graph: a training graph needs the batch size");
+
+  // Sampling is jittered only while training (and only if the spec asks); rendering is deterministic.
+  ops::SampleOptions sample_options = spec_.sample;
+  sample_options.randomized = training && spec_.sample.randomized;
+  resample_options_ = spec_.resample;
+  resample_options_.randomized = training && spec_.resample.randomized;
+  ops::RaysOptions rays_options = spec_.rays;
+  if (!training) rays_options.jitter_subpixel = false;  // supersampling jitter is the renderer's choice
+
+  rays_ = std::make_unique<ops::Rays>(ctx, rays_options);
+  sample_ = std::make_unique<ops::Sample>(ctx, sample_options);
+  resample_ = std::make_unique<ops::Resample>(ctx);
+  gaussian_ = std::make_unique<ops::Gaussian>(ctx, spec_.gaussian);
+  encode_ = std::make_unique<ops::Encode>(ctx, spec_.gaussian);
+  render_ = std::make_unique<ops::Render>(ctx, spec_.render, spec_.activation);
+  if (training) loss_ = std::make_unique<ops::Loss>(ctx, spec_.loss);
+
+  const BufferPlan plan =
+      plan_for(spec_, mode_, max_chunk_rays_, max_batch_rays_, training ? loss_->group_size() : kSmallestLossGroup);
+  const size_t R = plan.rays, S = plan.samples;
+  camera_ids_ = ocl::DeviceArray<uint32_t>(ctx, R, "chunk camera_ids [R]");
+  pixel_ids_ = ocl::DeviceArray<uint32_t>(ctx, R, "chunk pixel_ids [R]");
+  origins_ = ocl::DeviceArray<float>(ctx, 3 * R, "origins [R][3]");
+  directions_ = ocl::DeviceArray<float>(ctx, 3 * R, "directions [R][3]");
+  viewdirs_ = ocl::DeviceArray<float>(ctx, 3 * R, "viewdirs [R][3]");
+  radii_ = ocl::DeviceArray<float>(ctx, R, "radii [R]");
+  near_ = ocl::DeviceArray<float>(ctx, R, "near [R]");
+  far_ = ocl::DeviceArray<float>(ctx, R, "far [R]");
+  ray_lossmult_ = ocl::DeviceArray<float>(ctx, R, "ray lossmult [R]");
+  view_features_ = ocl::DeviceArray<float>(ctx, R * plan.view_width, "view_encoding [R][view]");
+  features_ = ocl::DeviceArray<float>(ctx, S * plan.feature_width, "features [samples][F]");
+  if (plan.needs_points) {
+    means_ = ocl::DeviceArray<float>(ctx, 3 * S, "means [samples][3]");
+    covs_ = ocl::DeviceArray<float>(ctx, 3 * S, "covs [samples][3]");
+  }
+  if (plan.drawn_edges) drawn_edges_ = ocl::DeviceArray<float>(ctx, plan.drawn_edges, "drawn t_edges [R][new+1]");
+  raw_density_ = ocl::DeviceArray<float>(ctx, S, "raw_density [samples]");
+  raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * S, "raw_rgb [samples][3]");
+  if (training) {
+    d_comp_rgb_ = ocl::DeviceArray<float>(ctx, 3 * R, "d_comp_rgb [R][3]");
+    d_raw_density_ = ocl::DeviceArray<float>(ctx, S, "d_raw_density [samples]");
+    d_raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * S, "d_raw_rgb [samples][3]");
+  }
+  for (size_t l = 0; l < spec_.levels.size(); ++l) {
+    LevelBuffers level;
+    level.intervals = plan.level_intervals[l];
+    const std::string tag = "level " + std::to_string(l) + " ";
+    level.t_edges = ocl::DeviceArray<float>(ctx, R * (level.intervals + 1), tag + "t_edges [R][N+1]");
+    level.weights = ocl::DeviceArray<float>(ctx, R * level.intervals, tag + "weights [R][N]");
+    level.outputs.comp_rgb = ocl::DeviceArray<float>(ctx, 3 * R, tag + "comp_rgb [R][3]");
+    level.outputs.acc = ocl::DeviceArray<float>(ctx, R, tag + "acc [R]");
+    level.outputs.distance = ocl::DeviceArray<float>(ctx, R, tag + "distance [R]");
+    if (training) level.partials = ocl::DeviceArray<float>(ctx, 2 * plan.partial_slots, tag + "loss partials");
+    levels_.push_back(std::move(level));
+  }
+  for (size_t i = 0; i < networks_.size(); ++i) {
+    workspaces_.push_back(networks_[i]->make_workspace(std::max<size_t>(1, max_rows(spec_, i, R)), R,
+                                                       workspace_mode(mode_)));
+  }
+}
+
+Graph::~Graph() = default;
+
+void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key) {
+  if (chunk.count == 0 || chunk.count > max_chunk_rays_) {
+    throw Error("graph: a chunk of " + std::to_string(chunk.count) + " rays (the graph holds up to " +
+                std::to_string(max_chunk_rays_) + ")");
+  }
+  ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
+  ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
+  const ops::RngKey rng{key.seed, key.step, static_cast<uint32_t>(chunk.first)};
+  rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count},
+             {origins_, directions_, viewdirs_, radii_, near_, far_, ray_lossmult_}, rng);
+  if (spec_.rays.view_dependence) encode_->pe(spec_.view_encoding, {viewdirs_, chunk.count}, view_features_);
+}
+
+void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ray) {
+  const LevelSpec& level = spec_.levels[l];
+  LevelBuffers& out = levels_[l];
+  const ops::RngKey rng{key.seed, key.step, first_ray};
+  switch (level.sampling) {
+    case Sampling::stratified:
+      sample_->stratified({near_, far_, n_rays, out.intervals}, out.t_edges, rng);
+      break;
+    case Sampling::resample: {
+      const LevelBuffers& previous = levels_[l - 1];
+      resample_->fwd(resample_options_,
+                     {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples},
+                     out.t_edges, rng);
+      break;
+    }
+    case Sampling::resample_union: {
+      const LevelBuffers& previous = levels_[l - 1];
+      resample_->fwd(resample_options_,
+                     {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples},
+                     drawn_edges_, rng);
+      sample_->merge({previous.t_edges, drawn_edges_, n_rays, previous.intervals + 1, level.new_samples + 1},
+                     out.t_edges);
+      break;
+    }
+  }
+}
+
+void Graph::encode_level(size_t l, size_t n_rays) {
+  const LevelSpec& level = spec_.levels[l];
+  const LevelBuffers& buffers = levels_[l];
+  const ops::GaussianInputs intervals{origins_, directions_, radii_, buffers.t_edges, n_rays, buffers.intervals};
+  const size_t rows = n_rays * buffers.intervals;
+  switch (level.encoding) {
+    case Encoding::integrated:
+      encode_->gaussian_ipe(spec_.position_encoding, intervals, features_);
+      break;
+    case Encoding::frustum_mean_pe:
+      gaussian_->fwd(intervals, {means_, covs_});
+      encode_->pe(spec_.position_encoding, {means_, rows}, features_);
+      break;
+    case Encoding::midpoint_pe:
+      gaussian_->points(intervals, {means_, covs_});
+      encode_->pe(spec_.position_encoding, {means_, rows}, features_);
+      break;
+  }
+}
+
+void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws) {
+  const LevelSpec& level = spec_.levels[l];
+  LevelBuffers& buffers = levels_[l];
+  mlp::Mlp& network = *networks_[level.mlp_index];
+  const size_t feature_width = network.config().input_width;
+  mlp::MlpInputs in;
+  in.features = mlp::view(features_, feature_width);
+  if (spec_.rays.view_dependence) in.view_encoding = mlp::view(view_features_, network.config().view_width);
+  in.n_rays = n_rays;
+  in.samples_per_ray = buffers.intervals;
+  network.forward(in, {mlp::view(raw_density_, 1), mlp::view(raw_rgb_, 3)}, ws);
+  // The activations are fused into rendering: raw MLP outputs in, composited colour out.
+  render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, directions_, n_rays, buffers.intervals},
+                   {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights});
+}
+
+void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets, ChunkRange chunk) {
+  const LevelSpec& level = spec_.levels[l];
+  LevelBuffers& buffers = levels_[l];
+  const ops::LossChunk loss_chunk{n_rays, chunk.first, step_groups_};
+  loss_->fwd_bwd(buffers.outputs.comp_rgb, targets.target_rgb, targets.lossmult,
+                 {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
+  render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, directions_, n_rays, buffers.intervals},
+                   buffers.weights, {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_});
+  networks_[level.mlp_index]->backward(workspaces_[level.mlp_index],
+                                       {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)});
+}
+
+void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
+  if (mode_ != GraphMode::training) throw Error("graph: begin_step on a rendering graph");
+  if (batch_rays == 0 || batch_rays > max_batch_rays_) {
+    throw Error("graph: a batch of " + std::to_string(batch_rays) + " rays (the graph holds up to " +
+                std::to_string(max_batch_rays_) + ")");
+  }
+  if (!(lossmult_sum > 0.0)) throw Error("graph: the batch's lossmult sum must be > 0");
+  step_batch_rays_ = batch_rays;
+  step_lossmult_sum_ = lossmult_sum;
+  step_groups_ = 0;
+  for (auto* network : networks_) network->zero_grad();
+}
+
+void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key) {
+  if (mode_ != GraphMode::training) throw Error("graph: train_chunk on a rendering graph");
+  if (chunk.first + chunk.count > step_batch_rays_) throw Error("graph: chunk outside the step's batch");
+  generate_rays(source, chunk, key);
+  for (size_t l = 0; l < spec_.levels.size(); ++l) {
+    sample_level(l, chunk.count, key, static_cast<uint32_t>(chunk.first));
+    encode_level(l, chunk.count);
+    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index]);
+    backward_level(l, chunk.count, targets, chunk);
+  }
+  step_groups_ += loss_->groups_for(chunk.count);
+}
+
+std::vector<ops::LevelLoss> Graph::end_step() {
+  std::vector<ops::LevelLoss> losses;
+  for (auto& level : levels_) {
+    std::vector<float> partials(2 * step_groups_);
+    level.partials.download(*ctx_, partials.data(), partials.size());  // blocking: waits for the step
+    losses.push_back(ops::sum_loss_partials(partials, step_groups_, step_lossmult_sum_, step_batch_rays_));
+  }
+  return losses;
+}
+
+void Graph::render_chunk(const RaySource& source, ChunkRange chunk) {
+  generate_rays(source, chunk, StepKey{});
+  for (size_t l = 0; l < spec_.levels.size(); ++l) {
+    sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
+    encode_level(l, chunk.count);
+    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index]);
+  }
+}
+
+}  // namespace mipnerf::graph

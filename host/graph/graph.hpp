@@ -1,0 +1,146 @@
+// The host graph: rays → samples → features → MLP → render (→ loss → backward), looped over the levels of
+// a GraphSpec, one chunk of rays at a time, all on the device. The host only orchestrates.
+//
+// Training, per step:  begin_step(); train_chunk(...) for each chunk of the batch; end_step() → losses.
+// Per chunk and level l: sample (stratified, or resampled from level l−1's weights: a constant, the
+// stop-gradient) → encode → MLP forward → fused activation + render → loss and ∂loss/∂colour → render
+// backward → MLP backward (gradients accumulate over chunks and levels into each network's one buffer).
+// A level's backward runs before the next level's forward: stop-gradient means no gradient crosses levels,
+// so one MLP workspace per network is enough, whatever the number of levels.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "cl/buffer.hpp"
+#include "cl/context.hpp"
+#include "graph/graph_spec.hpp"
+#include "mlp/mlp.hpp"
+#include "ops/encode.hpp"
+#include "ops/gaussian.hpp"
+#include "ops/loss.hpp"
+#include "ops/rays.hpp"
+#include "ops/render.hpp"
+#include "ops/resample.hpp"
+#include "ops/sample.hpp"
+
+namespace mipnerf::graph {
+
+// Where a chunk's rays come from: cameras and, per ray of the batch (or image), its camera and pixel.
+struct RaySource {
+  const ocl::DeviceArray<float>& cameras;        // [C][24] packed
+  const ocl::DeviceArray<uint32_t>& camera_ids;  // [B]
+  const ocl::DeviceArray<uint32_t>& pixel_ids;   // [B] y·width + x
+};
+
+// Rays first .. first + count − 1 of the source.
+struct ChunkRange {
+  size_t first = 0;
+  size_t count = 0;
+};
+
+// What the loss compares against, for the whole batch (indexed like the source).
+struct TrainTargets {
+  const ocl::DeviceArray<float>& target_rgb;  // [B][3]
+  const ocl::DeviceArray<float>* lossmult;    // [B], read only when the spec's loss is multiscale
+};
+
+// Everything random is keyed by (seed, step, ray index in the batch), so chunking never changes results.
+struct StepKey {
+  uint64_t seed = 0;
+  uint32_t step = 0;
+};
+
+// A level's rendered chunk, on the device.
+struct LevelOutputs {
+  ocl::DeviceArray<float> comp_rgb;  // [R][3]
+  ocl::DeviceArray<float> acc;       // [R]
+  ocl::DeviceArray<float> distance;  // [R] expected distance in t
+};
+
+enum class GraphMode {
+  training,   // randomized sampling (per the spec), saved activations, loss and backward
+  inference,  // deterministic sampling, forward only (rendering, evaluation)
+};
+
+class Graph {
+ public:
+  // `networks[i]` evaluates the levels with mlp_index i; they outlive the graph. Buffers are sized for
+  // chunks of up to max_chunk_rays and (training) batches of up to max_batch_rays.
+  Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> networks, GraphMode mode,
+        size_t max_chunk_rays, size_t max_batch_rays = 0);
+  ~Graph();
+
+  // Device bytes the graph's own buffers and workspaces take (networks and datasets not included).
+  static size_t bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays);
+
+  const GraphSpec& spec() const { return spec_; }
+  size_t max_chunk_rays() const { return max_chunk_rays_; }
+
+  // ---- training ----
+  // Starts a step over a batch of batch_rays rays whose Σ lossmult is lossmult_sum (the loss normaliser,
+  // known before any chunk runs). Zeroes every network's gradients.
+  void begin_step(size_t batch_rays, double lossmult_sum);
+  void train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key);
+  // Waits for the step's work and returns each level's loss sums over the batch.
+  std::vector<ops::LevelLoss> end_step();
+
+  // ---- rendering ----
+  // Runs every level's forward for the chunk (deterministic sampling); the outputs of each level stay in
+  // level_outputs(l) until the next call.
+  void render_chunk(const RaySource& source, ChunkRange chunk);
+  const LevelOutputs& level_outputs(size_t level) const { return levels_.at(level).outputs; }
+
+ private:
+  struct LevelBuffers {
+    size_t intervals = 0;
+    ocl::DeviceArray<float> t_edges;  // [R][N+1]
+    ocl::DeviceArray<float> weights;  // [R][N]
+    ocl::DeviceArray<float> partials;  // [slots][2] loss sums per work-group (training)
+    LevelOutputs outputs;
+  };
+
+  void generate_rays(const RaySource& source, ChunkRange chunk, StepKey key);
+  void sample_level(size_t level, size_t n_rays, StepKey key, uint32_t first_ray);
+  void encode_level(size_t level, size_t n_rays);
+  void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws);
+  void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk);
+
+  ocl::Context* ctx_;
+  GraphSpec spec_;
+  std::vector<mlp::Mlp*> networks_;
+  GraphMode mode_;
+  size_t max_chunk_rays_;
+  size_t max_batch_rays_;
+
+  // Stages (each builds its specialisation once).
+  std::unique_ptr<ops::Rays> rays_;
+  std::unique_ptr<ops::Sample> sample_;
+  std::unique_ptr<ops::Resample> resample_;
+  std::unique_ptr<ops::Gaussian> gaussian_;
+  std::unique_ptr<ops::Encode> encode_;
+  std::unique_ptr<ops::Render> render_;
+  std::unique_ptr<ops::Loss> loss_;
+  ops::ResampleOptions resample_options_;
+
+  // Chunk buffers, R = max_chunk_rays, S = R · max intervals.
+  ocl::DeviceArray<uint32_t> camera_ids_, pixel_ids_;                  // [R]
+  ocl::DeviceArray<float> origins_, directions_, viewdirs_, radii_;   // [R][3], radii [R]
+  ocl::DeviceArray<float> near_, far_, ray_lossmult_;                  // [R]
+  ocl::DeviceArray<float> view_features_;                              // [R][view width]
+  ocl::DeviceArray<float> features_;                                   // [S][position features]
+  ocl::DeviceArray<float> means_, covs_;                               // [S][3] (PE encodings only)
+  ocl::DeviceArray<float> drawn_edges_;                                // [R][new + 1] (union levels only)
+  ocl::DeviceArray<float> raw_density_, raw_rgb_;                      // [S], [S][3]
+  ocl::DeviceArray<float> d_comp_rgb_;                                 // [R][3] (training)
+  ocl::DeviceArray<float> d_raw_density_, d_raw_rgb_;                  // [S], [S][3] (training)
+  std::vector<LevelBuffers> levels_;
+  std::vector<mlp::Workspace> workspaces_;  // one per network
+
+  // The step in progress (training).
+  size_t step_batch_rays_ = 0;
+  double step_lossmult_sum_ = 0.0;
+  size_t step_groups_ = 0;  // loss partial slots written so far this step
+};
+
+}  // namespace mipnerf::graph

@@ -1,0 +1,73 @@
+// Checks and descriptions of a graph spec.
+#include "graph/graph_spec.hpp"
+
+#include <algorithm>
+#include <sstream>
+
+#include "cl/error.hpp"
+
+namespace mipnerf::graph {
+
+std::vector<size_t> GraphSpec::intervals_per_level() const {
+  std::vector<size_t> out;
+  size_t previous = 0;
+  for (const auto& level : levels) {
+    previous = level.intervals(previous);
+    out.push_back(previous);
+  }
+  return out;
+}
+
+size_t GraphSpec::max_intervals() const {
+  const auto all = intervals_per_level();
+  return all.empty() ? 0 : *std::max_element(all.begin(), all.end());
+}
+
+void GraphSpec::validate() const {
+  if (levels.empty()) throw Error("graph: at least one level is needed");
+  if (levels.front().sampling != Sampling::stratified) throw Error("graph: the first level must sample stratified");
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const auto& level = levels[l];
+    const std::string where = "graph level " + std::to_string(l);
+    if (level.new_samples < 1) throw Error(where + ": needs at least one sample");
+    if (level.mlp_index >= mlps.size()) throw Error(where + ": names network " + std::to_string(level.mlp_index) +
+                                                    " but there are " + std::to_string(mlps.size()));
+    const auto& mlp = mlps[level.mlp_index];
+    const size_t width = level.encoding == Encoding::integrated ? static_cast<size_t>(position_encoding.ipe_width())
+                                                                : static_cast<size_t>(position_encoding.pe_width());
+    if (mlp.input_width != width) {
+      throw Error(where + ": the encoding gives " + std::to_string(width) + " features but network " +
+                  std::to_string(level.mlp_index) + " expects " + std::to_string(mlp.input_width));
+    }
+    if (level.encoding == Encoding::integrated && position_encoding.append_identity) {
+      throw Error(where + ": IPE has no identity features; set pos_identity = false or use PE");
+    }
+    if (mlp.view_dependence != rays.view_dependence) {
+      throw Error(where + ": the network's view dependence does not match the rays'");
+    }
+    if (mlp.view_dependence && mlp.view_width != static_cast<size_t>(view_encoding.pe_width())) {
+      throw Error(where + ": the view encoding gives " + std::to_string(view_encoding.pe_width()) +
+                  " features but the network expects " + std::to_string(mlp.view_width));
+    }
+  }
+}
+
+std::string GraphSpec::describe() const {
+  std::ostringstream out;
+  const auto intervals = intervals_per_level();
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const auto& level = levels[l];
+    const char* sampling = level.sampling == Sampling::stratified ? "stratified"
+                           : level.sampling == Sampling::resample ? "resampled"
+                                                                  : "resampled + previous";
+    const char* encoding = level.encoding == Encoding::integrated        ? "IPE"
+                           : level.encoding == Encoding::frustum_mean_pe ? "PE of frustum means"
+                                                                         : "PE of midpoints";
+    out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals, " << encoding
+        << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1 << ", network "
+        << level.mlp_index << ", loss weight " << level.loss_weight;
+  }
+  return out.str();
+}
+
+}  // namespace mipnerf::graph

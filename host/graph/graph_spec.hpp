@@ -1,0 +1,63 @@
+// The host graph as data: which stages each level runs and with which options. Coarse and fine are two
+// entries of one list, run by one loop (graph.hpp); variants (NeRF, ablations) are other lists.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "mlp/mlp_config.hpp"
+#include "ops/loss.hpp"
+#include "ops/ray_options.hpp"
+
+namespace mipnerf::graph {
+
+// How a level gets its interval edges.
+enum class Sampling {
+  stratified,      // N + 1 edges between near and far (the first level)
+  resample,        // N + 1 edges drawn from the previous level's weights (mip-NeRF's fine level)
+  resample_union,  // N_new + 1 drawn edges merged with the previous level's edges (NeRF's fine level)
+};
+
+// How an interval becomes the MLP's input features.
+enum class Encoding {
+  integrated,       // IPE of the frustum Gaussian (mip-NeRF), fused Gaussian + IPE kernel
+  frustum_mean_pe,  // PE of the Gaussian's mean, covariance ignored (mip-NeRF "w/o IPE")
+  midpoint_pe,      // PE of the interval's midpoint on the ray (NeRF's point samples)
+};
+
+struct LevelSpec {
+  Sampling sampling = Sampling::stratified;
+  size_t new_samples = 128;  // edges drawn by this level's sampling: new_samples + 1
+  Encoding encoding = Encoding::integrated;
+  size_t mlp_index = 0;      // which network evaluates this level (mip-NeRF: one shared; NeRF: one each)
+  float loss_weight = 1.0f;  // λ = 0.1 on coarse levels, 1 on the last
+  // Intervals this level renders: new_samples, or previous + new_samples + 1 for a union of edge sets.
+  size_t intervals(size_t previous_intervals) const {
+    return sampling == Sampling::resample_union ? previous_intervals + new_samples + 1 : new_samples;
+  }
+};
+
+struct GraphSpec {
+  std::vector<LevelSpec> levels;
+  std::vector<mlp::MlpConfig> mlps;  // the networks, indexed by LevelSpec::mlp_index
+  ops::RaysOptions rays;
+  ops::SampleOptions sample;          // `randomized` is set per call (training vs rendering)
+  ops::ResampleOptions resample;      // idem
+  ops::GaussianOptions gaussian;
+  ops::EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
+  ops::EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)
+  ops::ActivationOptions activation;
+  ops::RenderOptions render;
+  ops::LossOptions loss;
+
+  // Intervals of each level, in order.
+  std::vector<size_t> intervals_per_level() const;
+  size_t max_intervals() const;
+  // Throws mipnerf::Error when levels, networks and encodings do not fit together.
+  void validate() const;
+  // One line per level, for logs: "level 0: stratified 128, IPE 0..15 (96), MLP 0, weight 0.1".
+  std::string describe() const;
+};
+
+}  // namespace mipnerf::graph

@@ -1,0 +1,34 @@
+// How many rays a chunk can hold on a device: the memory a configuration needs, estimated before anything
+// is allocated, against the device's global memory and its single-allocation limit.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "cl/device.hpp"
+#include "graph/graph_spec.hpp"
+
+namespace mipnerf::train {
+
+struct MemoryPlan {
+  size_t chunk_rays = 0;        // rays per chunk
+  size_t graph_bytes = 0;       // the graph's buffers and MLP workspaces at that chunk size
+  size_t fixed_bytes = 0;       // dataset, networks, optimiser state, batch arrays
+  size_t largest_buffer = 0;    // the biggest single allocation (must fit CL_DEVICE_MAX_MEM_ALLOC_SIZE)
+  size_t budget_bytes = 0;      // what the plan allows itself of the device's global memory
+  size_t total() const { return graph_bytes + fixed_bytes; }
+  std::string describe() const;  // "chunk 1024 rays, 812 MiB (graph 700 + fixed 112) of 3.0 GiB budget"
+};
+
+// Fraction of the device's global memory a run may plan for (the rest: driver, CLBlast temporaries).
+constexpr double kMemoryBudgetFraction = 0.75;
+
+// The largest chunk (a power of two, at most batch_rays) that fits, or `requested_chunk` when > 0 (checked).
+// Throws mipnerf::Error saying which setting to lower when nothing fits.
+MemoryPlan plan_memory(const graph::GraphSpec& spec, const ocl::DeviceInfo& device, size_t batch_rays,
+                       size_t fixed_bytes, size_t requested_chunk, bool training);
+
+// The largest single buffer the graph allocates for a chunk of `chunk_rays` (features or an MLP layer).
+size_t largest_graph_buffer(const graph::GraphSpec& spec, size_t chunk_rays);
+
+}  // namespace mipnerf::train

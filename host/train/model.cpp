@@ -1,0 +1,87 @@
+// TrainConfig → GraphSpec: the levels and options of mip-NeRF, the NeRF baseline and the ablations.
+#include "train/model.hpp"
+
+namespace mipnerf::train {
+namespace {
+
+ops::EncodingOptions position_encoding(const TrainConfig& c) {
+  ops::EncodingOptions e;
+  e.min_deg = c.pos_min_deg;
+  e.max_deg = c.pos_max_deg;
+  e.append_identity = c.pos_identity;
+  return e;
+}
+
+// The networks' shared shape; input width follows the level's encoding.
+mlp::MlpConfig network(const TrainConfig& c, size_t input_width, size_t index) {
+  mlp::MlpConfig m;
+  m.input_width = input_width;
+  m.depth = static_cast<size_t>(c.mlp_depth);
+  m.width = static_cast<size_t>(c.mlp_width);
+  // The official rule concatenates after trunk layer i when i % skip == 0 and i > 0; a skip at or past the
+  // last layer means none (MlpConfig: 0).
+  m.skip_layer = c.mlp_skip > 0 && c.mlp_skip < c.mlp_depth - 1 ? static_cast<size_t>(c.mlp_skip) : 0;
+  m.view_dependence = c.view_dependence;
+  m.view_width = static_cast<size_t>(3 + 6 * c.view_max_deg);
+  m.view_branch_width = static_cast<size_t>(c.view_branch_width);
+  m.bottleneck_width = static_cast<size_t>(c.mlp_width);
+  m.seed = c.seed + 0x9E3779B97F4A7C15ull * (index + 1);  // distinct weights per network
+  return m;
+}
+
+}  // namespace
+
+graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
+  graph::GraphSpec spec;
+  const bool nerf = c.variant == "nerf";
+  spec.position_encoding = position_encoding(c);
+  spec.view_encoding.min_deg = 0;
+  spec.view_encoding.max_deg = c.view_max_deg;
+  spec.view_encoding.append_identity = true;
+
+  const graph::Encoding encoding = nerf                    ? graph::Encoding::midpoint_pe
+                                   : c.integrated_encoding ? graph::Encoding::integrated
+                                                           : graph::Encoding::frustum_mean_pe;
+  const size_t input_width = encoding == graph::Encoding::integrated ? spec.position_encoding.ipe_width()
+                                                                     : spec.position_encoding.pe_width();
+  for (int l = 0; l < c.num_levels; ++l) {
+    graph::LevelSpec level;
+    const bool first = l == 0, last = l == c.num_levels - 1;
+    if (nerf) {
+      // NeRF: num_samples/2 coarse points, then num_samples more drawn and merged with them (64 + 128).
+      level.sampling = first ? graph::Sampling::stratified : graph::Sampling::resample_union;
+      level.new_samples = static_cast<size_t>(first ? c.num_samples / 2 : c.num_samples);
+    } else {
+      level.sampling = first ? graph::Sampling::stratified : graph::Sampling::resample;
+      level.new_samples = static_cast<size_t>(c.num_samples);
+    }
+    level.encoding = encoding;
+    level.mlp_index = c.single_mlp ? 0 : static_cast<size_t>(l);
+    level.loss_weight = last ? 1.0f : static_cast<float>(c.coarse_loss_mult);
+    spec.levels.push_back(level);
+  }
+  const size_t n_networks = c.single_mlp ? 1 : static_cast<size_t>(c.num_levels);
+  for (size_t i = 0; i < n_networks; ++i) spec.mlps.push_back(network(c, input_width, i));
+
+  spec.rays.ray_shape = c.ray_shape == "cylinder" ? ops::RayShape::cylinder : ops::RayShape::cone;
+  spec.rays.pixel_center_offset = static_cast<float>(c.pixel_center);
+  spec.rays.view_dependence = c.view_dependence;
+  spec.gaussian.ray_shape = spec.rays.ray_shape;
+  spec.sample.lindisp = c.lindisp;
+  spec.sample.randomized = c.randomized;
+  spec.resample.padding = static_cast<float>(c.resample_padding);
+  spec.resample.blur = c.resample_blur;
+  spec.resample.randomized = c.randomized;
+  spec.activation.density =
+      c.density_activation == "relu" ? ops::DensityActivation::relu : ops::DensityActivation::softplus;
+  spec.activation.density_bias = static_cast<float>(c.density_bias);
+  spec.activation.rgb_padding = static_cast<float>(c.rgb_padding);
+  spec.render.background = c.background == "black"  ? ops::Background::black
+                           : c.background == "none" ? ops::Background::none
+                                                    : ops::Background::white;
+  spec.loss.multiscale = multiscale_data && c.area_loss;
+  spec.validate();
+  return spec;
+}
+
+}  // namespace mipnerf::train

@@ -1,0 +1,323 @@
+// The training loop: batches on the device, the host graph per chunk, Adam, logs and checkpoints.
+#include "train/trainer.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+
+#include "cl/error.hpp"
+#include "data/device_dataset.hpp"
+#include "graph/graph.hpp"
+#include "io/atomic_file.hpp"
+#include "io/checkpoint.hpp"
+#include "ops/batch.hpp"
+#include "train/model.hpp"
+
+namespace mipnerf::train {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kCheckpointFormat = "mipnerf-cl checkpoint";
+constexpr int kCheckpointVersion = 1;
+
+data::LoadOptions load_options(const TrainConfig& c, std::vector<std::string> splits, const LogFn& log) {
+  data::LoadOptions options;
+  options.background = data::parse_background(c.background);
+  options.scales = c.multiscale ? 4 : 1;
+  if (c.near > 0) options.near = c.near;
+  if (c.far > 0) options.far = c.far;
+  options.splits = std::move(splits);
+  options.log = log;
+  return options;
+}
+
+mlp::LrSchedule schedule_of(const TrainConfig& c) {
+  mlp::LrSchedule s;
+  s.lr_init = c.lr_init;
+  s.lr_final = c.lr_final;
+  s.max_steps = c.steps;
+  s.warmup_steps = c.lr_warmup_steps;
+  s.warmup_mult = c.lr_warmup_mult;
+  return s;
+}
+
+// Settings that may change between a run and its resume without changing what is learnt.
+bool is_execution_setting(const std::string& difference) {
+  const std::string name = difference.substr(0, difference.find(':'));
+  for (const auto& s : settings()) {
+    if (s.name == name) return s.group == "execution";
+  }
+  return false;
+}
+
+std::vector<std::unique_ptr<mlp::Mlp>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec) {
+  std::vector<std::unique_ptr<mlp::Mlp>> networks;
+  for (const auto& config : spec.mlps) networks.push_back(std::make_unique<mlp::Mlp>(ctx, config));
+  return networks;
+}
+
+std::vector<mlp::Mlp*> pointers(const std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
+  std::vector<mlp::Mlp*> out;
+  for (const auto& n : networks) out.push_back(n.get());
+  return out;
+}
+
+}  // namespace
+
+struct Trainer::Impl {
+  data::DeviceDataset device_data;
+  ops::BatchArrays batch;
+  graph::Graph graph;
+  std::ofstream csv;
+
+  Impl(ocl::Context& ctx, const data::Split& split, size_t batch_rays, const graph::GraphSpec& spec,
+       std::vector<mlp::Mlp*> networks, size_t chunk_rays)
+      : device_data(ctx, split),
+        batch(ctx, batch_rays),
+        graph(ctx, spec, std::move(networks), graph::GraphMode::training, chunk_rays, batch_rays) {}
+};
+
+Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string& data_path,
+                 const std::string& out_dir, bool resume)
+    : ctx_(&ctx), config_(config), out_dir_(out_dir) {
+  validate(config_);
+  LogFn log = [&ctx](LogLevel level, const std::string& message) { ctx.log(level, message); };
+  dataset_ = data::load_dataset(data_path, load_options(config_, {"train"}, log));
+  const data::Split& train = dataset_.split("train");
+  const bool multiscale_data = train.num_scales() > 1;
+  spec_ = make_graph_spec(config_, multiscale_data);
+  networks_ = make_networks(ctx, spec_);
+  for (const auto& network : networks_) {
+    mlp::AdamHyper hyper;
+    hyper.grad_max_norm = config_.grad_max_norm;
+    optimisers_.push_back(std::make_unique<mlp::Adam>(ctx, network->parameter_count(), hyper));
+  }
+
+  const size_t batch_rays = static_cast<size_t>(config_.batch_size);
+  size_t fixed = train.num_pixels() * 3 * sizeof(float) + train.num_images() * 32 * sizeof(float);
+  fixed += parameter_count() * 4 * sizeof(float);  // parameters, gradients, two Adam moments
+  fixed += batch_rays * 6 * sizeof(float);         // batch arrays
+  memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, fixed, static_cast<size_t>(config_.chunk_rays), true);
+  impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, pointers(networks_), memory_.chunk_rays);
+
+  fs::create_directories(out_dir_);
+  const std::string checkpoints = (fs::path(out_dir_) / "checkpoints").string();
+  const auto existing = io::list_checkpoints(checkpoints);
+  if (resume && !existing.empty()) {
+    restore(existing.back().second);
+  } else if (resume) {
+    ctx.log(LogLevel::warning, "--resume: no checkpoint in " + checkpoints + "; starting from step 0");
+  } else if (!existing.empty()) {
+    throw Error(out_dir_ + " already holds checkpoints (newest: step " + std::to_string(existing.back().first) +
+                "): pass --resume to continue, or choose another --out");
+  }
+  io::write_bytes_atomically((fs::path(out_dir_) / "config.json").string(), to_json(config_) + "\n");
+
+  const std::string csv_path = (fs::path(out_dir_) / "train_log.csv").string();
+  const bool append = step_ > 0 && fs::exists(csv_path);
+  impl_->csv.open(csv_path, append ? std::ios::app : std::ios::trunc);
+  if (!impl_->csv) throw Error(csv_path + ": cannot write the training log");
+  if (!append) impl_->csv << "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
+}
+
+Trainer::~Trainer() = default;
+
+size_t Trainer::parameter_count() const {
+  size_t n = 0;
+  for (const auto& network : networks_) n += network->parameter_count();
+  return n;
+}
+
+std::string Trainer::save_checkpoint() {
+  io::Checkpoint c;
+  c.header["format"] = kCheckpointFormat;
+  c.header["version"] = kCheckpointVersion;
+  c.header["step"] = step_;
+  c.header["train_seconds"] = seconds_before_;
+  c.header["config"] = nlohmann::json::parse(to_json(config_));
+  c.header["multiscale_data"] = dataset_.split("train").num_scales() > 1;
+  c.header["device"] = ctx_->device_info().name;
+  nlohmann::json adam_steps = nlohmann::json::array();
+  for (size_t i = 0; i < networks_.size(); ++i) {
+    const std::string prefix = "network" + std::to_string(i) + ".";
+    c.add(prefix + "params", networks_[i]->download_params());
+    mlp::AdamState state = optimisers_[i]->state();
+    adam_steps.push_back(state.step);
+    c.add(prefix + "adam_m", std::move(state.m));
+    c.add(prefix + "adam_v", std::move(state.v));
+  }
+  c.header["adam_steps"] = adam_steps;
+  const std::string folder = (fs::path(out_dir_) / "checkpoints").string();
+  const std::string path = io::checkpoint_path(folder, step_);
+  io::write_checkpoint(path, c);
+  io::prune_checkpoints(folder, config_.keep_checkpoints);
+  return path;
+}
+
+void Trainer::restore(const std::string& path) {
+  const io::Checkpoint c = io::read_checkpoint(path);
+  if (c.header.value("format", "") != kCheckpointFormat) throw Error(path + ": not a training checkpoint");
+  const TrainConfig saved = from_json(c.header.at("config").dump(), path);
+  std::string mismatched;
+  for (const auto& d : differences(saved, config_)) {
+    if (!is_execution_setting(d)) mismatched += (mismatched.empty() ? "" : "; ") + d;
+  }
+  if (!mismatched.empty()) {
+    throw Error("--resume: the settings differ from the checkpoint's (" + mismatched + "); run with the same "
+                "settings, or start a new --out");
+  }
+  const auto& adam_steps = c.header.at("adam_steps");
+  for (size_t i = 0; i < networks_.size(); ++i) {
+    const std::string prefix = "network" + std::to_string(i) + ".";
+    networks_[i]->upload_params(c.tensor(prefix + "params", path));
+    mlp::AdamState state;
+    state.step = adam_steps.at(i).get<int64_t>();
+    state.m = c.tensor(prefix + "adam_m", path);
+    state.v = c.tensor(prefix + "adam_v", path);
+    optimisers_[i]->restore(state);
+  }
+  step_ = c.header.at("step").get<int64_t>();
+  seconds_before_ = c.header.value("train_seconds", 0.0);
+  ctx_->log(LogLevel::info, "resuming from " + path + " at step " + std::to_string(step_));
+}
+
+TrainResult Trainer::run(const TrainHooks& hooks) {
+  using clock = std::chrono::steady_clock;
+  const auto run_start = clock::now();
+  const mlp::LrSchedule schedule = schedule_of(config_);
+  const size_t batch_rays = static_cast<size_t>(config_.batch_size);
+  const size_t chunk = memory_.chunk_rays;
+  const ops::BatchOptions batch_options{config_.seed, ops::parse_batching(config_.batching)};
+  auto& batch = impl_->batch;
+  const graph::RaySource source{impl_->device_data.cameras(), batch.camera_ids, batch.pixel_ids};
+  const graph::TrainTargets targets{batch.target_rgb, spec_.loss.multiscale ? &batch.lossmult : nullptr};
+
+  TrainResult result;
+  int consecutive_bad = 0;
+  int64_t last_saved = -1;
+  auto window_start = clock::now();
+  int64_t window_steps = 0;
+  auto seconds_so_far = [&] { return seconds_before_ + std::chrono::duration<double>(clock::now() - run_start).count(); };
+
+  while (step_ < config_.steps) {
+    const int64_t step = step_ + 1;
+    ops::batch_sample(*ctx_, impl_->device_data, batch_options, static_cast<uint32_t>(step), batch);
+    double lossmult_sum = static_cast<double>(batch_rays);
+    if (spec_.loss.multiscale) {
+      lossmult_sum = 0.0;
+      for (float m : batch.lossmult.download(*ctx_)) lossmult_sum += m;
+    }
+    impl_->graph.begin_step(batch_rays, lossmult_sum);
+    for (size_t first = 0; first < batch_rays; first += chunk) {
+      impl_->graph.train_chunk(source, {first, std::min(chunk, batch_rays - first)}, targets,
+                               {config_.seed, static_cast<uint32_t>(step)});
+    }
+    const std::vector<ops::LevelLoss> losses = impl_->graph.end_step();
+    if (hooks.after_backward) hooks.after_backward(step, networks_);
+
+    bool finite = true;
+    for (const auto& l : losses) finite = finite && l.finite();
+    std::vector<mlp::GradientStats> stats;
+    for (size_t i = 0; i < networks_.size(); ++i) {
+      stats.push_back(optimisers_[i]->gradient_stats(networks_[i]->grads()));
+      finite = finite && stats.back().finite();
+    }
+    const double lr = mlp::learning_rate(schedule, step);
+    if (finite) {
+      for (size_t i = 0; i < networks_.size(); ++i) {
+        optimisers_[i]->step(networks_[i]->params(), networks_[i]->grads(), lr, &stats[i]);
+      }
+      consecutive_bad = 0;
+    } else {
+      ++result.skipped_steps;
+      ++consecutive_bad;
+      ctx_->log(LogLevel::warning, "step " + std::to_string(step) +
+                                       ": non-finite loss or gradients; the update was skipped");
+      if (consecutive_bad >= config_.max_bad_steps) {
+        const auto saved = io::list_checkpoints((fs::path(out_dir_) / "checkpoints").string());
+        throw Error("training stopped at step " + std::to_string(step) + " after " + std::to_string(consecutive_bad) +
+                    " consecutive non-finite steps; the last good checkpoint is " +
+                    (saved.empty() ? std::string("none") : saved.back().second) +
+                    "; try a lower lr_init or set grad_max_norm");
+      }
+    }
+    step_ = step;
+    ++window_steps;
+
+    StepReport report;
+    report.step = step;
+    report.total_steps = config_.steps;
+    report.loss = ops::total_loss(losses, static_cast<float>(config_.coarse_loss_mult));
+    report.psnr = losses.back().psnr();
+    report.learning_rate = lr;
+    report.skipped = !finite;
+    const double window = std::chrono::duration<double>(clock::now() - window_start).count();
+    report.rays_per_second = window > 0 ? static_cast<double>(window_steps * batch_rays) / window : 0.0;
+    report.train_seconds = seconds_so_far();
+    result.final_psnr = report.psnr;
+    if (step % config_.log_every == 0 || !finite || step == config_.steps) {
+      impl_->csv << step << "," << std::setprecision(6) << report.train_seconds << "," << std::setprecision(8)
+                 << report.loss << "," << report.psnr << "," << lr << "," << std::setprecision(6)
+                 << report.rays_per_second << "," << (finite ? 0 : 1) << "\n"
+                 << std::flush;
+      window_start = clock::now();
+      window_steps = 0;
+    }
+    if (hooks.on_step) hooks.on_step(report);
+
+    const bool stop = hooks.should_stop && hooks.should_stop();
+    // Periodic checkpoints only after good steps, so a non-finite streak never replaces (or prunes) the
+    // last good one; the final and the interrupt checkpoints are always written.
+    if ((finite && step % config_.checkpoint_every == 0) || step == config_.steps || stop) {
+      seconds_before_ = seconds_so_far();
+      result.checkpoint = save_checkpoint();
+      seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count();
+      last_saved = step;
+    }
+    if (stop) {
+      result.interrupted = step < config_.steps;
+      break;
+    }
+  }
+  if (last_saved != step_) {  // nothing left to do (e.g. resumed a finished run): make sure a checkpoint exists
+    seconds_before_ = seconds_so_far();
+    result.checkpoint = save_checkpoint();
+    seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count();
+  }
+  result.last_step = step_;
+  result.seconds_this_run = std::chrono::duration<double>(clock::now() - run_start).count();
+  result.train_seconds = seconds_before_ + result.seconds_this_run;
+  seconds_before_ = result.train_seconds;
+  return result;
+}
+
+std::vector<mlp::Mlp*> TrainedModel::network_pointers() const { return pointers(networks); }
+
+TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path) {
+  const io::Checkpoint c = io::read_checkpoint(checkpoint_path);
+  if (c.header.value("format", "") != kCheckpointFormat) throw Error(checkpoint_path + ": not a training checkpoint");
+  TrainedModel model;
+  model.config = from_json(c.header.at("config").dump(), checkpoint_path);
+  model.spec = make_graph_spec(model.config, c.header.value("multiscale_data", false));
+  model.networks = make_networks(ctx, model.spec);
+  for (size_t i = 0; i < model.networks.size(); ++i) {
+    model.networks[i]->upload_params(c.tensor("network" + std::to_string(i) + ".params", checkpoint_path));
+  }
+  model.step = c.header.at("step").get<int64_t>();
+  return model;
+}
+
+std::string find_checkpoint(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_regular_file(path, ec)) return path;
+  for (const auto& folder : {(fs::path(path) / "checkpoints").string(), path}) {
+    const auto found = io::list_checkpoints(folder);
+    if (!found.empty()) return found.back().second;
+  }
+  throw Error(path + ": no checkpoint found (expected a .mnck file, or a training --out folder holding checkpoints/)");
+}
+
+}  // namespace mipnerf::train

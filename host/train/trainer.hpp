@@ -1,0 +1,104 @@
+// Training end to end: dataset → device, networks and Adam, the host graph step by step, non-finite
+// steps skipped, a CSV log, atomic checkpoints, resume, and a clean stop on request (Ctrl-C).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cl/context.hpp"
+#include "data/dataset.hpp"
+#include "graph/graph_spec.hpp"
+#include "mlp/adam.hpp"
+#include "mlp/mlp.hpp"
+#include "ops/loss.hpp"
+#include "train/config.hpp"
+#include "train/memory_plan.hpp"
+
+namespace mipnerf::train {
+
+// What one step did, for progress displays.
+struct StepReport {
+  int64_t step = 0;           // 1-based number of this step
+  int64_t total_steps = 0;
+  double loss = 0.0;          // the official weighted total (λ·coarse + fine)
+  double psnr = 0.0;          // per-channel PSNR of the last level on this batch
+  double learning_rate = 0.0;
+  double rays_per_second = 0.0;  // over the steps since the previous report
+  double train_seconds = 0.0;    // of this run plus those before a resume
+  bool skipped = false;          // non-finite loss or gradients: no update was applied
+};
+
+struct TrainHooks {
+  std::function<void(const StepReport&)> on_step;  // after every step
+  std::function<bool()> should_stop;               // checked after every step: true → checkpoint and return
+  // Tests: called after the backward of every step, before the gradients are checked (e.g. to inject a NaN).
+  std::function<void(int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks)> after_backward;
+};
+
+struct TrainResult {
+  int64_t last_step = 0;          // the step the final checkpoint holds
+  bool interrupted = false;       // stopped by should_stop before the configured steps
+  int64_t skipped_steps = 0;      // non-finite steps of this run
+  double train_seconds = 0.0;     // total, including before a resume
+  double seconds_this_run = 0.0;
+  std::string checkpoint;         // path of the final checkpoint
+  double final_psnr = 0.0;        // last step's batch PSNR
+};
+
+class Trainer {
+ public:
+  // Loads the training split of `data_path` and prepares the networks; with `resume`, continues from the
+  // newest checkpoint in out_dir/checkpoints (its configuration must match `config`, execution settings
+  // aside). Throws mipnerf::Error for bad data, settings that do not fit the device, or a mismatched resume.
+  Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string& data_path, const std::string& out_dir,
+          bool resume);
+  ~Trainer();
+
+  TrainResult run(const TrainHooks& hooks = {});
+
+  const TrainConfig& config() const { return config_; }
+  const graph::GraphSpec& spec() const { return spec_; }
+  const MemoryPlan& memory() const { return memory_; }
+  const data::Dataset& dataset() const { return dataset_; }
+  std::vector<std::unique_ptr<mlp::Mlp>>& networks() { return networks_; }
+  int64_t step() const { return step_; }
+  size_t parameter_count() const;
+
+  // Writes out_dir/checkpoints/ckpt_<step>.mnck (atomically) and prunes old ones; returns its path.
+  std::string save_checkpoint();
+
+ private:
+  struct Impl;
+  void restore(const std::string& path);
+
+  ocl::Context* ctx_;
+  TrainConfig config_;
+  std::string out_dir_;
+  data::Dataset dataset_;
+  graph::GraphSpec spec_;
+  MemoryPlan memory_;
+  std::vector<std::unique_ptr<mlp::Mlp>> networks_;
+  std::vector<std::unique_ptr<mlp::Adam>> optimisers_;
+  std::unique_ptr<Impl> impl_;
+  int64_t step_ = 0;              // steps completed
+  double seconds_before_ = 0.0;   // training seconds of earlier runs (resume)
+};
+
+// Loads networks from a checkpoint for rendering: the configuration it was trained with, its graph spec
+// (for `multiscale_data` as the caller's data has it) and the networks with their trained parameters.
+struct TrainedModel {
+  TrainConfig config;
+  graph::GraphSpec spec;
+  std::vector<std::unique_ptr<mlp::Mlp>> networks;
+  int64_t step = 0;
+  std::vector<mlp::Mlp*> network_pointers() const;
+};
+TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path);
+
+// The checkpoint a path names: a .mnck file, or the newest in DIR/checkpoints or DIR.
+std::string find_checkpoint(const std::string& path);
+
+}  // namespace mipnerf::train

@@ -1,0 +1,224 @@
+// End-to-end training on the device: learning, resume equality, non-finite steps, every variant.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "cl/error.hpp"
+#include "eval/evaluate.hpp"
+#include "eval/metrics.hpp"
+#include "io/checkpoint.hpp"
+#include "support/test_context.hpp"
+#include "train/model.hpp"
+#include "train/trainer.hpp"
+#include "train_fixtures.hpp"
+
+using namespace mipnerf;
+namespace fs = std::filesystem;
+
+namespace {
+
+train::TrainConfig tiny(std::map<std::string, std::string> extra = {}, const std::string& variant = "mipnerf") {
+  extra.emplace("log_every", "1");
+  return train::resolve_config("tiny", variant, extra);
+}
+
+// Mean PSNR over the val split of the best constant image: every pixel the mean colour of the training
+// pixels. A model that learnt nothing about the scene's geometry can do no better than this.
+double constant_colour_val_psnr(const std::string& scene) {
+  const auto dataset = data::load_dataset(scene, {});
+  const auto& train = dataset.split("train");
+  double mean[3] = {0, 0, 0};
+  for (uint64_t p = 0; p < train.num_pixels(); ++p) {
+    for (int c = 0; c < 3; ++c) mean[c] += train.rgb[3 * p + c] / static_cast<double>(train.num_pixels());
+  }
+  const auto& val = dataset.split("val");
+  double sum = 0.0;
+  for (size_t i = 0; i < val.num_images(); ++i) {
+    const auto& cam = val.cameras[i];
+    std::vector<float> constant(3 * cam.width_px * cam.height_px);
+    for (size_t k = 0; k < constant.size(); ++k) constant[k] = static_cast<float>(mean[k % 3]);
+    sum += eval::psnr({constant.data(), cam.height_px, cam.width_px, 3}, {val.image_rgb(i), cam.height_px, cam.width_px, 3});
+  }
+  return sum / static_cast<double>(val.num_images());
+}
+
+eval::SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const std::string& scene) {
+  const auto dataset = data::load_dataset(scene, {});
+  const auto& val = dataset.split("val");
+  std::vector<mlp::Mlp*> networks;
+  for (auto& n : trainer.networks()) networks.push_back(n.get());
+  eval::ImageRenderer renderer(ctx, trainer.spec(), networks, val.cameras, 1024);
+  return eval::evaluate_split(renderer, val, {});
+}
+
+bool bitwise_equal(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("train: a tiny procedural scene learns beyond its mean colour in a few hundred steps") {
+  auto& ctx = test::test_context();
+  const std::string out = test::fresh_run_dir("learn");
+  train::Trainer trainer(ctx, tiny({{"steps", "250"}, {"batch_size", "256"}}), test::small_scene(), out, false);
+  const auto result = trainer.run();
+  CHECK(result.last_step == 250);
+  CHECK(result.skipped_steps == 0);
+  const double baseline = constant_colour_val_psnr(test::small_scene());
+  const auto scores = evaluate_val(ctx, trainer, test::small_scene());
+  MESSAGE("val PSNR " << scores.mean_psnr << " dB after 250 steps (" << result.train_seconds
+                      << " s); best constant colour " << baseline << " dB");
+  // 3 dB over the constant image halves the error energy: only possible by learning where the objects are.
+  CHECK(scores.mean_psnr > baseline + 3.0);
+  CHECK(std::isfinite(scores.mean_ssim));
+  // The log has a row per step (log_every 1) with a rising trend: the last 25 steps beat the first 25.
+  std::ifstream csv(fs::path(out) / "train_log.csv");
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line == "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped");
+  std::vector<double> psnr;
+  while (std::getline(csv, line)) {
+    std::stringstream row(line);
+    std::string field;
+    for (int k = 0; k < 4; ++k) std::getline(row, field, ',');
+    psnr.push_back(std::stod(field));
+  }
+  REQUIRE(psnr.size() == 250);
+  double first = 0, last = 0;
+  for (int k = 0; k < 25; ++k) first += psnr[k] / 25, last += psnr[psnr.size() - 1 - k] / 25;
+  CHECK(last > first + 2.0);
+  fs::remove_all(out);
+}
+
+TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for bit") {
+  auto& ctx = test::test_context();
+  const auto config = tiny({{"steps", "8"}, {"batch_size", "96"}, {"chunk_rays", "32"}});
+  const std::string straight_dir = test::fresh_run_dir("straight"), resumed_dir = test::fresh_run_dir("resumed");
+  std::vector<float> straight_params;
+  {
+    train::Trainer trainer(ctx, config, test::small_scene(), straight_dir, false);
+    trainer.run();
+    straight_params = trainer.networks()[0]->download_params();
+  }
+  {
+    train::Trainer first(ctx, config, test::small_scene(), resumed_dir, false);
+    train::TrainHooks hooks;
+    hooks.should_stop = [&first] { return first.step() >= 4; };  // what Ctrl-C does, at step 4
+    const auto result = first.run(hooks);
+    CHECK(result.interrupted);
+    CHECK(result.last_step == 4);
+  }
+  CHECK_THROWS_WITH_AS(train::Trainer(ctx, config, test::small_scene(), resumed_dir, false),
+                       doctest::Contains("--resume"), Error);
+  train::Trainer second(ctx, config, test::small_scene(), resumed_dir, true);
+  CHECK(second.step() == 4);
+  const auto result = second.run();
+  CHECK(result.last_step == 8);
+  CHECK(bitwise_equal(second.networks()[0]->download_params(), straight_params));
+  // Both runs' final checkpoints hold the same Adam moments too.
+  const auto a = io::read_checkpoint(io::checkpoint_path((fs::path(straight_dir) / "checkpoints").string(), 8));
+  const auto b = io::read_checkpoint(io::checkpoint_path((fs::path(resumed_dir) / "checkpoints").string(), 8));
+  CHECK(bitwise_equal(a.tensor("network0.adam_m", "a"), b.tensor("network0.adam_m", "b")));
+  CHECK(bitwise_equal(a.tensor("network0.adam_v", "a"), b.tensor("network0.adam_v", "b")));
+  CHECK(a.header["adam_steps"] == b.header["adam_steps"]);
+  // A resume with different learning settings is refused, naming them.
+  CHECK_THROWS_WITH_AS(train::Trainer(ctx, tiny({{"steps", "8"}, {"batch_size", "64"}, {"chunk_rays", "32"}}),
+                                      test::small_scene(), resumed_dir, true),
+                       doctest::Contains("batch_size: 96 -> 64"), Error);
+  fs::remove_all(straight_dir);
+  fs::remove_all(resumed_dir);
+}
+
+TEST_CASE("train: a NaN in the gradients skips that step and the run goes on") {
+  auto& ctx = test::test_context();
+  const std::string out = test::fresh_run_dir("nan");
+  train::Trainer trainer(ctx, tiny({{"steps", "6"}, {"batch_size", "64"}}), test::small_scene(), out, false);
+  std::vector<float> before_bad_step;
+  train::TrainHooks hooks;
+  hooks.after_backward = [&](int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
+    if (step != 3) return;
+    before_bad_step = networks[0]->download_params();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    networks[0]->grads().upload(ctx, &nan, 1, 17);
+  };
+  std::vector<bool> skipped;
+  hooks.on_step = [&](const train::StepReport& r) { skipped.push_back(r.skipped); };
+  const auto result = trainer.run(hooks);
+  CHECK(result.last_step == 6);
+  CHECK(result.skipped_steps == 1);
+  REQUIRE(skipped.size() == 6);
+  CHECK(skipped == std::vector<bool>{false, false, true, false, false, false});
+  for (float p : trainer.networks()[0]->download_params()) REQUIRE(std::isfinite(p));
+  fs::remove_all(out);
+}
+
+TEST_CASE("train: repeated non-finite steps stop the run and keep the last good checkpoint") {
+  auto& ctx = test::test_context();
+  const std::string out = test::fresh_run_dir("nan-stop");
+  train::Trainer trainer(ctx, tiny({{"steps", "20"}, {"batch_size", "64"}, {"checkpoint_every", "2"},
+                                    {"max_bad_steps", "3"}}),
+                         test::small_scene(), out, false);
+  train::TrainHooks hooks;
+  hooks.after_backward = [&](int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
+    if (step < 5) return;
+    const float inf = std::numeric_limits<float>::infinity();
+    networks[0]->grads().upload(ctx, &inf, 1, 0);
+  };
+  CHECK_THROWS_WITH_AS(trainer.run(hooks), doctest::Contains("ckpt_000000004.mnck"), Error);
+  const auto saved = io::list_checkpoints((fs::path(out) / "checkpoints").string());
+  REQUIRE(!saved.empty());
+  CHECK(saved.back().first == 4);
+  const auto checkpoint = io::read_checkpoint(saved.back().second);
+  for (float p : checkpoint.tensor("network0.params", "ckpt")) REQUIRE(std::isfinite(p));
+  fs::remove_all(out);
+}
+
+TEST_CASE("train: every variant trains a few steps on multiscale data and renders") {
+  auto& ctx = test::test_context();
+  const std::string multiscale = (fs::path(test::small_scene()) / "multiscale").string();
+  for (const auto& [variant, bundle] : train::variants()) {
+    INFO("variant " << variant);
+    const std::string out = test::fresh_run_dir("variant-" + variant);
+    train::Trainer trainer(ctx, tiny({{"steps", "3"}, {"batch_size", "128"}}, variant), multiscale, out, false);
+    CHECK(trainer.spec().loss.multiscale == trainer.config().area_loss);
+    const auto result = trainer.run();
+    CHECK(result.skipped_steps == 0);
+    CHECK(std::isfinite(result.final_psnr));
+    const size_t expected_networks = trainer.config().single_mlp ? 1 : 2;
+    CHECK(trainer.networks().size() == expected_networks);
+    auto model = train::load_trained_model(ctx, train::find_checkpoint(out));
+    CHECK(model.step == 3);
+    const auto dataset = data::load_dataset(multiscale, {});
+    eval::ImageRenderer renderer(ctx, model.spec, model.network_pointers(), dataset.split("val").cameras, 512);
+    const auto image = renderer.render(1);  // the ×2 downsampled copy of the first val view
+    CHECK(image.width == 16);
+    for (float v : image.rgb) REQUIRE(std::isfinite(v));
+    for (float d : image.depth) REQUIRE(std::isfinite(d));
+    fs::remove_all(out);
+  }
+}
+
+TEST_CASE("train: memory planning picks a chunk that fits, and says what to lower when nothing does") {
+  auto& ctx = test::test_context();
+  const auto paper = train::resolve_config("paper", "mipnerf", {});
+  const auto spec = train::make_graph_spec(paper, false);
+  const auto plan = train::plan_memory(spec, ctx.device_info(), 4096, 0, 0, true);
+  MESSAGE("paper preset on " << ctx.device_info().name << ": " << plan.describe());
+  CHECK(plan.chunk_rays >= 1);
+  CHECK(plan.total() <= plan.budget_bytes);
+  CHECK(plan.largest_buffer <= ctx.device_info().max_alloc_bytes);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, 0, 1u << 20, true),
+                       doctest::Contains("lower chunk_rays"), Error);
+  auto small_device = ctx.device_info();
+  small_device.global_mem_bytes = 1ull << 20;  // one ray of 2 × 128 samples through 8×256 needs more
+  small_device.max_alloc_bytes = 256ull << 10;
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 0, 0, true), doctest::Contains("num_samples"),
+                       Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 1ull << 30, 0, true),
+                       doctest::Contains("fewer or smaller images"), Error);
+}
