@@ -120,6 +120,13 @@ mlp::KernelParameters run_tuner(ocl::Context& ctx, const json& spec) {
   else if (tuner == "Transpose") status = clblast::TuneTranspose<float>(&queue, m, n, fraction, params);
   else if (tuner == "Padtranspose") status = clblast::TunePadtranspose<float>(&queue, m, n, fraction, params);
   else throw Error("unknown tuner " + tuner);
+  // TuneXgemm runs two searches (GEMMK = 0, then GEMMK = 1) into one map; when the second finds no valid
+  // configuration it fails although the map holds the first one's best, which is still worth timing.
+  if (status != clblast::StatusCode::kSuccess && tuner == "Xgemm" && params.count("GEMMK")) {
+    std::cerr << "TuneXgemm: the GEMMK = 1 search failed (" << mlp::clblast_status_name(status)
+              << "); keeping the GEMMK = 0 result\n";
+    status = clblast::StatusCode::kSuccess;
+  }
   mlp::check_clblast(status, "clblast::Tune" + tuner);
   // The tuners report only the parameters they vary; the rest keep CLBlast's values for this device.
   std::unordered_map<std::string, size_t> all;
@@ -133,9 +140,57 @@ mlp::KernelParameters run_tuner(ocl::Context& ctx, const json& spec) {
 
 // Times each problem through mlp::gemm with the candidate installed (best of `reps` after a warm-up that
 // compiles), and checks sampled elements of each result against a double dot product.
+// Worst |error| / (2·k·u·Σ|a·b|) over every element of small products of awkward sizes (not multiples of any
+// tile), each kind, computed with `set` and the indirect kernel forced (at these sizes CLBlast would otherwise
+// run its direct kernel and the candidate's Xgemm would go unchecked). Correct results give ≈ 0.01.
+double probe_correctness(ocl::Context& ctx, const mlp::ParameterSet& set) {
+  mlp::GemmTuning forced;
+  forced.common = set;
+  forced.common["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", 0}};
+  mlp::install_gemm_tuning(ctx, forced);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
+  double worst = 0.0;
+  for (const auto& [m, n, k] : {std::tuple<size_t, size_t, size_t>{1000, 256, 96}, {333, 130, 257}, {96, 256, 1000}}) {
+    for (int kind = 0; kind < 3; ++kind) {
+      mlp::GemmShape s;
+      s.m = m;
+      s.n = n;
+      s.k = k;
+      s.transpose_a = kind == 2;
+      s.transpose_b = kind == 1;
+      std::vector<float> a(m * k), b(k * n);
+      for (auto& v : a) v = dist(rng);
+      for (auto& v : b) v = dist(rng);
+      ocl::DeviceArray<float> a_dev(ctx, a.size(), "A"), b_dev(ctx, b.size(), "B"), c_dev(ctx, m * n, "C");
+      a_dev.upload(ctx, a);
+      b_dev.upload(ctx, b);
+      const size_t lda = s.transpose_a ? m : k, ldb = s.transpose_b ? k : n;
+      mlp::gemm(ctx, s, 1.0f, mlp::view(a_dev, lda), mlp::view(b_dev, ldb), 0.0f, mlp::view(c_dev, n), "probe");
+      const auto c = c_dev.download(ctx);
+      for (size_t i = 0; i < m; ++i) {
+        for (size_t j = 0; j < n; ++j) {
+          double sum = 0.0, magnitude = 0.0;
+          for (size_t p = 0; p < k; ++p) {
+            const double term = static_cast<double>(s.transpose_a ? a[p * lda + i] : a[i * lda + p]) *
+                                (s.transpose_b ? b[j * ldb + p] : b[p * ldb + j]);
+            sum += term;
+            magnitude += std::abs(term);
+          }
+          const double error = std::abs(static_cast<double>(c[i * n + j]) - sum);
+          worst = std::max(worst, std::isfinite(error) ? error / (2.0 * k * 5.96e-8 * magnitude + 1e-30) : 1e30);
+        }
+      }
+    }
+  }
+  return worst;
+}
+
 json run_evaluate(ocl::Context& ctx, const json& spec) {
   mlp::GemmTuning candidate;
   candidate.common = set_from(spec.at("set"));
+  const double probe_ratio = probe_correctness(ctx, candidate.common);
+  std::cerr << "  correctness probe (indirect kernel forced): worst error ratio " << probe_ratio << "\n";
   mlp::install_gemm_tuning(ctx, candidate);
   const int reps = spec.value("reps", 3);
   size_t a_size = 0, b_size = 0, c_size = 0;
@@ -198,7 +253,43 @@ json run_evaluate(ocl::Context& ctx, const json& spec) {
     std::cerr << "  " << s.m << "x" << s.n << "x" << s.k << " " << mlp::gemm_kind_name(mlp::gemm_kind(s)) << ": "
               << 2.0 * s.m * s.n * s.k / best * 1e-9 << " GFLOP/s\n";
   }
-  return {{"seconds", times}, {"error_ratio", errors}};
+  return {{"seconds", times}, {"error_ratio", errors}, {"probe_error_ratio", probe_ratio}};
+}
+
+// CLBlast's direct/indirect switch: times the forward product (rows × W · W × W) for each row count with every
+// product forced through the indirect kernel (XGEMM_MIN_INDIRECT_SIZE 0) and through the direct one (a
+// threshold above any product), with the candidate's kernels.
+json run_crossover(ocl::Context& ctx, const json& spec) {
+  const mlp::ParameterSet base = set_from(spec.at("set"));
+  const size_t width = spec.at("width");
+  size_t max_rows = 0;
+  for (const auto& r : spec.at("rows")) max_rows = std::max<size_t>(max_rows, r.get<size_t>());
+  ocl::DeviceArray<float> a(ctx, max_rows * width, "A"), b(ctx, width * width, "B"), c(ctx, max_rows * width, "C");
+  a.fill(ctx, 0.5f);
+  b.fill(ctx, 0.25f);
+  json indirect = json::array(), direct = json::array();
+  for (const auto& r : spec.at("rows")) {
+    mlp::GemmShape s;
+    s.m = r.get<size_t>();
+    s.n = s.k = width;
+    for (const size_t threshold : {size_t{0}, size_t{1} << 20}) {
+      mlp::GemmTuning t;
+      t.common = base;
+      t.common["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", threshold}};
+      mlp::install_gemm_tuning(ctx, t);
+      double best = 1e30;
+      for (int rep = 0; rep < 4; ++rep) {  // the first call builds the program
+        const auto start = Clock::now();
+        mlp::gemm(ctx, s, 1.0f, mlp::view(a, width), mlp::view(b, width), 0.0f, mlp::view(c, width), "crossover");
+        ctx.finish();
+        if (rep > 0) best = std::min(best, std::chrono::duration<double>(Clock::now() - start).count());
+      }
+      (threshold == 0 ? indirect : direct).push_back(best);
+    }
+    std::cerr << "  " << s.m << " rows: indirect " << indirect.back().get<double>() * 1e3 << " ms, direct "
+              << direct.back().get<double>() * 1e3 << " ms\n";
+  }
+  return {{"indirect", indirect}, {"direct", direct}};
 }
 
 void run_step(const StepArgs& args) {
@@ -208,6 +299,8 @@ void run_step(const StepArgs& args) {
   const auto start = Clock::now();
   if (spec.at("type") == "tuner") {
     result["parameters"] = run_tuner(*ctx, spec);
+  } else if (spec.at("type") == "crossover") {
+    result = run_crossover(*ctx, spec);
   } else {
     result = run_evaluate(*ctx, spec);
   }
@@ -239,7 +332,11 @@ struct StepOutcome {
 class Tuner {
  public:
   Tuner(const TuneArgs& args, const ocl::DeviceInfo& device)
-      : args_(args), device_(device), exe_(self_path()), start_(Clock::now()) {
+      : args_(args),
+        device_(device),
+        exe_(self_path()),
+        start_(Clock::now()),
+        progress_("tune", static_cast<int64_t>(args.minutes * 60.0)) {
     char pattern[] = "/tmp/mipnerf-tune-XXXXXX";
     if (!::mkdtemp(pattern)) throw Error("cannot create a temporary folder under /tmp for the tuning steps");
     work_ = pattern;
@@ -261,6 +358,12 @@ class Tuner {
   }
 
   double elapsed() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+  // A finished line above the progress line (which redraws itself below it).
+  void note(const std::string& message) const {
+    std::cerr << (isatty(STDERR_FILENO) ? "\r\033[K" : "") << "mipnerf-cl: tune: " << message << "\n";
+  }
+  void finish_progress() { progress_.finish("done"); }
   double left() const { return args_.minutes * 60.0 - elapsed(); }
   const std::string& path() const { return path_; }
 
@@ -295,7 +398,6 @@ class Tuner {
       _exit(127);
     }
     ::close(log_fd);
-    Progress progress("tune", static_cast<int64_t>(args_.minutes * 60.0));
     int status = 0;
     bool timed_out = false;
     while (true) {
@@ -308,11 +410,10 @@ class Tuner {
         timed_out = !g_interrupted;
         break;
       }
-      progress.update(static_cast<int64_t>(std::min(elapsed(), args_.minutes * 60.0)),
-                      name + " (" + format_duration(running) + " of at most " + format_duration(timeout_s) + ")");
+      progress_.update(static_cast<int64_t>(std::min(elapsed(), args_.minutes * 60.0)),
+                       name + " (" + format_duration(running) + " of at most " + format_duration(timeout_s) + ")");
       std::this_thread::sleep_for(std::chrono::milliseconds(250));
     }
-    progress.finish(name);
     outcome.seconds = std::chrono::duration<double>(Clock::now() - started).count();
     if (g_interrupted) {
       outcome.status = "interrupted";
@@ -334,8 +435,8 @@ class Tuner {
     if (!outcome.ok && outcome.status != "interrupted") {
       const std::string log = read_text(log_path);
       const auto last_line = log.find_last_of('\n', log.size() >= 2 ? log.size() - 2 : 0);
-      std::cerr << "mipnerf-cl: tune: " << name << " " << outcome.status
-                << (log.empty() ? "" : ": " + log.substr(last_line == std::string::npos ? 0 : last_line + 1)) << "\n";
+      note(name + " " + outcome.status +
+           (log.empty() ? "" : ": " + log.substr(last_line == std::string::npos ? 0 : last_line + 1)));
     }
     report_["steps"].push_back({{"step", name}, {"status", outcome.status}, {"seconds", outcome.seconds}});
     return outcome;
@@ -349,6 +450,7 @@ class Tuner {
                   k ? ("x" + std::to_string(k)).c_str() : "", fraction);
     if (timeout_s < 20.0) {
       report_["steps"].push_back({{"step", what}, {"status", "skipped: time box used up"}});
+      note(std::string(what) + ": skipped, the time box is used up");
       return std::nullopt;
     }
     const auto outcome =
@@ -357,8 +459,7 @@ class Tuner {
     if (!outcome.ok) return std::nullopt;
     mlp::KernelParameters found;
     for (const auto& [name, value] : outcome.result.at("parameters").items()) found[name] = value.get<size_t>();
-    std::cerr << "mipnerf-cl: tune: " << what << " → " << describe_set({{tuner, found}}) << " ("
-              << format_duration(outcome.seconds) << ")\n";
+    note(std::string(what) + " → " + describe_set({{tuner, found}}) + " (" + format_duration(outcome.seconds) + ")");
     return found;
   }
 
@@ -367,6 +468,7 @@ class Tuner {
     const double timeout_s = std::min(left(), 300.0);
     if (timeout_s < 30.0) {
       report_["steps"].push_back({{"step", "evaluate " + name}, {"status", "skipped: time box used up"}});
+      note("evaluate " + name + ": skipped, the time box is used up");
       return;
     }
     json problems = json::array();
@@ -383,7 +485,7 @@ class Tuner {
       return;
     }
     std::map<mlp::GemmKind, double> per_kind;
-    bool correct = true;
+    bool correct = outcome.result.value("probe_error_ratio", 1e30) <= 1.0;
     std::string summary;
     for (size_t i = 0; i < problems_.size(); ++i) {
       const double seconds = outcome.result.at("seconds")[i], ratio = outcome.result.at("error_ratio")[i];
@@ -397,8 +499,7 @@ class Tuner {
     }
     entry["correct"] = correct;
     report_["candidates"].push_back(entry);
-    std::cerr << "mipnerf-cl: tune: " << name << (correct ? "" : " (WRONG RESULTS, discarded)") << ": GFLOP/s "
-              << summary << "\n";
+    note(name + (correct ? "" : " (WRONG RESULTS, discarded)") + ": GFLOP/s " + summary);
     if (!correct) return;
     bool improved = false;
     for (const auto& [kind, seconds] : per_kind) {
@@ -409,6 +510,41 @@ class Tuner {
       }
     }
     if (improved) save();
+  }
+
+  // Finds the row count from which the indirect kernel (with `set`) beats the direct one on the forward
+  // product, and writes the matching XGEMM_MIN_INDIRECT_SIZE into every kind's best set: products with
+  // m·n·k ≥ threshold³ then run indirect. Small products (the thin heads, the per-ray view product) stay direct.
+  void choose_direct_switch(const mlp::ParameterSet& set) {
+    const double timeout_s = std::min(left(), 240.0);
+    if (timeout_s < 40.0 || best_.empty()) return;
+    json rows = json::array();
+    for (size_t r = 512; r <= 32768; r *= 2) rows.push_back(r);
+    const auto outcome =
+        run("direct/indirect crossover", {{"type", "crossover"}, {"set", set_json(set)}, {"width", args_.width},
+                                           {"rows", rows}},
+            timeout_s);
+    if (!outcome.ok) return;
+    const json& indirect = outcome.result.at("indirect");
+    const json& direct = outcome.result.at("direct");
+    size_t from = rows.size();  // the first row count from which indirect is never slower
+    for (size_t i = rows.size(); i-- > 0;) {
+      if (indirect[i].get<double>() > direct[i].get<double>()) break;
+      from = i;
+    }
+    const double W = static_cast<double>(args_.width);
+    const size_t threshold = from == rows.size() ? size_t{1} << 20
+                                                 : static_cast<size_t>(std::cbrt(rows[from].get<double>() * W * W));
+    report_["direct_switch"] = {{"rows", rows}, {"indirect_seconds", indirect}, {"direct_seconds", direct},
+                                {"XGEMM_MIN_INDIRECT_SIZE", threshold}};
+    note("the indirect kernel wins from " +
+         (from == rows.size() ? std::string("no measured size") : rows[from].dump() + " rows") +
+         "; XGEMM_MIN_INDIRECT_SIZE = " + std::to_string(threshold));
+    for (auto& [kind, best] : best_) {
+      (void)kind;
+      best.set["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", threshold}};
+    }
+    save();
   }
 
   // The best set so far for `kind` (empty = CLBlast defaults).
@@ -462,6 +598,7 @@ class Tuner {
   std::string work_;
   std::string path_;
   Clock::time_point start_;
+  Progress progress_;
   std::vector<mlp::GemmProblem> problems_;
   std::map<mlp::GemmKind, Best> best_;
   std::map<mlp::GemmKind, double> baseline_;
@@ -481,10 +618,15 @@ std::vector<std::pair<std::string, mlp::KernelParameters>> seed_sets() {
                                  {"STRM", 0},      {"STRN", 0},    {"SA", 0},        {"SB", 0}};
   };
   return {
-      {"seed GEMMK=1 64x32 KREG 4", xgemm(1, 4, 64, 32, 1, 8, 8, 8, 4, 1)},
-      {"seed GEMMK=1 64x64 KREG 4", xgemm(1, 4, 64, 64, 1, 8, 8, 8, 4, 1)},
-      {"seed GEMMK=0 64x128 KWG 32", xgemm(0, 1, 64, 128, 32, 8, 8, 8, 16, 2)},
-      {"seed GEMMK=0 64x256 KWG 32", xgemm(0, 1, 64, 256, 32, 8, 16, 8, 16, 2)},
+      // GEMMK = 1 (no transposes in forward and backward-data products). Several GEMMK = 1 configurations gave
+      // wrong results or crashed with CLBlast 1.5.3 on PoCL here (some picked by TuneXgemm itself), which is
+      // why every candidate's results are checked before it can win.
+      {"seed GEMMK=1 64x64 KREG4", xgemm(1, 4, 64, 64, 1, 8, 8, 8, 4, 1)},
+      {"seed GEMMK=1 128x32 KREG4", xgemm(1, 4, 128, 32, 1, 8, 8, 8, 4, 1)},
+      // GEMMK = 0 with 8×16 results per work-item (float16 loads of B): no transpose of the big matrices
+      // in the weight gradient.
+      {"seed GEMMK=0 64x128 NWI16", xgemm(0, 1, 64, 128, 32, 8, 8, 8, 16, 2)},
+      {"seed GEMMK=0 64x256 NWI16", xgemm(0, 1, 64, 256, 32, 8, 16, 8, 16, 2)},
   };
 }
 
@@ -539,8 +681,9 @@ void run_tune(const TuneArgs& args) {
 
   // 3. The GEMM kernels themselves. TuneXgemm samples a fixed random subset of its configurations (the
   //    fraction sets its size) and returns the best GEMMK = 1 configuration it timed.
+  // At least ~8 GEMMK = 1 configurations (fewer and its search may find no valid one).
   auto fraction_for = [](double seconds, double configurations) {
-    return std::clamp(seconds / (configurations * kSecondsPerGemmConfiguration), 2.0 / 16566.0, 1.0);
+    return std::clamp(seconds / (configurations * kSecondsPerGemmConfiguration), 8.0 / 16566.0, 1.0);
   };
   const double forward_share = std::min(tuner.left() - 120.0, 0.3 * budget);
   if (auto found = tuner.tune_kernel("Xgemm", R, W, W, fraction_for(forward_share, kXgemmConfigurations),
@@ -566,7 +709,10 @@ void run_tune(const TuneArgs& args) {
     set["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", 100000}};
     tuner.evaluate("TuneXgemmDirect, direct kernel for all", set);
   }
+  // 4. Where the direct kernel should take over (small chunks), with the forward product's best set.
+  tuner.choose_direct_switch(tuner.best_set(mlp::GemmKind::forward));
   tuner.save();
+  tuner.finish_progress();
   tuner.summary();
   if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + tuner.path());
 }
