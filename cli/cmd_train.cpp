@@ -30,6 +30,7 @@ struct TrainArgs {
   std::string preset = "quick";
   std::string variant = "mipnerf";
   bool resume = false;
+  std::string config_file;                // --config FILE
   std::vector<std::string> sets;          // --set name=value
   std::map<std::string, std::string> flag_values;  // --<setting> value
 };
@@ -40,9 +41,38 @@ extern "C" void on_interrupt(int) {
   if (g_stop_requested.exchange(true)) _exit(130);  // a second Ctrl-C stops at once
 }
 
-// The settings given explicitly, by config file or flag (flags win), then --set.
+// Settings from a TOML/INI file (CLI11's parser): `name = value` at the top level or in a [train] table.
+std::map<std::string, std::string> config_file_settings(const std::string& path) {
+  std::vector<CLI::ConfigItem> items;
+  try {
+    items = CLI::ConfigTOML().from_file(path);
+  } catch (const CLI::Error& e) {
+    throw Error("--config " + path + ": " + e.what());
+  }
+  std::map<std::string, std::string> out;
+  for (const auto& item : items) {
+    if (item.name == "++" || item.name == "--") continue;  // CLI11's section markers
+    const bool in_train = item.parents.size() == 1 && item.parents[0] == "train";
+    if (!item.parents.empty() && !in_train) {
+      throw Error("--config " + path + ": '" + item.fullname() + "' is outside a [train] table");
+    }
+    std::string value;
+    for (const auto& input : item.inputs) value += (value.empty() ? "" : ",") + input;
+    try {
+      train::TrainConfig probe;
+      train::set_value(probe, item.name, value);  // unknown names and bad values are refused here, by file
+    } catch (const Error& e) {
+      throw Error("--config " + path + ": " + e.what());
+    }
+    out[item.name] = value;
+  }
+  return out;
+}
+
+// The settings given explicitly: the config file, then flags, then --set (later ones win).
 std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI::App& cmd) {
   std::map<std::string, std::string> out;
+  if (!args.config_file.empty()) out = config_file_settings(args.config_file);
   for (const auto& s : train::settings()) {
     auto* option = cmd.get_option_no_throw("--" + s.name);
     if (option != nullptr && option->count() > 0) out[s.name] = option->as<std::string>();
@@ -189,8 +219,9 @@ void register_train(CLI::App& app) {
   cmd->add_option("--variant", args->variant, "Model variant (rows of the paper's tables)")->capture_default_str();
   cmd->add_flag("--resume", args->resume, "Continue from the newest checkpoint in OUT/checkpoints");
   cmd->add_option("--set", args->sets, "Any setting as name=value (repeatable)");
-  cmd->set_config("--config", "", "TOML/INI file of settings (names as the flags, e.g. num_samples = 64)");
-  cmd->allow_config_extras(CLI::config_extras_mode::error);
+  cmd->add_option("--config", args->config_file,
+                  "TOML/INI file of settings, e.g. `num_samples = 64` (top level or a [train] table); flags win")
+      ->check(CLI::ExistingFile);
   for (const auto& s : train::settings()) {
     if (s.name == "variant") continue;  // set through --variant, which also applies the variant's bundle
     cmd->add_option("--" + s.name)->description("[" + s.group + "] " + s.help)->type_name("VALUE");

@@ -140,6 +140,8 @@ std::string Trainer::save_checkpoint() {
   c.header["config"] = nlohmann::json::parse(to_json(config_));
   c.header["multiscale_data"] = dataset_.split("train").num_scales() > 1;
   c.header["device"] = ctx_->device_info().name;
+  // Where the training data was (absolute), so render and eval find the scene without being told.
+  c.header["data"] = fs::absolute(dataset_.path).lexically_normal().string();
   nlohmann::json adam_steps = nlohmann::json::array();
   for (size_t i = 0; i < networks_.size(); ++i) {
     const std::string prefix = "network" + std::to_string(i) + ".";
@@ -163,7 +165,13 @@ void Trainer::restore(const std::string& path) {
   const TrainConfig saved = from_json(c.header.at("config").dump(), path);
   std::string mismatched;
   for (const auto& d : differences(saved, config_)) {
-    if (!is_execution_setting(d)) mismatched += (mismatched.empty() ? "" : "; ") + d;
+    if (d.rfind("steps:", 0) == 0) {
+      // Training longer (or shorter) is allowed: the schedule then spans the new step count from here on.
+      ctx_->log(LogLevel::warning, "--resume with " + d + ": the learning-rate schedule now spans " +
+                                       std::to_string(config_.steps) + " steps");
+    } else if (!is_execution_setting(d)) {
+      mismatched += (mismatched.empty() ? "" : "; ") + d;
+    }
   }
   if (!mismatched.empty()) {
     throw Error("--resume: the settings differ from the checkpoint's (" + mismatched + "); run with the same "
@@ -307,6 +315,9 @@ TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint
     model.networks[i]->upload_params(c.tensor("network" + std::to_string(i) + ".params", checkpoint_path));
   }
   model.step = c.header.at("step").get<int64_t>();
+  model.data_path = c.header.value("data", "");
+  model.train_seconds = c.header.value("train_seconds", 0.0);
+  model.trained_on = c.header.value("device", "");
   return model;
 }
 
