@@ -30,5 +30,7 @@ void register_train(CLI::App& app);
 void register_dataset(CLI::App& app);
 void register_make_scene(CLI::App& app);
 void register_make_multiscale(CLI::App& app);
+void register_render(CLI::App& app);
+void register_eval(CLI::App& app);
 
 }  // namespace mipnerf::cli

@@ -39,6 +39,8 @@ int main(int argc, char** argv) {
   cli::register_dataset(app);
   cli::register_make_scene(app);
   cli::register_make_multiscale(app);
+  cli::register_render(app);
+  cli::register_eval(app);
 
   try {
     app.parse(argc, argv);

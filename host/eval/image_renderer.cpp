@@ -1,4 +1,4 @@
-// Whole images through an inference graph, chunk by chunk.
+// Whole images through an inference graph, chunk by chunk (and pass by pass when supersampling).
 #include "eval/image_renderer.hpp"
 
 #include <chrono>
@@ -7,17 +7,48 @@
 #include "cl/error.hpp"
 
 namespace mipnerf::eval {
+namespace {
+
+graph::GraphMode mode_for(const RenderSettings& settings) {
+  return settings.supersample > 1 ? graph::GraphMode::inference_jittered : graph::GraphMode::inference;
+}
+
+const RenderSettings& checked(const RenderSettings& settings) {
+  if (settings.chunk_rays == 0) throw Error("render: the chunk size must be at least one ray");
+  if (settings.supersample == 0) throw Error("render: supersampling needs at least one ray per pixel");
+  return settings;
+}
+
+// The jitter seed of one camera (splitmix64 of seed and index), so views do not share a jitter pattern.
+uint64_t camera_seed(uint64_t seed, size_t index) {
+  uint64_t z = seed + 0x9E3779B97F4A7C15ull * (static_cast<uint64_t>(index) + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
 
 ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
                              const std::vector<data::Camera>& cameras, size_t chunk_rays)
+    : ImageRenderer(ctx, spec, std::move(networks), cameras, RenderSettings{chunk_rays, 1, 0}) {}
+
+ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
+                             const std::vector<data::Camera>& cameras, const RenderSettings& settings)
     : ctx_(&ctx),
       cameras_(cameras),
-      chunk_rays_(chunk_rays),
-      graph_(ctx, spec, std::move(networks), graph::GraphMode::inference, chunk_rays),
+      settings_(checked(settings)),
+      graph_(ctx, spec, std::move(networks), mode_for(settings), settings.chunk_rays),
       packed_cameras_(ctx, std::max<size_t>(1, cameras.size()) * data::camera_layout::stride, "render cameras [C][24]"),
-      camera_ids_(ctx, chunk_rays, "render camera_ids [chunk]"),
-      pixel_ids_(ctx, chunk_rays, "render pixel_ids [chunk]") {
+      camera_ids_(ctx, settings.chunk_rays, "render camera_ids [chunk]"),
+      pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {
   if (cameras_.empty()) throw Error("render: no camera to render");
+  for (const auto& camera : cameras_) {
+    if (static_cast<uint64_t>(camera.width_px) * camera.height_px > 0xFFFFFFFFull) {
+      throw Error("render: an image of " + std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) +
+                  " has more than 2^32 - 1 pixels");
+    }
+  }
   packed_cameras_.upload(ctx, data::pack_cameras(cameras_));
 }
 
@@ -31,26 +62,68 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
   image.width = camera.width_px;
   image.height = camera.height_px;
   const size_t n_pixels = static_cast<size_t>(image.width) * image.height;
-  image.rgb.resize(3 * n_pixels);
-  image.depth.resize(n_pixels);
-  image.acc.resize(n_pixels);
+  image.rgb.assign(3 * n_pixels, 0.0f);
+  image.depth.assign(n_pixels, 0.0f);
+  image.acc.assign(n_pixels, 0.0f);
 
   camera_ids_.fill(*ctx_, static_cast<uint32_t>(index));
-  std::vector<uint32_t> ids(chunk_rays_);
+  const size_t chunk_rays = settings_.chunk_rays;
+  const uint32_t passes = settings_.supersample;
+  std::vector<uint32_t> ids(chunk_rays);
+  std::vector<float> rgb, depth, acc;  // one chunk of one pass (supersampling only)
+  if (passes > 1) {
+    rgb.resize(3 * chunk_rays);
+    depth.resize(chunk_rays);
+    acc.resize(chunk_rays);
+  }
   const graph::RaySource source{packed_cameras_, camera_ids_, pixel_ids_};
   const auto& out = graph_.level_outputs(graph_.spec().levels.size() - 1);
-  for (size_t first = 0; first < n_pixels; first += chunk_rays_) {
-    const size_t count = std::min(chunk_rays_, n_pixels - first);
+  const uint64_t seed = camera_seed(settings_.seed, index);
+  const size_t total_rays = n_pixels * passes;
+  size_t done_rays = 0;
+  for (size_t first = 0; first < n_pixels; first += chunk_rays) {
+    const size_t count = std::min(chunk_rays, n_pixels - first);
     std::iota(ids.begin(), ids.begin() + static_cast<long>(count), static_cast<uint32_t>(first));
     pixel_ids_.upload(*ctx_, ids.data(), count);
-    graph_.render_chunk(source, {0, count});
-    out.comp_rgb.download(*ctx_, image.rgb.data() + 3 * first, 3 * count);
-    out.distance.download(*ctx_, image.depth.data() + first, count);
-    out.acc.download(*ctx_, image.acc.data() + first, count);
-    if (progress) progress(first + count, n_pixels);
+    if (passes == 1) {
+      graph_.render_chunk(source, {0, count});
+      out.comp_rgb.download(*ctx_, image.rgb.data() + 3 * first, 3 * count);
+      out.distance.download(*ctx_, image.depth.data() + first, count);
+      out.acc.download(*ctx_, image.acc.data() + first, count);
+    } else {
+      // Pass p jitters pixel q with Philox(seed, q, p): the ray number is the pixel's index in the image.
+      for (uint32_t pass = 0; pass < passes; ++pass) {
+        graph_.render_chunk(source, {0, count}, {seed, pass}, static_cast<uint32_t>(first));
+        out.comp_rgb.download(*ctx_, rgb.data(), 3 * count);
+        out.distance.download(*ctx_, depth.data(), count);
+        out.acc.download(*ctx_, acc.data(), count);
+        for (size_t k = 0; k < 3 * count; ++k) image.rgb[3 * first + k] += rgb[k] / static_cast<float>(passes);
+        for (size_t k = 0; k < count; ++k) {
+          image.depth[first + k] += depth[k] / static_cast<float>(passes);
+          image.acc[first + k] += acc[k] / static_cast<float>(passes);
+        }
+        if (progress && pass + 1 < passes) progress(done_rays + (pass + 1) * count, total_rays);
+      }
+    }
+    done_rays += count * passes;
+    if (progress) progress(done_rays, total_rays);
   }
   image.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return image;
+}
+
+double ImageRenderer::warm_up() {
+  const auto start = std::chrono::steady_clock::now();
+  const data::Camera& camera = cameras_.front();
+  const size_t count = std::min(settings_.chunk_rays, static_cast<size_t>(camera.width_px) * camera.height_px);
+  std::vector<uint32_t> ids(count);
+  std::iota(ids.begin(), ids.end(), 0u);
+  camera_ids_.fill(*ctx_, 0u);
+  pixel_ids_.upload(*ctx_, ids.data(), count);
+  graph_.render_chunk({packed_cameras_, camera_ids_, pixel_ids_}, {0, count}, {settings_.seed, 0}, 0);
+  std::vector<float> acc(count);
+  graph_.level_outputs(graph_.spec().levels.size() - 1).acc.download(*ctx_, acc.data(), count);  // waits
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace mipnerf::eval

@@ -1,5 +1,6 @@
 // Rendering whole images from trained networks: every pixel of a camera through an inference graph, in
-// chunks whose size bounds device memory, with the colour, expected depth and accumulation of the last level.
+// chunks whose size bounds device memory, with the colour, expected depth and accumulation of the last level;
+// optionally K jittered rays per pixel averaged (supersampling).
 #pragma once
 
 #include <cstdint>
@@ -23,21 +24,40 @@ struct RenderedImage {
   double megapixels() const { return static_cast<double>(width) * height / 1e6; }
 };
 
+struct RenderSettings {
+  size_t chunk_rays = 4096;  // rays per launch sequence: bounds the device memory, whatever the image size
+  // Rays per pixel. 1: one ray through the pixel's centre offset (the model's pixel_center), deterministic.
+  // K > 1: K rays through uniformly random points of the pixel (a new Philox draw per pass, keyed by seed,
+  // camera, pass and pixel, so independent of the chunking), their colour, depth and accumulation averaged: the
+  // jittered supersampling baseline of the paper's supplement. Cone radii stay those of the whole pixel.
+  uint32_t supersample = 1;
+  uint64_t seed = 0;  // of the supersampling jitter
+};
+
 class ImageRenderer {
  public:
   // `cameras` are uploaded once; chunk_rays bounds the rays (and so the memory) of one launch sequence.
   ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
                 const std::vector<data::Camera>& cameras, size_t chunk_rays);
+  ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
+                const std::vector<data::Camera>& cameras, const RenderSettings& settings);
 
-  // Renders camera `index`; `progress(done_rays, total_rays)` is called after every chunk.
+  // Renders camera `index`; `progress(done_rays, total_rays)` is called after every chunk (total_rays counts
+  // every supersampling pass).
   RenderedImage render(size_t index, const std::function<void(size_t, size_t)>& progress = {});
 
-  size_t chunk_rays() const { return chunk_rays_; }
+  // Runs one chunk of camera 0 and waits for it, outside any timing: first-use costs (kernel builds, CLBlast's
+  // program compilation, driver warm-up) then stay out of the render seconds. Returns its wall time.
+  double warm_up();
+
+  size_t chunk_rays() const { return settings_.chunk_rays; }
+  const RenderSettings& settings() const { return settings_; }
+  const std::vector<data::Camera>& cameras() const { return cameras_; }
 
  private:
   ocl::Context* ctx_;
   std::vector<data::Camera> cameras_;
-  size_t chunk_rays_;
+  RenderSettings settings_;
   graph::Graph graph_;
   ocl::DeviceArray<float> packed_cameras_;     // [C][24]
   ocl::DeviceArray<uint32_t> camera_ids_;      // [chunk]

@@ -104,7 +104,8 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> ne
   resample_options_ = spec_.resample;
   resample_options_.randomized = training && spec_.resample.randomized;
   ops::RaysOptions rays_options = spec_.rays;
-  if (!training) rays_options.jitter_subpixel = false;  // supersampling jitter is the renderer's choice
+  // Supersampling jitter while rendering is the renderer's choice (inference_jittered), whatever training did.
+  if (!training) rays_options.jitter_subpixel = mode_ == GraphMode::inference_jittered;
 
   rays_ = std::make_unique<ops::Rays>(ctx, rays_options);
   sample_ = std::make_unique<ops::Sample>(ctx, sample_options);
@@ -160,14 +161,14 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> ne
 
 Graph::~Graph() = default;
 
-void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key) {
+void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray) {
   if (chunk.count == 0 || chunk.count > max_chunk_rays_) {
     throw Error("graph: a chunk of " + std::to_string(chunk.count) + " rays (the graph holds up to " +
                 std::to_string(max_chunk_rays_) + ")");
   }
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
-  const ops::RngKey rng{key.seed, key.step, static_cast<uint32_t>(chunk.first)};
+  const ops::RngKey rng{key.seed, key.step, first_ray};
   rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count},
              {origins_, directions_, viewdirs_, radii_, near_, far_, ray_lossmult_}, rng);
   if (spec_.rays.view_dependence) encode_->pe(spec_.view_encoding, {viewdirs_, chunk.count}, view_features_);
@@ -264,7 +265,7 @@ void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
 void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key) {
   if (mode_ != GraphMode::training) throw Error("graph: train_chunk on a rendering graph");
   if (chunk.first + chunk.count > step_batch_rays_) throw Error("graph: chunk outside the step's batch");
-  generate_rays(source, chunk, key);
+  generate_rays(source, chunk, key, static_cast<uint32_t>(chunk.first));
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, key, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count);
@@ -284,8 +285,8 @@ std::vector<ops::LevelLoss> Graph::end_step() {
   return losses;
 }
 
-void Graph::render_chunk(const RaySource& source, ChunkRange chunk) {
-  generate_rays(source, chunk, StepKey{});
+void Graph::render_chunk(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray_number) {
+  generate_rays(source, chunk, key, first_ray_number + static_cast<uint32_t>(chunk.first));
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count);

@@ -61,6 +61,10 @@ struct LevelOutputs {
 enum class GraphMode {
   training,   // randomized sampling (per the spec), saved activations, loss and backward
   inference,  // deterministic sampling, forward only (rendering, evaluation)
+  // As inference, but each ray passes through a uniformly random point of its pixel (SUBPIXEL_JITTER) keyed by
+  // render_chunk's key and ray numbers: K renders with K different steps, averaged, are K× jittered
+  // supersampling (the NeRF supersampling baseline). Sampling along the rays stays deterministic.
+  inference_jittered,
 };
 
 class Graph {
@@ -87,8 +91,9 @@ class Graph {
 
   // ---- rendering ----
   // Runs every level's forward for the chunk (deterministic sampling); the outputs of each level stay in
-  // level_outputs(l) until the next call.
-  void render_chunk(const RaySource& source, ChunkRange chunk);
+  // level_outputs(l) until the next call. An inference_jittered graph jitters ray i of the chunk by
+  // (key.seed, key.step, ray number first_ray_number + chunk.first + i); other graphs ignore both.
+  void render_chunk(const RaySource& source, ChunkRange chunk, StepKey key = {}, uint32_t first_ray_number = 0);
   const LevelOutputs& level_outputs(size_t level) const { return levels_.at(level).outputs; }
 
  private:
@@ -100,7 +105,8 @@ class Graph {
     LevelOutputs outputs;
   };
 
-  void generate_rays(const RaySource& source, ChunkRange chunk, StepKey key);
+  // Ray i of the chunk draws its sub-pixel jitter (when compiled in) as ray number first_ray + i.
+  void generate_rays(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray);
   void sample_level(size_t level, size_t n_rays, StepKey key, uint32_t first_ray);
   void encode_level(size_t level, size_t n_rays);
   void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws);

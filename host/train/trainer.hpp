@@ -94,6 +94,9 @@ struct TrainedModel {
   graph::GraphSpec spec;
   std::vector<std::unique_ptr<mlp::Mlp>> networks;
   int64_t step = 0;
+  std::string data_path;     // the training data's folder or file (absolute); empty in older checkpoints
+  double train_seconds = 0;  // training time up to this checkpoint
+  std::string trained_on;    // the device that trained it
   std::vector<mlp::Mlp*> network_pointers() const;
 };
 TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path);

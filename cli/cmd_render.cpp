@@ -1,0 +1,343 @@
+// `mipnerf-cl render`: images from a checkpoint — a dataset split's cameras, an orbit, or a camera path file —
+// at any resolution (intrinsics scaled, so cone radii follow the pixel size), as PNG and/or OpenEXR.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "cl/error.hpp"
+#include "common.hpp"
+#include "data/camera_path.hpp"
+#include "eval/evaluate.hpp"
+#include "eval/image_output.hpp"
+#include "eval/render_setup.hpp"
+#include "eval/report.hpp"
+#include "mlp/gemm_tuning.hpp"
+#include "progress.hpp"
+#include "train/trainer.hpp"
+
+namespace mipnerf::cli {
+namespace fs = std::filesystem;
+namespace {
+
+struct RenderArgs {
+  std::string checkpoint;
+  std::string data;
+  std::string split;
+  std::string path;  // "orbit" or a camera path file
+  std::string out;
+  std::string format = "png";
+  size_t views = 0;
+  int scales = 0;
+  // resolution
+  double scale = 0.0;
+  std::string size;
+  uint32_t width = 0, height = 0;
+  // orbit
+  double radius = 0.0;
+  double elevation = 30.0;
+  double azimuth = 0.0;
+  uint32_t frames = 120;
+  double fov = 0.0;
+  double focal = 0.0;
+  // all cameras
+  double near = 0.0, far = 0.0;
+  uint32_t supersample = 1;
+  uint64_t seed = 0;
+  size_t chunk = 0;
+};
+
+bool given(const CLI::App& cmd, const char* flag) { return cmd.count(flag) > 0; }
+
+// What the frames are, with their cameras and output names.
+struct Frames {
+  std::string source;  // for messages and render.json: "the test split of DIR", "an orbit", "path FILE"
+  std::string default_folder;  // under the run folder
+  std::vector<data::Camera> cameras;
+  std::vector<std::string> stems;
+  nlohmann::ordered_json details = nlohmann::ordered_json::object();
+};
+
+data::ResolutionRequest resolution_of(const RenderArgs& args, const CLI::App& cmd) {
+  data::ResolutionRequest request;
+  request.scale = args.scale;
+  if (given(cmd, "--scale") && !(args.scale > 0.0)) {
+    throw Error("--scale " + std::to_string(args.scale) + ": the scale factor must be positive");
+  }
+  if (given(cmd, "--size")) {
+    if (given(cmd, "--width") || given(cmd, "--height")) throw Error("give --size or --width/--height, not both");
+    const auto [w, h] = data::parse_size(args.size, "--size");
+    request.width = w;
+    request.height = h;
+  } else {
+    if (given(cmd, "--width") && args.width == 0) throw Error("--width must be at least 1 pixel");
+    if (given(cmd, "--height") && args.height == 0) throw Error("--height must be at least 1 pixel");
+    request.width = args.width;
+    request.height = args.height;
+  }
+  if (request.scale > 0.0 && (request.width || request.height)) {
+    throw Error("give --scale or a size (--size, --width, --height), not both");
+  }
+  data::validate(request);
+  return request;
+}
+
+// The checks that need no device, so bad input fails before anything is opened.
+void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
+  if (given(cmd, "--path") && given(cmd, "--split")) {
+    throw Error("give --split (a dataset's cameras) or --path (orbit or a camera path file), not both");
+  }
+  const bool orbit = args.path == "orbit";
+  for (const char* flag : {"--radius", "--elevation", "--azimuth", "--frames", "--fov", "--focal"}) {
+    if (given(cmd, flag) && !orbit) throw Error(std::string(flag) + " applies to --path orbit only");
+  }
+  if (given(cmd, "--fov") && given(cmd, "--focal")) throw Error("give --fov or --focal, not both");
+  if (given(cmd, "--fov") && !(args.fov > 0.0 && args.fov < 180.0)) {
+    throw Error("--fov " + std::to_string(args.fov) + ": the horizontal field of view must lie in (0, 180) degrees");
+  }
+  if (given(cmd, "--focal") && !(args.focal > 0.0 && std::isfinite(args.focal))) {
+    throw Error("--focal must be a positive length in pixels");
+  }
+  if (given(cmd, "--radius") && !(args.radius > 0.0 && std::isfinite(args.radius))) {
+    throw Error("--radius must be a positive distance in scene units");
+  }
+  if (given(cmd, "--frames") && args.frames == 0) throw Error("--frames must be at least 1");
+  if (args.supersample == 0) throw Error("--supersample must be at least 1 ray per pixel");
+  if (given(cmd, "--near") && !(args.near >= 0.0)) throw Error("--near must be >= 0");
+  if (given(cmd, "--far") && !(args.far > 0.0)) throw Error("--far must be positive");
+  if (given(cmd, "--near") && given(cmd, "--far") && !(args.far > args.near)) throw Error("--far must exceed --near");
+  for (const char* flag : {"--views", "--scales"}) {
+    if (given(cmd, flag) && given(cmd, "--path")) throw Error(std::string(flag) + " applies to --split only");
+  }
+  if (given(cmd, "--views") && args.views == 0) throw Error("--views must be at least 1 (leave it out for all views)");
+  if (given(cmd, "--scales") && args.scales < 1) throw Error("--scales must be at least 1");
+  if (!args.path.empty() && !orbit) {
+    std::error_code ec;
+    if (!fs::is_regular_file(args.path, ec)) {
+      throw Error(args.path + ": no such camera path file (give --path orbit, or a transforms-style JSON file)");
+    }
+  }
+  eval::parse_output_formats(args.format);
+  resolution_of(args, cmd);
+}
+
+std::string frame_stem(size_t index) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "frame_%04zu", index);
+  return text;
+}
+
+Frames split_frames(const RenderArgs& args, const train::TrainedModel& model, const std::string& checkpoint,
+                    const data::ResolutionRequest& resolution) {
+  const std::string name = args.split.empty() ? "test" : args.split;
+  const std::string data_path = eval::resolve_data_path(args.data, model, checkpoint);
+  const data::Dataset dataset = data::load_dataset(data_path, eval::load_options_for(model.config, data_path, {name}, args.scales));
+  const data::Split& split = dataset.split(name);
+  Frames frames;
+  frames.source = "the " + name + " split of " + data_path;
+  frames.default_folder = "render_" + name;
+  const std::vector<std::string> stems = eval::split_image_stems(split);
+  for (size_t i : eval::select_views(split, args.views)) {
+    frames.cameras.push_back(data::resize_camera(split.cameras[i], resolution));
+    frames.stems.push_back(stems[i]);
+  }
+  frames.details = {{"kind", "split"}, {"data", data_path}, {"split", name}};
+  return frames;
+}
+
+// The training cameras (full resolution) when the data can be found; empty otherwise.
+std::vector<data::Camera> training_cameras(const RenderArgs& args, const train::TrainedModel& model) {
+  std::string path = args.data;
+  std::error_code ec;
+  if (path.empty() && !model.data_path.empty() && fs::exists(model.data_path, ec)) path = model.data_path;
+  if (path.empty()) return {};
+  const data::Dataset dataset = data::load_dataset(path, eval::load_options_for(model.config, path, {"train"}, 1));
+  const data::Split& train = dataset.split("train");
+  std::vector<data::Camera> cameras;
+  for (size_t i = 0; i < train.num_images(); ++i) {
+    if (train.scale_levels[i] == 0) cameras.push_back(train.cameras[i]);
+  }
+  return cameras;
+}
+
+Frames orbit_frames(const RenderArgs& args, const CLI::App& cmd, const train::TrainedModel& model,
+                    const data::ResolutionRequest& resolution) {
+  const auto cameras = training_cameras(args, model);
+  data::OrbitOptions orbit;
+  if (!cameras.empty()) {
+    orbit = data::orbit_around(cameras);
+  } else {
+    // Nothing to fit to: Blender's camera, 400x400, at the Blender scenes' distance around the origin.
+    data::Camera& c = orbit.intrinsics;
+    c.width_px = c.height_px = 400;
+    c.focal_x_px = c.focal_y_px = 0.5 * c.width_px / std::tan(0.5 * data::kDefaultCameraAngleX);
+    c.center_x_px = c.center_y_px = 200.0;
+    c.near = model.config.near > 0 ? model.config.near : 2.0;
+    c.far = model.config.far > 0 ? model.config.far : 6.0;
+  }
+  if (given(cmd, "--radius")) orbit.radius = args.radius;
+  orbit.elevation_deg = args.elevation;
+  orbit.start_azimuth_deg = args.azimuth;
+  orbit.frames = args.frames;
+  orbit.intrinsics = data::resize_camera(orbit.intrinsics, resolution);
+  data::Camera& c = orbit.intrinsics;
+  if (given(cmd, "--fov")) c.focal_x_px = c.focal_y_px = 0.5 * c.width_px / std::tan(0.5 * args.fov * M_PI / 180.0);
+  if (given(cmd, "--focal")) c.focal_x_px = c.focal_y_px = args.focal;
+  Frames frames;
+  frames.source = "an orbit";
+  frames.default_folder = "render_orbit";
+  frames.cameras = data::orbit_cameras(orbit);
+  for (size_t i = 0; i < frames.cameras.size(); ++i) frames.stems.push_back(frame_stem(i));
+  frames.details = {{"kind", "orbit"},
+                    {"fitted_to_training_cameras", !cameras.empty()},
+                    {"target", orbit.target},
+                    {"up", orbit.up},
+                    {"radius", orbit.radius},
+                    {"elevation_deg", orbit.elevation_deg},
+                    {"start_azimuth_deg", orbit.start_azimuth_deg},
+                    {"frames", orbit.frames}};
+  return frames;
+}
+
+Frames path_frames(const RenderArgs& args, const train::TrainedModel& model,
+                   const data::ResolutionRequest& resolution) {
+  data::CameraPathDefaults defaults;
+  // Without w/h in the file, an explicit size is the frames' size.
+  if (resolution.scale <= 0.0 && resolution.width && resolution.height) {
+    defaults.width = resolution.width;
+    defaults.height = resolution.height;
+  }
+  if (model.config.near > 0) defaults.near = model.config.near;
+  if (model.config.far > 0) defaults.far = model.config.far;
+  Frames frames;
+  frames.source = "the camera path " + args.path;
+  frames.default_folder = "render_" + fs::path(args.path).stem().string();
+  for (const auto& camera : data::read_camera_path(args.path, defaults)) {
+    frames.cameras.push_back(data::resize_camera(camera, resolution));
+    frames.stems.push_back(frame_stem(frames.stems.size()));
+  }
+  frames.details = {{"kind", "path"}, {"file", fs::absolute(args.path).lexically_normal().string()}};
+  return frames;
+}
+
+void apply_range(const RenderArgs& args, const CLI::App& cmd, std::vector<data::Camera>& cameras) {
+  for (auto& camera : cameras) {
+    if (given(cmd, "--near")) camera.near = args.near;
+    if (given(cmd, "--far")) camera.far = args.far;
+    if (!(camera.far > camera.near)) {
+      throw Error("near " + std::to_string(camera.near) + " is not below far " + std::to_string(camera.far) +
+                  ": fix --near/--far");
+    }
+  }
+}
+
+void run_render(const RenderArgs& args, const CLI::App& cmd) {
+  check_arguments(args, cmd);
+  const data::ResolutionRequest resolution = resolution_of(args, cmd);
+  const eval::OutputFormats formats = eval::parse_output_formats(args.format);
+  const std::string checkpoint = train::find_checkpoint(args.checkpoint);
+
+  auto ctx = open_context();
+  const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
+  Frames frames = args.path == "orbit" ? orbit_frames(args, cmd, model, resolution)
+                  : !args.path.empty() ? path_frames(args, model, resolution)
+                                       : split_frames(args, model, checkpoint, resolution);
+  apply_range(args, cmd, frames.cameras);
+  const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
+  const std::string out =
+      args.out.empty() ? (fs::path(eval::run_folder_of(checkpoint)) / frames.default_folder).string() : args.out;
+  const std::string device = ctx->device_info().name;
+
+  mlp::load_gemm_tuning(*ctx);
+  eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), frames.cameras,
+                               eval::RenderSettings{chunk, args.supersample, args.seed});
+  const double warm_up = renderer.warm_up();
+
+  size_t total_rays = 0;
+  for (const auto& c : frames.cameras) total_rays += static_cast<size_t>(c.width_px) * c.height_px * args.supersample;
+  Progress progress("render", static_cast<int64_t>(total_rays));
+  size_t rays_before = 0;
+  double seconds = 0.0, megapixels = 0.0;
+  std::vector<std::string> file_paths;
+  const std::map<std::string, std::string> attributes = {{"mipnerf:checkpoint", checkpoint},
+                                                         {"mipnerf:step", std::to_string(model.step)}};
+  for (size_t i = 0; i < frames.cameras.size(); ++i) {
+    const std::string detail = "frame " + std::to_string(i + 1) + "/" + std::to_string(frames.cameras.size());
+    const eval::RenderedImage image = renderer.render(i, [&](size_t done, size_t) {
+      progress.update(static_cast<int64_t>(rays_before + done), detail);
+    });
+    rays_before += static_cast<size_t>(image.width) * image.height * args.supersample;
+    seconds += image.seconds;
+    megapixels += image.megapixels();
+    const auto written = eval::write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
+    file_paths.push_back(fs::path(written.front()).filename().string());
+  }
+  progress.finish();
+
+  data::write_camera_path((fs::path(out) / "transforms.json").string(), frames.cameras, file_paths);
+  nlohmann::ordered_json record;
+  record["checkpoint"] = checkpoint;
+  record["step"] = model.step;
+  record["source"] = frames.details;
+  record["date"] = eval::utc_timestamp();
+  record["device"] = eval::device_record(ctx->device_info());
+  record["frames"] = frames.cameras.size();
+  record["formats"] = formats.png && formats.exr ? "png, exr" : formats.png ? "png" : "exr";
+  record["rays_per_pixel"] = args.supersample;
+  record["chunk_rays"] = chunk;
+  record["warm_up_seconds"] = warm_up;
+  record["render_seconds"] = seconds;
+  record["megapixels"] = megapixels;
+  record["seconds_per_megapixel"] = megapixels > 0 ? seconds / megapixels : 0.0;
+  io::write_json((fs::path(out) / "render.json").string(), record);
+
+  const auto& first = frames.cameras.front();
+  std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s; images in %s\n",
+              frames.cameras.size(), frames.source.c_str(), first.width_px, first.height_px,
+              args.supersample > 1 ? (", " + std::to_string(args.supersample) + " rays per pixel").c_str() : "",
+              static_cast<long long>(model.step), seconds, megapixels > 0 ? seconds / megapixels : 0.0,
+              device.c_str(), out.c_str());
+}
+
+}  // namespace
+
+void register_render(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  auto* cmd = app.add_subcommand(
+      "render", "Render images from a checkpoint: a dataset split, an orbit, or a camera path, at any resolution");
+  cmd->add_option("--checkpoint", args->checkpoint, "A .mnck checkpoint, or a training --out folder (its newest)")
+      ->required();
+  cmd->add_option("--out", args->out, "Output folder (default: RUN/render_<split|orbit|path name>)");
+  cmd->add_option("--format", args->format, "png (8-bit sRGB), exr (linear RGB, depth Z, accumulation acc) or both")
+      ->capture_default_str();
+  // What to render.
+  cmd->add_option("--split", args->split, "Render this split's cameras (train, val, test; default test)");
+  cmd->add_option("--data", args->data, "Dataset of --split (default: the one the checkpoint was trained on)");
+  cmd->add_option("--views", args->views, "Only the first N views of the split (all their scales)");
+  cmd->add_option("--scales", args->scales, "Build the multiscale pyramid with N scales (default: as trained)");
+  cmd->add_option("--path", args->path,
+                  "'orbit', or a transforms-style JSON of frames (transform_matrix; fl_x/fl_y/cx/cy/w/h or "
+                  "camera_angle_x)");
+  cmd->add_option("--radius", args->radius, "Orbit: distance from the target (default: the training cameras' mean)");
+  cmd->add_option("--elevation", args->elevation, "Orbit: degrees above the horizontal plane")->capture_default_str();
+  cmd->add_option("--azimuth", args->azimuth, "Orbit: azimuth of the first frame, degrees")->capture_default_str();
+  cmd->add_option("--frames", args->frames, "Orbit: number of frames")->capture_default_str();
+  cmd->add_option("--fov", args->fov, "Orbit: horizontal field of view, degrees (default: the training camera's)");
+  cmd->add_option("--focal", args->focal, "Orbit: focal length in pixels of the output size");
+  // Resolution.
+  cmd->add_option("--scale", args->scale, "Scale factor of the cameras' resolution (0.5: half the width and height)");
+  cmd->add_option("--size", args->size, "Output size WIDTHxHEIGHT (intrinsics scaled to it)");
+  cmd->add_option("--width", args->width, "Output width (height follows the aspect ratio unless given)");
+  cmd->add_option("--height", args->height, "Output height (width follows the aspect ratio unless given)");
+  // Rays.
+  cmd->add_option("--supersample", args->supersample, "Jittered rays per pixel, averaged (1: one ray at the centre)")
+      ->capture_default_str();
+  cmd->add_option("--seed", args->seed, "Seed of the supersampling jitter")->capture_default_str();
+  cmd->add_option("--near", args->near, "Near bound of every ray (default: the data's or the path's)");
+  cmd->add_option("--far", args->far, "Far bound of every ray");
+  cmd->add_option("--chunk", args->chunk, "Rays per chunk (default: render_chunk_rays, lowered to fit the device)");
+  cmd->callback([args, cmd] { run_render(*args, *cmd); });
+}
+
+}  // namespace mipnerf::cli

@@ -1,0 +1,66 @@
+// Data, chunk size, output folder and device record for render and eval.
+#include "eval/render_setup.hpp"
+
+#include <filesystem>
+
+#include "cl/error.hpp"
+#include "train/memory_plan.hpp"
+
+namespace mipnerf::eval {
+namespace fs = std::filesystem;
+
+std::string resolve_data_path(const std::string& requested, const train::TrainedModel& model,
+                              const std::string& checkpoint) {
+  if (!requested.empty()) return requested;
+  if (model.data_path.empty()) {
+    throw Error(checkpoint + " does not record the data it was trained on: pass --data DIR");
+  }
+  std::error_code ec;
+  if (!fs::exists(model.data_path, ec)) {
+    throw Error(checkpoint + " was trained on " + model.data_path + ", which no longer exists: pass --data DIR");
+  }
+  return model.data_path;
+}
+
+data::LoadOptions load_options_for(const train::TrainConfig& config, const std::string& data_path,
+                                   std::vector<std::string> splits, int scales) {
+  data::LoadOptions options;
+  options.background = data::parse_background(config.background);
+  const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
+  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? 4 : 1;
+  if (config.near > 0) options.near = config.near;
+  if (config.far > 0) options.far = config.far;
+  options.splits = std::move(splits);
+  return options;
+}
+
+size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested) {
+  const size_t networks = parameter_count(model) * sizeof(float);
+  const size_t upper = requested > 0 ? requested : static_cast<size_t>(model.config.render_chunk_rays);
+  const train::MemoryPlan plan = train::plan_memory(model.spec, device, upper, networks, requested, false);
+  return plan.chunk_rays;
+}
+
+std::string run_folder_of(const std::string& checkpoint) {
+  const fs::path folder = fs::absolute(checkpoint).lexically_normal().parent_path();
+  return (folder.filename() == "checkpoints" ? folder.parent_path() : folder).string();
+}
+
+io::Json device_record(const ocl::DeviceInfo& device) {
+  return {{"name", device.name},
+          {"platform", device.platform_name},
+          {"vendor", device.vendor},
+          {"type", device.type_name()},
+          {"driver_version", device.driver_version},
+          {"opencl_c_version", device.opencl_c_version},
+          {"compute_units", device.compute_units},
+          {"global_memory_bytes", device.global_mem_bytes}};
+}
+
+size_t parameter_count(const train::TrainedModel& model) {
+  size_t n = 0;
+  for (const auto& network : model.networks) n += network->parameter_count();
+  return n;
+}
+
+}  // namespace mipnerf::eval

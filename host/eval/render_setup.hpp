@@ -1,0 +1,40 @@
+// What rendering and evaluating a checkpoint share: the data it was trained on (and how to load it the same
+// way), a chunk size that fits the device, where outputs go by default, and a record of the device.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "cl/device.hpp"
+#include "data/dataset.hpp"
+#include "io/json.hpp"
+#include "train/trainer.hpp"
+
+namespace mipnerf::eval {
+
+// `requested` when given, else the data path the checkpoint records. Throws mipnerf::Error saying to pass
+// --data when there is none, or when the recorded one no longer exists.
+std::string resolve_data_path(const std::string& requested, const train::TrainedModel& model,
+                              const std::string& checkpoint);
+
+// Load options for `data_path` as training used them (background, near/far overrides, the multiscale pyramid
+// when it trained on one built on the fly, except for data already multiscale on disk); `scales` > 0 overrides the
+// pyramid depth (1: the images as stored).
+data::LoadOptions load_options_for(const train::TrainConfig& config, const std::string& data_path,
+                                   std::vector<std::string> splits, int scales = 0);
+
+// Rays per render chunk: `requested` when > 0 (checked against the device's memory), else the largest power of
+// two up to the model's render_chunk_rays that fits. Throws naming what to lower when nothing fits.
+size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested);
+
+// The run folder a checkpoint belongs to: RUN for RUN/checkpoints/ckpt_N.mnck, else the file's folder.
+std::string run_folder_of(const std::string& checkpoint);
+
+// name, platform, vendor, type, driver version, OpenCL C version, compute units, global memory.
+io::Json device_record(const ocl::DeviceInfo& device);
+
+// Parameters of all networks of the model.
+size_t parameter_count(const train::TrainedModel& model);
+
+}  // namespace mipnerf::eval
