@@ -45,7 +45,8 @@ void check_arguments(const EvalArgs& args, const CLI::App& cmd) {
 
 void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   check_arguments(args, cmd);
-  const std::string checkpoint = train::find_checkpoint(args.checkpoint);
+  const std::string found = train::find_checkpoint(args.checkpoint);
+  const std::string checkpoint = fs::absolute(found).lexically_normal().string();  // for the records
   auto ctx = open_context();
   const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
   const std::string data_path = eval::resolve_data_path(args.data, model, checkpoint);
@@ -54,7 +55,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   const data::Split& split = dataset.split(args.split);
   const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
   const std::string out = args.out.empty()
-                              ? (fs::path(eval::run_folder_of(checkpoint)) / ("eval_" + args.split)).string()
+                              ? (fs::path(eval::run_folder_of(found)) / ("eval_" + args.split)).string()
                               : args.out;
   const fs::path images = fs::path(out) / "images";
   const std::vector<std::string> stems = eval::split_image_stems(split);
@@ -71,6 +72,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
     total_rays += static_cast<size_t>(split.cameras[i].width_px) * split.cameras[i].height_px * args.supersample;
   }
   Progress progress("eval " + args.split, static_cast<int64_t>(total_rays));
+  progress.update(0);  // the rate (and ETA) counts from here, not from the first chunk
   size_t images_done = 0, images_total = eval::select_views(split, args.views).size();
   options.ray_progress = [&](size_t done, size_t) {
     progress.update(static_cast<int64_t>(done),
@@ -107,9 +109,13 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   record.warm_up_seconds = warm_up;
   record.image_folder = args.no_images ? "" : "images";
   record.image_stems = stems;
-  io::Json metrics = eval::metrics_json(scores, record);
-  if (!args.no_images) metrics["error_images"] = "mean |render - ground truth| over RGB, x" + std::to_string(args.error_gain);
-  io::write_json((fs::path(out) / "metrics.json").string(), metrics);
+  auto metrics = eval::metrics_json(scores, record);
+  if (!args.no_images) {
+    char gain[32];
+    std::snprintf(gain, sizeof(gain), "%g", args.error_gain);
+    metrics["error_images"] = std::string("mean |render - ground truth| over RGB, times ") + gain + ", clamped to 1";
+  }
+  io::write_bytes_atomically((fs::path(out) / "metrics.json").string(), metrics.dump(2) + "\n");
   io::write_bytes_atomically((fs::path(out) / "metrics.md").string(), eval::metrics_markdown(scores, record));
 
   std::printf("%s split of %s, step %lld, on %s:\n%s", args.split.c_str(), data_path.c_str(),

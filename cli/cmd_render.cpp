@@ -13,6 +13,7 @@
 #include "eval/image_output.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
+#include "io/atomic_file.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "progress.hpp"
 #include "train/trainer.hpp"
@@ -236,7 +237,8 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   check_arguments(args, cmd);
   const data::ResolutionRequest resolution = resolution_of(args, cmd);
   const eval::OutputFormats formats = eval::parse_output_formats(args.format);
-  const std::string checkpoint = train::find_checkpoint(args.checkpoint);
+  const std::string found = train::find_checkpoint(args.checkpoint);
+  const std::string checkpoint = fs::absolute(found).lexically_normal().string();  // for the records
 
   auto ctx = open_context();
   const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
@@ -246,7 +248,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   apply_range(args, cmd, frames.cameras);
   const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
   const std::string out =
-      args.out.empty() ? (fs::path(eval::run_folder_of(checkpoint)) / frames.default_folder).string() : args.out;
+      args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
   const std::string device = ctx->device_info().name;
 
   mlp::load_gemm_tuning(*ctx);
@@ -257,6 +259,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   size_t total_rays = 0;
   for (const auto& c : frames.cameras) total_rays += static_cast<size_t>(c.width_px) * c.height_px * args.supersample;
   Progress progress("render", static_cast<int64_t>(total_rays));
+  progress.update(0);  // the rate (and ETA) counts from here, not from the first chunk
   size_t rays_before = 0;
   double seconds = 0.0, megapixels = 0.0;
   std::vector<std::string> file_paths;
@@ -290,7 +293,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   record["render_seconds"] = seconds;
   record["megapixels"] = megapixels;
   record["seconds_per_megapixel"] = megapixels > 0 ? seconds / megapixels : 0.0;
-  io::write_json((fs::path(out) / "render.json").string(), record);
+  io::write_bytes_atomically((fs::path(out) / "render.json").string(), record.dump(2) + "\n");
 
   const auto& first = frames.cameras.front();
   std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s; images in %s\n",

@@ -42,8 +42,9 @@ size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo
 }
 
 std::string run_folder_of(const std::string& checkpoint) {
-  const fs::path folder = fs::absolute(checkpoint).lexically_normal().parent_path();
-  return (folder.filename() == "checkpoints" ? folder.parent_path() : folder).string();
+  const fs::path folder = fs::path(checkpoint).lexically_normal().parent_path();
+  const fs::path run = folder.filename() == "checkpoints" ? folder.parent_path() : folder;
+  return run.empty() ? std::string(".") : run.string();
 }
 
 io::Json device_record(const ocl::DeviceInfo& device) {

@@ -28,7 +28,8 @@ data::LoadOptions load_options_for(const train::TrainConfig& config, const std::
 // two up to the model's render_chunk_rays that fits. Throws naming what to lower when nothing fits.
 size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested);
 
-// The run folder a checkpoint belongs to: RUN for RUN/checkpoints/ckpt_N.mnck, else the file's folder.
+// The run folder a checkpoint belongs to: RUN for RUN/checkpoints/ckpt_N.mnck, else the file's folder (relative
+// paths stay relative; "." for a file in the working folder).
 std::string run_folder_of(const std::string& checkpoint);
 
 // name, platform, vendor, type, driver version, OpenCL C version, compute units, global memory.

@@ -21,7 +21,9 @@ const char* const kSsimDefinition =
 
 namespace {
 
-io::Json number_or_null(double v) { return std::isfinite(v) ? io::Json(v) : io::Json(nullptr); }
+using Ordered = nlohmann::ordered_json;
+
+Ordered number_or_null(double v) { return std::isfinite(v) ? Ordered(v) : Ordered(nullptr); }
 
 std::string fixed(double v, int decimals) {
   if (!std::isfinite(v)) return "–";
@@ -36,8 +38,8 @@ std::string scale_name(uint32_t level) {
 
 }  // namespace
 
-io::Json metrics_json(const SplitScores& scores, const EvalRecord& r) {
-  io::Json j = io::Json::object();
+Ordered metrics_json(const SplitScores& scores, const EvalRecord& r) {
+  Ordered j = Ordered::object();
   j["checkpoint"] = r.checkpoint;
   j["step"] = r.step;
   j["train_seconds"] = r.train_seconds;
@@ -60,7 +62,7 @@ io::Json metrics_json(const SplitScores& scores, const EvalRecord& r) {
                {"psnr", number_or_null(scores.mean_psnr)},
                {"ssim", number_or_null(scores.mean_ssim)},
                {"ssim_images", scores.ssim_images}};
-  io::Json scales = io::Json::array();
+  Ordered scales = Ordered::array();
   for (const auto& s : scores.scales) {
     scales.push_back({{"scale_level", s.scale_level},
                       {"downsampling", 1u << s.scale_level},
@@ -75,15 +77,15 @@ io::Json metrics_json(const SplitScores& scores, const EvalRecord& r) {
                       {"seconds_per_megapixel", s.seconds_per_megapixel()}});
   }
   j["scales"] = std::move(scales);
-  io::Json images = io::Json::array();
+  Ordered images = Ordered::array();
   for (const auto& image : scores.images) {
-    io::Json e = {{"index", image.index},
+    Ordered e = {{"index", image.index},
                   {"file", image.file},
                   {"scale_level", image.scale_level},
                   {"width", image.width},
                   {"height", image.height},
                   {"psnr", number_or_null(image.psnr)},
-                  {"ssim", image.has_ssim ? number_or_null(image.ssim) : io::Json(nullptr)},
+                  {"ssim", image.has_ssim ? number_or_null(image.ssim) : Ordered(nullptr)},
                   {"render_seconds", image.seconds}};
     if (!r.image_folder.empty() && image.index < r.image_stems.size()) {
       const std::string stem = r.image_folder + "/" + r.image_stems[image.index];

@@ -33,8 +33,9 @@ struct EvalRecord {
   std::vector<std::string> image_stems;  // by split index (split_image_stems), when images were written
 };
 
-// metrics.json's content. SSIMs that were not computed (images smaller than the window) are null.
-io::Json metrics_json(const SplitScores& scores, const EvalRecord& record);
+// metrics.json's content, keys in a reading order. SSIMs that were not computed (images smaller than the window)
+// are null.
+nlohmann::ordered_json metrics_json(const SplitScores& scores, const EvalRecord& record);
 
 // The per-scale table alone: scale, resolution, images, PSNR, SSIM, render s/MP, then the overall means.
 std::string scale_table_markdown(const SplitScores& scores);

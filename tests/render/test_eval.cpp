@@ -165,6 +165,8 @@ TEST_CASE("render: eval and render find the data a checkpoint records, or say to
   CHECK(eval::load_options_for(config, test::render_scene(), {"test"}, 2).scales == 2);
   CHECK(eval::run_folder_of("/runs/a/checkpoints/ckpt_000000010.mnck") == "/runs/a");
   CHECK(eval::run_folder_of("/somewhere/model.mnck") == "/somewhere");
+  CHECK(eval::run_folder_of("runs/b/checkpoints/ckpt_000000010.mnck") == "runs/b");
+  CHECK(eval::run_folder_of("model.mnck") == ".");
 }
 
 TEST_CASE("render: mipnerf-cl eval writes metrics that agree with the images it wrote") {
