@@ -54,9 +54,8 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
       data::load_dataset(data_path, eval::load_options_for(model.config, data_path, {args.split}, args.scales));
   const data::Split& split = dataset.split(args.split);
   const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
-  const std::string out = args.out.empty()
-                              ? (fs::path(eval::run_folder_of(found)) / ("eval_" + args.split)).string()
-                              : args.out;
+  const std::string out =
+      args.out.empty() ? (fs::path(eval::run_folder_of(found)) / ("eval_" + args.split)).string() : args.out;
   const fs::path images = fs::path(out) / "images";
   const std::vector<std::string> stems = eval::split_image_stems(split);
 
@@ -75,8 +74,8 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   progress.update(0);  // the rate (and ETA) counts from here, not from the first chunk
   size_t images_done = 0, images_total = eval::select_views(split, args.views).size();
   options.ray_progress = [&](size_t done, size_t) {
-    progress.update(static_cast<int64_t>(done),
-                    "image " + std::to_string(std::min(images_done + 1, images_total)) + "/" + std::to_string(images_total));
+    progress.update(static_cast<int64_t>(done), "image " + std::to_string(std::min(images_done + 1, images_total)) +
+                                                    "/" + std::to_string(images_total));
   };
   options.progress = [&](size_t done, size_t) { images_done = done; };
   if (!args.no_images) {
@@ -84,8 +83,8 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
       const std::string stem = (images / stems[score.index]).string();
       eval::write_rendered_image(stem, image, {true, args.exr});
       io::write_png(stem + "_gt.png", image.width, image.height, 3, truth);
-      const auto error = eval::error_image(image.rgb.data(), truth, static_cast<size_t>(image.width) * image.height,
-                                           args.error_gain);
+      const auto error =
+          eval::error_image(image.rgb.data(), truth, static_cast<size_t>(image.width) * image.height, args.error_gain);
       io::write_png(stem + "_error.png", image.width, image.height, 3, error.data());
     };
   }

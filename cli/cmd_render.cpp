@@ -53,7 +53,7 @@ bool given(const CLI::App& cmd, const char* flag) { return cmd.count(flag) > 0; 
 
 // What the frames are, with their cameras and output names.
 struct Frames {
-  std::string source;  // for messages and render.json: "the test split of DIR", "an orbit", "path FILE"
+  std::string source;          // for messages and render.json: "the test split of DIR", "an orbit", "path FILE"
   std::string default_folder;  // under the run folder
   std::vector<data::Camera> cameras;
   std::vector<std::string> stems;
@@ -133,7 +133,8 @@ Frames split_frames(const RenderArgs& args, const train::TrainedModel& model, co
                     const data::ResolutionRequest& resolution) {
   const std::string name = args.split.empty() ? "test" : args.split;
   const std::string data_path = eval::resolve_data_path(args.data, model, checkpoint);
-  const data::Dataset dataset = data::load_dataset(data_path, eval::load_options_for(model.config, data_path, {name}, args.scales));
+  const data::Dataset dataset =
+      data::load_dataset(data_path, eval::load_options_for(model.config, data_path, {name}, args.scales));
   const data::Split& split = dataset.split(name);
   Frames frames;
   frames.source = "the " + name + " split of " + data_path;
@@ -267,13 +268,13 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
                                                          {"mipnerf:step", std::to_string(model.step)}};
   for (size_t i = 0; i < frames.cameras.size(); ++i) {
     const std::string detail = "frame " + std::to_string(i + 1) + "/" + std::to_string(frames.cameras.size());
-    const eval::RenderedImage image = renderer.render(i, [&](size_t done, size_t) {
-      progress.update(static_cast<int64_t>(rays_before + done), detail);
-    });
+    const eval::RenderedImage image = renderer.render(
+        i, [&](size_t done, size_t) { progress.update(static_cast<int64_t>(rays_before + done), detail); });
     rays_before += static_cast<size_t>(image.width) * image.height * args.supersample;
     seconds += image.seconds;
     megapixels += image.megapixels();
-    const auto written = eval::write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
+    const auto written =
+        eval::write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
     file_paths.push_back(fs::path(written.front()).filename().string());
   }
   progress.finish();
@@ -299,8 +300,8 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s; images in %s\n",
               frames.cameras.size(), frames.source.c_str(), first.width_px, first.height_px,
               args.supersample > 1 ? (", " + std::to_string(args.supersample) + " rays per pixel").c_str() : "",
-              static_cast<long long>(model.step), seconds, megapixels > 0 ? seconds / megapixels : 0.0,
-              device.c_str(), out.c_str());
+              static_cast<long long>(model.step), seconds, megapixels > 0 ? seconds / megapixels : 0.0, device.c_str(),
+              out.c_str());
 }
 
 }  // namespace

@@ -49,7 +49,8 @@ double range_value(const io::Json& frame, const io::Json& root, const char* key,
   return fallback;
 }
 
-uint32_t size_value(const std::optional<double>& declared, uint32_t fallback, const char* key, const std::string& where) {
+uint32_t size_value(const std::optional<double>& declared, uint32_t fallback, const char* key,
+                    const std::string& where) {
   if (declared) {
     if (*declared > static_cast<double>(std::numeric_limits<uint32_t>::max())) {
       throw Error(where + ": '" + key + "' = " + number_text(*declared) + " is too large");
@@ -57,8 +58,9 @@ uint32_t size_value(const std::optional<double>& declared, uint32_t fallback, co
     return static_cast<uint32_t>(std::lround(*declared));
   }
   if (fallback == 0) {
-    throw Error(where + ": no image size: give 'w' and 'h' (for the file or per frame), or the size to render "
-                        "(mipnerf-cl render --size WxH)");
+    throw Error(where +
+                ": no image size: give 'w' and 'h' (for the file or per frame), or the size to render "
+                "(mipnerf-cl render --size WxH)");
   }
   return fallback;
 }

@@ -24,7 +24,7 @@ struct OrbitOptions {
   double elevation_deg = 30.0;     // angle above the plane through the target perpendicular to `up`
   double start_azimuth_deg = 0.0;  // azimuth of the first frame (see orbit_cameras)
   uint32_t frames = 120;
-  Camera intrinsics;               // size, focal lengths, principal point, near and far of every frame (pose ignored)
+  Camera intrinsics;  // size, focal lengths, principal point, near and far of every frame (pose ignored)
 };
 
 // Throws mipnerf::Error saying which value is wrong: radius > 0, |elevation| < 90°, frames ≥ 1, a non-zero up,

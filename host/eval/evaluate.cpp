@@ -25,7 +25,8 @@ SplitScores evaluate_split(ImageRenderer& renderer, const data::Split& split, co
   const auto views = select_views(split, options.max_views);
   const size_t passes = renderer.settings().supersample;
   size_t total_rays = 0, rays_before = 0;
-  for (size_t i : views) total_rays += static_cast<size_t>(split.cameras[i].width_px) * split.cameras[i].height_px * passes;
+  for (size_t i : views)
+    total_rays += static_cast<size_t>(split.cameras[i].width_px) * split.cameras[i].height_px * passes;
   std::map<uint32_t, ScaleSummary> by_scale;
   for (size_t k = 0; k < views.size(); ++k) {
     const size_t i = views[k];

@@ -17,9 +17,9 @@ struct ImageScore {
   uint32_t scale_level = 0;  // 0 = full resolution, j = downsampled by 2^j
   uint32_t width = 0, height = 0;
   double psnr = 0.0;
-  double ssim = 0.0;         // 0 when has_ssim is false
-  bool has_ssim = false;     // SSIM computed: asked for, and the image at least as large as the 11×11 window
-  double seconds = 0.0;      // render wall time
+  double ssim = 0.0;      // 0 when has_ssim is false
+  bool has_ssim = false;  // SSIM computed: asked for, and the image at least as large as the 11×11 window
+  double seconds = 0.0;   // render wall time
 };
 
 struct ScaleSummary {

@@ -62,8 +62,10 @@ std::vector<std::string> split_image_stems(const data::Split& split) {
   for (size_t i = 0; i < split.num_images(); ++i) {
     if (split.scale_levels[i] == 0 && i > 0) ++view;
     char text[48];
-    if (multiscale) std::snprintf(text, sizeof(text), "%03zu_scale%u", view, split.scale_levels[i]);
-    else std::snprintf(text, sizeof(text), "%03zu", view);
+    if (multiscale)
+      std::snprintf(text, sizeof(text), "%03zu_scale%u", view, split.scale_levels[i]);
+    else
+      std::snprintf(text, sizeof(text), "%03zu", view);
     stems.push_back(text);
   }
   return stems;

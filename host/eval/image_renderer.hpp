@@ -59,9 +59,9 @@ class ImageRenderer {
   std::vector<data::Camera> cameras_;
   RenderSettings settings_;
   graph::Graph graph_;
-  ocl::DeviceArray<float> packed_cameras_;     // [C][24]
-  ocl::DeviceArray<uint32_t> camera_ids_;      // [chunk]
-  ocl::DeviceArray<uint32_t> pixel_ids_;       // [chunk]
+  ocl::DeviceArray<float> packed_cameras_;  // [C][24]
+  ocl::DeviceArray<uint32_t> camera_ids_;   // [chunk]
+  ocl::DeviceArray<uint32_t> pixel_ids_;    // [chunk]
 };
 
 }  // namespace mipnerf::eval

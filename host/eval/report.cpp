@@ -50,14 +50,15 @@ Ordered metrics_json(const SplitScores& scores, const EvalRecord& r) {
   j["device"] = r.device;
   j["model"] = r.model;
   j["metrics"] = {{"psnr", kPsnrDefinition}, {"ssim", kSsimDefinition}};
-  j["render"] = {{"rays_per_pixel", r.supersample},
-                 {"supersampling", r.supersample > 1 ? "jittered: rays through uniformly random points of the pixel, averaged"
-                                                     : "none: one ray through the pixel's centre offset"},
-                 {"chunk_rays", r.chunk_rays},
-                 {"warm_up_seconds", r.warm_up_seconds},
-                 {"render_seconds", scores.render_seconds},
-                 {"megapixels", scores.megapixels},
-                 {"seconds_per_megapixel", scores.seconds_per_megapixel()}};
+  j["render"] = {
+      {"rays_per_pixel", r.supersample},
+      {"supersampling", r.supersample > 1 ? "jittered: rays through uniformly random points of the pixel, averaged"
+                                          : "none: one ray through the pixel's centre offset"},
+      {"chunk_rays", r.chunk_rays},
+      {"warm_up_seconds", r.warm_up_seconds},
+      {"render_seconds", scores.render_seconds},
+      {"megapixels", scores.megapixels},
+      {"seconds_per_megapixel", scores.seconds_per_megapixel()}};
   j["mean"] = {{"images", scores.images.size()},
                {"psnr", number_or_null(scores.mean_psnr)},
                {"ssim", number_or_null(scores.mean_ssim)},
@@ -80,13 +81,13 @@ Ordered metrics_json(const SplitScores& scores, const EvalRecord& r) {
   Ordered images = Ordered::array();
   for (const auto& image : scores.images) {
     Ordered e = {{"index", image.index},
-                  {"file", image.file},
-                  {"scale_level", image.scale_level},
-                  {"width", image.width},
-                  {"height", image.height},
-                  {"psnr", number_or_null(image.psnr)},
-                  {"ssim", image.has_ssim ? number_or_null(image.ssim) : Ordered(nullptr)},
-                  {"render_seconds", image.seconds}};
+                 {"file", image.file},
+                 {"scale_level", image.scale_level},
+                 {"width", image.width},
+                 {"height", image.height},
+                 {"psnr", number_or_null(image.psnr)},
+                 {"ssim", image.has_ssim ? number_or_null(image.ssim) : Ordered(nullptr)},
+                 {"render_seconds", image.seconds}};
     if (!r.image_folder.empty() && image.index < r.image_stems.size()) {
       const std::string stem = r.image_folder + "/" + r.image_stems[image.index];
       e["render"] = stem + ".png";
@@ -117,11 +118,10 @@ std::string metrics_markdown(const SplitScores& scores, const EvalRecord& r) {
   std::ostringstream md;
   md << "# Evaluation: step " << r.step << " of `" << r.checkpoint << "`\n\n";
   md << "The " << r.split << " split of `" << r.data << "` (" << scores.images.size() << " images), rendered on "
-     << r.device.value("name", std::string("?")) << " (" << r.device.value("platform", std::string("?"))
-     << ", driver " << r.device.value("driver_version", std::string("?")) << ") on " << r.date << ", "
-     << r.supersample << (r.supersample == 1 ? " ray" : " jittered rays") << " per pixel, chunks of "
-     << r.chunk_rays << " rays. Render seconds per megapixel exclude the warm-up (" << fixed(r.warm_up_seconds, 2)
-     << " s).\n\n";
+     << r.device.value("name", std::string("?")) << " (" << r.device.value("platform", std::string("?")) << ", driver "
+     << r.device.value("driver_version", std::string("?")) << ") on " << r.date << ", " << r.supersample
+     << (r.supersample == 1 ? " ray" : " jittered rays") << " per pixel, chunks of " << r.chunk_rays
+     << " rays. Render seconds per megapixel exclude the warm-up (" << fixed(r.warm_up_seconds, 2) << " s).\n\n";
   md << scale_table_markdown(scores) << "\n";
   md << "- **PSNR**: " << kPsnrDefinition << ".\n";
   md << "- **SSIM**: " << kSsimDefinition << ".\n\n";
@@ -130,9 +130,10 @@ std::string metrics_markdown(const SplitScores& scores, const EvalRecord& r) {
   md << "|---:|---|---|---:|---:|---:|---|\n";
   for (const auto& image : scores.images) {
     const bool named = image.index < r.image_stems.size();
-    md << "| " << (named ? r.image_stems[image.index] : std::to_string(image.index)) << " | " << scale_name(image.scale_level) << " | " << image.width << "x" << image.height
-       << " | " << fixed(image.psnr, 2) << " | " << (image.has_ssim ? fixed(image.ssim, 4) : std::string("–"))
-       << " | " << fixed(image.seconds, 3) << " | " << image.file << " |\n";
+    md << "| " << (named ? r.image_stems[image.index] : std::to_string(image.index)) << " | "
+       << scale_name(image.scale_level) << " | " << image.width << "x" << image.height << " | " << fixed(image.psnr, 2)
+       << " | " << (image.has_ssim ? fixed(image.ssim, 4) : std::string("–")) << " | " << fixed(image.seconds, 3)
+       << " | " << image.file << " |\n";
   }
   return md.str();
 }

@@ -17,19 +17,19 @@ extern const char* const kSsimDefinition;
 
 // What an evaluation records beside its scores.
 struct EvalRecord {
-  std::string checkpoint;       // the .mnck file
-  int64_t step = 0;             // its training step
-  double train_seconds = 0.0;   // training time up to it
-  std::string trained_on;       // the device that trained it
-  std::string data;             // the dataset evaluated
-  std::string split;            // "test", "val", ...
-  std::string date;             // ISO 8601, UTC
+  std::string checkpoint;                // the .mnck file
+  int64_t step = 0;                      // its training step
+  double train_seconds = 0.0;            // training time up to it
+  std::string trained_on;                // the device that trained it
+  std::string data;                      // the dataset evaluated
+  std::string split;                     // "test", "val", ...
+  std::string date;                      // ISO 8601, UTC
   io::Json device = io::Json::object();  // name, platform, vendor, driver version, ... (see device_record)
   io::Json model = io::Json::object();   // variant, parameter count, configuration
   uint32_t supersample = 1;
   size_t chunk_rays = 0;
-  double warm_up_seconds = 0.0;  // the untimed first chunk (kernel builds, CLBlast compilation)
-  std::string image_folder;      // where the images are, relative to metrics.json; empty when none were written
+  double warm_up_seconds = 0.0;          // the untimed first chunk (kernel builds, CLBlast compilation)
+  std::string image_folder;              // where the images are, relative to metrics.json; empty when none were written
   std::vector<std::string> image_stems;  // by split index (split_image_stems), when images were written
 };
 

@@ -2,14 +2,14 @@
 // made once per test process in temporary folders; and running the real mipnerf-cl executable.
 #pragma once
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "data/procedural.hpp"
 #include "support/test_context.hpp"

@@ -50,7 +50,8 @@ TEST_CASE("render: orbit cameras reproduce the procedural scene's val orbit") {
   for (size_t k = 0; k < 8; ++k) {
     INFO("frame " << k);
     // Both are look_at_pose of the same eye; only the azimuth's rounding differs (a few ulp of 2π).
-    for (int i = 0; i < 12; ++i) CHECK(cameras[k].camera_to_world[i] == doctest::Approx(val[k].camera_to_world[i]).epsilon(1e-12).scale(1.0));
+    for (int i = 0; i < 12; ++i)
+      CHECK(cameras[k].camera_to_world[i] == doctest::Approx(val[k].camera_to_world[i]).epsilon(1e-12).scale(1.0));
     CHECK(cameras[k].focal_x_px == val[k].focal_x_px);
     CHECK(cameras[k].width_px == val[k].width_px);
     CHECK(cameras[k].near == val[k].near);
@@ -90,7 +91,8 @@ TEST_CASE("render: an orbit fitted to a capture finds its centre, up direction a
     // ... and looking at the target.
     const auto axis = data::optical_axis(c);
     const auto to_target = unit({1.0 - centre[0], -2.0 - centre[1], 0.5 - centre[2]});
-    CHECK(axis[0] * to_target[0] + axis[1] * to_target[1] + axis[2] * to_target[2] == doctest::Approx(1.0).epsilon(1e-12));
+    CHECK(axis[0] * to_target[0] + axis[1] * to_target[1] + axis[2] * to_target[2] ==
+          doctest::Approx(1.0).epsilon(1e-12));
   }
   // Random views of the upper hemisphere: the mean up vector is only roughly +z; it is snapped to the axis.
   scene.train_views = 10;
@@ -100,7 +102,8 @@ TEST_CASE("render: an orbit fitted to a capture finds its centre, up direction a
   CHECK_THROWS_WITH_AS(data::orbit_around({}), doctest::Contains("no cameras"), Error);
   data::OrbitOptions bad = orbit;
   bad.elevation_deg = 90.0;
-  CHECK_THROWS_WITH_AS(data::orbit_cameras(bad), doctest::Contains("elevation must lie strictly between -90 and 90"), Error);
+  CHECK_THROWS_WITH_AS(data::orbit_cameras(bad), doctest::Contains("elevation must lie strictly between -90 and 90"),
+                       Error);
   bad = orbit;
   bad.radius = 0.0;
   CHECK_THROWS_WITH_AS(data::orbit_cameras(bad), doctest::Contains("radius must be positive"), Error);
@@ -175,7 +178,8 @@ TEST_CASE("render: every bad camera path file is one error naming the file and t
       {"no_pose.json", "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"frames\": [{}]}",
        "no_pose.json: frames[0]: missing key 'transform_matrix'"},
       {"scaled_pose.json",
-       "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"frames\": [{\"transform_matrix\": [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}",
+       "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"frames\": [{\"transform_matrix\": "
+       "[[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}",
        "scaled_pose.json: frames[0]: the pose's rotation is not orthonormal"},
       {"no_focal.json", "{\"w\": 4, \"h\": 4, \"frames\": [{\"transform_matrix\": " + pose + "}]}",
        "no_focal.json: frames[0]: no focal length"},
@@ -187,7 +191,8 @@ TEST_CASE("render: every bad camera path file is one error naming the file and t
        "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"k1\": 0.1, \"frames\": [{\"transform_matrix\": " + pose + "}]}",
        "distortion.json: lens distortion k1"},
       {"bad_range.json",
-       "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"frames\": [{\"transform_matrix\": " + pose + ", \"near\": 5, \"far\": 3}]}",
+       "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"frames\": [{\"transform_matrix\": " + pose +
+           ", \"near\": 5, \"far\": 3}]}",
        "bad_range.json: frames[0]: near and far must satisfy 0 <= near < far"},
   };
   for (const auto& c : cases) {
@@ -264,8 +269,10 @@ TEST_CASE("render: a resized camera sees the same view, with pixels (and cone ra
     CHECK(same_direction(data::camera_ray(camera, 64, 25), data::camera_ray(other, 128, other.center_y_px)));
   }
   SUBCASE("bad requests") {
-    CHECK_THROWS_WITH_AS(data::resize_camera(camera, {-1.0, 0, 0}), doctest::Contains("scale factor must be positive"), Error);
-    CHECK_THROWS_WITH_AS(data::resize_camera(camera, {NAN, 0, 0}), doctest::Contains("scale factor must be positive"), Error);
+    CHECK_THROWS_WITH_AS(data::resize_camera(camera, {-1.0, 0, 0}), doctest::Contains("scale factor must be positive"),
+                         Error);
+    CHECK_THROWS_WITH_AS(data::resize_camera(camera, {NAN, 0, 0}), doctest::Contains("scale factor must be positive"),
+                         Error);
     CHECK_THROWS_WITH_AS(data::resize_camera(camera, {0.5, 10, 0}), doctest::Contains("not both"), Error);
     CHECK_THROWS_WITH_AS(data::resize_camera(camera, {0.0, 100000, 100000}),
                          doctest::Contains("more than 2^32 - 1 pixels"), Error);

@@ -76,8 +76,8 @@ TEST_CASE("render: evaluation scores every scale, and its report holds exactly t
   for (const auto& score : scores.images) {
     const auto image = again.render(score.index);
     const auto& camera = split.cameras[score.index];
-    const double psnr =
-        eval::psnr(view(image.rgb.data(), camera.width_px, camera.height_px), view(split.image_rgb(score.index), camera.width_px, camera.height_px));
+    const double psnr = eval::psnr(view(image.rgb.data(), camera.width_px, camera.height_px),
+                                   view(split.image_rgb(score.index), camera.width_px, camera.height_px));
     CHECK(score.psnr == psnr);  // the same deterministic render, the same double arithmetic
     CHECK(score.scale_level == split.scale_levels[score.index]);
     CHECK(score.has_ssim == (camera.width_px >= 11));
@@ -150,7 +150,8 @@ TEST_CASE("render: eval and render find the data a checkpoint records, or say to
   const std::string gone = "ckpt.mnck was trained on " + moved.data_path + ", which no longer exists: pass --data";
   CHECK_THROWS_WITH_AS(eval::resolve_data_path("", moved, "ckpt.mnck"), doctest::Contains(gone.c_str()), Error);
   CHECK_THROWS_WITH_AS(eval::resolve_data_path("", train::TrainedModel{}, "old.mnck"),
-                       doctest::Contains("old.mnck does not record the data it was trained on: pass --data DIR"), Error);
+                       doctest::Contains("old.mnck does not record the data it was trained on: pass --data DIR"),
+                       Error);
   // Load options follow training: a multiscale run builds 4 scales on the fly, except from data already multiscale.
   train::TrainConfig config;
   config.multiscale = true;
@@ -244,9 +245,11 @@ TEST_CASE("render: mipnerf-cl eval writes metrics that agree with the images it 
   fs::remove_all(out);
 }
 
-TEST_CASE("render: mipnerf-cl render writes split, orbit and path frames, and a render's transforms.json renders it again") {
+TEST_CASE(
+    "render: mipnerf-cl render writes split, orbit and path frames, and a render's transforms.json renders it again") {
   const std::string split_out = fresh("cli-split");
-  auto result = test::run_cli("render --checkpoint " + test::trained_checkpoint() + " --split test --scale 0.5 --out " + split_out);
+  auto result = test::run_cli("render --checkpoint " + test::trained_checkpoint() + " --split test --scale 0.5 --out " +
+                              split_out);
   INFO(result.err);
   REQUIRE(result.exit_code == 0);
   CHECK(result.out.find("rendered 2 frames of the test split") != std::string::npos);
@@ -270,8 +273,10 @@ TEST_CASE("render: mipnerf-cl render writes split, orbit and path frames, and a 
 
   // An orbit at another size, supersampled, in both formats.
   const std::string orbit_out = fresh("cli-orbit");
-  result = test::run_cli("render --checkpoint " + run_folder() + " --path orbit --frames 3 --elevation 40 --size 12x8 "
-                         "--supersample 2 --format both --out " + orbit_out);
+  result = test::run_cli("render --checkpoint " + run_folder() +
+                         " --path orbit --frames 3 --elevation 40 --size 12x8 "
+                         "--supersample 2 --format both --out " +
+                         orbit_out);
   INFO(result.err);
   REQUIRE(result.exit_code == 0);
   CHECK(result.out.find("rendered 3 frames of an orbit (12x8, 2 rays per pixel)") != std::string::npos);
