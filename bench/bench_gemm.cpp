@@ -194,8 +194,11 @@ int main(int argc, char** argv) try {
   }
   mlp::clear_gemm_tuning(ctx);
 
-  std::printf("## bench_gemm: %s, CLBlast %s, %s\n\n", ctx.device_info().name.c_str(),
-              mlp::clblast_version().c_str(), OPENBLAS_VERSION);
+  std::string openblas = OPENBLAS_VERSION;  // " OpenBLAS 0.3.21 "
+  openblas.erase(0, openblas.find_first_not_of(' '));
+  openblas.erase(openblas.find_last_not_of(' ') + 1);
+  std::printf("## bench_gemm: %s, CLBlast %s, %s\n\n", ctx.device_info().name.c_str(), mlp::clblast_version().c_str(),
+              openblas.c_str());
   std::printf("GFLOP/s, best call of %zu rounds × %zu (median in brackets); tuned parameters: %s\n\n", args.rounds,
               args.reps, tuning ? tuning_path.c_str() : "none found (run `mipnerf-cl tune`)");
   std::printf("| product | m×n×k |");

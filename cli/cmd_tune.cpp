@@ -455,6 +455,7 @@ class Tuner {
   // A kernel tuner; returns its full parameter set, or nothing when the step failed.
   std::optional<mlp::KernelParameters> tune_kernel(const std::string& tuner, size_t m, size_t n, size_t k,
                                                    double fraction, double timeout_s) {
+    timeout_s = std::min(timeout_s, left());  // never past the time box
     char what[160];
     std::snprintf(what, sizeof(what), "Tune%s %zux%zu%s, fraction %.4g", tuner.c_str(), m, n,
                   k ? ("x" + std::to_string(k)).c_str() : "", fraction);
@@ -518,6 +519,9 @@ class Tuner {
     report_["candidates"].push_back(entry);
     note(name + (correct ? "" : " (WRONG RESULTS, discarded)") + ": GFLOP/s " + summary);
     if (!correct) return;
+    double total = 0.0;
+    for (const auto& [kind, seconds] : per_kind) total += seconds;
+    evaluated_.push_back({name, set, total});
     bool improved = false;
     for (const auto& [kind, seconds] : per_kind) {
       auto it = best_.find(kind);
@@ -527,6 +531,19 @@ class Tuner {
       }
     }
     if (improved) save();
+  }
+
+  // The machine may have been busy while a candidate was timed (other processes on a shared CPU): time the
+  // correct candidates again, fastest first, while `reserve_s` of the time box stays free. A kind keeps the
+  // fastest time any candidate showed.
+  void second_round(double reserve_s) {
+    auto order = evaluated_;
+    std::sort(order.begin(), order.end(), [](const Evaluated& a, const Evaluated& b) { return a.total < b.total; });
+    for (const auto& c : order) {
+      if (left() < reserve_s + 60.0 || g_interrupted) break;
+      if (c.name.find("(again)") != std::string::npos) continue;
+      evaluate(c.name + " (again)", c.set);
+    }
   }
 
   // Finds the row count from which the indirect kernel (with `set`) beats the direct one on the forward
@@ -609,6 +626,12 @@ class Tuner {
     mlp::ParameterSet set;
     double seconds = 0.0;
   };
+  struct Evaluated {
+    std::string name;
+    mlp::ParameterSet set;
+    double total = 0.0;  // seconds over all kinds, first timing
+  };
+  std::vector<Evaluated> evaluated_;
   TuneArgs args_;
   ocl::DeviceInfo device_;
   std::string exe_;
@@ -710,21 +733,21 @@ void run_tune(const TuneArgs& args) {
   auto fraction_for = [](double seconds, double configurations) {
     return std::clamp(seconds / (configurations * kSecondsPerGemmConfiguration), 8.0 / 16566.0, 1.0);
   };
-  const double forward_share = std::min(tuner.left() - 120.0, 0.3 * budget);
+  const double forward_share = std::min(tuner.left() - 120.0, 0.25 * budget);
   if (auto found = tuner.tune_kernel("Xgemm", R, W, W, fraction_for(forward_share, kXgemmConfigurations),
                                      forward_share * 1.5)) {
     mlp::ParameterSet set = helpers;
     set["Xgemm"] = *found;
     tuner.evaluate("TuneXgemm (forward shape)", set);
   }
-  const double weights_share = std::min(tuner.left() - 120.0, 0.2 * budget);
+  const double weights_share = std::min(tuner.left() - 120.0, 0.15 * budget);
   if (auto found = tuner.tune_kernel("Xgemm", W, W, R, fraction_for(weights_share, kXgemmConfigurations),
                                      weights_share * 1.5)) {
     mlp::ParameterSet set = helpers;
     set["Xgemm"] = *found;
     tuner.evaluate("TuneXgemm (weight-gradient shape)", set);
   }
-  const double direct_share = std::min(tuner.left() - 90.0, 0.1 * budget);
+  const double direct_share = std::min(tuner.left() - 90.0, 0.08 * budget);
   if (auto found = tuner.tune_kernel("XgemmDirect", R, W, W, fraction_for(direct_share, kXgemmDirectConfigurations),
                                      direct_share * 1.5)) {
     // The direct kernel for every product (no pads or transposes at all): GemmRoutine's switch set above
@@ -734,7 +757,9 @@ void run_tune(const TuneArgs& args) {
     set["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", 100000}};
     tuner.evaluate("TuneXgemmDirect, direct kernel for all", set);
   }
-  // 4. Where the direct kernel should take over (small chunks), with the forward product's best set.
+  // 4. Every correct candidate timed once more (the time box permitting), then where the direct kernel should
+  //    take over (small chunks), with the forward product's best set.
+  tuner.second_round(150.0);
   tuner.choose_direct_switch(tuner.best_set(mlp::GemmKind::forward));
   tuner.save();
   tuner.finish_progress();
