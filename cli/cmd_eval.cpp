@@ -59,7 +59,6 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   const fs::path images = fs::path(out) / "images";
   const std::vector<std::string> stems = eval::split_image_stems(split);
 
-  mlp::load_gemm_tuning(*ctx);
   eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), split.cameras,
                                eval::RenderSettings{chunk, args.supersample, args.seed});
   const double warm_up = renderer.warm_up();

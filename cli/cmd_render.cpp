@@ -252,7 +252,6 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
       args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
   const std::string device = ctx->device_info().name;
 
-  mlp::load_gemm_tuning(*ctx);
   eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), frames.cameras,
                                eval::RenderSettings{chunk, args.supersample, args.seed});
   const double warm_up = renderer.warm_up();

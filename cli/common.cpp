@@ -3,6 +3,8 @@
 
 #include <iostream>
 
+#include "mlp/gemm_tuning.hpp"
+
 namespace mipnerf::cli {
 
 GlobalOptions& global_options() {
@@ -16,7 +18,7 @@ void print_log(LogLevel level, const std::string& message) {
   std::cerr << "mipnerf-cl: " << prefix << message << "\n";
 }
 
-std::unique_ptr<ocl::Context> open_context(bool profiling) {
+std::unique_ptr<ocl::Context> open_context(bool profiling, bool load_tuning) {
   ocl::ContextOptions options;
   options.device_selector = global_options().device;
   options.profiling = profiling;
@@ -24,6 +26,7 @@ std::unique_ptr<ocl::Context> open_context(bool profiling) {
   ctx->set_log(print_log);
   ctx->log(LogLevel::debug, "using device [" + std::to_string(ctx->device_info().index) + "] " +
                                 ctx->device_info().name);
+  if (load_tuning) mlp::load_gemm_tuning(*ctx);
   return ctx;
 }
 
