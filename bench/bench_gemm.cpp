@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <random>
 #include <sstream>
@@ -28,6 +29,7 @@
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm.hpp"
 #include "mlp/gemm_tuning.hpp"
+#include "mlp/mlp.hpp"
 
 using namespace mipnerf;
 
@@ -40,6 +42,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 struct Args {
   std::string device;
   size_t rows = 65536, reps = 5, rounds = 2;
+  size_t mlp_rays = 512, mlp_samples = 128;  // the whole-network section; --mlp-rays 0 skips it
   std::vector<size_t> widths = {64, 128, 256};
   std::string tuning;
 };
@@ -66,8 +69,12 @@ Args parse(int argc, char** argv) {
       while (std::getline(list, item, ',')) args.widths.push_back(std::stoul(item));
     } else if (flag == "--tuning") {
       args.tuning = value;
+    } else if (flag == "--mlp-rays") {
+      args.mlp_rays = std::stoul(value);
+    } else if (flag == "--mlp-samples") {
+      args.mlp_samples = std::max<size_t>(1, std::stoul(value));
     } else {
-      throw Error("bench_gemm: unknown flag " + flag + " (use --device, --rows, --widths, --reps, --rounds, --tuning)");
+      throw Error("bench_gemm: unknown flag " + flag + " (use --device, --rows, --widths, --reps, --rounds, --tuning, --mlp-rays, --mlp-samples)");
     }
   }
   return args;
@@ -139,6 +146,52 @@ std::string gflops_cell(const Shape& shape, const Timings& t) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.1f (%.1f)", shape.flops() / t.best() * 1e-9, shape.flops() / t.median() * 1e-9);
   return text;
+}
+
+// The paper's network on one chunk (rays × samples rows): best of `reps` forward (training workspace),
+// backward, and inference forward, each followed by clFinish. Seconds.
+struct MlpTimes {
+  double forward = 0, backward = 0, inference = 0;
+};
+
+MlpTimes time_mlp(ocl::Context& ctx, mlp::Mlp& net, size_t rays, size_t samples, size_t reps) {
+  const size_t rows = rays * samples;
+  const auto& c = net.config();
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> dist(-1.0f, 1.0f);
+  auto random_array = [&](size_t n, const char* name) {
+    std::vector<float> v(n);
+    for (auto& x : v) x = dist(rng);
+    ocl::DeviceArray<float> a(ctx, n, name);
+    a.upload(ctx, v);
+    return a;
+  };
+  auto features = random_array(rows * c.input_width, "features");
+  auto view = random_array(rays * c.view_width, "view encoding");
+  auto d_density = random_array(rows, "d_raw_density"), d_rgb = random_array(rows * 3, "d_raw_rgb");
+  ocl::DeviceArray<float> density(ctx, rows, "raw_density"), rgb(ctx, rows * 3, "raw_rgb");
+  auto train_ws = net.make_workspace(rows, rays, mlp::WorkspaceMode::training);
+  auto infer_ws = net.make_workspace(rows, rays, mlp::WorkspaceMode::inference);
+  const mlp::MlpInputs in{mlp::view(features, c.input_width), mlp::view(view, c.view_width), rays, samples};
+  const mlp::MlpOutputs out{mlp::view(density, 1), mlp::view(rgb, 3)};
+  const mlp::MlpOutputGradients d_out{mlp::view(d_density, 1), mlp::view(d_rgb, 3)};
+  auto timed = [&](const std::function<void()>& work) {
+    const auto start = Clock::now();
+    work();
+    ctx.finish();
+    return seconds_since(start);
+  };
+  MlpTimes best{1e30, 1e30, 1e30};
+  for (size_t r = 0; r <= reps; ++r) {  // the first pass builds programs
+    const double f = timed([&] { net.forward(in, out, train_ws); });
+    const double b = timed([&] { net.backward(train_ws, d_out); });
+    const double i = timed([&] { net.forward(in, out, infer_ws); });
+    if (r == 0) continue;
+    best.forward = std::min(best.forward, f);
+    best.backward = std::min(best.backward, b);
+    best.inference = std::min(best.inference, i);
+  }
+  return best;
 }
 
 }  // namespace
@@ -226,6 +279,28 @@ int main(int argc, char** argv) try {
     const char* kinds[] = {"forward", "backward data", "backward weights"};
     for (size_t k = 0; k < cold[name].size(); ++k) std::printf(" %s %.2f s;", kinds[k], cold[name][k]);
     std::printf("\n");
+  }
+
+  if (args.mlp_rays > 0) {
+    // The whole paper network (8×256, skip, view branch) on one chunk, GEMMs and mlp.cl kernels together.
+    mlp::MlpConfig config;
+    mlp::Mlp net(ctx, config);
+    const size_t rows = args.mlp_rays * args.mlp_samples;
+    const double flops_per_row = 2.0 * static_cast<double>(net.parameter_count());  // forward multiply-adds
+    std::printf("\nThe paper's network on one chunk of %zu rays × %zu samples = %zu rows (best of %zu):\n\n",
+                args.mlp_rays, args.mlp_samples, rows, args.reps);
+    std::printf("| GEMM parameters | forward (training) | backward | forward (inference) | training rows/s |\n");
+    std::printf("|---|---|---|---|---|\n");
+    for (const auto& name : configs) {
+      if (name == "OpenBLAS") continue;
+      if (name == "CLBlast default") mlp::clear_gemm_tuning(ctx);
+      if (name == "CLBlast tuned") mlp::install_gemm_tuning(ctx, *tuning);
+      const MlpTimes t = time_mlp(ctx, net, args.mlp_rays, args.mlp_samples, args.reps);
+      std::printf("| %s | %.0f ms (%.0f GFLOP/s) | %.0f ms | %.0f ms | %.0f |\n", name.c_str(), t.forward * 1e3,
+                  flops_per_row * rows / t.forward * 1e-9, t.backward * 1e3, t.inference * 1e3,
+                  rows / (t.forward + t.backward));
+    }
+    mlp::clear_gemm_tuning(ctx);
   }
   return 0;
 } catch (const std::exception& e) {

@@ -547,7 +547,7 @@ class Tuner {
   }
 
   // Finds the row count from which the indirect kernel (with `set`) beats the direct one on the forward
-  // product, and writes the matching XGEMM_MIN_INDIRECT_SIZE into every kind's best set: products with
+  // product, and writes the matching XGEMM_MIN_INDIRECT_SIZE into each kind's best set that has none: products with
   // m·n·k ≥ threshold³ then run indirect. Small products (the thin heads, the per-ray view product) stay direct.
   void choose_direct_switch(const mlp::ParameterSet& set) {
     const double timeout_s = std::min(left(), 240.0);
@@ -576,7 +576,8 @@ class Tuner {
          "; XGEMM_MIN_INDIRECT_SIZE = " + std::to_string(threshold));
     for (auto& [kind, best] : best_) {
       (void)kind;
-      best.set["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", threshold}};
+      // A kind whose winner chose its own switch (the all-direct candidate) keeps it.
+      if (!best.set.count("GemmRoutine")) best.set["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", threshold}};
     }
     save();
   }
