@@ -51,7 +51,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
   const std::string data_path = eval::resolve_data_path(args.data, model, checkpoint);
   const data::Dataset dataset =
-      data::load_dataset(data_path, eval::load_options_for(model.config, data_path, {args.split}, args.scales));
+      data::load_dataset(data_path, train::load_options(model.config, data_path, {args.split}, args.scales));
   const data::Split& split = dataset.split(args.split);
   const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
   const std::string out =
@@ -59,6 +59,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   const fs::path images = fs::path(out) / "images";
   const std::vector<std::string> stems = eval::split_image_stems(split);
 
+  mlp::load_gemm_tuning(*ctx);
   eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), split.cameras,
                                eval::RenderSettings{chunk, args.supersample, args.seed});
   const double warm_up = renderer.warm_up();

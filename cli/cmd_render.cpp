@@ -134,7 +134,7 @@ Frames split_frames(const RenderArgs& args, const train::TrainedModel& model, co
   const std::string name = args.split.empty() ? "test" : args.split;
   const std::string data_path = eval::resolve_data_path(args.data, model, checkpoint);
   const data::Dataset dataset =
-      data::load_dataset(data_path, eval::load_options_for(model.config, data_path, {name}, args.scales));
+      data::load_dataset(data_path, train::load_options(model.config, data_path, {name}, args.scales));
   const data::Split& split = dataset.split(name);
   Frames frames;
   frames.source = "the " + name + " split of " + data_path;
@@ -154,7 +154,7 @@ std::vector<data::Camera> training_cameras(const RenderArgs& args, const train::
   std::error_code ec;
   if (path.empty() && !model.data_path.empty() && fs::exists(model.data_path, ec)) path = model.data_path;
   if (path.empty()) return {};
-  const data::Dataset dataset = data::load_dataset(path, eval::load_options_for(model.config, path, {"train"}, 1));
+  const data::Dataset dataset = data::load_dataset(path, train::load_options(model.config, path, {"train"}, 1));
   const data::Split& train = dataset.split("train");
   std::vector<data::Camera> cameras;
   for (size_t i = 0; i < train.num_images(); ++i) {
@@ -252,6 +252,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
       args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
   const std::string device = ctx->device_info().name;
 
+  mlp::load_gemm_tuning(*ctx);
   eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), frames.cameras,
                                eval::RenderSettings{chunk, args.supersample, args.seed});
   const double warm_up = renderer.warm_up();

@@ -16,6 +16,7 @@
 #include "eval/evaluate.hpp"
 #include "io/atomic_file.hpp"
 #include "io/png.hpp"
+#include "mlp/gemm_tuning.hpp"
 #include "mlp/mlp_config.hpp"
 #include "progress.hpp"
 #include "train/trainer.hpp"
@@ -125,13 +126,7 @@ void write_summary(const std::string& out_dir, const train::Trainer& trainer, co
 eval::SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const std::string& data_path,
                                const std::string& out_dir) {
   const auto& c = trainer.config();
-  data::LoadOptions load;
-  load.background = data::parse_background(c.background);
-  load.scales = c.multiscale ? 4 : 1;
-  if (c.near > 0) load.near = c.near;
-  if (c.far > 0) load.far = c.far;
-  load.splits = {"val"};
-  const data::Dataset val_data = data::load_dataset(data_path, load);
+  const data::Dataset val_data = data::load_dataset(data_path, train::load_options(c, data_path, {"val"}));
   const data::Split& val = val_data.split("val");
   std::vector<mlp::Mlp*> networks;
   for (auto& n : trainer.networks()) networks.push_back(n.get());
@@ -160,6 +155,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   const std::string device = ctx->device_info().name;
 
   train::Trainer trainer(*ctx, config, data_path, args.out, args.resume);
+  mlp::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
   const auto& spec = trainer.spec();
   std::cerr << "mipnerf-cl: training " << config.variant << " (preset " << args.preset << ") on " << device << ": "
             << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()

@@ -294,7 +294,7 @@ json run_crossover(ocl::Context& ctx, const json& spec) {
 
 void run_step(const StepArgs& args) {
   const json spec = json::parse(read_text(args.spec));
-  auto ctx = open_context(false, /*load_tuning=*/false);  // each step installs the set it measures
+  auto ctx = open_context();
   json result;
   const auto start = Clock::now();
   if (spec.at("type") == "tuner") {

@@ -3,8 +3,6 @@
 
 #include <iostream>
 
-#include "mlp/gemm_tuning.hpp"
-
 namespace mipnerf::cli {
 
 GlobalOptions& global_options() {
@@ -18,7 +16,7 @@ void print_log(LogLevel level, const std::string& message) {
   std::cerr << "mipnerf-cl: " << prefix << message << "\n";
 }
 
-std::unique_ptr<ocl::Context> open_context(bool profiling, bool load_tuning) {
+std::unique_ptr<ocl::Context> open_context(bool profiling) {
   ocl::ContextOptions options;
   options.device_selector = global_options().device;
   options.profiling = profiling;
@@ -26,7 +24,6 @@ std::unique_ptr<ocl::Context> open_context(bool profiling, bool load_tuning) {
   ctx->set_log(print_log);
   ctx->log(LogLevel::debug, "using device [" + std::to_string(ctx->device_info().index) + "] " +
                                 ctx->device_info().name);
-  if (load_tuning) mlp::load_gemm_tuning(*ctx);
   return ctx;
 }
 

@@ -18,8 +18,8 @@ struct GlobalOptions {
 GlobalOptions& global_options();
 
 // Opens the device chosen by --device, with the library's log routed to stderr.
-// With `load_tuning`, the device's GEMM tuning file (mipnerf-cl tune) is installed before any product runs.
-std::unique_ptr<ocl::Context> open_context(bool profiling = false, bool load_tuning = true);
+// Commands that run GEMMs then call mlp::load_gemm_tuning once their inputs are checked.
+std::unique_ptr<ocl::Context> open_context(bool profiling = false);
 
 // Prints a library log message to stderr ("mipnerf-cl: warning: ...").
 void print_log(LogLevel level, const std::string& message);

@@ -143,11 +143,19 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
   split.source = spec.source;
   detail::SizeCheck sizes;
   for (const auto& frame : spec.frames) {
-    const RgbaImage image = load_rgba_png(frame.image_path);
+    RgbaImage image = load_rgba_png(frame.image_path);
     if (spec.uniform_size) sizes.check(image.width, image.height, frame.image_path);
     Camera camera;
     camera.camera_to_world = frame.camera_to_world;
     resolve_intrinsics(frame.intrinsics, image.width, image.height, camera, frame.where);
+    if (options.factor > 1) {
+      if (image.width % options.factor != 0 || image.height % options.factor != 0) {
+        throw Error(frame.image_path + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                    " is not divisible by factor " + std::to_string(options.factor) + "; use a factor that divides it");
+      }
+      for (uint32_t f = 1; f < options.factor; f *= 2) image = downsample2(image);
+      camera = scale_camera(camera, options.factor);
+    }
     camera.near = frame.near;
     camera.far = frame.far;
     camera.lossmult = frame.lossmult;
@@ -167,6 +175,9 @@ Dataset load_dataset(const std::string& path, const LoadOptions& options) {
   if (options.scales < 1 || options.scales > 8) {
     throw Error("the number of scales must be 1 to 8 (the paper's multiscale Blender uses 4), got " +
                 std::to_string(options.scales));
+  }
+  if (options.factor < 1 || (options.factor & (options.factor - 1)) != 0 || options.factor > 64) {
+    throw Error("the downsampling factor must be a power of two from 1 to 64, got " + std::to_string(options.factor));
   }
   Dataset dataset;
   dataset.path = path;

@@ -27,6 +27,10 @@ struct LoadOptions {
   // Blender: every image also box-downsampled ×2, ×4, … ×2^(n−1) (n = 4 in the paper), each with
   // lossmult = its pixel area in full-resolution pixels (1, 4, 16, 64) and focal length / 2^j.
   int scales = 1;
+  // Box-downsample every stored image by this power of two first (the official Config.factor: lego at
+  // 400×400 with factor 4 trains at 100×100). Intrinsics follow; lossmult does not change (it is relative
+  // to the resolution trained at). Applied before the multiscale pyramid, which then starts from it.
+  uint32_t factor = 1;
   std::optional<double> near, far;  // override the files' values (default: the file's, else 2 and 6)
   std::vector<std::string> splits;  // splits to load ("train", "val", "test"); empty = every split present
   int holdout_every = 8;  // transforms.json: every n-th frame (0, n, 2n …) becomes "test", the rest "train"; 0 = none

@@ -22,18 +22,6 @@ std::string resolve_data_path(const std::string& requested, const train::Trained
   return model.data_path;
 }
 
-data::LoadOptions load_options_for(const train::TrainConfig& config, const std::string& data_path,
-                                   std::vector<std::string> splits, int scales) {
-  data::LoadOptions options;
-  options.background = data::parse_background(config.background);
-  const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
-  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? 4 : 1;
-  if (config.near > 0) options.near = config.near;
-  if (config.far > 0) options.far = config.far;
-  options.splits = std::move(splits);
-  return options;
-}
-
 size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested) {
   const size_t networks = parameter_count(model) * sizeof(float);
   const size_t upper = requested > 0 ? requested : static_cast<size_t>(model.config.render_chunk_rays);

@@ -18,12 +18,6 @@ namespace mipnerf::eval {
 std::string resolve_data_path(const std::string& requested, const train::TrainedModel& model,
                               const std::string& checkpoint);
 
-// Load options for `data_path` as training used them (background, near/far overrides, the multiscale pyramid
-// when it trained on one built on the fly, except for data already multiscale on disk); `scales` > 0 overrides the
-// pyramid depth (1: the images as stored).
-data::LoadOptions load_options_for(const train::TrainConfig& config, const std::string& data_path,
-                                   std::vector<std::string> splits, int scales = 0);
-
 // Rays per render chunk: `requested` when > 0 (checked against the device's memory), else the largest power of
 // two up to the model's render_chunk_rays that fits. Throws naming what to lower when nothing fits.
 size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested);

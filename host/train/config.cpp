@@ -28,6 +28,8 @@ const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
       {{"background", "white | black | none: what shows where the scene is empty", "scene"},
        &TrainConfig::background, {"white", "black", "none"}},
+      {{"factor", "box-downsample the stored images by this power of two first (official factor)", "scene"},
+       &TrainConfig::factor, {}},
       {{"multiscale", "build x2 x4 x8 box-downsampled copies of the data on the fly", "scene"},
        &TrainConfig::multiscale, {}},
       {{"area_loss", "weight each pixel's loss by its area relative to full resolution", "scene"},
@@ -270,6 +272,7 @@ void validate(const TrainConfig& c) {
   auto require = [](bool ok, const std::string& message) {
     if (!ok) throw Error("invalid configuration: " + message);
   };
+  require(c.factor >= 1 && c.factor <= 64 && (c.factor & (c.factor - 1)) == 0, "factor must be a power of two, 1 to 64");
   require(c.num_samples >= 2, "num_samples must be at least 2");
   require(c.num_levels >= 1, "num_levels must be at least 1");
   require(c.variant != "nerf" || c.num_samples % 2 == 0, "the nerf variant needs an even num_samples (coarse = half)");

@@ -23,17 +23,6 @@ namespace {
 constexpr const char* kCheckpointFormat = "mipnerf-cl checkpoint";
 constexpr int kCheckpointVersion = 1;
 
-data::LoadOptions load_options(const TrainConfig& c, std::vector<std::string> splits, const LogFn& log) {
-  data::LoadOptions options;
-  options.background = data::parse_background(c.background);
-  options.scales = c.multiscale ? 4 : 1;
-  if (c.near > 0) options.near = c.near;
-  if (c.far > 0) options.far = c.far;
-  options.splits = std::move(splits);
-  options.log = log;
-  return options;
-}
-
 mlp::LrSchedule schedule_of(const TrainConfig& c) {
   mlp::LrSchedule s;
   s.lr_init = c.lr_init;
@@ -85,7 +74,9 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
     : ctx_(&ctx), config_(config), out_dir_(out_dir) {
   validate(config_);
   LogFn log = [&ctx](LogLevel level, const std::string& message) { ctx.log(level, message); };
-  dataset_ = data::load_dataset(data_path, load_options(config_, {"train"}, log));
+  data::LoadOptions options = load_options(config_, data_path, {"train"});
+  options.log = log;
+  dataset_ = data::load_dataset(data_path, options);
   const data::Split& train = dataset_.split("train");
   const bool multiscale_data = train.num_scales() > 1;
   spec_ = make_graph_spec(config_, multiscale_data);
@@ -319,6 +310,20 @@ TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint
   model.train_seconds = c.header.value("train_seconds", 0.0);
   model.trained_on = c.header.value("device", "");
   return model;
+}
+
+data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path,
+                               std::vector<std::string> splits, int scales) {
+  data::LoadOptions options;
+  options.background = data::parse_background(config.background);
+  options.factor = static_cast<uint32_t>(config.factor);
+  // A folder that is multiscale on disk (metadata.json) already holds its scales; build them otherwise.
+  const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
+  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? 4 : 1;
+  if (config.near > 0) options.near = config.near;
+  if (config.far > 0) options.far = config.far;
+  options.splits = std::move(splits);
+  return options;
 }
 
 std::string find_checkpoint(const std::string& path) {

@@ -101,6 +101,12 @@ struct TrainedModel {
 };
 TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path);
 
+// How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
+// (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0
+// forces that many scales.
+data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path,
+                               std::vector<std::string> splits, int scales = 0);
+
 // The checkpoint a path names: a .mnck file, or the newest in DIR/checkpoints or DIR.
 std::string find_checkpoint(const std::string& path);
 

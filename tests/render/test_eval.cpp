@@ -157,13 +157,13 @@ TEST_CASE("render: eval and render find the data a checkpoint records, or say to
   config.multiscale = true;
   config.background = "black";
   config.near = 1.5;
-  const auto blender = eval::load_options_for(config, test::render_scene(), {"test"});
+  const auto blender = train::load_options(config, test::render_scene(), {"test"});
   CHECK(blender.scales == 4);
   CHECK(blender.background == data::Background::black);
   CHECK(blender.near == 1.5);
   CHECK(!blender.far.has_value());
-  CHECK(eval::load_options_for(config, test::render_scene() + "/multiscale", {"test"}).scales == 1);
-  CHECK(eval::load_options_for(config, test::render_scene(), {"test"}, 2).scales == 2);
+  CHECK(train::load_options(config, test::render_scene() + "/multiscale", {"test"}).scales == 1);
+  CHECK(train::load_options(config, test::render_scene(), {"test"}, 2).scales == 2);
   CHECK(eval::run_folder_of("/runs/a/checkpoints/ckpt_000000010.mnck") == "/runs/a");
   CHECK(eval::run_folder_of("/somewhere/model.mnck") == "/somewhere");
   CHECK(eval::run_folder_of("runs/b/checkpoints/ckpt_000000010.mnck") == "runs/b");
