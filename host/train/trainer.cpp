@@ -100,7 +100,7 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   if (resume && !existing.empty()) {
     restore(existing.back().second);
   } else if (resume) {
-    ctx.log(LogLevel::warning, "--resume: no checkpoint in " + checkpoints + "; starting from step 0");
+    ctx.log(LogLevel::info, "--resume: no checkpoint yet in " + checkpoints + "; starting at step 0");
   } else if (!existing.empty()) {
     throw Error(out_dir_ + " already holds checkpoints (newest: step " + std::to_string(existing.back().first) +
                 "): pass --resume to continue, or choose another --out");
