@@ -10,6 +10,9 @@
 // warm-up call and K timed calls per shape, each followed by clFinish. The whole sequence (default, tuned,
 // OpenBLAS) runs N rounds, so a noisy moment hits all columns alike; the table shows the best call over all
 // rounds and, in brackets, the median. --tuning names a tuning file (default: the per-device file in the cache).
+// Then the paper's whole network on one chunk (--mlp-rays × --mlp-samples rows; --mlp-rays 0 skips it): forward,
+// backward and inference forward with default and tuned parameters. On PoCL, POCL_TRACING=text writes every
+// kernel's start and end to pocl_trace_events.log (the queue has profiling on), to see where the time goes.
 #include <cblas.h>
 
 #include <algorithm>
@@ -199,7 +202,8 @@ MlpTimes time_mlp(ocl::Context& ctx, mlp::Mlp& net, size_t rays, size_t samples,
 int main(int argc, char** argv) try {
   const Args args = parse(argc, argv);
   auto devices = ocl::list_devices();
-  ocl::Context ctx(ocl::choose_device(devices, args.device));
+  // A profiling queue costs nothing measurable here and lets POCL_TRACING=text time every kernel CLBlast runs.
+  ocl::Context ctx(ocl::choose_device(devices, args.device), /*profiling=*/true);
   const auto shapes = shapes_for(args);
 
   const std::string tuning_path = args.tuning.empty() ? mlp::tuning_file_path(ctx.device_info()) : args.tuning;
