@@ -41,6 +41,8 @@ const std::vector<Entry>& table() {
       {{"batching", "all_images | single_image", "scene"}, &TrainConfig::batching, {"all_images", "single_image"}},
       {{"pixel_center", "offset of a pixel's ray inside the pixel (0.5 = centre)", "scene"},
        &TrainConfig::pixel_center, {}},
+      {{"jitter_pixels", "train on rays through random points of their pixels (supersampling)", "scene"},
+       &TrainConfig::jitter_pixels, {}},
       {{"variant", "mipnerf | nerf", "model"}, &TrainConfig::variant, {"mipnerf", "nerf"}},
       {{"num_samples", "intervals per level", "model"}, &TrainConfig::num_samples, {}},
       {{"num_levels", "sampling levels (coarse + fine = 2)", "model"}, &TrainConfig::num_levels, {}},

@@ -22,6 +22,7 @@ struct TrainConfig {
   bool lindisp = false;              // sample linearly in disparity instead of depth
   std::string batching = "all_images";  // all_images | single_image: where a batch's rays come from
   double pixel_center = 0.5;         // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
+  bool jitter_pixels = false;        // each training ray through a random point of its pixel (supersampling baselines)
 
   // --- model ---
   std::string variant = "mipnerf";  // mipnerf | nerf: nerf = point samples, PE, two MLPs, union fine samples

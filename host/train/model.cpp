@@ -65,6 +65,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
 
   spec.rays.ray_shape = c.ray_shape == "cylinder" ? ops::RayShape::cylinder : ops::RayShape::cone;
   spec.rays.pixel_center_offset = static_cast<float>(c.pixel_center);
+  spec.rays.jitter_subpixel = c.jitter_pixels;  // training only: rendering decides its own supersampling
   spec.rays.view_dependence = c.view_dependence;
   spec.gaussian.ray_shape = spec.rays.ray_shape;
   spec.sample.lindisp = c.lindisp;

@@ -222,3 +222,21 @@ TEST_CASE("train: memory planning picks a chunk that fits, and says what to lowe
   CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 1ull << 30, 0, true),
                        doctest::Contains("fewer or smaller images"), Error);
 }
+
+TEST_CASE("train: rays through random points of their pixels are reproducible and differ from centred rays") {
+  auto& ctx = test::test_context();
+  auto params_after = [&](bool jitter, const std::string& name) {
+    const std::string out = test::fresh_run_dir(name);
+    train::Trainer trainer(ctx, tiny({{"steps", "2"}, {"batch_size", "64"}, {"jitter_pixels", jitter ? "true" : "false"}}),
+                           test::small_scene(), out, false);
+    CHECK(trainer.spec().rays.jitter_subpixel == jitter);
+    trainer.run();
+    auto params = trainer.networks()[0]->download_params();
+    fs::remove_all(out);
+    return params;
+  };
+  const auto jittered = params_after(true, "jitter-a");
+  CHECK(bitwise_equal(jittered, params_after(true, "jitter-b")));
+  CHECK(!bitwise_equal(jittered, params_after(false, "centred")));
+  for (float p : jittered) REQUIRE(std::isfinite(p));
+}
