@@ -20,9 +20,10 @@ import argparse
 import datetime
 import json
 import os
-import subprocess
 import sys
 import time
+
+from study_common import device_line, procedural_scene, read_json, run
 
 # (key, label, variant, settings, supersample at evaluation)
 CONFIGS = [
@@ -37,24 +38,10 @@ CONFIGS = [
 SCALE_NAMES = {1: "full", 2: "1/2", 4: "1/4", 8: "1/8"}
 
 
-def run(command, log_path):
-    """Runs a command, its output appended to log_path; raises with the log's tail on failure."""
-    with open(log_path, "a") as log:
-        log.write("$ " + " ".join(command) + "\n")
-        log.flush()
-        result = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT)
-    if result.returncode != 0:
-        with open(log_path) as log:
-            tail = log.read()[-2000:]
-        raise RuntimeError(f"{' '.join(command)} failed ({result.returncode}):\n{tail}")
-
-
 def scenes(args):
     """(name, data path, extra train settings, eval split, eval views) of each scene of the study."""
     out = []
-    procedural = os.path.join(args.work, "procedural")
-    if not os.path.exists(os.path.join(procedural, "multiscale", "metadata.json")):
-        run([args.exe, "make-scene", procedural, "--size", "64"], os.path.join(args.work, "make-scene.log"))
+    procedural = procedural_scene(args.exe, args.work)
     out.append(("procedural", os.path.join(procedural, "multiscale"), {}, "test", args.procedural_views))
     if args.lego:
         # Lego at 200x200 (x2 box-downsampled), with x2 x4 x8 copies built on the fly: 200/100/50/25 pixels.
@@ -82,10 +69,8 @@ def train_and_eval(args, scene, config):
     if not os.path.exists(metrics):
         run([args.exe, "eval", "--checkpoint", run_dir, "--split", split, "--views", str(views), "--out", metrics_dir,
              "--supersample", str(supersample), "--no-images"], log)
-    with open(summary) as f:
-        s = json.load(f)
-    with open(metrics) as f:
-        m = json.load(f)
+    s = read_json(summary)
+    m = read_json(metrics)
     return {
         "key": key, "label": label, "variant": variant, "settings": settings, "eval_supersample": supersample,
         "train_seconds": s["train_seconds"], "steps": s["steps"], "parameters": s["parameters"],
@@ -204,7 +189,7 @@ def main():
 
     device = next(iter(results.values()))[0]["device"]
     date = datetime.date.today().isoformat()
-    meta = (f"Device: {device.get('name')} ({device.get('platform')}, driver {device.get('driver_version')}); {date}. "
+    meta = (f"Device: {device_line(device)}; {date}. "
             f"Preset `{args.preset}` with {args.steps} steps of {args.batch_size} rays for every setting"
             + (f", plus {', '.join(f'{k}={v}' for k, v in args.base_settings.items())}" if args.base_settings else "")
             + ". Train s: wall time of `mipnerf-cl train` (GEMM tuning file loaded). Render s/MP: `mipnerf-cl eval`, "
