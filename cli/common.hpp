@@ -33,5 +33,6 @@ void register_make_scene(CLI::App& app);
 void register_make_multiscale(CLI::App& app);
 void register_render(CLI::App& app);
 void register_eval(CLI::App& app);
+void register_bench(CLI::App& app);
 
 }  // namespace mipnerf::cli

@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   cli::register_make_multiscale(app);
   cli::register_render(app);
   cli::register_eval(app);
+  cli::register_bench(app);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,420 @@
+// host/bench on tiny sizes: every measurement returns positive, finite figures of the right shape (figures are
+// measured, never compared with a speed), the time box and the step counts behave, bench.json carries what a record
+// needs (device, driver, OpenCL C and CLBlast versions, date, settings), and `mipnerf-cl bench --quick` writes
+// bench.json and bench.md through the real executable.
+#include <doctest/doctest.h>
+
+#include <clblast.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <unordered_map>
+
+#include "bench/gemm_bench.hpp"
+#include "bench/kernel_bench.hpp"
+#include "bench/preset_bench.hpp"
+#include "bench/report.hpp"
+#include "data/procedural.hpp"
+#include "eval/render_setup.hpp"
+#include "eval/report.hpp"
+#include "io/json.hpp"
+#include "mlp/clblast_check.hpp"
+#include "mlp/gemm_tuning.hpp"
+#include "support/test_context.hpp"
+
+using namespace mipnerf;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
+
+fs::path bench_temp(const std::string& name) {
+  return fs::temp_directory_path() / ("mipnerf-bench-" + name + "-" + std::to_string(::getpid()));
+}
+
+// A 16×16 procedural scene with 4 training views: trains and renders in well under a second per step.
+const std::string& tiny_scene() {
+  static const std::string path = [] {
+    const auto dir = bench_temp("scene");
+    fs::remove_all(dir);
+    data::SceneOptions options;
+    options.size_px = 16;
+    options.train_views = 4;
+    options.val_views = 1;
+    options.test_views = 1;
+    options.scales = 1;
+    options.samples_per_axis = 2;
+    options.threads = 2;
+    data::write_procedural_scene(dir.string(), options);
+    return dir.string();
+  }();
+  return path;
+}
+
+bench::KernelBenchOptions tiny_kernel_options() {
+  bench::KernelBenchOptions o;
+  o.rays = 32;
+  o.samples = 8;
+  o.reps = 2;
+  o.reference_reps = 1;
+  return o;
+}
+
+bench::GemmBenchOptions tiny_gemm_options() {
+  bench::GemmBenchOptions o;
+  o.widths = {8, 16};
+  o.rows = 64;
+  o.reps = 2;
+  o.rounds = 2;
+  return o;
+}
+
+// A "tuned" set that exercises installing and switching without a new CLBlast compile: CLBlast's own value of the
+// direct/indirect switch (every product here is small enough for the direct kernel, already built by the defaults).
+mlp::GemmTuning same_as_defaults_tuning() {
+  auto& ctx = test::test_context();
+  std::unordered_map<std::string, size_t> values;
+  mlp::check_clblast(clblast::RetrieveParameters(ctx.raw_device(), "GemmRoutine", clblast::Precision::kSingle, values),
+                     "RetrieveParameters");
+  mlp::GemmTuning t;
+  t.device_name = ctx.device_info().name;
+  t.driver_version = ctx.device_info().driver_version;
+  t.clblast_version = mlp::clblast_version();
+  t.common["GemmRoutine"] = {values.begin(), values.end()};
+  return t;
+}
+
+bench::PresetBenchOptions tiny_preset_options(const std::string& name) {
+  bench::PresetBenchOptions o;
+  o.preset = "tiny";
+  o.settings = {{"batch_size", "32"}};
+  o.data_path = tiny_scene();
+  o.work_dir = bench_temp(name).string();
+  fs::remove_all(o.work_dir);
+  o.warm_steps = 2;
+  o.render_width = 8;
+  o.render_height = 6;
+  o.render_reps = 2;
+  return o;
+}
+
+// Results shared by the tests that need a measurement (each made once per process).
+const bench::KernelBenchResult& kernel_result() {
+  static const auto r = bench::run_kernel_bench(test::test_context(), tiny_kernel_options());
+  return r;
+}
+
+const bench::GemmBenchResult& gemm_result() {
+  static const auto r = [] {
+    auto configs = bench::clblast_configs(same_as_defaults_tuning());
+    // A host configuration, as bench_gemm adds OpenBLAS: a plain loop on the host copies.
+    configs.push_back({"host loop", std::nullopt, [](const bench::GemmProduct& p, bench::GemmOperands& o) {
+                         return bench::time_call([&] {
+                           for (size_t i = 0; i < p.shape.m * p.shape.n; ++i) o.c[i] = 0.5f * o.a[i % o.a.size()];
+                         });
+                       }});
+    return bench::run_gemm_bench(test::test_context(), tiny_gemm_options(), configs);
+  }();
+  return r;
+}
+
+const bench::PresetBenchResult& preset_result() {
+  static const auto r = [] {
+    mlp::clear_gemm_tuning(test::test_context());
+    const auto options = tiny_preset_options("preset");
+    auto result = bench::run_preset_bench(test::test_context(), options);
+    fs::remove_all(options.work_dir);
+    return result;
+  }();
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("bench timings: best, upper median and mean, zero when empty, and the peak RSS") {
+  bench::Timings t;
+  CHECK(t.best() == 0.0);
+  CHECK(t.median() == 0.0);
+  for (double s : {0.3, 0.1, 0.4, 0.2}) t.add(s);
+  CHECK(t.best() == doctest::Approx(0.1));
+  CHECK(t.median() == doctest::Approx(0.3));  // sorted[n/2] of 0.1 0.2 0.3 0.4
+  CHECK(t.mean() == doctest::Approx(0.25));
+  CHECK(bench::peak_rss_bytes() > 0);
+}
+
+TEST_CASE("bench kernels: every ray-math stage gives positive finite timings beside the reference") {
+  const auto& r = kernel_result();
+  // One program per stage file and specialisation, one row per kernel variant (13, as in bench/results).
+  REQUIRE(r.builds.size() == 7);
+  REQUIRE(r.stages.size() == 13);
+  std::set<std::string> names;
+  for (const auto& b : r.builds) CHECK(positive_finite(b.seconds));
+  for (const auto& s : r.stages) {
+    INFO(s.stage);
+    names.insert(s.stage);
+    CHECK(s.items >= 32);
+    CHECK(s.device.count() == 2);
+    CHECK(positive_finite(s.first_call_seconds));
+    CHECK(positive_finite(s.device.best()));
+    CHECK(s.device.median() >= s.device.best());
+    CHECK(positive_finite(s.items_per_second()));
+    CHECK(positive_finite(s.reference_items_per_second()));
+  }
+  CHECK(names.size() == r.stages.size());
+  for (const char* kernel : {"rays_fwd", "sample_stratified_fwd", "resample_fwd", "gaussian_fwd", "ipe_fwd", "pe_fwd",
+                             "gaussian_ipe_fwd", "activations_fwd", "activations_bwd", "render_fwd", "render_bwd",
+                             "render_raw_fwd", "render_raw_bwd"}) {
+    bool found = false;
+    for (const auto& n : names) found = found || n.rfind(std::string(kernel) + " ", 0) == 0 || n == kernel;
+    CHECK_MESSAGE(found, kernel);
+  }
+}
+
+TEST_CASE("bench gemm: forward, backward data and backward weights per width, every configuration, defaults after") {
+  const auto& r = gemm_result();
+  REQUIRE(r.products.size() == 6);
+  CHECK(r.products[0].kind == "forward");
+  CHECK(r.products[0].shape.m == 64);
+  CHECK(r.products[0].shape.n == 8);
+  CHECK(r.products[1].shape.transpose_b);
+  CHECK(r.products[2].shape.transpose_a);
+  CHECK(r.products[2].shape.k == 64);  // the weight gradient sums over the rows
+  CHECK(r.products[5].shape.m == 16);
+  REQUIRE(r.series.size() == 3);
+  CHECK(r.series[0].name == "CLBlast default");
+  CHECK(r.series[1].name == "CLBlast tuned");
+  for (const auto& s : r.series) {
+    INFO(s.name);
+    REQUIRE(s.first_call_seconds.size() == r.products.size());
+    for (size_t i = 0; i < r.products.size(); ++i) {
+      CHECK(s.calls[i].count() == 4);  // rounds × reps
+      CHECK(positive_finite(s.first_call_seconds[i]));
+      CHECK(positive_finite(s.gflops_best(r.products[i], i)));
+      CHECK(s.gflops_best(r.products[i], i) >= s.gflops_median(r.products[i], i));
+    }
+  }
+  CHECK_FALSE(mlp::gemm_tuning_installed(test::test_context()));
+}
+
+TEST_CASE("bench gemm: zero rows or reps are refused") {
+  auto o = tiny_gemm_options();
+  o.rows = 0;
+  CHECK_THROWS_WITH_AS(bench::run_gemm_bench(test::test_context(), o, bench::clblast_configs(std::nullopt)),
+                       doctest::Contains("at least 1"), Error);
+  o = tiny_gemm_options();
+  o.reps = 0;
+  CHECK_THROWS_AS(bench::run_gemm_bench(test::test_context(), o, bench::clblast_configs(std::nullopt)), Error);
+}
+
+TEST_CASE("bench gemm: the whole network on one chunk") {
+  mlp::MlpConfig config;
+  config.input_width = 12;
+  config.depth = 2;
+  config.width = 16;
+  config.skip_layer = 0;
+  config.view_branch_width = 8;
+  config.bottleneck_width = 16;
+  mlp::Mlp net(test::test_context(), config);
+  const auto t = bench::time_mlp_chunk(test::test_context(), net, 4, 8, 1);
+  CHECK(t.rows == 32);
+  CHECK(positive_finite(t.forward));
+  CHECK(positive_finite(t.backward));
+  CHECK(positive_finite(t.inference));
+  CHECK(positive_finite(t.training_rows_per_second()));
+}
+
+TEST_CASE("bench preset: a few training steps and a render of the tiny preset") {
+  const auto& r = preset_result();
+  CHECK(r.preset == "tiny");
+  CHECK(r.config.steps == 3);           // the first step and 2 warm ones
+  CHECK(r.config.batch_size == 32);     // the settings apply over the preset
+  CHECK(r.config.num_samples == 16);    // the preset's own
+  const auto& t = r.train;
+  CHECK(t.batch_rays == 32);
+  CHECK(t.parameters > 0);
+  CHECK(t.chunk_rays > 0);
+  CHECK(t.chunk_rays <= 32);
+  CHECK(t.planned_device_bytes > 0);
+  CHECK(t.planned_device_bytes <= t.memory_budget_bytes);
+  CHECK(t.peak_rss_bytes > 0);
+  CHECK_FALSE(t.gemm_tuned);
+  CHECK(positive_finite(t.setup_seconds));
+  CHECK(positive_finite(t.first_step_seconds));
+  CHECK(t.warm_steps.count() == 2);
+  CHECK_FALSE(t.time_boxed);
+  CHECK(positive_finite(t.warm_steps.best()));
+  CHECK(positive_finite(t.rays_per_second()));
+  REQUIRE(r.render.has_value());
+  CHECK(r.render->width == 8);
+  CHECK(r.render->height == 6);
+  CHECK(r.render->renders.count() == 2);
+  CHECK(positive_finite(r.render->warm_up_seconds));
+  CHECK(positive_finite(r.render->seconds_per_megapixel()));
+}
+
+TEST_CASE("bench preset: the time box stops the warm steps after the first one, and no render when size is 0") {
+  auto options = tiny_preset_options("timebox");
+  options.warm_steps = 50;
+  options.time_box_seconds = 1e-9;  // spent by any step: exactly one warm step runs
+  options.render_width = 0;
+  const auto r = bench::run_preset_bench(test::test_context(), options);
+  fs::remove_all(options.work_dir);
+  CHECK(r.train.warm_steps.count() == 1);
+  CHECK(r.train.time_boxed);
+  CHECK_FALSE(r.render.has_value());
+}
+
+TEST_CASE("bench preset: an unknown preset or zero warm steps are refused") {
+  auto options = tiny_preset_options("bad");
+  options.preset = "nosuch";
+  CHECK_THROWS_WITH_AS(bench::run_preset_bench(test::test_context(), options), doctest::Contains("unknown preset"),
+                       Error);
+  options = tiny_preset_options("bad");
+  options.warm_steps = 0;
+  CHECK_THROWS_WITH_AS(bench::run_preset_bench(test::test_context(), options),
+                       doctest::Contains("at least one warm step"), Error);
+}
+
+TEST_CASE("bench report: bench.json names the device, driver, OpenCL C and CLBlast versions, date and settings") {
+  auto& ctx = test::test_context();
+  bench::BenchRun run;
+  run.version = MIPNERF_VERSION;
+  run.date = eval::utc_timestamp();
+  run.command = "mipnerf-cl bench (test)";
+  run.host = bench::host_record();
+  run.presets.scene = "tiny scene";
+  run.presets.warm_steps = 2;
+  bench::DeviceBench d;
+  d.device = eval::device_record(ctx.device_info());
+  d.clblast_version = mlp::clblast_version();
+  d.tuning_file = "/nowhere/gemm.json";
+  d.gemm = gemm_result();
+  d.kernels = kernel_result();
+  d.presets.push_back(preset_result());
+  d.errors.push_back({"train paper", "did not fit"});
+  run.devices.push_back(d);
+  run.complete = true;
+
+  const auto j = io::parse_json(bench::bench_json(run).dump(), "bench.json");
+  CHECK(j.at("tool") == "mipnerf-cl bench");
+  CHECK(std::regex_match(j.at("date").get<std::string>(), std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ)")));
+  CHECK(j.at("host").at("hardware_threads").get<int>() > 0);
+  REQUIRE(j.at("devices").size() == 1);
+  const auto& dj = j.at("devices")[0];
+  CHECK(dj.at("device").at("name") == ctx.device_info().name);
+  CHECK(dj.at("device").at("platform") == ctx.device_info().platform_name);
+  CHECK(dj.at("device").at("driver_version") == ctx.device_info().driver_version);
+  CHECK(dj.at("device").at("opencl_c_version") == ctx.device_info().opencl_c_version);
+  CHECK_FALSE(dj.at("clblast_version").get<std::string>().empty());
+  CHECK(dj.at("gemm").at("tuned") == false);
+  CHECK(dj.at("gemm").at("note").get<std::string>().find("mipnerf-cl tune") != std::string::npos);
+  CHECK(dj.at("gemm").at("settings").at("rows") == 64);
+  REQUIRE(dj.at("gemm").at("products").size() == 6);
+  CHECK(dj.at("gemm").at("products")[0].at("CLBlast default").at("gflops_best").get<double>() > 0);
+  CHECK(dj.at("kernels").at("stages").size() == 13);
+  CHECK(dj.at("kernels").at("settings").at("rays") == 32);
+  const auto& tj = dj.at("training").at(0);
+  CHECK(tj.at("preset") == "tiny");
+  CHECK(tj.at("rays_per_second").get<double>() > 0);
+  CHECK(tj.at("first_step_seconds").get<double>() > 0);
+  CHECK(tj.at("planned_device_bytes").get<double>() > 0);
+  CHECK(tj.at("peak_rss_bytes").get<double>() > 0);
+  CHECK(tj.at("config").at("batch_size") == 32);
+  CHECK(dj.at("render").at(0).at("seconds_per_megapixel").get<double>() > 0);
+  CHECK(dj.at("errors").at(0).at("section") == "train paper");
+
+  const std::string md = bench::bench_markdown(run);
+  for (const std::string& expected : {ctx.device_info().name, ctx.device_info().driver_version,
+                                      ctx.device_info().opencl_c_version, "CLBlast | " + mlp::clblast_version(),
+                                      run.date, std::string("No tuning file"), std::string("### Training steps"),
+                                      std::string("| tiny | 32 × 16 × 2 |"), std::string("train paper: did not fit")}) {
+    CHECK_MESSAGE(md.find(expected) != std::string::npos, expected);
+  }
+}
+
+#ifdef MIPNERF_CLI_PATH
+// Points XDG_CACHE_HOME at `folder` for the scope (where tuning files are looked up), then restores it.
+class CacheHome {
+ public:
+  explicit CacheHome(const fs::path& folder) {
+    const char* old = std::getenv("XDG_CACHE_HOME");
+    had_old_ = old != nullptr;
+    if (old) old_ = old;
+    ::setenv("XDG_CACHE_HOME", folder.c_str(), 1);
+  }
+  ~CacheHome() {
+    if (had_old_) {
+      ::setenv("XDG_CACHE_HOME", old_.c_str(), 1);
+    } else {
+      ::unsetenv("XDG_CACHE_HOME");
+    }
+  }
+
+ private:
+  std::string old_;
+  bool had_old_ = false;
+};
+
+TEST_CASE("bench CLI: mipnerf-cl bench --quick on tiny sizes writes bench.json and bench.md, tuned where a file is") {
+  const auto out = bench_temp("cli");
+  const auto cache = bench_temp("cli-cache");
+  fs::remove_all(out);
+  fs::remove_all(cache);
+  // A tuning file for this device in a cache folder of the test's own (never the user's): the bench finds it and
+  // adds the tuned column; its one set equals CLBlast's default, so nothing new is compiled.
+  CacheHome cache_home(cache);
+  mlp::save_tuning(mlp::tuning_file_path(test::test_context().device_info()), same_as_defaults_tuning());
+  const std::string log = (bench_temp("cli-log")).string();
+  const std::string command = "XDG_CACHE_HOME=\"" + cache.string() + "\" \"" + MIPNERF_CLI_PATH + "\" --device " +
+                              std::to_string(test::test_context().device_info().index) + " bench --quick --out \"" +
+                              out.string() +
+                              "\" --presets tiny --set batch_size=32 --steps 1 --gemm-rows 64 --gemm-widths 8 "
+                              "--kernel-rays 16 --kernel-samples 4 --render-size 8x8 --scene-size 16 --scene-views 3 "
+                              ">\"" + log + ".out\" 2>\"" + log + ".err\"";
+  const int status = std::system(command.c_str());
+  std::ifstream err(log + ".err");
+  std::stringstream err_text;
+  err_text << err.rdbuf();
+  INFO(err_text.str());
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+
+  const auto j = io::read_json((out / "bench.json").string());
+  CHECK(j.at("complete") == true);
+  CHECK(j.at("quick") == true);
+  CHECK(j.at("command").get<std::string>().find("--quick") != std::string::npos);
+  REQUIRE(j.at("devices").size() == 1);
+  const auto& d = j.at("devices")[0];
+  CHECK(d.at("device").at("name") == test::test_context().device_info().name);
+  CHECK_FALSE(d.at("device").at("driver_version").get<std::string>().empty());
+  CHECK_FALSE(d.at("clblast_version").get<std::string>().empty());
+  CHECK(d.at("errors").empty());
+  CHECK(d.at("gemm").at("tuned") == true);
+  REQUIRE(d.at("gemm").at("products").size() == 3);
+  CHECK(d.at("gemm").at("products")[2].at("CLBlast tuned").at("gflops_best").get<double>() > 0);
+  CHECK(d.at("kernels").at("stages").size() == 13);
+  REQUIRE(d.at("training").size() == 1);
+  CHECK(d.at("training")[0].at("warm_steps") == 1);
+  CHECK(d.at("training")[0].at("gemm_parameters") == "tuned");
+  CHECK(d.at("render")[0].at("width") == 8);
+
+  std::ifstream md_file(out / "bench.md");
+  std::stringstream md;
+  md << md_file.rdbuf();
+  CHECK(md.str().find("# mipnerf-cl bench") != std::string::npos);
+  CHECK(md.str().find(test::test_context().device_info().name) != std::string::npos);
+  CHECK(md.str().find("### Rendering") != std::string::npos);
+  fs::remove_all(out);
+  fs::remove_all(cache);
+  fs::remove(log + ".out");
+  fs::remove(log + ".err");
+}
+#endif
