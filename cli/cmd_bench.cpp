@@ -302,7 +302,6 @@ std::vector<ocl::DeviceInfo> devices_to_bench() {
 void run_bench(BenchArgs& a, const CLI::App& cmd) {
   apply_quick(a, cmd);
   check_arguments(a);
-  explicit_settings(a);  // malformed --set fails before anything runs
   const auto devices = devices_to_bench();
   const fs::path out = a.out;
   const auto start = bench::Clock::now();
@@ -317,6 +316,8 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   run.presets.paper_warm_steps = a.paper_steps;
   run.presets.time_box_seconds = a.time_box;
   run.presets.render_reps = a.render_reps;
+  run.presets.settings = explicit_settings(a);
+  for (const auto& preset : a.presets) train::resolve_config(preset, "mipnerf", run.presets.settings);  // bad --set
 
   ScratchFolder scratch;
   std::string scene = a.data;

@@ -49,6 +49,24 @@ std::string pocl_kernel_cache() {
   return text;
 }
 
+std::string json_text(const io::Json& j, const char* key) {
+  if (!j.contains(key)) return "?";
+  return j[key].is_string() ? j[key].get<std::string>() : j[key].dump();
+}
+
+std::string load_text(const io::Json& host) {
+  if (!host.contains("load_average_1_5_15_min")) return "?";
+  std::string text;
+  for (const auto& v : host["load_average_1_5_15_min"]) text += (text.empty() ? "" : ", ") + fixed(v.get<double>(), 2);
+  return text;
+}
+
+std::string settings_text(const std::map<std::string, std::string>& settings) {
+  std::string text;
+  for (const auto& [name, value] : settings) text += (text.empty() ? "" : ", ") + name + " = " + value;
+  return text;
+}
+
 // ---- bench.json ----
 
 Ordered gemm_json(const DeviceBench& d) {
@@ -241,6 +259,7 @@ std::string training_markdown(const DeviceBench& d, const PresetBenchSettings& s
   md << "### Training steps\n\nSettings: " << s.scene << "; each preset as `mipnerf-cl train --preset P` has it, "
      << "trained for a first step (cold: kernel first launches, CLBlast's program builds) then up to " << s.warm_steps
      << " warm steps (paper: " << s.paper_warm_steps << ")";
+  if (!s.settings.empty()) md << ", with " << settings_text(s.settings) << " over every preset";
   if (s.time_box_seconds > 0) md << ", no new warm step after " << fixed(s.time_box_seconds, 0) << " s of them";
   md << ". Setup = loading and uploading the data and building the graph. rays/s from the median warm step. Planned "
         "device memory: the trainer's plan (graph, data, networks, Adam); peak RSS: the process's (getrusage), "
@@ -277,11 +296,6 @@ std::string render_markdown(const DeviceBench& d, const PresetBenchSettings& s) 
   }
   md << "\n";
   return md.str();
-}
-
-std::string json_text(const io::Json& j, const char* key) {
-  if (!j.contains(key)) return "?";
-  return j[key].is_string() ? j[key].get<std::string>() : j[key].dump();
 }
 
 std::string device_markdown(const DeviceBench& d, const BenchRun& run) {
@@ -327,7 +341,17 @@ Ordered bench_json(const BenchRun& run) {
   j["quick"] = run.quick;
   j["host"] = run.host;
   if (!run.host_at_end.empty()) j["host_at_end"] = run.host_at_end;
+  j["definitions"] = {
+      {"first_call", "the first call of a measurement in a fresh OpenCL context with CLBlast's compiled programs "
+                     "forgotten: kernel and CLBlast program builds (PoCL's disk cache may serve them), first launches"},
+      {"gflops", "2*m*n*k / wall seconds of one mlp::gemm call followed by clFinish"},
+      {"items_per_second", "items / wall seconds of the best call followed by clFinish"},
+      {"rays_per_second", "batch rays / seconds of the median warm training step (wall time between step reports)"},
+      {"seconds_per_megapixel", "wall seconds of the best whole-image render / megapixels"},
+      {"planned_device_bytes", "train::Trainer::memory().total(): graph buffers, MLP workspaces, data, networks, Adam"},
+      {"peak_rss_bytes", "getrusage ru_maxrss of the process (reset before each preset where Linux allows)"}};
   j["training_settings"] = {{"scene", run.presets.scene},
+                            {"settings_over_presets", run.presets.settings},
                             {"warm_steps", run.presets.warm_steps},
                             {"paper_warm_steps", run.presets.paper_warm_steps},
                             {"time_box_seconds", run.presets.time_box_seconds},
@@ -345,8 +369,8 @@ std::string bench_markdown(const BenchRun& run) {
      << (run.complete ? "" : " — **incomplete** (still running, or interrupted)") << "; " << fixed(run.seconds, 0)
      << " s in all.\n\n";
   md << "Host: " << json_text(run.host, "cpu") << ", " << json_text(run.host, "hardware_threads")
-     << " hardware threads; load average (1, 5, 15 min) at the start " << json_text(run.host, "load_average_1_5_15_min");
-  if (!run.host_at_end.empty()) md << ", at the end " << json_text(run.host_at_end, "load_average_1_5_15_min");
+     << " hardware threads; load average (1, 5, 15 min) at the start " << load_text(run.host);
+  if (!run.host_at_end.empty()) md << ", at the end " << load_text(run.host_at_end);
   md << ". PoCL kernel cache: " << json_text(run.host, "pocl_kernel_cache") << ".\n\n";
   md << "Each section runs in a fresh OpenCL context with CLBlast's compiled programs forgotten, so \"first\" figures "
         "are what a new process pays (PoCL's disk cache aside). Figures are wall times, measured, never asserted.\n\n";

@@ -2,6 +2,7 @@
 // bench.md (the same as tables), with the device, driver, OpenCL C and CLBlast versions and the date.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -31,6 +32,7 @@ struct DeviceBench {
 // How the training and render measurements were set up (shared by every device of a run).
 struct PresetBenchSettings {
   std::string scene;           // what was trained on, e.g. "procedural scene, 64x64, 40 train views"
+  std::map<std::string, std::string> settings;  // applied over every preset (--set), as given
   int64_t warm_steps = 0;      // CPU presets (tiny, quick, small)
   int64_t paper_warm_steps = 0;
   double time_box_seconds = 0.0;
