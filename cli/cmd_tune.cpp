@@ -14,6 +14,7 @@
 // per product kind (forward, backward data, backward weights) the fastest candidate is kept.
 #include <clblast.h>
 #include <csignal>
+#include <filesystem>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -58,6 +59,7 @@ struct TuneArgs {
   size_t view_branch_width = 128;
   bool no_view = false;
   std::string output;            // default: the per-device file
+  bool if_missing = false;       // do nothing when the per-device file already exists (quick start re-runs)
 };
 
 struct StepArgs {
@@ -690,6 +692,13 @@ void run_tune(const TuneArgs& args) {
   if (args.width % 128 != 0) throw Error("--width must be a multiple of 128 for CLBlast's Xgemm tuner");
   const auto devices = ocl::list_devices();
   const ocl::DeviceInfo device = ocl::choose_device(devices, global_options().device);
+  if (args.if_missing) {
+    const std::string existing = args.output.empty() ? mlp::tuning_file_path(device) : args.output;
+    if (std::filesystem::exists(existing)) {
+      std::cerr << "mipnerf-cl: tune: " << existing << " exists; nothing to do (--if-missing)\n";
+      return;
+    }
+  }
   Tuner tuner(args, device);
   std::signal(SIGINT, on_tune_interrupt);
   std::signal(SIGTERM, on_tune_interrupt);
@@ -786,6 +795,7 @@ void register_tune(CLI::App& app) {
   cmd->add_option("--view-branch-width", args->view_branch_width, "Width of the view branch")->capture_default_str();
   cmd->add_flag("--no-view", args->no_view, "The MLP has no view branch");
   cmd->add_option("--output", args->output, "Write the parameters here instead of the per-device cache file");
+  cmd->add_flag("--if-missing", args->if_missing, "Do nothing when the tuning file already exists");
   cmd->callback([args] { run_tune(*args); });
 
   // The child side: one step, started by `tune` itself (hidden from --help).

@@ -220,7 +220,7 @@ std::string gemm_markdown(const DeviceBench& d) {
     for (size_t i = 0; i < std::min<size_t>(3, s.first_call_seconds.size()); ++i) {
       md << " " << g.products[i].kind << " " << fixed(s.first_call_seconds[i], 2) << ";";
     }
-    md << " later widths:";
+    if (s.first_call_seconds.size() > 3) md << " later widths:";
     for (size_t i = 3; i < s.first_call_seconds.size(); ++i) md << " " << fixed(s.first_call_seconds[i], 2);
     md << "\n";
   }
