@@ -21,12 +21,12 @@
 #include "bench/kernel_bench.hpp"
 #include "bench/preset_bench.hpp"
 #include "bench/report.hpp"
-#include "data/procedural.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "io/json.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
+#include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -36,26 +36,11 @@ namespace {
 
 bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
 
-fs::path bench_temp(const std::string& name) {
-  return fs::temp_directory_path() / ("mipnerf-bench-" + name + "-" + std::to_string(::getpid()));
-}
+fs::path bench_temp(const std::string& name) { return test::temp_path("bench-" + name); }
 
 // A 16×16 procedural scene with 4 training views: trains and renders in well under a second per step.
 const std::string& tiny_scene() {
-  static const std::string path = [] {
-    const auto dir = bench_temp("scene");
-    fs::remove_all(dir);
-    data::SceneOptions options;
-    options.size_px = 16;
-    options.train_views = 4;
-    options.val_views = 1;
-    options.test_views = 1;
-    options.scales = 1;
-    options.samples_per_axis = 2;
-    options.threads = 2;
-    data::write_procedural_scene(dir.string(), options);
-    return dir.string();
-  }();
+  static const std::string path = test::write_temp_scene("bench-scene", {16, 4, 1, 1, 2});
   return path;
 }
 

@@ -11,33 +11,18 @@
 #include <sstream>
 #include <string>
 
-#include "data/procedural.hpp"
+#include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "train/trainer.hpp"
 
 namespace mipnerf::test {
 
-inline std::filesystem::path render_temp(const std::string& name) {
-  return std::filesystem::temp_directory_path() / ("mipnerf-render-" + name + "-" + std::to_string(::getpid()));
-}
+inline std::filesystem::path render_temp(const std::string& name) { return temp_path("render-" + name); }
 
 // A 16×16 procedural scene: 8 train views, 2 val, 2 test, and OUT/multiscale with 2 scales (16 and 8 pixels: the
 // second smaller than SSIM's 11×11 window). Small, so every test renders in seconds on two CPU cores.
 inline const std::string& render_scene() {
-  static const std::string path = [] {
-    const auto dir = render_temp("scene");
-    std::filesystem::remove_all(dir);
-    data::SceneOptions options;
-    options.size_px = 16;
-    options.train_views = 8;
-    options.val_views = 2;
-    options.test_views = 2;
-    options.scales = 2;
-    options.samples_per_axis = 2;
-    options.threads = 2;
-    data::write_procedural_scene(dir.string(), options);
-    return dir.string();
-  }();
+  static const std::string path = write_temp_scene("render-scene", {16, 8, 2, 2, 2});
   return path;
 }
 

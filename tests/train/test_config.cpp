@@ -76,7 +76,7 @@ TEST_CASE("config: JSON round trip keeps every setting, and differences are list
   other.batch_size = 17;
   const auto diff = train::differences(c, other);
   REQUIRE(diff.size() == 1);
-  CHECK(diff[0] == "batch_size: 1024 -> 17");
+  CHECK(diff[0] == "batch_size: 512 -> 17");
   CHECK_THROWS_WITH_AS(train::from_json("{\"bogus\": 1}", "cfg.json"), doctest::Contains("cfg.json"), Error);
   CHECK_THROWS_WITH_AS(train::from_json("{oops", "cfg.json"), doctest::Contains("malformed"), Error);
 }
