@@ -13,7 +13,7 @@ study continues where it stopped.
 
 Example (the committed results were made with this):
   python3 bench/accuracy_time.py --build build --work /tmp/study --results bench/results \
-      --lego ../shared/data/nerf_synthetic/lego
+      --steps 400 --lego-views 2 --lego ../shared/data/nerf_synthetic/lego      (about 95 minutes on 2 CPU cores)
 """
 
 import argparse
