@@ -37,9 +37,7 @@ struct EvalArgs {
 };
 
 void check_arguments(const EvalArgs& args, const CLI::App& cmd) {
-  if (cmd.count("--views") && args.views == 0) throw Error("--views must be at least 1 (leave it out for all views)");
-  if (cmd.count("--scales") && args.scales < 1) throw Error("--scales must be at least 1");
-  if (args.supersample == 0) throw Error("--supersample must be at least 1 ray per pixel");
+  check_view_options(cmd, args.views, args.scales, args.supersample);
   if (!(args.error_gain > 0.0)) throw Error("--error-gain must be positive");
 }
 

@@ -104,15 +104,13 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
     throw Error("--radius must be a positive distance in scene units");
   }
   if (given(cmd, "--frames") && args.frames == 0) throw Error("--frames must be at least 1");
-  if (args.supersample == 0) throw Error("--supersample must be at least 1 ray per pixel");
   if (given(cmd, "--near") && !(args.near >= 0.0)) throw Error("--near must be >= 0");
   if (given(cmd, "--far") && !(args.far > 0.0)) throw Error("--far must be positive");
   if (given(cmd, "--near") && given(cmd, "--far") && !(args.far > args.near)) throw Error("--far must exceed --near");
   for (const char* flag : {"--views", "--scales"}) {
     if (given(cmd, flag) && given(cmd, "--path")) throw Error(std::string(flag) + " applies to --split only");
   }
-  if (given(cmd, "--views") && args.views == 0) throw Error("--views must be at least 1 (leave it out for all views)");
-  if (given(cmd, "--scales") && args.scales < 1) throw Error("--scales must be at least 1");
+  check_view_options(cmd, args.views, args.scales, args.supersample);
   if (!args.path.empty() && !orbit) {
     std::error_code ec;
     if (!fs::is_regular_file(args.path, ec)) {

@@ -3,6 +3,8 @@
 
 #include <iostream>
 
+#include "cl/error.hpp"
+
 namespace mipnerf::cli {
 
 GlobalOptions& global_options() {
@@ -25,6 +27,12 @@ std::unique_ptr<ocl::Context> open_context(bool profiling) {
   ctx->log(LogLevel::debug, "using device [" + std::to_string(ctx->device_info().index) + "] " +
                                 ctx->device_info().name);
   return ctx;
+}
+
+void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t supersample) {
+  if (cmd.count("--views") && views == 0) throw Error("--views must be at least 1 (leave it out for all views)");
+  if (cmd.count("--scales") && scales < 1) throw Error("--scales must be at least 1");
+  if (supersample == 0) throw Error("--supersample must be at least 1 ray per pixel");
 }
 
 }  // namespace mipnerf::cli

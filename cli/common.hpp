@@ -1,6 +1,8 @@
 // What every subcommand shares: the global options, opening the device, and printing to the terminal.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -20,6 +22,10 @@ GlobalOptions& global_options();
 // Opens the device chosen by --device, with the library's log routed to stderr.
 // Commands that run GEMMs then call mlp::load_gemm_tuning once their inputs are checked.
 std::unique_ptr<ocl::Context> open_context(bool profiling = false);
+
+// The view selection and sampling options that render and eval share (--views, --scales, --supersample):
+// throws mipnerf::Error naming the flag when one is out of range. --views and --scales are checked only when given.
+void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t supersample);
 
 // Prints a library log message to stderr ("mipnerf-cl: warning: ...").
 void print_log(LogLevel level, const std::string& message);

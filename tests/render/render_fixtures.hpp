@@ -10,7 +10,9 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "eval/image_renderer.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "train/trainer.hpp"
@@ -38,6 +40,19 @@ inline const std::string& trained_checkpoint() {
     return trainer.run().checkpoint;
   }();
   return path;
+}
+
+// trained_checkpoint() loaded once per test process: its networks on the test device, its graph spec and config.
+inline train::TrainedModel& trained_model() {
+  static train::TrainedModel trained = train::load_trained_model(test_context(), trained_checkpoint());
+  return trained;
+}
+
+// A renderer of trained_model() over `cameras`.
+inline eval::ImageRenderer trained_renderer(const std::vector<data::Camera>& cameras,
+                                            const eval::RenderSettings& settings) {
+  return eval::ImageRenderer(test_context(), trained_model().spec, trained_model().network_pointers(), cameras,
+                             settings);
 }
 
 struct CliResult {

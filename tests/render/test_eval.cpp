@@ -26,19 +26,9 @@
 
 using namespace mipnerf;
 namespace fs = std::filesystem;
+using test::trained_model;
 
 namespace {
-
-train::TrainedModel& model() {
-  static train::TrainedModel trained = train::load_trained_model(test::test_context(), test::trained_checkpoint());
-  return trained;
-}
-
-std::string fresh(const std::string& name) {
-  const auto dir = test::render_temp(name);
-  fs::remove_all(dir);
-  return dir.string();
-}
 
 eval::ImageView view(const float* pixels, uint32_t width, uint32_t height) { return {pixels, height, width, 3}; }
 
@@ -55,8 +45,7 @@ TEST_CASE("render: evaluation scores every scale, and its report holds exactly t
   const auto dataset = data::load_dataset(test::render_scene(), load);
   const auto& split = dataset.split("test");
   REQUIRE(split.num_images() == 6);
-  eval::ImageRenderer renderer(test::test_context(), model().spec, model().network_pointers(), split.cameras,
-                               eval::RenderSettings{512, 1, 0});
+  auto renderer = test::trained_renderer(split.cameras, eval::RenderSettings{512, 1, 0});
   size_t last_rays = 0, total = 0;
   eval::EvaluateOptions options;
   options.ray_progress = [&](size_t done, size_t all) {
@@ -70,8 +59,7 @@ TEST_CASE("render: evaluation scores every scale, and its report holds exactly t
   REQUIRE(scores.images.size() == 6);
   REQUIRE(scores.scales.size() == 3);
   // Each image's score is eval::psnr / eval::ssim of an independent render of it.
-  eval::ImageRenderer again(test::test_context(), model().spec, model().network_pointers(), split.cameras,
-                            eval::RenderSettings{512, 1, 0});
+  auto again = test::trained_renderer(split.cameras, eval::RenderSettings{512, 1, 0});
   std::map<uint32_t, std::vector<double>> psnr_by_scale;
   for (const auto& score : scores.images) {
     const auto image = again.render(score.index);
@@ -171,7 +159,7 @@ TEST_CASE("render: eval and render find the data a checkpoint records, or say to
 }
 
 TEST_CASE("render: mipnerf-cl eval writes metrics that agree with the images it wrote") {
-  const std::string out = fresh("cli-eval");
+  const std::string out = test::fresh_temp_dir("render-cli-eval").string();
   // No --data: the checkpoint's recorded scene; --scales 2 builds its ×2 copies on the fly.
   const auto result = test::run_cli("eval --checkpoint " + run_folder() + " --scales 2 --exr --out " + out);
   INFO(result.err);
@@ -247,7 +235,7 @@ TEST_CASE("render: mipnerf-cl eval writes metrics that agree with the images it 
 
 TEST_CASE(
     "render: mipnerf-cl render writes split, orbit and path frames, and a render's transforms.json renders it again") {
-  const std::string split_out = fresh("cli-split");
+  const std::string split_out = test::fresh_temp_dir("render-cli-split").string();
   auto result = test::run_cli("render --checkpoint " + test::trained_checkpoint() + " --split test --scale 0.5 --out " +
                               split_out);
   INFO(result.err);
@@ -259,8 +247,8 @@ TEST_CASE(
   // Each frame is the library's render of the split camera at half size (the same device, chunking and kernels).
   const auto dataset = data::load_dataset(test::render_scene(), {});
   const auto camera = data::resize_camera(dataset.split("test").cameras[1], {0.5, 0, 0});
-  eval::ImageRenderer renderer(test::test_context(), model().spec, model().network_pointers(), {camera},
-                               eval::RenderSettings{static_cast<size_t>(model().config.render_chunk_rays), 1, 0});
+  auto renderer = test::trained_renderer(
+      {camera}, eval::RenderSettings{static_cast<size_t>(trained_model().config.render_chunk_rays), 1, 0});
   const auto expected = renderer.render(0);
   const io::PngImage frame = io::read_png((fs::path(split_out) / "001.png").string());
   REQUIRE(frame.width == 8);
@@ -272,7 +260,7 @@ TEST_CASE(
   }
 
   // An orbit at another size, supersampled, in both formats.
-  const std::string orbit_out = fresh("cli-orbit");
+  const std::string orbit_out = test::fresh_temp_dir("render-cli-orbit").string();
   result = test::run_cli("render --checkpoint " + run_folder() +
                          " --path orbit --frames 3 --elevation 40 --size 12x8 "
                          "--supersample 2 --format both --out " +
@@ -301,7 +289,7 @@ TEST_CASE(
   CHECK(data::camera_center(cameras[1])[2] == doctest::Approx(4.0 * std::sin(40.0 * M_PI / 180.0)).epsilon(1e-9));
 
   // Its transforms.json as a camera path renders the same frames again, bit for bit (the same rays and jitter).
-  const std::string again_out = fresh("cli-again");
+  const std::string again_out = test::fresh_temp_dir("render-cli-again").string();
   result = test::run_cli("render --checkpoint " + run_folder() + " --path " + orbit_out +
                          "/transforms.json --supersample 2 --format exr --out " + again_out);
   INFO(result.err);

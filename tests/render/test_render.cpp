@@ -18,13 +18,9 @@
 
 using namespace mipnerf;
 namespace fs = std::filesystem;
+using test::trained_model;
 
 namespace {
-
-train::TrainedModel& model() {
-  static train::TrainedModel trained = train::load_trained_model(test::test_context(), test::trained_checkpoint());
-  return trained;
-}
 
 const data::Split& test_split() {
   static const data::Dataset dataset = data::load_dataset(test::render_scene(), {});
@@ -32,7 +28,7 @@ const data::Split& test_split() {
 }
 
 eval::RenderedImage render(const std::vector<data::Camera>& cameras, size_t index, eval::RenderSettings settings) {
-  eval::ImageRenderer renderer(test::test_context(), model().spec, model().network_pointers(), cameras, settings);
+  auto renderer = test::trained_renderer(cameras, settings);
   return renderer.render(index);
 }
 
@@ -91,13 +87,12 @@ void check_plausible(const eval::RenderedImage& image, const data::Camera& camer
 }  // namespace
 
 TEST_CASE("render: a checkpoint records its data, and renders a split the same in any chunking") {
-  CHECK(model().step == 10);
-  CHECK(model().data_path == fs::absolute(test::render_scene()).lexically_normal().string());
+  CHECK(trained_model().step == 10);
+  CHECK(trained_model().data_path == fs::absolute(test::render_scene()).lexically_normal().string());
   const auto& split = test_split();
-  eval::ImageRenderer whole(test::test_context(), model().spec, model().network_pointers(), split.cameras,
-                            eval::RenderSettings{1024, 1, 0});
-  eval::ImageRenderer chunked(test::test_context(), model().spec, model().network_pointers(), split.cameras,
-                              eval::RenderSettings{100, 1, 0});  // not a divisor of 256: a partial last chunk
+  auto whole = test::trained_renderer(split.cameras, eval::RenderSettings{1024, 1, 0});
+  // 100 rays is not a divisor of 256: a partial last chunk.
+  auto chunked = test::trained_renderer(split.cameras, eval::RenderSettings{100, 1, 0});
   for (size_t i = 0; i < split.num_images(); ++i) {
     const auto a = whole.render(i), b = chunked.render(i);
     check_plausible(a, split.cameras[i]);
