@@ -25,7 +25,7 @@
 
 #include "bench/gemm_bench.hpp"
 #include "cl/context.hpp"
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "mlp/mlp.hpp"

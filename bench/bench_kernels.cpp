@@ -16,8 +16,9 @@
 #include <string>
 
 #include "bench/kernel_bench.hpp"
+#include "kernel_reference.hpp"
 #include "cl/context.hpp"
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 using namespace mipnerf;
 
@@ -82,7 +83,7 @@ int main(int argc, char** argv) try {
   const Args args = parse(argc, argv);
   auto devices = ocl::list_devices();
   ocl::Context ctx(ocl::choose_device(devices, args.device));
-  print_table(ctx.device_info(), bench::run_kernel_bench(ctx, args.options));
+  print_table(ctx.device_info(), bench::run_kernel_bench(ctx, args.options, {}, bench::reference_stages()));
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_kernels: %s\n", e.what());

@@ -18,7 +18,7 @@
 #include "bench/kernel_bench.hpp"
 #include "bench/preset_bench.hpp"
 #include "bench/report.hpp"
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "common.hpp"
 #include "data/camera_path.hpp"
 #include "data/procedural.hpp"

@@ -5,7 +5,7 @@
 #include <iostream>
 #include <memory>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "common.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"

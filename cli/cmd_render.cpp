@@ -6,7 +6,7 @@
 #include <iostream>
 #include <memory>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "common.hpp"
 #include "data/camera_path.hpp"
 #include "eval/evaluate.hpp"
@@ -55,7 +55,7 @@ bool given(const CLI::App& cmd, const char* flag) { return cmd.count(flag) > 0; 
 struct Frames {
   std::string source;          // for messages and render.json: "the test split of DIR", "an orbit", "path FILE"
   std::string default_folder;  // under the run folder
-  std::vector<data::Camera> cameras;
+  std::vector<Camera> cameras;
   std::vector<std::string> stems;
   nlohmann::ordered_json details = nlohmann::ordered_json::object();
 };
@@ -147,14 +147,14 @@ Frames split_frames(const RenderArgs& args, const train::TrainedModel& model, co
 }
 
 // The training cameras (full resolution) when the data can be found; empty otherwise.
-std::vector<data::Camera> training_cameras(const RenderArgs& args, const train::TrainedModel& model) {
+std::vector<Camera> training_cameras(const RenderArgs& args, const train::TrainedModel& model) {
   std::string path = args.data;
   std::error_code ec;
   if (path.empty() && !model.data_path.empty() && fs::exists(model.data_path, ec)) path = model.data_path;
   if (path.empty()) return {};
   const data::Dataset dataset = data::load_dataset(path, train::load_options(model.config, path, {"train"}, 1));
   const data::Split& train = dataset.split("train");
-  std::vector<data::Camera> cameras;
+  std::vector<Camera> cameras;
   for (size_t i = 0; i < train.num_images(); ++i) {
     if (train.scale_levels[i] == 0) cameras.push_back(train.cameras[i]);
   }
@@ -169,7 +169,7 @@ Frames orbit_frames(const RenderArgs& args, const CLI::App& cmd, const train::Tr
     orbit = data::orbit_around(cameras);
   } else {
     // Nothing to fit to: Blender's camera, 400x400, at the Blender scenes' distance around the origin.
-    data::Camera& c = orbit.intrinsics;
+    Camera& c = orbit.intrinsics;
     c.width_px = c.height_px = 400;
     c.focal_x_px = c.focal_y_px = 0.5 * c.width_px / std::tan(0.5 * data::kDefaultCameraAngleX);
     c.center_x_px = c.center_y_px = 200.0;
@@ -181,7 +181,7 @@ Frames orbit_frames(const RenderArgs& args, const CLI::App& cmd, const train::Tr
   orbit.start_azimuth_deg = args.azimuth;
   orbit.frames = args.frames;
   orbit.intrinsics = data::resize_camera(orbit.intrinsics, resolution);
-  data::Camera& c = orbit.intrinsics;
+  Camera& c = orbit.intrinsics;
   if (given(cmd, "--fov")) c.focal_x_px = c.focal_y_px = 0.5 * c.width_px / std::tan(0.5 * args.fov * M_PI / 180.0);
   if (given(cmd, "--focal")) c.focal_x_px = c.focal_y_px = args.focal;
   Frames frames;
@@ -221,7 +221,7 @@ Frames path_frames(const RenderArgs& args, const train::TrainedModel& model,
   return frames;
 }
 
-void apply_range(const RenderArgs& args, const CLI::App& cmd, std::vector<data::Camera>& cameras) {
+void apply_range(const RenderArgs& args, const CLI::App& cmd, std::vector<Camera>& cameras) {
   for (auto& camera : cameras) {
     if (given(cmd, "--near")) camera.near = args.near;
     if (given(cmd, "--far")) camera.far = args.far;

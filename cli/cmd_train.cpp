@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "common.hpp"
 #include "data/procedural.hpp"
 #include "eval/evaluate.hpp"

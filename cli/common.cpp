@@ -3,7 +3,7 @@
 
 #include <iostream>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::cli {
 

@@ -3,7 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "common.hpp"
 
 namespace mipnerf::cli {

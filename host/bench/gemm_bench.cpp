@@ -7,7 +7,7 @@
 
 #include <clblast.h>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 
 namespace mipnerf::bench {

@@ -1,4 +1,4 @@
-// The ray-math stages timed on the device and in the CPU reference (see kernel_bench.hpp).
+// The ray-math stages timed on the device, and in a CPU implementation when one is given (see kernel_bench.hpp).
 #include "bench/kernel_bench.hpp"
 
 #include <algorithm>
@@ -6,8 +6,8 @@
 #include <random>
 
 #include "cl/buffer.hpp"
-#include "cl/error.hpp"
-#include "data/camera.hpp"
+#include "core/error.hpp"
+#include "core/camera.hpp"
 #include "ops/activations.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
@@ -15,32 +15,9 @@
 #include "ops/render.hpp"
 #include "ops/resample.hpp"
 #include "ops/sample.hpp"
-#include "ref/activations.hpp"
-#include "ref/encode.hpp"
-#include "ref/gaussian.hpp"
-#include "ref/rays.hpp"
-#include "ref/render.hpp"
-#include "ref/resample.hpp"
-#include "ref/sample.hpp"
 
 namespace mipnerf::bench {
 namespace {
-
-// Every stage's options, as the paper's Blender configuration has them.
-struct StageOptions {
-  ops::RaysOptions rays;
-  ops::SampleOptions sample{false, true};  // depth-linear, jittered
-  ops::ResampleOptions resample;           // α = 0.01, blur, jittered
-  ops::GaussianOptions gaussian;           // cone
-  ops::RenderOptions render;               // white background
-  ops::ActivationOptions activation;
-  ops::EncodingOptions ipe;   // degrees 0..15: 96 features
-  ops::EncodingOptions view;  // degrees 0..3 + identity: 27 features
-  StageOptions() {
-    view.max_deg = 4;
-    view.append_identity = true;
-  }
-};
 
 // One program per stage and specialisation, each first build timed.
 struct Stages {
@@ -61,7 +38,7 @@ auto timed_build(std::vector<ProgramBuild>& builds, const std::string& name, Mak
   return stage;
 }
 
-Stages build_stages(ocl::Context& ctx, const StageOptions& o, std::vector<ProgramBuild>& builds) {
+Stages build_stages(ocl::Context& ctx, const KernelStageOptions& o, std::vector<ProgramBuild>& builds) {
   return Stages{
       timed_build(builds, "rays.cl", [&] { return ops::Rays(ctx, o.rays); }),
       timed_build(builds, "sample.cl", [&] { return ops::Sample(ctx, o.sample); }),
@@ -75,8 +52,8 @@ Stages build_stages(ocl::Context& ctx, const StageOptions& o, std::vector<Progra
 
 // The device buffers of one batch of R rays × N samples (layouts: docs/ARCHITECTURE.md, "Buffers and layouts").
 struct DeviceBuffers {
-  DeviceBuffers(ocl::Context& ctx, size_t R, size_t N, const StageOptions& o)
-      : cameras(ctx, data::camera_layout::stride, "cameras"),
+  DeviceBuffers(ocl::Context& ctx, size_t R, size_t N, const KernelStageOptions& o)
+      : cameras(ctx, camera_layout::stride, "cameras"),
         camera_ids(ctx, R, "camera_ids"),
         pixel_ids(ctx, R, "pixel_ids"),
         origins(ctx, 3 * R, "origins"),
@@ -114,8 +91,8 @@ struct DeviceBuffers {
 };
 
 // A 800×800 Blender-like camera (lego's first training view, rounded).
-data::Camera blender_camera() {
-  data::Camera cam;
+Camera blender_camera() {
+  Camera cam;
   cam.width_px = cam.height_px = 800;
   cam.focal_x_px = cam.focal_y_px = 1111.0;
   cam.center_x_px = cam.center_y_px = 400.0;
@@ -129,22 +106,14 @@ std::vector<double> download_double(ocl::Context& ctx, const ocl::DeviceArray<fl
   return {values.begin(), values.end()};
 }
 
-// The CPU reference's inputs: the device's, in double; the reference's outputs are scratch.
-struct ReferenceInputs {
-  std::vector<double> cameras, origins, directions, radii, near, far, viewdirs, t_edges, weights;
-  std::vector<double> raw_density, raw_rgb, density, rgb, d_comp, means, covs;
-  std::vector<uint32_t> camera_ids, pixel_ids;
-  std::vector<double> o1, o2, o3, o4, o5, o6, o7;  // outputs, discarded
-};
-
 struct Stage {
   std::string name, unit;
   size_t items;
-  std::function<void()> device, reference;
+  std::function<void()> device;
 };
 
-std::vector<Stage> stage_list(Stages& s, DeviceBuffers& b, ReferenceInputs& r, const StageOptions& o, size_t R,
-                              size_t N, const ops::RngKey& key) {
+std::vector<Stage> stage_list(Stages& s, DeviceBuffers& b, const KernelStageOptions& o, size_t R, size_t N,
+                              const RngKey& key) {
   const size_t rows = R * N;
   const ops::RaysInputs rays_in{b.cameras, b.camera_ids, b.pixel_ids, R};
   const ops::RaysOutputs rays_out{b.origins, b.directions, b.viewdirs, b.radii, b.near, b.far, b.lossmult};
@@ -153,74 +122,43 @@ std::vector<Stage> stage_list(Stages& s, DeviceBuffers& b, ReferenceInputs& r, c
   const ops::RenderInputs render_in{b.rgb, b.density, b.t_edges, b.directions, R, N};
   const ops::RenderInputs render_raw_in{b.raw_rgb, b.raw_density, b.t_edges, b.directions, R, N};
   return {
-      {"rays_fwd (cone)", "rays", R, [&s, rays_in, rays_out, key] { s.rays.fwd(rays_in, rays_out, key); },
-       [&r, &o, R, key] {
-         ref::rays_fwd(o.rays, r.cameras, r.camera_ids, r.pixel_ids, r.o1, r.o2, r.o3, r.o4, r.o5, r.o6, r.o7, R, 1,
-                       key);
-       }},
+      {"rays_fwd (cone)", "rays", R, [&s, rays_in, rays_out, key] { s.rays.fwd(rays_in, rays_out, key); }},
       {"sample_stratified_fwd (jittered)", "edges", R * (N + 1),
-       [&s, &b, R, N, key] { s.sample.stratified({b.near, b.far, R, N}, b.t_edges, key); },
-       [&r, &o, R, N, key] { ref::sample_stratified_fwd(o.sample, r.near, r.far, r.o1, R, N, key); }},
-      {"gaussian_fwd (cone)", "intervals", rows, [&s, &b, gaussian_in] { s.gaussian.fwd(gaussian_in, {b.means, b.covs}); },
-       [&r, &o, R, N] { ref::gaussian_fwd(o.gaussian, r.origins, r.directions, r.radii, r.t_edges, r.o1, r.o2, R, N); }},
+       [&s, &b, R, N, key] { s.sample.stratified({b.near, b.far, R, N}, b.t_edges, key); }},
+      {"gaussian_fwd (cone)", "intervals", rows, [&s, &b, gaussian_in] { s.gaussian.fwd(gaussian_in, {b.means, b.covs}); }},
       {"ipe_fwd (L = 16, 96 features)", "intervals", rows,
-       [&s, &b, &o, rows] { s.encode.ipe(o.ipe, {b.means, b.covs, rows}, b.features); },
-       [&r, &o, rows] { ref::ipe_fwd(o.ipe, r.means, r.covs, r.o1, rows); }},
+       [&s, &b, &o, rows] { s.encode.ipe(o.ipe, {b.means, b.covs, rows}, b.features); }},
       {"gaussian_ipe_fwd (fused)", "intervals", rows,
-       [&s, &b, &o, gaussian_in] { s.encode.gaussian_ipe(o.ipe, gaussian_in, b.features); },
-       [&r, &o, R, N] {
-         ref::gaussian_ipe_fwd(o.gaussian, o.ipe, r.origins, r.directions, r.radii, r.t_edges, r.o1, R, N);
-       }},
+       [&s, &b, &o, gaussian_in] { s.encode.gaussian_ipe(o.ipe, gaussian_in, b.features); }},
       {"pe_fwd (view directions, 27 features)", "rays", R,
-       [&s, &b, &o, R] { s.encode.pe(o.view, {b.viewdirs, R}, b.view_features); },
-       [&r, &o, R] { ref::pe_fwd(o.view, r.viewdirs, r.o1, R); }},
-      {"activations_fwd", "samples", rows, [&s, &b, act_in] { s.activations.fwd(act_in, {b.density, b.rgb}); },
-       [&r, &o, rows] { ref::activations_fwd(o.activation, r.raw_density, r.raw_rgb, r.o1, r.o2, rows); }},
+       [&s, &b, &o, R] { s.encode.pe(o.view, {b.viewdirs, R}, b.view_features); }},
+      {"activations_fwd", "samples", rows, [&s, &b, act_in] { s.activations.fwd(act_in, {b.density, b.rgb}); }},
       {"activations_bwd", "samples", rows,
-       [&s, &b, act_in] { s.activations.bwd(act_in, {b.density, b.rgb}, {b.d_raw_density, b.d_raw_rgb}); },
-       [&r, &o, rows] {
-         ref::activations_bwd(o.activation, r.raw_density, r.raw_rgb, r.density, r.rgb, r.o1, r.o2, rows);
-       }},
+       [&s, &b, act_in] { s.activations.bwd(act_in, {b.density, b.rgb}, {b.d_raw_density, b.d_raw_rgb}); }},
       {"render_fwd (white)", "samples", rows,
-       [&s, &b, render_in] { s.render.fwd(render_in, {b.comp, b.acc, b.distance, b.weights}); },
-       [&r, &o, R, N] {
-         ref::render_fwd(o.render, r.rgb, r.density, r.t_edges, r.directions, r.o1, r.o2, r.o3, r.o4, R, N);
-       }},
+       [&s, &b, render_in] { s.render.fwd(render_in, {b.comp, b.acc, b.distance, b.weights}); }},
       {"render_bwd (white)", "samples", rows,
-       [&s, &b, render_in] { s.render.bwd(render_in, b.weights, {b.d_comp, nullptr}, {b.d_rgb, b.d_density}); },
-       [&r, &o, R, N] {
-         ref::render_bwd(o.render, r.rgb, r.density, r.t_edges, r.directions, r.weights, r.d_comp, nullptr, r.o1,
-                         r.o2, R, N);
-       }},
+       [&s, &b, render_in] { s.render.bwd(render_in, b.weights, {b.d_comp, nullptr}, {b.d_rgb, b.d_density}); }},
       {"render_raw_fwd (fused activations)", "samples", rows,
-       [&s, &b, render_raw_in] { s.render.raw_fwd(render_raw_in, {b.comp, b.acc, b.distance, b.weights}); },
-       [&r, &o, R, N] {
-         ref::render_raw_fwd(o.render, o.activation, r.raw_rgb, r.raw_density, r.t_edges, r.directions, r.o1, r.o2,
-                             r.o3, r.o4, R, N);
-       }},
+       [&s, &b, render_raw_in] { s.render.raw_fwd(render_raw_in, {b.comp, b.acc, b.distance, b.weights}); }},
       {"render_raw_bwd (fused activations)", "samples", rows,
        [&s, &b, render_raw_in] {
          s.render.raw_bwd(render_raw_in, b.weights, {b.d_comp, nullptr}, {b.d_raw_rgb, b.d_raw_density});
-       },
-       [&r, &o, R, N] {
-         ref::render_raw_bwd(o.render, o.activation, r.raw_rgb, r.raw_density, r.t_edges, r.directions, r.weights,
-                             r.d_comp, nullptr, r.o1, r.o2, R, N);
        }},
       {"resample_fwd (α = 0.01, jittered)", "edges", R * (N + 1),
-       [&s, &b, &o, R, N, key] { s.resample.fwd(o.resample, {b.t_edges, b.weights, R, N, N}, b.t_fine, key); },
-       [&r, &o, R, N, key] { ref::resample_fwd(o.resample, r.t_edges, r.weights, r.o1, R, N, N, key); }},
+       [&s, &b, &o, R, N, key] { s.resample.fwd(o.resample, {b.t_edges, b.weights, R, N, N}, b.t_fine, key); }},
   };
 }
 
 // Random pixels and network outputs, then one pass of the pipeline so every stage's inputs hold realistic values;
 // returns the reference's copies of them.
-ReferenceInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, const StageOptions& o, size_t R, size_t N,
-                            const ops::RngKey& key) {
+KernelBenchInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, const KernelStageOptions& o, size_t R, size_t N,
+                            const RngKey& key) {
   const size_t rows = R * N;
   std::mt19937 rng(1);
-  const data::Camera cam = blender_camera();
-  const std::vector<float> cameras = data::pack_cameras({cam});
-  ReferenceInputs r;
+  const Camera cam = blender_camera();
+  const std::vector<float> cameras = pack_cameras({cam});
+  KernelBenchInputs r;
   r.camera_ids.assign(R, 0);
   r.pixel_ids.resize(R);
   for (auto& p : r.pixel_ids) p = static_cast<uint32_t>(rng() % (cam.width_px * cam.height_px));
@@ -265,7 +203,8 @@ ReferenceInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, cons
   return r;
 }
 
-StageTiming time_stage(ocl::Context& ctx, const Stage& stage, const KernelBenchOptions& options) {
+StageTiming time_stage(ocl::Context& ctx, const Stage& stage, const std::function<void()>& reference,
+                       const KernelBenchOptions& options) {
   StageTiming t;
   t.stage = stage.name;
   t.unit = stage.unit;
@@ -276,10 +215,10 @@ StageTiming time_stage(ocl::Context& ctx, const Stage& stage, const KernelBenchO
   };
   t.first_call_seconds = time_call(on_device);  // first launch: buffers touched, work-group code generated
   for (size_t k = 0; k < options.reps; ++k) t.device.add(time_call(on_device));
-  if (options.reference_reps > 0) {
+  if (reference && options.reference_reps > 0) {
     t.reference_seconds = 1e300;
     for (size_t k = 0; k < options.reference_reps; ++k) {
-      t.reference_seconds = std::min(t.reference_seconds, time_call(stage.reference));
+      t.reference_seconds = std::min(t.reference_seconds, time_call(reference));
     }
   }
   return t;
@@ -287,22 +226,27 @@ StageTiming time_stage(ocl::Context& ctx, const Stage& stage, const KernelBenchO
 
 }  // namespace
 
-KernelBenchResult run_kernel_bench(ocl::Context& ctx, const KernelBenchOptions& options, const ProgressFn& progress) {
+KernelBenchResult run_kernel_bench(ocl::Context& ctx, const KernelBenchOptions& options, const ProgressFn& progress,
+                                   const ReferenceStages& reference) {
   if (options.rays == 0 || options.samples == 0 || options.reps == 0) {
     throw Error("kernel benchmark: rays, samples and reps must be at least 1");
   }
   const size_t R = options.rays, N = options.samples;
   KernelBenchResult result;
   result.options = options;
-  const StageOptions stage_options;
+  if (!reference) result.options.reference_reps = 0;
+  const KernelStageOptions stage_options;
   Stages stages = build_stages(ctx, stage_options, result.builds);
   DeviceBuffers buffers(ctx, R, N, stage_options);
-  const ops::RngKey key{20200823, 1, 0};
-  ReferenceInputs reference = make_inputs(ctx, stages, buffers, stage_options, R, N, key);
-  const std::vector<Stage> list = stage_list(stages, buffers, reference, stage_options, R, N, key);
+  const RngKey key{20200823, 1, 0};
+  KernelBenchInputs inputs = make_inputs(ctx, stages, buffers, stage_options, R, N, key);
+  const std::vector<Stage> list = stage_list(stages, buffers, stage_options, R, N, key);
   for (size_t i = 0; i < list.size(); ++i) {
     if (progress) progress(list[i].name, i, list.size());
-    result.stages.push_back(time_stage(ctx, list[i], options));
+    const std::function<void()> on_cpu =
+        reference && result.options.reference_reps > 0 ? reference(list[i].name, stage_options, inputs, R, N, key)
+                                                       : std::function<void()>{};
+    result.stages.push_back(time_stage(ctx, list[i], on_cpu, result.options));
   }
   if (progress) progress("done", list.size(), list.size());
   return result;

@@ -1,6 +1,7 @@
-// Throughput of every ray-math stage (rays … activations, forward and backward) on one OpenCL device, beside the
-// double-precision CPU reference (host/ref, one thread) on the same inputs. Shared by `mipnerf-cl bench` and
-// bench/bench_kernels.
+// Throughput of every ray-math stage (rays … activations, forward and backward) on one OpenCL device, and, when a
+// CPU implementation of the stages is handed in, beside it on the same inputs. Shared by `mipnerf-cl bench` (device
+// only) and bench/bench_kernels (beside the double-precision reference, bench/kernel_reference: the library does not
+// link the reference, the test oracle).
 //
 // Inputs: a 800×800 Blender-like camera, R random pixels, then the pipeline's own outputs (one pass of rays,
 // sampling, activations and rendering first), so every stage reads realistic values. Per stage: one untimed-but-
@@ -9,11 +10,13 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "bench/timing.hpp"
 #include "cl/context.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::bench {
 
@@ -23,6 +26,37 @@ struct KernelBenchOptions {
   size_t reps = 10;           // timed device calls per stage, after the first call
   size_t reference_reps = 2;  // timed CPU reference calls per stage (best kept); 0 leaves the reference out
 };
+
+// Every stage's options, as the paper's Blender configuration has them.
+struct KernelStageOptions {
+  RaysOptions rays;
+  SampleOptions sample{false, true};  // depth-linear, jittered
+  ResampleOptions resample;           // α = 0.01, blur, jittered
+  GaussianOptions gaussian;           // cone
+  RenderOptions render;               // white background
+  ActivationOptions activation;
+  EncodingOptions ipe;   // degrees 0..15: 96 features
+  EncodingOptions view;  // degrees 0..3 + identity: 27 features
+  KernelStageOptions() {
+    view.max_deg = 4;
+    view.append_identity = true;
+  }
+};
+
+// The device's inputs after one pass of the pipeline, in double, for a CPU implementation of the stages; o1…o7 are
+// its scratch outputs (discarded). Layouts as the device buffers (docs/ARCHITECTURE.md, "Buffers and layouts").
+struct KernelBenchInputs {
+  std::vector<double> cameras, origins, directions, radii, near, far, viewdirs, t_edges, weights;
+  std::vector<double> raw_density, raw_rgb, density, rgb, d_comp, means, covs;
+  std::vector<uint32_t> camera_ids, pixel_ids;
+  std::vector<double> o1, o2, o3, o4, o5, o6, o7;
+};
+
+// Given a stage's name (StageTiming::stage), the call that runs that stage on the CPU over `inputs` (R rays × N
+// samples); it throws mipnerf::Error for a stage it does not know, so the two lists cannot drift apart.
+using ReferenceStages = std::function<std::function<void()>(const std::string& stage, const KernelStageOptions& options,
+                                                            KernelBenchInputs& inputs, size_t R, size_t N,
+                                                            const RngKey& key)>;
 
 // One program's first clBuildProgram in this context (PoCL's on-disk cache may serve it: POCL_KERNEL_CACHE=0 gives
 // a true cold compile).
@@ -37,7 +71,7 @@ struct StageTiming {
   size_t items = 0;     // items per call
   double first_call_seconds = 0.0;  // the first launch (work-group code generation on PoCL), then clFinish
   Timings device;                   // the `reps` timed calls after it
-  double reference_seconds = 0.0;   // best CPU reference call; 0 when not measured
+  double reference_seconds = 0.0;   // best CPU reference call; 0 when not measured (no ReferenceStages given)
   double items_per_second() const { return device.best() > 0 ? static_cast<double>(items) / device.best() : 0.0; }
   double reference_items_per_second() const {
     return reference_seconds > 0 ? static_cast<double>(items) / reference_seconds : 0.0;
@@ -50,9 +84,10 @@ struct KernelBenchResult {
   std::vector<StageTiming> stages;   // in pipeline order
 };
 
-// Builds every stage's program (timed), makes the inputs, and times each stage. `progress` is called before each
-// stage with its name. Throws mipnerf::Error for zero sizes or device errors.
+// Builds every stage's program (timed), makes the inputs, and times each stage, and `reference`'s version of it when
+// given (else reference_reps is recorded as 0). `progress` is called before each stage with its name. Throws
+// mipnerf::Error for zero sizes or device errors.
 KernelBenchResult run_kernel_bench(ocl::Context& ctx, const KernelBenchOptions& options,
-                                   const ProgressFn& progress = {});
+                                   const ProgressFn& progress = {}, const ReferenceStages& reference = {});
 
 }  // namespace mipnerf::bench

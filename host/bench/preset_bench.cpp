@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "eval/image_renderer.hpp"
 #include "mlp/gemm_tuning.hpp"
@@ -59,7 +59,7 @@ RenderTiming time_render(ocl::Context& ctx, train::Trainer& trainer, const Prese
   data::ResolutionRequest size;
   size.width = options.render_width;
   size.height = options.render_height;
-  const data::Camera camera = data::resize_camera(trainer.dataset().split("train").cameras.at(0), size);
+  const Camera camera = data::resize_camera(trainer.dataset().split("train").cameras.at(0), size);
   const size_t network_bytes = trainer.parameter_count() * sizeof(float);
   const auto plan = train::plan_memory(trainer.spec(), ctx.device_info(),
                                        static_cast<size_t>(trainer.config().render_chunk_rays), network_bytes, 0, false);

@@ -95,4 +95,15 @@ void copy(Context& ctx, const DeviceArray<T>& src, size_t src_offset, DeviceArra
         "clEnqueueCopyBuffer(" + src.name() + " -> " + dst.name() + ")");
 }
 
+// A row-major matrix inside a device buffer: element (r, c) is at buffer[offset + r·ld + c].
+struct MatrixView {
+  const ocl::DeviceArray<float>* array = nullptr;
+  size_t offset = 0;  // in elements
+  size_t ld = 0;      // leading dimension: elements between consecutive rows
+};
+
+inline MatrixView view(const ocl::DeviceArray<float>& array, size_t ld, size_t offset = 0) {
+  return MatrixView{&array, offset, ld};
+}
+
 }  // namespace mipnerf::ocl

@@ -7,7 +7,7 @@
 
 #include "cl/device.hpp"
 #include "cl/device_quirks.hpp"
-#include "cl/log.hpp"
+#include "core/log.hpp"
 #include "cl/opencl.hpp"
 #include "cl/program.hpp"
 

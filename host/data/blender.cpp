@@ -3,7 +3,7 @@
 #include <cctype>
 #include <filesystem>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/frames.hpp"
 
 namespace mipnerf::data::detail {

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/intrinsics.hpp"
 #include "io/json.hpp"
 

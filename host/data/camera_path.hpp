@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "data/pose.hpp"
 
 namespace mipnerf::data {

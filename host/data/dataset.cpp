@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/frames.hpp"
 
 namespace mipnerf::data {

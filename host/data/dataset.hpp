@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cl/log.hpp"
-#include "data/camera.hpp"
+#include "core/log.hpp"
+#include "core/camera.hpp"
 #include "data/image.hpp"
 
 namespace mipnerf::data {

@@ -1,7 +1,7 @@
 // Uploading a split to the device.
 #include "data/device_dataset.hpp"
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::data {
 

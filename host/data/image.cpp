@@ -1,7 +1,7 @@
 // Host images: loading, the ×2 box filter and compositing.
 #include "data/image.hpp"
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/png.hpp"
 
 namespace mipnerf::data {

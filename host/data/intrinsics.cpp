@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::data {
 namespace {

@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "io/json.hpp"
 
 namespace mipnerf::data {

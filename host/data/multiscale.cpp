@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/frames.hpp"
 #include "io/file.hpp"
 #include "io/png.hpp"

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "cl/log.hpp"
+#include "core/log.hpp"
 
 namespace mipnerf::data {
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::data {
 namespace {

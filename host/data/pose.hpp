@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "io/json.hpp"
 
 namespace mipnerf::data {

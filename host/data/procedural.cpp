@@ -10,13 +10,13 @@
 #include <mutex>
 #include <thread>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/multiscale.hpp"
 #include "data/pose.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
 #include "io/png.hpp"
-#include "ref/rng.hpp"
+#include "core/rng.hpp"
 
 namespace mipnerf::data {
 namespace {
@@ -204,14 +204,14 @@ std::vector<Camera> procedural_cameras(const std::string& split, const SceneOpti
     // Uniform over the spherical cap 10° … 80° elevation: sin(elevation) uniform, azimuth uniform.
     const double z_low = std::sin(10.0 * M_PI / 180.0), z_high = std::sin(80.0 * M_PI / 180.0);
     for (uint32_t v = 0; v < options.train_views; ++v) {
-      const auto u = ref::rng_uniform4(options.seed, v, 0, 0, kStreamCameras);
+      const auto u = rng_uniform4(options.seed, v, 0, 0, kStreamCameras);
       const double elevation = std::asin(z_low + (z_high - z_low) * u[0]);
       cameras.push_back(camera_at(on_sphere(options.camera_distance, elevation, 2.0 * M_PI * u[1]), options));
     }
   } else {
     const uint32_t count = index == 1 ? options.val_views : options.test_views;
     const double elevation = (index == 1 ? 25.0 : 40.0) * M_PI / 180.0;
-    const double phase = ref::rng_uniform4(options.seed, 0, index, 0, kStreamCameras)[0] + (index == 2 ? 0.5 : 0.0);
+    const double phase = rng_uniform4(options.seed, 0, index, 0, kStreamCameras)[0] + (index == 2 ? 0.5 : 0.0);
     for (uint32_t v = 0; v < count; ++v) {
       const double azimuth = 2.0 * M_PI * (v + phase) / count;
       cameras.push_back(camera_at(on_sphere(options.camera_distance, elevation, azimuth), options));
@@ -245,7 +245,7 @@ RgbaImage render_procedural(const Camera& camera, const SceneOptions& options, u
       int hits = 0;
       for (uint32_t k = 0; k < s * s; k += 2) {
         // Two jittered samples per Philox call: stratum k and k + 1 of the s × s grid.
-        const auto u = ref::rng_uniform4(options.seed, pixel, view_key, k / 2, kStreamJitter);
+        const auto u = rng_uniform4(options.seed, pixel, view_key, k / 2, kStreamJitter);
         for (uint32_t m = 0; m < 2 && k + m < s * s; ++m) {
           const uint32_t stratum = k + m;
           const double sx = x + ((stratum % s) + u[2 * m]) * inv_s;

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "cl/log.hpp"
-#include "data/camera.hpp"
+#include "core/log.hpp"
+#include "core/camera.hpp"
 #include "data/image.hpp"
 
 namespace mipnerf::data {
@@ -44,7 +44,7 @@ struct SceneHit {
 };
 SceneHit trace_procedural(const Ray& ray);
 
-// One view: straight RGBA in [0, 1]; each pixel averages samples_per_axis² jittered rays (data::camera_ray):
+// One view: straight RGBA in [0, 1]; each pixel averages samples_per_axis² jittered rays (camera_ray):
 // alpha = the fraction that hit, rgb = the mean colour of those that hit (0 where none did). `view_key`
 // makes the jitter of each view distinct.
 RgbaImage render_procedural(const Camera& camera, const SceneOptions& options, uint32_t view_key);

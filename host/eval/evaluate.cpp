@@ -35,7 +35,7 @@ SplitScores evaluate_split(ImageRenderer& renderer, const data::Split& split, co
       on_chunk = [&](size_t done, size_t) { options.ray_progress(rays_before + done, total_rays); };
     }
     const RenderedImage image = renderer.render(i, on_chunk);
-    const data::Camera& camera = split.cameras[i];
+    const Camera& camera = split.cameras[i];
     rays_before += static_cast<size_t>(camera.width_px) * camera.height_px * passes;
     const ImageView rendered{image.rgb.data(), camera.height_px, camera.width_px, 3};
     const ImageView truth{split.image_rgb(i), camera.height_px, camera.width_px, 3};

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/color.hpp"
 #include "io/exr.hpp"
 #include "io/png.hpp"

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <numeric>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::eval {
 namespace {
@@ -30,16 +30,16 @@ uint64_t camera_seed(uint64_t seed, size_t index) {
 }  // namespace
 
 ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
-                             const std::vector<data::Camera>& cameras, size_t chunk_rays)
+                             const std::vector<Camera>& cameras, size_t chunk_rays)
     : ImageRenderer(ctx, spec, std::move(networks), cameras, RenderSettings{chunk_rays, 1, 0}) {}
 
 ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
-                             const std::vector<data::Camera>& cameras, const RenderSettings& settings)
+                             const std::vector<Camera>& cameras, const RenderSettings& settings)
     : ctx_(&ctx),
       cameras_(cameras),
       settings_(checked(settings)),
       graph_(ctx, spec, std::move(networks), mode_for(settings), settings.chunk_rays),
-      packed_cameras_(ctx, std::max<size_t>(1, cameras.size()) * data::camera_layout::stride, "render cameras [C][24]"),
+      packed_cameras_(ctx, std::max<size_t>(1, cameras.size()) * camera_layout::stride, "render cameras [C][24]"),
       camera_ids_(ctx, settings.chunk_rays, "render camera_ids [chunk]"),
       pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {
   if (cameras_.empty()) throw Error("render: no camera to render");
@@ -49,7 +49,7 @@ ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, st
                   " has more than 2^32 - 1 pixels");
     }
   }
-  packed_cameras_.upload(ctx, data::pack_cameras(cameras_));
+  packed_cameras_.upload(ctx, pack_cameras(cameras_));
 }
 
 RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_t, size_t)>& progress) {
@@ -57,7 +57,7 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
     throw Error("render: camera " + std::to_string(index) + " of " + std::to_string(cameras_.size()));
   }
   const auto start = std::chrono::steady_clock::now();
-  const data::Camera& camera = cameras_[index];
+  const Camera& camera = cameras_[index];
   RenderedImage image;
   image.width = camera.width_px;
   image.height = camera.height_px;
@@ -114,7 +114,7 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
 
 double ImageRenderer::warm_up() {
   const auto start = std::chrono::steady_clock::now();
-  const data::Camera& camera = cameras_.front();
+  const Camera& camera = cameras_.front();
   const size_t count = std::min(settings_.chunk_rays, static_cast<size_t>(camera.width_px) * camera.height_px);
   std::vector<uint32_t> ids(count);
   std::iota(ids.begin(), ids.end(), 0u);

@@ -10,7 +10,7 @@
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "graph/graph.hpp"
 
 namespace mipnerf::eval {
@@ -38,9 +38,9 @@ class ImageRenderer {
  public:
   // `cameras` are uploaded once; chunk_rays bounds the rays (and so the memory) of one launch sequence.
   ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
-                const std::vector<data::Camera>& cameras, size_t chunk_rays);
+                const std::vector<Camera>& cameras, size_t chunk_rays);
   ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
-                const std::vector<data::Camera>& cameras, const RenderSettings& settings);
+                const std::vector<Camera>& cameras, const RenderSettings& settings);
 
   // Renders camera `index`; `progress(done_rays, total_rays)` is called after every chunk (total_rays counts
   // every supersampling pass).
@@ -52,11 +52,11 @@ class ImageRenderer {
 
   size_t chunk_rays() const { return settings_.chunk_rays; }
   const RenderSettings& settings() const { return settings_; }
-  const std::vector<data::Camera>& cameras() const { return cameras_; }
+  const std::vector<Camera>& cameras() const { return cameras_; }
 
  private:
   ocl::Context* ctx_;
-  std::vector<data::Camera> cameras_;
+  std::vector<Camera> cameras_;
   RenderSettings settings_;
   graph::Graph graph_;
   ocl::DeviceArray<float> packed_cameras_;  // [C][24]

@@ -6,7 +6,7 @@
 #include <limits>
 #include <string>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::eval {
 namespace {

@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "train/memory_plan.hpp"
 
 namespace mipnerf::eval {

@@ -1,7 +1,7 @@
 // The host graph: one loop over levels, one chunk of rays at a time.
 #include "graph/graph.hpp"
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::graph {
 namespace {
@@ -99,11 +99,11 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> ne
   if (training && max_batch_rays_ == 0) throw Error("graph: a training graph needs the batch size");
 
   // Sampling is jittered only while training (and only if the spec asks); rendering is deterministic.
-  ops::SampleOptions sample_options = spec_.sample;
+  SampleOptions sample_options = spec_.sample;
   sample_options.randomized = training && spec_.sample.randomized;
   resample_options_ = spec_.resample;
   resample_options_.randomized = training && spec_.resample.randomized;
-  ops::RaysOptions rays_options = spec_.rays;
+  RaysOptions rays_options = spec_.rays;
   // Supersampling jitter while rendering is the renderer's choice (inference_jittered), whatever training did.
   if (!training) rays_options.jitter_subpixel = mode_ == GraphMode::inference_jittered;
 
@@ -168,7 +168,7 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
   }
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
-  const ops::RngKey rng{key.seed, key.step, first_ray};
+  const RngKey rng{key.seed, key.step, first_ray};
   rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count},
              {origins_, directions_, viewdirs_, radii_, near_, far_, ray_lossmult_}, rng);
   if (spec_.rays.view_dependence) encode_->pe(spec_.view_encoding, {viewdirs_, chunk.count}, view_features_);
@@ -177,7 +177,7 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
 void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ray) {
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& out = levels_[l];
-  const ops::RngKey rng{key.seed, key.step, first_ray};
+  const RngKey rng{key.seed, key.step, first_ray};
   switch (level.sampling) {
     case Sampling::stratified:
       sample_->stratified({near_, far_, n_rays, out.intervals}, out.t_edges, rng);

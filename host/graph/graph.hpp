@@ -127,7 +127,7 @@ class Graph {
   std::unique_ptr<ops::Encode> encode_;
   std::unique_ptr<ops::Render> render_;
   std::unique_ptr<ops::Loss> loss_;
-  ops::ResampleOptions resample_options_;
+  ResampleOptions resample_options_;
 
   // Chunk buffers, R = max_chunk_rays, S = R · max intervals.
   ocl::DeviceArray<uint32_t> camera_ids_, pixel_ids_;                  // [R]

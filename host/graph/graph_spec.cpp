@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <sstream>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::graph {
 

@@ -8,7 +8,7 @@
 
 #include "mlp/mlp_config.hpp"
 #include "ops/loss.hpp"
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::graph {
 
@@ -41,14 +41,14 @@ struct LevelSpec {
 struct GraphSpec {
   std::vector<LevelSpec> levels;
   std::vector<mlp::MlpConfig> mlps;  // the networks, indexed by LevelSpec::mlp_index
-  ops::RaysOptions rays;
-  ops::SampleOptions sample;          // `randomized` is set per call (training vs rendering)
-  ops::ResampleOptions resample;      // idem
-  ops::GaussianOptions gaussian;
-  ops::EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
-  ops::EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)
-  ops::ActivationOptions activation;
-  ops::RenderOptions render;
+  RaysOptions rays;
+  SampleOptions sample;          // `randomized` is set per call (training vs rendering)
+  ResampleOptions resample;      // idem
+  GaussianOptions gaussian;
+  EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
+  EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)
+  ActivationOptions activation;
+  RenderOptions render;
   ops::LossOptions loss;
 
   // Intervals of each level, in order.

@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::io {
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/atomic_file.hpp"
 
 namespace mipnerf::io {

@@ -11,7 +11,7 @@
 
 #include <exception>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/atomic_file.hpp"
 
 namespace mipnerf::io {

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::io {
 namespace fs = std::filesystem;

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/file.hpp"
 

@@ -13,7 +13,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/file.hpp"
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "ops/adam.hpp"
 
 namespace mipnerf::mlp {

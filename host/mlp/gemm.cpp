@@ -3,7 +3,7 @@
 
 #include <clblast.h>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
 

@@ -16,16 +16,9 @@ struct GemmShape {
   size_t m = 0, n = 0, k = 0;
 };
 
-// A row-major matrix inside a device buffer: element (r, c) is at buffer[offset + r·ld + c].
-struct MatrixView {
-  const ocl::DeviceArray<float>* array = nullptr;
-  size_t offset = 0;  // in elements
-  size_t ld = 0;      // leading dimension: elements between consecutive rows
-};
-
-inline MatrixView view(const ocl::DeviceArray<float>& array, size_t ld, size_t offset = 0) {
-  return MatrixView{&array, offset, ld};
-}
+// The products read and write ocl::MatrixView (cl/buffer.hpp); the names are kept here for the MLP.
+using ocl::MatrixView;
+using ocl::view;
 
 // Enqueues the product (asynchronous, in queue order). `what` names the product in error messages
 // (e.g. "layer 3 forward"). Sizes are checked against the buffers before CLBlast is called.

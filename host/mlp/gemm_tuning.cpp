@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 
 namespace mipnerf::mlp {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <string>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "ops/mlp.hpp"
 
 namespace mipnerf::mlp {

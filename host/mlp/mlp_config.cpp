@@ -4,8 +4,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "cl/error.hpp"
-#include "ref/rng.hpp"
+#include "core/error.hpp"
+#include "core/rng.hpp"
 
 namespace mipnerf::mlp {
 namespace {
@@ -94,7 +94,7 @@ std::vector<float> glorot_uniform_init(const MlpConfig& config) {
     const double limit = std::sqrt(6.0 / static_cast<double>(layer.in + layer.out));
     const size_t count = layer.in * layer.out;
     for (size_t i = 0; i < count; i += 4) {
-      const auto u = ref::rng_uniform4(config.seed, static_cast<uint32_t>(i / 4), static_cast<uint32_t>(l), 0,
+      const auto u = rng_uniform4(config.seed, static_cast<uint32_t>(i / 4), static_cast<uint32_t>(l), 0,
                                        kInitStream);
       for (size_t k = 0; k < 4 && i + k < count; ++k) {
         params[layer.weight_offset + i + k] = static_cast<float>((2.0 * u[k] - 1.0) * limit);

@@ -7,7 +7,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "cl/program.hpp"
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ops {
 

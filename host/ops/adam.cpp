@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
 

@@ -1,7 +1,7 @@
 // Training-batch sampling: the one place batch_sample's arguments are set.
 #include "ops/batch.hpp"
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "cl/launch.hpp"
 
 namespace mipnerf::ops {

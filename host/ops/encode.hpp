@@ -9,7 +9,7 @@
 #include "cl/context.hpp"
 #include "cl/program.hpp"
 #include "ops/gaussian.hpp"
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ops {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <string>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
 
@@ -14,7 +14,7 @@ namespace {
 // Elements a row-major rows×cols view with leading dimension ld spans from its offset.
 size_t span(size_t rows, size_t cols, size_t ld) { return rows == 0 ? 0 : (rows - 1) * ld + cols; }
 
-void require_view(const mlp::MatrixView& v, size_t rows, size_t cols, const std::string& where, const char* which) {
+void require_view(const ocl::MatrixView& v, size_t rows, size_t cols, const std::string& where, const char* which) {
   if (v.array == nullptr) throw Error(where + ": " + which + " has no buffer");
   if (v.ld < cols) {
     throw Error(where + ": " + which + " has leading dimension " + std::to_string(v.ld) + " < its " +
@@ -42,7 +42,7 @@ MlpKernels::MlpKernels(ocl::Context& ctx) : ctx_(&ctx) {
   sum_partials_ = &program.kernel("mlp_sum_partials");
 }
 
-void MlpKernels::bias_act_fwd(const mlp::MatrixView& z, size_t rows, size_t cols,
+void MlpKernels::bias_act_fwd(const ocl::MatrixView& z, size_t rows, size_t cols,
                               const ocl::DeviceArray<float>& params, size_t bias_offset, bool relu) {
   const std::string where = "mlp_bias_act_fwd";
   if (rows == 0 || cols == 0) return;
@@ -57,7 +57,7 @@ void MlpKernels::bias_act_fwd(const mlp::MatrixView& z, size_t rows, size_t cols
   ocl::launch_2d(*ctx_, *bias_act_fwd_, cols, rows, lx, ly, where);
 }
 
-void MlpKernels::bias_ray_relu_fwd(const mlp::MatrixView& z, size_t rows, size_t cols,
+void MlpKernels::bias_ray_relu_fwd(const ocl::MatrixView& z, size_t rows, size_t cols,
                                    const ocl::DeviceArray<float>& params, size_t bias_offset,
                                    const ocl::DeviceArray<float>& ray_term, size_t samples_per_ray) {
   const std::string where = "mlp_bias_ray_relu_fwd";
@@ -78,7 +78,7 @@ void MlpKernels::bias_ray_relu_fwd(const mlp::MatrixView& z, size_t rows, size_t
   ocl::launch_2d(*ctx_, *bias_ray_relu_fwd_, cols, rows, lx, ly, where);
 }
 
-void MlpKernels::act_bwd_partial(const mlp::MatrixView& dz, const mlp::MatrixView* act, size_t rows, size_t cols,
+void MlpKernels::act_bwd_partial(const ocl::MatrixView& dz, const ocl::MatrixView* act, size_t rows, size_t cols,
                                  size_t rows_per_block, ocl::DeviceArray<float>& partials) {
   const std::string where = "mlp_act_bwd_partial";
   if (rows == 0 || cols == 0) return;
@@ -88,7 +88,7 @@ void MlpKernels::act_bwd_partial(const mlp::MatrixView& dz, const mlp::MatrixVie
   const size_t n_blocks = blocks_for(rows, rows_per_block);
   partials.require_size(n_blocks * cols, where);
   // Without an activation the kernel never reads `act`; dz stands in for it.
-  const mlp::MatrixView& act_view = act ? *act : dz;
+  const ocl::MatrixView& act_view = act ? *act : dz;
   ocl::set_args(*act_bwd_partial_, where, *dz.array, detail::to_uint(dz.offset, where, "dz offset"),
                 detail::to_uint(dz.ld, where, "dz ld"), *act_view.array,
                 detail::to_uint(act_view.offset, where, "act offset"), detail::to_uint(act_view.ld, where, "act ld"),

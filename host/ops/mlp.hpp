@@ -6,7 +6,6 @@
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
-#include "mlp/gemm.hpp"
 
 namespace mipnerf::ops {
 
@@ -19,18 +18,18 @@ class MlpKernels {
   static size_t blocks_for(size_t rows, size_t rows_per_block) { return (rows + rows_per_block - 1) / rows_per_block; }
 
   // mlp_bias_act_fwd: z [rows][cols] (view, written) += params[bias_offset + c]; then ReLU when relu.
-  void bias_act_fwd(const mlp::MatrixView& z, size_t rows, size_t cols, const ocl::DeviceArray<float>& params,
+  void bias_act_fwd(const ocl::MatrixView& z, size_t rows, size_t cols, const ocl::DeviceArray<float>& params,
                     size_t bias_offset, bool relu);
 
   // mlp_bias_ray_relu_fwd: z [rows][cols] = ReLU(z + ray_term[r / samples_per_ray] + bias); ray_term is
   // [rows / samples_per_ray][cols], dense.
-  void bias_ray_relu_fwd(const mlp::MatrixView& z, size_t rows, size_t cols, const ocl::DeviceArray<float>& params,
+  void bias_ray_relu_fwd(const ocl::MatrixView& z, size_t rows, size_t cols, const ocl::DeviceArray<float>& params,
                          size_t bias_offset, const ocl::DeviceArray<float>& ray_term, size_t samples_per_ray);
 
   // mlp_act_bwd_partial: when act is given, dz [rows][cols] (written) is masked by act > 0 (the layer's ReLU
   // output); without act, dz is only read. partials [blocks][cols] (dense) receive the column sums of each
   // block of rows_per_block rows.
-  void act_bwd_partial(const mlp::MatrixView& dz, const mlp::MatrixView* act, size_t rows, size_t cols,
+  void act_bwd_partial(const ocl::MatrixView& dz, const ocl::MatrixView* act, size_t rows, size_t cols,
                        size_t rows_per_block, ocl::DeviceArray<float>& partials);
 
   // mlp_sum_partials: grad[grad_offset + c] += Σ_b partials[b][c] over n_blocks blocks.

@@ -2,7 +2,7 @@
 #include "ops/rays.hpp"
 
 #include "cl/launch.hpp"
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "ops/stage_checks.hpp"
 
 namespace mipnerf::ops {
@@ -22,10 +22,10 @@ Rays::Rays(ocl::Context& ctx, const RaysOptions& options) : ctx_(&ctx), options_
 
 void Rays::fwd(const RaysInputs& in, const RaysOutputs& out, const RngKey& key) {
   const std::string where = "rays_fwd";
-  const size_t stride = data::camera_layout::stride;
+  const size_t stride = camera_layout::stride;
   if (in.cameras.size() % stride != 0) {
     throw Error(where + ": cameras buffer '" + in.cameras.name() + "' holds " + std::to_string(in.cameras.size()) +
-                " floats, not a multiple of " + std::to_string(stride) + " (pack them with data::pack_cameras)");
+                " floats, not a multiple of " + std::to_string(stride) + " (pack them with pack_cameras)");
   }
   const size_t n = in.n_rays;
   detail::require(in.camera_ids, n, where);

@@ -7,7 +7,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "cl/program.hpp"
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ops {
 
@@ -15,7 +15,7 @@ namespace mipnerf::ops {
 ocl::BuildOptions rays_build_options(const RaysOptions& options);
 
 struct RaysInputs {
-  const ocl::DeviceArray<float>& cameras;        // [C][24] packed (data::pack_cameras)
+  const ocl::DeviceArray<float>& cameras;        // [C][24] packed (pack_cameras)
   const ocl::DeviceArray<uint32_t>& camera_ids;  // [R]
   const ocl::DeviceArray<uint32_t>& pixel_ids;   // [R] y·width + x
   size_t n_rays;

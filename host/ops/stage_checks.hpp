@@ -7,7 +7,7 @@
 #include <string>
 
 #include "cl/buffer.hpp"
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "cl/opencl.hpp"
 
 namespace mipnerf::ops::detail {

@@ -14,28 +14,28 @@ double sigmoid(double x) {
 
 }  // namespace
 
-double density_activation(const ops::ActivationOptions& options, double raw) {
+double density_activation(const ActivationOptions& options, double raw) {
   const double x = raw + options.density_bias;
-  if (options.density == ops::DensityActivation::relu) return std::max(x, 0.0);
+  if (options.density == DensityActivation::relu) return std::max(x, 0.0);
   return std::max(x, 0.0) + std::log1p(std::exp(-std::abs(x)));  // softplus without overflow
 }
 
-double density_activation_grad(const ops::ActivationOptions& options, double raw) {
+double density_activation_grad(const ActivationOptions& options, double raw) {
   const double x = raw + options.density_bias;
-  if (options.density == ops::DensityActivation::relu) return x > 0 ? 1.0 : 0.0;
+  if (options.density == DensityActivation::relu) return x > 0 ? 1.0 : 0.0;
   return sigmoid(x);
 }
 
-double rgb_activation(const ops::ActivationOptions& options, double raw) {
+double rgb_activation(const ActivationOptions& options, double raw) {
   return (1.0 + 2.0 * options.rgb_padding) * sigmoid(raw) - options.rgb_padding;
 }
 
-double rgb_activation_grad(const ops::ActivationOptions& options, double raw) {
+double rgb_activation_grad(const ActivationOptions& options, double raw) {
   const double e = std::exp(-std::abs(raw));
   return (1.0 + 2.0 * options.rgb_padding) * e / ((1.0 + e) * (1.0 + e));
 }
 
-void activations_fwd(const ops::ActivationOptions& options, const std::vector<double>& raw_density,
+void activations_fwd(const ActivationOptions& options, const std::vector<double>& raw_density,
                      const std::vector<double>& raw_rgb, std::vector<double>& density, std::vector<double>& rgb,
                      size_t n_rows) {
   density.resize(n_rows);
@@ -46,7 +46,7 @@ void activations_fwd(const ops::ActivationOptions& options, const std::vector<do
   }
 }
 
-void activations_bwd(const ops::ActivationOptions& options, const std::vector<double>& raw_density,
+void activations_bwd(const ActivationOptions& options, const std::vector<double>& raw_density,
                      const std::vector<double>& raw_rgb, const std::vector<double>& d_density,
                      const std::vector<double>& d_rgb, std::vector<double>& d_raw_density,
                      std::vector<double>& d_raw_rgb, size_t n_rows) {

@@ -4,8 +4,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "data/camera.hpp"
-#include "ref/rng.hpp"
+#include "core/camera.hpp"
+#include "core/rng.hpp"
 
 namespace mipnerf::ref {
 
@@ -16,7 +16,7 @@ inline uint64_t uniform_below(uint32_t hi_word, uint32_t lo_word, uint64_t n) {
 }
 
 // Mirrors batch_sample (arguments in the kernel's order; single_image = BATCH_SINGLE_IMAGE).
-// pixel_offsets [num_cameras + 1], pixels_rgb [pixels][3], cameras [C][24] (data::camera_layout);
+// pixel_offsets [num_cameras + 1], pixels_rgb [pixels][3], cameras [C][24] (camera_layout);
 // writes camera_ids [n], pixel_ids [n], target_rgb [n][3], lossmult [n].
 inline void batch_sample(uint64_t seed, uint32_t step, const uint32_t* pixel_offsets, uint32_t num_cameras,
                          const float* pixels_rgb, const float* cameras, uint32_t* camera_ids, uint32_t* pixel_ids,
@@ -37,7 +37,7 @@ inline void batch_sample(uint64_t seed, uint32_t step, const uint32_t* pixel_off
     camera_ids[i] = camera;
     pixel_ids[i] = global_pixel - pixel_offsets[camera];
     for (int c = 0; c < 3; ++c) target_rgb[3 * static_cast<size_t>(i) + c] = pixels_rgb[3 * static_cast<size_t>(global_pixel) + c];
-    lossmult[i] = cameras[static_cast<size_t>(camera) * data::camera_layout::stride + data::camera_layout::lossmult];
+    lossmult[i] = cameras[static_cast<size_t>(camera) * camera_layout::stride + camera_layout::lossmult];
   }
 }
 

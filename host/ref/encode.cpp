@@ -7,7 +7,7 @@ namespace mipnerf::ref {
 namespace {
 
 // Writes a row's 3L sines at out[0..3L) and 3L cosines at out[3L..6L).
-void encode_row(const ops::EncodingOptions& options, const double* mean, const double* var, double* out) {
+void encode_row(const EncodingOptions& options, const double* mean, const double* var, double* out) {
   const int n_degrees = options.degrees();
   for (int l = 0; l < n_degrees; ++l) {
     for (int a = 0; a < 3; ++a) {
@@ -18,7 +18,7 @@ void encode_row(const ops::EncodingOptions& options, const double* mean, const d
 
 }  // namespace
 
-void ipe_fwd(const ops::EncodingOptions& options, const std::vector<double>& means, const std::vector<double>& covs,
+void ipe_fwd(const EncodingOptions& options, const std::vector<double>& means, const std::vector<double>& covs,
              std::vector<double>& features, size_t n_rows) {
   const size_t width = options.ipe_width();
   features.assign(n_rows * width, 0.0);
@@ -27,7 +27,7 @@ void ipe_fwd(const ops::EncodingOptions& options, const std::vector<double>& mea
   }
 }
 
-void pe_fwd(const ops::EncodingOptions& options, const std::vector<double>& x, std::vector<double>& features,
+void pe_fwd(const EncodingOptions& options, const std::vector<double>& x, std::vector<double>& features,
             size_t n_rows) {
   const size_t width = options.pe_width(), identity = options.append_identity ? 3 : 0;
   features.assign(n_rows * width, 0.0);
@@ -38,7 +38,7 @@ void pe_fwd(const ops::EncodingOptions& options, const std::vector<double>& x, s
   }
 }
 
-void gaussian_ipe_fwd(const ops::GaussianOptions& gaussian_options, const ops::EncodingOptions& options,
+void gaussian_ipe_fwd(const GaussianOptions& gaussian_options, const EncodingOptions& options,
                       const std::vector<double>& origins, const std::vector<double>& directions,
                       const std::vector<double>& radii, const std::vector<double>& t_edges,
                       std::vector<double>& features, size_t n_rays, size_t n_samples) {

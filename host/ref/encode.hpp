@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ref {
 
@@ -26,15 +26,15 @@ void ipe_pair(T mean, T var, int degree, T& sin_feature, T& cos_feature) {
 }
 
 // Mirror of ipe_fwd: ipe_features [rows][6L] from means, covs [rows][3] (sines then cosines, index l·3 + axis).
-void ipe_fwd(const ops::EncodingOptions& options, const std::vector<double>& means, const std::vector<double>& covs,
+void ipe_fwd(const EncodingOptions& options, const std::vector<double>& means, const std::vector<double>& covs,
              std::vector<double>& features, size_t n_rows);
 
 // Mirror of pe_fwd (official pos_enc): features [rows][3·identity + 6L] from x [rows][3], identity first.
-void pe_fwd(const ops::EncodingOptions& options, const std::vector<double>& x, std::vector<double>& features,
+void pe_fwd(const EncodingOptions& options, const std::vector<double>& x, std::vector<double>& features,
             size_t n_rows);
 
 // Mirror of gaussian_ipe_fwd: ref::gaussian_fwd then ref::ipe_fwd.
-void gaussian_ipe_fwd(const ops::GaussianOptions& gaussian_options, const ops::EncodingOptions& options,
+void gaussian_ipe_fwd(const GaussianOptions& gaussian_options, const EncodingOptions& options,
                       const std::vector<double>& origins, const std::vector<double>& directions,
                       const std::vector<double>& radii, const std::vector<double>& t_edges,
                       std::vector<double>& features, size_t n_rays, size_t n_samples);

@@ -3,7 +3,7 @@
 
 namespace mipnerf::ref {
 
-void gaussian_fwd(const ops::GaussianOptions& options, const std::vector<double>& origins,
+void gaussian_fwd(const GaussianOptions& options, const std::vector<double>& origins,
                   const std::vector<double>& directions, const std::vector<double>& radii,
                   const std::vector<double>& t_edges, std::vector<double>& means, std::vector<double>& covs,
                   size_t n_rays, size_t n_samples) {
@@ -12,7 +12,7 @@ void gaussian_fwd(const ops::GaussianOptions& options, const std::vector<double>
   for (size_t ray = 0; ray < n_rays; ++ray) {
     const double* t = t_edges.data() + ray * (n_samples + 1);
     for (size_t i = 0; i < n_samples; ++i) {
-      const auto moments = options.ray_shape == ops::RayShape::cylinder
+      const auto moments = options.ray_shape == RayShape::cylinder
                                ? cylinder_moments(t[i], t[i + 1], radii[ray])
                                : conical_frustum_moments(t[i], t[i + 1], radii[ray]);
       const size_t row = ray * n_samples + i;

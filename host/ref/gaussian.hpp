@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ref {
 
@@ -59,7 +59,7 @@ void lift_gaussian(const T o[3], const T d[3], const FrustumMoments<T>& m, T mea
 
 // Mirror of gaussian_fwd (mip-NeRF §3.1: supplement eq. 23 or the cylinder, lifted to 3-D): means, covs [R][N][3] from
 // origins, directions [R][3], radii [R], t_edges [R][N+1].
-void gaussian_fwd(const ops::GaussianOptions& options, const std::vector<double>& origins,
+void gaussian_fwd(const GaussianOptions& options, const std::vector<double>& origins,
                   const std::vector<double>& directions, const std::vector<double>& radii,
                   const std::vector<double>& t_edges, std::vector<double>& means, std::vector<double>& covs,
                   size_t n_rays, size_t n_samples);

@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "ref/gemm_ref.hpp"
 
 namespace mipnerf::ref {

@@ -4,18 +4,18 @@
 #include <cmath>
 #include <limits>
 
-#include "data/camera.hpp"
-#include "ref/rng.hpp"
+#include "core/camera.hpp"
+#include "core/rng.hpp"
 
 namespace mipnerf::ref {
 namespace {
 
 constexpr double kRadiusPerPixelWidth = 0.57735026918962576451;  // 2/√12
 
-data::Camera unpack_camera(const std::vector<double>& cameras, size_t id) {
-  namespace L = data::camera_layout;
+Camera unpack_camera(const std::vector<double>& cameras, size_t id) {
+  namespace L = camera_layout;
   const double* p = cameras.data() + id * L::stride;
-  data::Camera cam;
+  Camera cam;
   for (int k = 0; k < 12; ++k) cam.camera_to_world[k] = p[L::camera_to_world + k];
   cam.focal_x_px = p[L::focal_x];
   cam.focal_y_px = p[L::focal_y];
@@ -37,11 +37,11 @@ struct RayOut {
   double origin[3], direction[3], viewdir[3], radius;
 };
 
-RayOut cone_ray(const data::Camera& cam, double x, double y, uint32_t px) {
-  const data::Ray ray = data::camera_ray(cam, x, y);
+RayOut cone_ray(const Camera& cam, double x, double y, uint32_t px) {
+  const Ray ray = camera_ray(cam, x, y);
   // The horizontal neighbour: the next pixel, the previous one in the last column (as official's edge padding).
   const double step = px + 1 < cam.width_px ? 1.0 : -1.0;
-  const data::Ray neighbour = data::camera_ray(cam, x + step, y);
+  const Ray neighbour = camera_ray(cam, x + step, y);
   RayOut out;
   for (int a = 0; a < 3; ++a) {
     out.origin[a] = ray.origin_world[a];
@@ -51,9 +51,9 @@ RayOut cone_ray(const data::Camera& cam, double x, double y, uint32_t px) {
   return out;
 }
 
-RayOut ndc_ray(const data::Camera& cam, double x, double y, uint32_t px, uint32_t py, double near_plane) {
+RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, double near_plane) {
   const auto ndc_origin = [&](double xx, double yy, double o_ndc[3], double d_ndc[3]) {
-    const data::Ray r = data::camera_ray(cam, xx, yy);
+    const Ray r = camera_ray(cam, xx, yy);
     convert_to_ndc(r.origin_world.data(), r.direction_world.data(), cam.focal_x_px, cam.focal_y_px, cam.width_px,
                    cam.height_px, near_plane, o_ndc, d_ndc);
   };
@@ -81,11 +81,11 @@ void convert_to_ndc(const double o[3], const double d[3], double focal_x, double
   d_ndc[2] = -2.0 * near_plane / o_near[2];
 }
 
-void rays_fwd(const ops::RaysOptions& options, const std::vector<double>& cameras,
+void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
               const std::vector<uint32_t>& camera_ids, const std::vector<uint32_t>& pixel_ids,
               std::vector<double>& origins, std::vector<double>& directions, std::vector<double>& viewdirs,
               std::vector<double>& radii, std::vector<double>& near, std::vector<double>& far,
-              std::vector<double>& lossmult, size_t n_rays, size_t n_cameras, const ops::RngKey& key) {
+              std::vector<double>& lossmult, size_t n_rays, size_t n_cameras, const RngKey& key) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   origins.assign(3 * n_rays, nan);
   directions.assign(3 * n_rays, nan);
@@ -96,7 +96,7 @@ void rays_fwd(const ops::RaysOptions& options, const std::vector<double>& camera
   lossmult.assign(n_rays, nan);
   for (size_t i = 0; i < n_rays; ++i) {
     if (camera_ids[i] >= n_cameras) continue;
-    const data::Camera cam = unpack_camera(cameras, camera_ids[i]);
+    const Camera cam = unpack_camera(cameras, camera_ids[i]);
     if (cam.width_px == 0 || pixel_ids[i] / cam.width_px >= cam.height_px) continue;
     const uint32_t px = pixel_ids[i] % cam.width_px, py = pixel_ids[i] / cam.width_px;
     double offset_x = options.pixel_center_offset, offset_y = options.pixel_center_offset;
@@ -107,10 +107,10 @@ void rays_fwd(const ops::RaysOptions& options, const std::vector<double>& camera
       offset_y = xi[1];
     }
     const double x = px + offset_x, y = py + offset_y;
-    const RayOut ray = options.ray_shape == ops::RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
+    const RayOut ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
                                                                     : cone_ray(cam, x, y, px);
     // viewdirs: the unit world direction (in NDC scenes too, where `directions` holds the NDC direction).
-    const data::Ray world = data::camera_ray(cam, x, y);
+    const Ray world = camera_ray(cam, x, y);
     const double norm = std::sqrt(world.direction_world[0] * world.direction_world[0] +
                                   world.direction_world[1] * world.direction_world[1] +
                                   world.direction_world[2] * world.direction_world[2]);

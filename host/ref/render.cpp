@@ -19,7 +19,7 @@ double thickness(double density, double t0, double t1, double dir_norm) {
 
 }  // namespace
 
-void render_fwd(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+void render_fwd(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
                 std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
                 std::vector<double>& weights, size_t n_rays, size_t n_samples) {
@@ -43,13 +43,13 @@ void render_fwd(const ops::RenderOptions& options, const std::vector<double>& rg
     }
     acc[ray] = sum;
     distance[ray] = std::clamp(sum > 0 ? t_weighted / sum : t[0], t[0], t[n_samples]);
-    if (options.background == ops::Background::white) {
+    if (options.background == Background::white) {
       for (int c = 0; c < 3; ++c) comp_rgb[3 * ray + c] += 1.0 - sum;
     }
   }
 }
 
-void render_bwd(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
                 const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                 const std::vector<double>* d_acc, std::vector<double>& d_rgb, std::vector<double>& d_density,
@@ -62,7 +62,7 @@ void render_bwd(const ops::RenderOptions& options, const std::vector<double>& rg
     const double* d_comp = d_comp_rgb.data() + 3 * ray;
     const double dir_norm = norm3(directions.data() + 3 * ray);
     double d_acc_total = d_acc ? (*d_acc)[ray] : 0.0;
-    if (options.background == ops::Background::white) d_acc_total -= d_comp[0] + d_comp[1] + d_comp[2];
+    if (options.background == Background::white) d_acc_total -= d_comp[0] + d_comp[1] + d_comp[2];
     double optical_depth = 0.0;
     for (size_t i = 0; i < n_samples; ++i) {
       const size_t at = ray * n_samples + i;
@@ -84,7 +84,7 @@ void render_bwd(const ops::RenderOptions& options, const std::vector<double>& rg
   }
 }
 
-void render_raw_fwd(const ops::RenderOptions& options, const ops::ActivationOptions& activation,
+void render_raw_fwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
@@ -94,7 +94,7 @@ void render_raw_fwd(const ops::RenderOptions& options, const ops::ActivationOpti
   render_fwd(options, rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, n_rays, n_samples);
 }
 
-void render_raw_bwd(const ops::RenderOptions& options, const ops::ActivationOptions& activation,
+void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,

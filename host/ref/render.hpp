@@ -4,7 +4,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ref {
 
@@ -12,7 +12,7 @@ namespace mipnerf::ref {
 // α_i = 1 − exp(−σ_i·δ_i), T_i = exp(−Σ_{j<i} σ_j·δ_j), w_i = α_i·T_i; comp_rgb [R][3] = Σ w_i·c_i (+ 1 − acc on
 // white), acc [R] = Σ w_i, distance [R] = Σ w_i·t_mid_i / acc clipped to [t_0, t_N] (t_0 when acc = 0),
 // weights [R][N]. Inputs rgb [R][N][3], density [R][N], t_edges [R][N+1], directions [R][3].
-void render_fwd(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+void render_fwd(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
                 std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
                 std::vector<double>& weights, size_t n_rays, size_t n_samples);
@@ -20,19 +20,19 @@ void render_fwd(const ops::RenderOptions& options, const std::vector<double>& rg
 // Mirror of render_bwd: d_rgb [R][N][3], d_density [R][N] from d_comp_rgb [R][3] and, when d_acc is not null,
 // d_acc [R]. Computed directly from the chain rule, ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − Σ_{k>i} g_k·w_k) with
 // g_i = ∂L/∂w_i, T_{i+1} = exp(−Σ_{j≤i} s_j); `weights` are the forward's.
-void render_bwd(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
                 const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                 const std::vector<double>* d_acc, std::vector<double>& d_rgb, std::vector<double>& d_density,
                 size_t n_rays, size_t n_samples);
 
 // Mirrors of the fused kernels: ref::activations_fwd then ref::render_fwd, and render_bwd then activations_bwd.
-void render_raw_fwd(const ops::RenderOptions& options, const ops::ActivationOptions& activation,
+void render_raw_fwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
                     std::vector<double>& weights, size_t n_rays, size_t n_samples);
-void render_raw_bwd(const ops::RenderOptions& options, const ops::ActivationOptions& activation,
+void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,

@@ -4,11 +4,11 @@
 #include <algorithm>
 #include <limits>
 
-#include "ref/rng.hpp"
+#include "core/rng.hpp"
 
 namespace mipnerf::ref {
 
-std::vector<double> resample_cdf(const ops::ResampleOptions& options, const double* raw, size_t n) {
+std::vector<double> resample_cdf(const ResampleOptions& options, const double* raw, size_t n) {
   std::vector<double> w(n), cdf(n + 1);
   double sum = 0.0;
   for (size_t i = 0; i < n; ++i) {
@@ -36,9 +36,9 @@ std::vector<double> resample_cdf(const ops::ResampleOptions& options, const doub
   return cdf;
 }
 
-void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>& t_edges,
+void resample_fwd(const ResampleOptions& options, const std::vector<double>& t_edges,
                   const std::vector<double>& weights, std::vector<double>& t_new, size_t n_rays, size_t n_samples,
-                  size_t n_new, const ops::RngKey& key) {
+                  size_t n_new, const RngKey& key) {
   const size_t n = n_samples, n_out = n_new + 1;
   const double eps = std::numeric_limits<float>::epsilon();  // official jnp.finfo('float32').eps
   t_new.assign(n_rays * n_out, 0.0);

@@ -4,13 +4,13 @@
 #include <cstddef>
 #include <vector>
 
-#include "ops/ray_options.hpp"
+#include "core/stage_options.hpp"
 
 namespace mipnerf::ref {
 
 // Steps 1–4 of resample_fwd for one ray's weights w [N]: cdf [N+1] with cdf[0] = 0 and cdf[N] = 1 (official
 // blur-pool, padding, 1e-5 floor on the sum, min(1, cumsum) between).
-std::vector<double> resample_cdf(const ops::ResampleOptions& options, const double* weights, size_t n_samples);
+std::vector<double> resample_cdf(const ResampleOptions& options, const double* weights, size_t n_samples);
 
 // Mirror of resample_fwd (mip-NeRF §3.2's blurred, α-padded weights; official resample_along_rays +
 // sorted_piecewise_constant_pdf):
@@ -19,8 +19,8 @@ std::vector<double> resample_cdf(const ops::ResampleOptions& options, const doub
 // M + 1 sorted u (linspace(0, 1 − ε) or stratified with RNG_STREAM_RESAMPLE) → t_new [R][M+1], M = n_new
 // (official num_samples = M + 1; mip-NeRF uses M = N).
 // Written as the official code: the whole CDF, then a search per u (not the kernel's merge walk).
-void resample_fwd(const ops::ResampleOptions& options, const std::vector<double>& t_edges,
+void resample_fwd(const ResampleOptions& options, const std::vector<double>& t_edges,
                   const std::vector<double>& weights, std::vector<double>& t_new, size_t n_rays, size_t n_samples,
-                  size_t n_new, const ops::RngKey& key);
+                  size_t n_new, const RngKey& key);
 
 }  // namespace mipnerf::ref

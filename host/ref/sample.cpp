@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "ref/rng.hpp"
+#include "core/rng.hpp"
 
 namespace mipnerf::ref {
 namespace {
@@ -15,9 +15,9 @@ double stratified_edge(bool lindisp, double near, double far, size_t k, size_t n
 
 }  // namespace
 
-void sample_stratified_fwd(const ops::SampleOptions& options, const std::vector<double>& near,
+void sample_stratified_fwd(const SampleOptions& options, const std::vector<double>& near,
                            const std::vector<double>& far, std::vector<double>& t_edges, size_t n_rays,
-                           size_t n_samples, const ops::RngKey& key) {
+                           size_t n_samples, const RngKey& key) {
   const size_t n_edges = n_samples + 1;
   t_edges.assign(n_rays * n_edges, 0.0);
   for (size_t ray = 0; ray < n_rays; ++ray) {

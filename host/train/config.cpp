@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::train {
 namespace {

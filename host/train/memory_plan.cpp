@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "graph/graph.hpp"
 
 namespace mipnerf::train {

@@ -4,8 +4,8 @@
 namespace mipnerf::train {
 namespace {
 
-ops::EncodingOptions position_encoding(const TrainConfig& c) {
-  ops::EncodingOptions e;
+EncodingOptions position_encoding(const TrainConfig& c) {
+  EncodingOptions e;
   e.min_deg = c.pos_min_deg;
   e.max_deg = c.pos_max_deg;
   e.append_identity = c.pos_identity;
@@ -63,7 +63,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   const size_t n_networks = c.single_mlp ? 1 : static_cast<size_t>(c.num_levels);
   for (size_t i = 0; i < n_networks; ++i) spec.mlps.push_back(network(c, input_width, i));
 
-  spec.rays.ray_shape = c.ray_shape == "cylinder" ? ops::RayShape::cylinder : ops::RayShape::cone;
+  spec.rays.ray_shape = c.ray_shape == "cylinder" ? RayShape::cylinder : RayShape::cone;
   spec.rays.pixel_center_offset = static_cast<float>(c.pixel_center);
   spec.rays.jitter_subpixel = c.jitter_pixels;  // training only: rendering decides its own supersampling
   spec.rays.view_dependence = c.view_dependence;
@@ -74,12 +74,12 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.resample.blur = c.resample_blur;
   spec.resample.randomized = c.randomized;
   spec.activation.density =
-      c.density_activation == "relu" ? ops::DensityActivation::relu : ops::DensityActivation::softplus;
+      c.density_activation == "relu" ? DensityActivation::relu : DensityActivation::softplus;
   spec.activation.density_bias = static_cast<float>(c.density_bias);
   spec.activation.rgb_padding = static_cast<float>(c.rgb_padding);
-  spec.render.background = c.background == "black"  ? ops::Background::black
-                           : c.background == "none" ? ops::Background::none
-                                                    : ops::Background::white;
+  spec.render.background = c.background == "black"  ? Background::black
+                           : c.background == "none" ? Background::none
+                                                    : Background::white;
   spec.loss.multiscale = multiscale_data && c.area_loss;
   spec.validate();
   return spec;

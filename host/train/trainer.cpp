@@ -7,7 +7,7 @@
 #include <fstream>
 #include <iomanip>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/device_dataset.hpp"
 #include "graph/graph.hpp"
 #include "io/atomic_file.hpp"

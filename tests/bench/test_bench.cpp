@@ -19,6 +19,7 @@
 
 #include "bench/gemm_bench.hpp"
 #include "bench/kernel_bench.hpp"
+#include "kernel_reference.hpp"
 #include "bench/preset_bench.hpp"
 #include "bench/report.hpp"
 #include "eval/render_setup.hpp"
@@ -93,7 +94,8 @@ bench::PresetBenchOptions tiny_preset_options(const std::string& name) {
 
 // Results shared by the tests that need a measurement (each made once per process).
 const bench::KernelBenchResult& kernel_result() {
-  static const auto r = bench::run_kernel_bench(test::test_context(), tiny_kernel_options());
+  static const auto r =
+      bench::run_kernel_bench(test::test_context(), tiny_kernel_options(), {}, bench::reference_stages());
   return r;
 }
 

@@ -38,8 +38,8 @@ void check_gemm(const mlp::GemmShape& s, float alpha, float beta, size_t pad) {
   a_dev.upload(ctx, a);
   b_dev.upload(ctx, b);
   c_dev.upload(ctx, c);
-  mlp::gemm(ctx, s, alpha, mlp::view(a_dev, lda, offset), mlp::view(b_dev, ldb, offset), beta,
-            mlp::view(c_dev, ldc, offset), "test");
+  mlp::gemm(ctx, s, alpha, ocl::view(a_dev, lda, offset), ocl::view(b_dev, ldb, offset), beta,
+            ocl::view(c_dev, ldc, offset), "test");
   const auto c_device = c_dev.download(ctx);
   ref::gemm<float>(s, alpha, a.data() + offset, lda, b.data() + offset, ldb, beta, c.data() + offset, ldc);
   const double tolerance = 4.0 * static_cast<double>(s.k) * 6e-8 * (std::abs(alpha) + 1.0) + 1e-6;
@@ -92,9 +92,9 @@ TEST_CASE("gemm: undersized buffers are refused before CLBlast runs") {
   ocl::DeviceArray<float> a(ctx, 16 * 16, "A"), b(ctx, 16 * 16, "B"), c(ctx, 16 * 15, "C too small");
   mlp::GemmShape s;
   s.m = s.n = s.k = 16;
-  CHECK_THROWS_WITH_AS(mlp::gemm(ctx, s, 1.0f, mlp::view(a, 16), mlp::view(b, 16), 0.0f, mlp::view(c, 16), "tiny"),
+  CHECK_THROWS_WITH_AS(mlp::gemm(ctx, s, 1.0f, ocl::view(a, 16), ocl::view(b, 16), 0.0f, ocl::view(c, 16), "tiny"),
                        doctest::Contains("C too small"), Error);
-  CHECK_THROWS_WITH_AS(mlp::gemm(ctx, s, 1.0f, mlp::view(a, 8), mlp::view(b, 16), 0.0f, mlp::view(a, 16), "tiny"),
+  CHECK_THROWS_WITH_AS(mlp::gemm(ctx, s, 1.0f, ocl::view(a, 8), ocl::view(b, 16), 0.0f, ocl::view(a, 16), "tiny"),
                        doctest::Contains("leading dimension"), Error);
   CHECK(mlp::clblast_status_name(clblast::StatusCode::kInsufficientMemoryC) == "kInsufficientMemoryC");
   CHECK(mlp::clblast_status_name(clblast::StatusCode::kOpenCLOutOfResources) == "CL_OUT_OF_RESOURCES");

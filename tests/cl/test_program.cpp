@@ -2,7 +2,7 @@
 #include <doctest/doctest.h>
 
 #include "cl/buffer.hpp"
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "cl/launch.hpp"
 #include "support/test_context.hpp"
 

@@ -3,7 +3,7 @@
 
 #include "cl/buffer.hpp"
 #include "cl/launch.hpp"
-#include "ref/rng.hpp"
+#include "core/rng.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -29,7 +29,7 @@ const Kat kKnownAnswers[] = {
 TEST_CASE("rng: Philox4x32-10 known answers on the CPU mirror and the device") {
   auto& ctx = test::test_context();
   for (const auto& kat : kKnownAnswers) {
-    CHECK(ref::philox4x32_10(kat.counter, kat.key) == kat.expected);
+    CHECK(philox4x32_10(kat.counter, kat.key) == kat.expected);
     ocl::DeviceArray<uint32_t> counters(ctx, 4, "counters"), out(ctx, 4, "words");
     counters.upload(ctx, kat.counter.data(), 4);
     auto& kernel = ctx.program({"common.cl", "util.cl"}).kernel("philox_words");
@@ -46,14 +46,14 @@ TEST_CASE("rng: device uniforms equal the CPU mirror bit for bit, lie in 0..1 an
   const uint64_t seed = 0x123456789abcdefULL;
   ocl::DeviceArray<float> out(ctx, 4 * n, "uniforms [n][4]");
   auto& kernel = ctx.program({"common.cl", "util.cl"}).kernel("rng_uniform4_fill");
-  ocl::set_args(kernel, "rng_uniform4_fill", cl_ulong{seed}, cl_uint{7}, cl_uint{3}, cl_uint{ref::rng_stream_batch},
+  ocl::set_args(kernel, "rng_uniform4_fill", cl_ulong{seed}, cl_uint{7}, cl_uint{3}, cl_uint{rng_stream_batch},
                 out, n);
   ocl::launch_1d(ctx, kernel, n, "rng_uniform4_fill");
   const auto device = out.download(ctx);
   double sum = 0.0;
   int bins[10] = {};
   for (cl_uint i = 0; i < n; ++i) {
-    const auto expected = ref::rng_uniform4(seed, i, 7, 3, ref::rng_stream_batch);
+    const auto expected = rng_uniform4(seed, i, 7, 3, rng_stream_batch);
     for (int k = 0; k < 4; ++k) {
       REQUIRE(device[4 * i + k] == expected[k]);
       REQUIRE(expected[k] >= 0.0f);
@@ -67,6 +67,6 @@ TEST_CASE("rng: device uniforms equal the CPU mirror bit for bit, lie in 0..1 an
   CHECK(std::abs(sum / (4.0 * n) - 0.5) < 0.01);
   for (int b = 0; b < 10; ++b) CHECK(std::abs(bins[b] - 4000) < 400);
   // A different stream or step gives different numbers.
-  CHECK(ref::rng_uniform4(seed, 0, 7, 3, 0) != ref::rng_uniform4(seed, 0, 7, 3, 1));
-  CHECK(ref::rng_uniform4(seed, 0, 7, 3, 0) != ref::rng_uniform4(seed, 0, 8, 3, 0));
+  CHECK(rng_uniform4(seed, 0, 7, 3, 0) != rng_uniform4(seed, 0, 7, 3, 1));
+  CHECK(rng_uniform4(seed, 0, 7, 3, 0) != rng_uniform4(seed, 0, 8, 3, 0));
 }

@@ -10,7 +10,7 @@
 
 #include <unistd.h>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/pose.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"

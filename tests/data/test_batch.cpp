@@ -53,7 +53,7 @@ HostBatch run_device(ocl::Context& ctx, const data::DeviceDataset& device, const
 
 HostBatch run_mirror(const data::Split& split, const ops::BatchOptions& options, uint32_t step, size_t rays) {
   const std::vector<uint32_t> offsets(split.pixel_offsets.begin(), split.pixel_offsets.end());
-  const auto cameras = data::pack_cameras(split.cameras);
+  const auto cameras = pack_cameras(split.cameras);
   HostBatch out{std::vector<uint32_t>(rays), std::vector<uint32_t>(rays), std::vector<float>(3 * rays),
                 std::vector<float>(rays)};
   ref::batch_sample(options.seed, step, offsets.data(), static_cast<uint32_t>(split.num_images()), split.rgb.data(),
@@ -64,7 +64,7 @@ HostBatch run_mirror(const data::Split& split, const ops::BatchOptions& options,
 
 }  // namespace
 
-TEST_CASE("device dataset: the kernels' CAMERA_* offsets equal data::camera_layout") {
+TEST_CASE("device dataset: the kernels' CAMERA_* offsets equal camera_layout") {
   auto& ctx = test::test_context();
   const std::string probe =
       "__kernel void camera_layout_probe(__global int* out) {\n"
@@ -78,7 +78,7 @@ TEST_CASE("device dataset: the kernels' CAMERA_* offsets equal data::camera_layo
   ocl::DeviceArray<int> out(ctx, 11, "camera layout [11]");
   ocl::set_args(kernel, "camera_layout_probe", out);
   ocl::launch_1d(ctx, kernel, 1, "camera_layout_probe");
-  namespace L = data::camera_layout;
+  namespace L = camera_layout;
   CHECK(out.download(ctx) == std::vector<int>{L::camera_to_world, L::focal_x, L::focal_y, L::center_x, L::center_y,
                                               L::width, L::height, L::near, L::far, L::lossmult, L::stride});
 }
@@ -90,7 +90,7 @@ TEST_CASE("device dataset: a split's cameras, pixels and offsets are uploaded as
   const data::DeviceDataset device(ctx, split);
   CHECK(device.num_cameras() == 12);
   CHECK(device.num_pixels() == 3 * (256 + 64 + 16 + 4));
-  CHECK(device.cameras().download(ctx) == data::pack_cameras(split.cameras));
+  CHECK(device.cameras().download(ctx) == pack_cameras(split.cameras));
   CHECK(device.pixels_rgb().download(ctx) == split.rgb);
   const auto offsets = device.pixel_offsets().download(ctx);
   REQUIRE(offsets.size() == 13);
@@ -179,7 +179,7 @@ TEST_CASE("batch sampler: single_image picks images uniformly and pixels uniform
   for (double n : pixels_of_smallest) CHECK(std::abs(n - total / 4) < 6 * std::sqrt(total * 0.25 * 0.75));
 }
 
-TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match data::camera_ray at every scale") {
+TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match camera_ray at every scale") {
   auto& ctx = test::test_context();
   const auto& split = fixture_split();
   const data::DeviceDataset device(ctx, split);
@@ -189,7 +189,7 @@ TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match data
   ocl::DeviceArray<float> origins(ctx, 3 * rays, "origins [R][3]"), directions(ctx, 3 * rays, "directions [R][3]"),
       viewdirs(ctx, 3 * rays, "viewdirs [R][3]"), radii(ctx, rays, "radii [R]"), near(ctx, rays, "near [R]"),
       far(ctx, rays, "far [R]"), lossmult(ctx, rays, "lossmult [R]");
-  ops::Rays stage(ctx, ops::RaysOptions{});
+  ops::Rays stage(ctx, RaysOptions{});
   stage.fwd({device.cameras(), batch.camera_ids, batch.pixel_ids, rays},
             {origins, directions, viewdirs, radii, near, far, lossmult});
   const auto camera_ids = batch.camera_ids.download(ctx), pixel_ids = batch.pixel_ids.download(ctx);
@@ -200,7 +200,7 @@ TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match data
   for (size_t i = 0; i < rays; ++i) {
     const auto& cam = split.cameras[camera_ids[i]];
     const uint32_t x = pixel_ids[i] % cam.width_px, y = pixel_ids[i] / cam.width_px;
-    const auto expected = data::camera_ray(cam, x + 0.5, y + 0.5);
+    const auto expected = camera_ray(cam, x + 0.5, y + 0.5);
     // float32 on the device: origins are copied (|o| = 4, ulp 5e-7); directions are ~1 in size, computed from
     // float-rounded cameras in a few operations: 1e-5 absolute is ~40 ulps.
     for (int k = 0; k < 3; ++k) {
@@ -208,7 +208,7 @@ TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match data
       REQUIRE(std::abs(d[3 * i + k] - expected.direction_world[k]) < 1e-5);
     }
     // The cone radius follows the image's pixel size: the distance to the next pixel's direction, times 2/√12.
-    const auto next = data::camera_ray(cam, x + 1.5, y + 0.5);
+    const auto next = camera_ray(cam, x + 1.5, y + 0.5);
     double step = 0;
     for (int k = 0; k < 3; ++k) step += std::pow(next.direction_world[k] - expected.direction_world[k], 2);
     REQUIRE(r[i] == doctest::Approx(std::sqrt(step) * 2.0 / std::sqrt(12.0)).epsilon(1e-5));

@@ -95,7 +95,7 @@ TEST_CASE("blender: requested splits, near/far from the file and overrides") {
 TEST_CASE("intrinsics: camera_angle_x and fl_x/cx describe the same camera identically") {
   const uint32_t w = 40, h = 30;
   const double angle = 0.6911112070083618;
-  data::Camera from_angle, from_focal;
+  Camera from_angle, from_focal;
   data::resolve_intrinsics(data::read_intrinsics({{"camera_angle_x", angle}}, {}, "a"), w, h, from_angle, "a");
   const double focal = 0.5 * w / std::tan(0.5 * angle);
   const io::Json explicit_keys = {{"fl_x", focal}, {"fl_y", focal}, {"cx", w / 2.0}, {"cy", h / 2.0}, {"w", w}, {"h", h}};
@@ -107,12 +107,12 @@ TEST_CASE("intrinsics: camera_angle_x and fl_x/cx describe the same camera ident
   // The rays through every pixel agree too.
   for (double x : {0.5, 13.5, 39.5}) {
     for (double y : {0.5, 29.5}) {
-      const auto a = data::camera_ray(from_angle, x, y), b = data::camera_ray(from_focal, x, y);
+      const auto a = camera_ray(from_angle, x, y), b = camera_ray(from_focal, x, y);
       for (int k = 0; k < 3; ++k) CHECK(a.direction_world[k] == b.direction_world[k]);
     }
   }
   // camera_angle_y gives fy when no fl_x is given; fl_y alone overrides.
-  data::Camera both;
+  Camera both;
   data::resolve_intrinsics(data::read_intrinsics({{"camera_angle_x", 0.8}, {"camera_angle_y", 0.5}}, {}, "c"), w, h,
                            both, "c");
   CHECK(both.focal_y_px == doctest::Approx(0.5 * h / std::tan(0.25)).epsilon(1e-15));

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/dataset.hpp"
 #include "data_fixtures.hpp"
 #include "train/trainer.hpp"

@@ -37,7 +37,7 @@ TEST_CASE("multiscale: the box filter averages straight RGBA, alpha included, th
 }
 
 TEST_CASE("multiscale: scale_camera divides focal, centre and size and multiplies lossmult by the area") {
-  data::Camera cam;
+  Camera cam;
   cam.width_px = 800;
   cam.height_px = 400;
   cam.focal_x_px = 1111.0;
@@ -57,14 +57,14 @@ TEST_CASE("multiscale: scale_camera divides focal, centre and size and multiplie
     // resolution does.
     for (int i : {0, 5}) {
       for (int k : {0, 3}) {
-        const auto small = data::camera_ray(s, i + 0.5, k + 0.5);
+        const auto small = camera_ray(s, i + 0.5, k + 0.5);
         const double f = 1 << j;
-        const auto full = data::camera_ray(cam, f * i + 0.5 * f, f * k + 0.5 * f);
+        const auto full = camera_ray(cam, f * i + 0.5 * f, f * k + 0.5 * f);
         for (int a = 0; a < 3; ++a) CHECK(small.direction_world[a] == doctest::Approx(full.direction_world[a]).epsilon(1e-12));
       }
     }
     // The distance between neighbouring pixels' directions (the cone radius / (2/√12)) grows with the pixel.
-    const auto p0 = data::camera_ray(s, 10.5, 7.5), p1 = data::camera_ray(s, 11.5, 7.5);
+    const auto p0 = camera_ray(s, 10.5, 7.5), p1 = camera_ray(s, 11.5, 7.5);
     double distance = 0;
     for (int a = 0; a < 3; ++a) distance += std::pow(p1.direction_world[a] - p0.direction_world[a], 2);
     CHECK(std::sqrt(distance) == doctest::Approx((1 << j) / 1111.0).epsilon(1e-12));

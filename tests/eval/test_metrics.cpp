@@ -1,12 +1,13 @@
 // PSNR and SSIM (host/eval/metrics) against hand-computed cases and a direct, non-separable SSIM.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
 #include <vector>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "eval/metrics.hpp"
 
 using namespace mipnerf;

@@ -16,7 +16,7 @@
 #include <limits>
 #include <random>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/exr.hpp"
 

@@ -16,7 +16,7 @@ struct Activated {
   std::vector<float> density, rgb, d_raw_density, d_raw_rgb;
 };
 
-Activated run_device(const ops::ActivationOptions& options, const std::vector<float>& raw_density,
+Activated run_device(const ActivationOptions& options, const std::vector<float>& raw_density,
                      const std::vector<float>& raw_rgb, const std::vector<float>& d_density,
                      const std::vector<float>& d_rgb) {
   auto& ctx = test::test_context();
@@ -34,10 +34,10 @@ Activated run_device(const ops::ActivationOptions& options, const std::vector<fl
   return {density.download(ctx), rgb.download(ctx), d_raw_density.download(ctx), d_raw_rgb.download(ctx)};
 }
 
-std::vector<ops::ActivationOptions> all_variants() {
-  ops::ActivationOptions mipnerf;  // softplus(raw − 1), widened sigmoid ε = 0.001
-  ops::ActivationOptions nerf;
-  nerf.density = ops::DensityActivation::relu;
+std::vector<ActivationOptions> all_variants() {
+  ActivationOptions mipnerf;  // softplus(raw − 1), widened sigmoid ε = 0.001
+  ActivationOptions nerf;
+  nerf.density = DensityActivation::relu;
   nerf.density_bias = 0.0f;
   nerf.rgb_padding = 0.0f;
   return {mipnerf, nerf};
@@ -79,7 +79,7 @@ TEST_CASE("activations: forward and backward match the CPU reference on 30,000 r
       const double e = std::exp(-std::abs(x));
       return e / ((1 + e) * (1 + e));
     };
-    const bool relu = options.density == ops::DensityActivation::relu;
+    const bool relu = options.density == DensityActivation::relu;
     MIPNERF_CHECK_CLOSE("density", dev.density, density, [&](size_t i) {
       return 16 * kUnitRoundoff * std::abs(density[i]) +
              argument_error(i, relu ? 1.0 : ref::density_activation_grad(options, raw_density[i])) + 1e-38;
@@ -103,7 +103,7 @@ TEST_CASE("activations: the reference backward matches central finite difference
     for (int trial = 0; trial < 2000; ++trial) {
       double x = raw_dist(rng);
       // ReLU has a kink at −bias: keep finite differences away from it (the derivative is not defined there).
-      if (options.density == ops::DensityActivation::relu && std::abs(x + options.density_bias) < 1e-3) continue;
+      if (options.density == DensityActivation::relu && std::abs(x + options.density_bias) < 1e-3) continue;
       const double h = 1e-5;
       const double fd_density =
           (ref::density_activation(options, x + h) - ref::density_activation(options, x - h)) / (2 * h);
@@ -139,7 +139,7 @@ TEST_CASE("activations: the device backward matches finite differences of the re
     // Float32 derivative (16u relative, as above) plus the finite difference's own error (≤ 1e-8, see the
     // previous test); ReLU's kink is never hit by a float within 1e-5 of −bias in this sample (checked).
     for (size_t i = 0; i < rows; ++i) {
-      if (options.density == ops::DensityActivation::relu)
+      if (options.density == DensityActivation::relu)
         REQUIRE(std::abs(raw_density[i] + options.density_bias) > 1e-5);
     }
     MIPNERF_CHECK_CLOSE("d density / d raw", dev.d_raw_density, fd_density,

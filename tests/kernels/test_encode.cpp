@@ -16,7 +16,7 @@ using test::kUnitRoundoff;
 
 namespace {
 
-std::vector<float> run_ipe(const ops::EncodingOptions& options, const std::vector<float>& means,
+std::vector<float> run_ipe(const EncodingOptions& options, const std::vector<float>& means,
                            const std::vector<float>& covs) {
   auto& ctx = test::test_context();
   const size_t rows = means.size() / 3;
@@ -26,7 +26,7 @@ std::vector<float> run_ipe(const ops::EncodingOptions& options, const std::vecto
   return features.download(ctx);
 }
 
-std::vector<float> run_pe(const ops::EncodingOptions& options, const std::vector<float>& x) {
+std::vector<float> run_pe(const EncodingOptions& options, const std::vector<float>& x) {
   auto& ctx = test::test_context();
   const size_t rows = x.size() / 3;
   auto x_dev = test::upload(ctx, x, "x");
@@ -51,7 +51,7 @@ TEST_CASE("encode: IPE matches the CPU reference on 10,000 rows over degrees 0-1
   for (size_t i = 0; i < covs.size(); ++i) {
     covs[i] = i % 97 == 0 ? 0.0f : static_cast<float>(test::log_uniform(rng, 1e-12, 10.0));
   }
-  const ops::EncodingOptions options;  // 0..15, the paper's L = 16
+  const EncodingOptions options;  // 0..15, the paper's L = 16
   REQUIRE(options.ipe_width() == 96);
   const auto dev = run_ipe(options, means, covs);
   std::vector<double> features;
@@ -70,7 +70,7 @@ TEST_CASE("encode: IPE of large arguments (up to 2^15 x 100) is accurate against
     const double sign = i % 2 ? 1.0 : -1.0;
     means[i] = static_cast<float>(sign * std::pow(10.0, magnitude(rng)));
   }
-  const ops::EncodingOptions options;
+  const EncodingOptions options;
   const auto dev = run_ipe(options, means, covs);
   const int n_degrees = options.degrees();
   double worst_ulps = 0;
@@ -99,7 +99,7 @@ TEST_CASE("encode: IPE of large arguments (up to 2^15 x 100) is accurate against
 
 TEST_CASE("encode: feature order is sines then cosines, index l times 3 plus axis") {
   const std::vector<float> mean = {0.3f, -1.1f, 2.5f}, var = {0.01f, 0.02f, 0.04f};
-  ops::EncodingOptions options;
+  EncodingOptions options;
   options.min_deg = 1;
   options.max_deg = 3;  // degrees 1 and 2: L = 2, 12 features
   const auto ipe = run_ipe(options, mean, var);
@@ -134,7 +134,7 @@ TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 fe
     }
   }
   for (const auto& [max_deg, x] : {std::pair{4, &dirs}, std::pair{10, &positions}}) {
-    ops::EncodingOptions options;
+    EncodingOptions options;
     options.max_deg = max_deg;
     options.append_identity = true;
     REQUIRE(options.pe_width() == (max_deg == 4 ? 27 : 63));
@@ -144,7 +144,7 @@ TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 fe
     MIPNERF_CHECK_CLOSE("pe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
   }
   // Identity only (no degrees) is a copy.
-  ops::EncodingOptions identity_only;
+  EncodingOptions identity_only;
   identity_only.max_deg = 0;
   identity_only.append_identity = true;
   CHECK(run_pe(identity_only, dirs) == dirs);
@@ -156,7 +156,7 @@ TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge vari
   const size_t rows = 2000;
   std::vector<float> means(3 * rows);
   for (auto& m : means) m = position(rng);
-  const ops::EncodingOptions options;
+  const EncodingOptions options;
   const auto ipe = run_ipe(options, means, std::vector<float>(3 * rows, 0.0f));
   const auto pe = run_pe(options, means);  // no identity: the same 96 features
   CHECK(ipe == pe);
@@ -175,7 +175,7 @@ TEST_CASE("encode: IPE is the expectation of sin and cos under the Gaussian (Mon
   // E[sin(2^l·z)] for z ~ N(μ, σ²) is exp(−4^l·σ²/2)·sin(2^l·μ) (mip-NeRF §3.1).
   std::mt19937_64 rng(25);
   const std::vector<float> mean = {0.7f, -0.2f, 1.3f}, var = {0.05f, 0.002f, 0.3f};
-  ops::EncodingOptions options;
+  EncodingOptions options;
   options.max_deg = 4;
   const auto dev = run_ipe(options, mean, var);
   const size_t samples = 400000;
@@ -219,8 +219,8 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
   auto o = test::upload(ctx, origins, "origins"), d = test::upload(ctx, directions, "directions");
   auto r = test::upload(ctx, radii, "radii"), t = test::upload(ctx, t_edges, "t_edges");
   const size_t rows = n_rays * n_samples;
-  const ops::EncodingOptions options;
-  for (auto shape : {ops::RayShape::cone, ops::RayShape::cylinder}) {
+  const EncodingOptions options;
+  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
     INFO("ray shape " << static_cast<int>(shape));
     ocl::DeviceArray<float> means(ctx, 3 * rows, "means"), covs(ctx, 3 * rows, "covs");
     ocl::DeviceArray<float> separate(ctx, rows * 96, "separate"), fused(ctx, rows * 96, "fused");

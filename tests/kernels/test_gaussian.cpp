@@ -53,7 +53,7 @@ struct Gaussians {
   std::vector<float> means, covs;
 };
 
-Gaussians run_device(const ops::GaussianOptions& options, const Rays& r, bool points = false) {
+Gaussians run_device(const GaussianOptions& options, const Rays& r, bool points = false) {
   auto& ctx = test::test_context();
   auto origins = test::upload(ctx, r.origins, "origins"), directions = test::upload(ctx, r.directions, "directions");
   auto radii = test::upload(ctx, r.radii, "radii"), t_edges = test::upload(ctx, r.t_edges, "t_edges");
@@ -122,9 +122,9 @@ std::vector<Frustum> hard_frustums() {
 
 TEST_CASE("gaussian: cone and cylinder Gaussians match the CPU reference on 12,800 random intervals") {
   const Rays r = random_rays(200, 64, 31);
-  for (auto shape : {ops::RayShape::cone, ops::RayShape::cylinder}) {
+  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
     INFO("ray shape " << static_cast<int>(shape));
-    const ops::GaussianOptions options{shape};
+    const GaussianOptions options{shape};
     const auto dev = run_device(options, r);
     std::vector<double> means, covs;
     ref::gaussian_fwd(options, test::to_double(r.origins), test::to_double(r.directions), test::to_double(r.radii),
@@ -142,7 +142,7 @@ TEST_CASE("gaussian: cone and cylinder Gaussians match the CPU reference on 12,8
       const double d_sq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
       for (size_t i = 0; i < r.n_samples; ++i) {
         const double t0 = r.t_edges[ray * (r.n_samples + 1) + i], t1 = r.t_edges[ray * (r.n_samples + 1) + i + 1];
-        const auto m = shape == ops::RayShape::cone ? ref::conical_frustum_moments(t0, t1, double(r.radii[ray]))
+        const auto m = shape == RayShape::cone ? ref::conical_frustum_moments(t0, t1, double(r.radii[ray]))
                                                     : ref::cylinder_moments(t0, t1, double(r.radii[ray]));
         for (int a = 0; a < 3; ++a) {
           const size_t at = 3 * (ray * r.n_samples + i) + a;
@@ -170,7 +170,7 @@ TEST_CASE("gaussian: frustum moments stay accurate from t0 = 0.1 to 1e4 and widt
     r.radii.push_back(1.0f);
     r.t_edges.insert(r.t_edges.end(), {f.t0, f.t1});
   }
-  const auto dev = run_device({ops::RayShape::cone}, r);
+  const auto dev = run_device({RayShape::cone}, r);
   double worst[3] = {0, 0, 0}, worst_ref = 0;
   for (size_t i = 0; i < frustums.size(); ++i) {
     const auto& f = frustums[i];
@@ -242,7 +242,7 @@ TEST_CASE("gaussian: the lifted mean and covariance match Monte Carlo samples of
     r.radii.push_back(0.2f);
     r.t_edges.insert(r.t_edges.end(), {1.5f, 2.5f});
   }
-  const auto dev = run_device({ops::RayShape::cone}, r);
+  const auto dev = run_device({RayShape::cone}, r);
   const size_t samples = 400000;
   for (size_t ray = 0; ray < r.n_rays; ++ray) {
     double d[3], e1[3], e2[3];
@@ -284,7 +284,7 @@ TEST_CASE("gaussian: the lifted mean and covariance match Monte Carlo samples of
 
 TEST_CASE("gaussian: point samples sit at interval midpoints with zero covariance") {
   const Rays r = random_rays(200, 64, 41);
-  const auto dev = run_device({ops::RayShape::cone}, r, true);
+  const auto dev = run_device({RayShape::cone}, r, true);
   std::vector<double> means, covs;
   ref::gaussian_points_fwd(test::to_double(r.origins), test::to_double(r.directions), test::to_double(r.t_edges), means,
                            covs, r.n_rays, r.n_samples);

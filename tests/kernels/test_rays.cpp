@@ -5,7 +5,7 @@
 
 #include <array>
 
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "kernel_checks.hpp"
 #include "ops/rays.hpp"
 #include "ref/rays.hpp"
@@ -31,7 +31,7 @@ std::array<double, 9> random_rotation(std::mt19937& rng, double max_angle) {
 }
 
 struct Scene {
-  std::vector<data::Camera> cameras;
+  std::vector<Camera> cameras;
   std::vector<uint32_t> camera_ids, pixel_ids;
 };
 
@@ -41,7 +41,7 @@ Scene random_scene(size_t n_cameras, size_t n_rays, unsigned seed, bool forward_
   std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
   Scene s;
   for (size_t c = 0; c < n_cameras; ++c) {
-    data::Camera cam;
+    Camera cam;
     const auto rot = random_rotation(rng, forward_facing ? 0.3 : M_PI);
     const double spread = forward_facing ? 0.3 : 4.0;
     for (int row = 0; row < 3; ++row) {
@@ -71,10 +71,10 @@ struct RayArrays {
   std::vector<float> origins, directions, viewdirs, radii, near, far, lossmult;
 };
 
-RayArrays run_device(const ops::RaysOptions& options, const Scene& s, const ops::RngKey& key = {}) {
+RayArrays run_device(const RaysOptions& options, const Scene& s, const RngKey& key = {}) {
   auto& ctx = test::test_context();
   const size_t n = s.camera_ids.size();
-  const auto packed = data::pack_cameras(s.cameras);
+  const auto packed = pack_cameras(s.cameras);
   auto cameras = test::upload(ctx, packed, "cameras");
   auto camera_ids = test::upload(ctx, s.camera_ids, "camera_ids"),
        pixel_ids = test::upload(ctx, s.pixel_ids, "pixel_ids");
@@ -92,9 +92,9 @@ struct RefArrays {
   std::vector<double> origins, directions, viewdirs, radii, near, far, lossmult;
 };
 
-RefArrays run_ref(const ops::RaysOptions& options, const Scene& s, const ops::RngKey& key = {}) {
+RefArrays run_ref(const RaysOptions& options, const Scene& s, const RngKey& key = {}) {
   RefArrays r;
-  const auto packed = test::to_double(data::pack_cameras(s.cameras));
+  const auto packed = test::to_double(pack_cameras(s.cameras));
   ref::rays_fwd(options, packed, s.camera_ids, s.pixel_ids, r.origins, r.directions, r.viewdirs, r.radii, r.near, r.far,
                 r.lossmult, s.camera_ids.size(), s.cameras.size(), key);
   return r;
@@ -112,7 +112,7 @@ std::function<double(size_t)> direction_tolerance(const std::vector<double>& dir
   };
 }
 
-void check_cone_rays(const ops::RaysOptions& options, const Scene& s, const ops::RngKey& key = {}) {
+void check_cone_rays(const RaysOptions& options, const Scene& s, const RngKey& key = {}) {
   const auto dev = run_device(options, s, key);
   const auto r = run_ref(options, s, key);
   const auto exact = [](size_t) { return 0.0; };
@@ -139,7 +139,7 @@ TEST_CASE("rays: cone rays match the CPU reference on 10,000 random pixels of 40
 TEST_CASE("rays: the cone radius is the neighbouring-pixel distance times 2 over sqrt 12") {
   // An unrotated camera with fx = 500: neighbouring directions differ by exactly 1/500, so r = 1/(500·√3).
   Scene s;
-  data::Camera cam;
+  Camera cam;
   cam.focal_x_px = cam.focal_y_px = 500;
   cam.width_px = 400;
   cam.height_px = 300;
@@ -158,8 +158,8 @@ TEST_CASE("rays: the cone radius is the neighbouring-pixel distance times 2 over
 
 TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official conversion") {
   const Scene s = random_scene(20, 10000, 52, true);
-  ops::RaysOptions options;
-  options.ray_shape = ops::RayShape::cylinder;
+  RaysOptions options;
+  options.ray_shape = RayShape::cylinder;
   const auto dev = run_device(options, s);
   const auto r = run_ref(options, s);
   // NDC origin (2f/(w·n))·o_near.x with o_near = o + t·d: t = −(n + o_z)/d_z, a few roundings of terms bounded by
@@ -168,8 +168,8 @@ TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official 
   std::vector<double> origin_tol(r.origins.size()), direction_tol(r.directions.size());
   for (size_t i = 0; i < s.camera_ids.size(); ++i) {
     const auto& cam = s.cameras[s.camera_ids[i]];
-    const data::Ray ray =
-        data::camera_ray(cam, s.pixel_ids[i] % cam.width_px + 0.5, s.pixel_ids[i] / cam.width_px + 0.5);
+    const Ray ray =
+        camera_ray(cam, s.pixel_ids[i] % cam.width_px + 0.5, s.pixel_ids[i] / cam.width_px + 0.5);
     const double t = std::abs((1.0 + ray.origin_world[2]) / ray.direction_world[2]);
     for (int a = 0; a < 3; ++a) {
       const double scale = 2 * (a == 0 ? cam.focal_x_px / cam.width_px : cam.focal_y_px / cam.height_px);
@@ -193,10 +193,10 @@ TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official 
 
 TEST_CASE("rays: pixel-centre offset 0 and sub-pixel jitter match the reference") {
   const Scene s = random_scene(10, 10000, 53, false);
-  ops::RaysOptions corners;
+  RaysOptions corners;
   corners.pixel_center_offset = 0.0f;  // original NeRF's convention
   check_cone_rays(corners, s);
-  ops::RaysOptions jitter;
+  RaysOptions jitter;
   jitter.jitter_subpixel = true;
   check_cone_rays(jitter, s, {12345, 7, 1000});
 }
@@ -204,7 +204,7 @@ TEST_CASE("rays: pixel-centre offset 0 and sub-pixel jitter match the reference"
 TEST_CASE("rays: jittered positions stay inside their pixel and depend only on seed, step and ray") {
   // An unrotated camera at the origin: the image position is recovered exactly as x = d_x·fx + cx.
   Scene s;
-  data::Camera cam;
+  Camera cam;
   cam.focal_x_px = cam.focal_y_px = 100;
   cam.width_px = 64;
   cam.height_px = 48;
@@ -215,9 +215,9 @@ TEST_CASE("rays: jittered positions stay inside their pixel and depend only on s
     s.camera_ids.push_back(0);
     s.pixel_ids.push_back(i % (64 * 48));
   }
-  ops::RaysOptions options;
+  RaysOptions options;
   options.jitter_subpixel = true;
-  const ops::RngKey key{99, 5, 0};
+  const RngKey key{99, 5, 0};
   const auto a = run_device(options, s, key);
   double min_offset = 1, max_offset = 0;
   for (size_t i = 0; i < s.pixel_ids.size(); ++i) {
@@ -246,7 +246,7 @@ TEST_CASE("rays: jittered positions stay inside their pixel and depend only on s
 
 TEST_CASE("rays: without view dependence the viewdirs buffer is never written") {
   const Scene s = random_scene(5, 1000, 54, false);
-  ops::RaysOptions options;
+  RaysOptions options;
   options.view_dependence = false;
   const auto dev = run_device(options, s);
   for (float v : dev.viewdirs) REQUIRE(v == 7.0f);  // the sentinel run_device filled it with

@@ -55,8 +55,8 @@ struct DeviceResult {
 };
 
 // Runs Render::fwd and ::bwd (or the fused raw_* kernels, on raw inputs) for one batch.
-DeviceResult run_device(const ops::RenderOptions& options, const Batch& b, bool with_d_acc, bool raw = false,
-                        const ops::ActivationOptions& activation = {}) {
+DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_d_acc, bool raw = false,
+                        const ActivationOptions& activation = {}) {
   auto& ctx = test::test_context();
   auto rgb = test::upload(ctx, b.rgb, "rgb"), density = test::upload(ctx, b.density, "density");
   auto t_edges = test::upload(ctx, b.t_edges, "t_edges"), directions = test::upload(ctx, b.directions, "directions");
@@ -84,7 +84,7 @@ struct RefResult {
   std::vector<double> comp_rgb, acc, distance, weights, d_rgb, d_density;
 };
 
-RefResult run_ref(const ops::RenderOptions& options, const Batch& b, bool with_d_acc) {
+RefResult run_ref(const RenderOptions& options, const Batch& b, bool with_d_acc) {
   RefResult r;
   const auto rgb = test::to_double(b.rgb), density = test::to_double(b.density);
   const auto t_edges = test::to_double(b.t_edges), directions = test::to_double(b.directions);
@@ -108,11 +108,11 @@ struct Bounds {
   std::vector<double> weights, comp_rgb, acc, distance, d_rgb, d_density;
 };
 
-Bounds float_bounds(const ops::RenderOptions& options, const Batch& b, const RefResult& r, bool with_d_acc) {
+Bounds float_bounds(const RenderOptions& options, const Batch& b, const RefResult& r, bool with_d_acc) {
   const size_t n = b.n_samples;
   const double u = kUnitRoundoff;
   const double tiny = 1e-43;  // a few float denormal ulps, for values that underflow
-  const bool white = options.background == ops::Background::white;
+  const bool white = options.background == Background::white;
   Bounds out;
   out.weights.resize(b.n_rays * n);
   out.comp_rgb.resize(3 * b.n_rays);
@@ -193,7 +193,7 @@ std::function<double(size_t)> from(const std::vector<double>& bounds) {
   return [&bounds](size_t i) { return bounds[i]; };
 }
 
-void check_against_reference(const ops::RenderOptions& options, const Batch& b, bool with_d_acc) {
+void check_against_reference(const RenderOptions& options, const Batch& b, bool with_d_acc) {
   const auto dev = run_device(options, b, with_d_acc);
   const auto r = run_ref(options, b, with_d_acc);
   const auto bounds = float_bounds(options, b, r, with_d_acc);
@@ -205,11 +205,11 @@ void check_against_reference(const ops::RenderOptions& options, const Batch& b, 
   MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
 }
 
-const ops::Background kBackgrounds[] = {ops::Background::none, ops::Background::black, ops::Background::white};
+const Background kBackgrounds[] = {Background::none, Background::black, Background::white};
 
 // L = Σ_c d_comp_c·comp_rgb_c + d_acc·acc of one ray through the reference forward, with the ray's inputs in
 // double (perturbed by the caller).
-double ray_loss(const ops::RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
+double ray_loss(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& direction, const double* d_comp,
                 const double* d_acc, size_t n_samples) {
   std::vector<double> comp, acc, distance, weights;
@@ -220,7 +220,7 @@ double ray_loss(const ops::RenderOptions& options, const std::vector<double>& rg
 }
 
 // Central finite differences of ray_loss for every colour and density of every ray.
-void finite_differences(const ops::RenderOptions& options, const Batch& b, bool with_d_acc, std::vector<double>& fd_rgb,
+void finite_differences(const RenderOptions& options, const Batch& b, bool with_d_acc, std::vector<double>& fd_rgb,
                         std::vector<double>& fd_density) {
   const size_t n = b.n_samples;
   fd_rgb.assign(3 * b.n_rays * n, 0.0);
@@ -281,7 +281,7 @@ TEST_CASE("render: the backward matches central finite differences of the refere
   for (auto background : kBackgrounds) {
     for (bool with_d_acc : {false, true}) {
       INFO("background " << static_cast<int>(background) << ", d_acc " << with_d_acc);
-      const ops::RenderOptions options{background};
+      const RenderOptions options{background};
       std::vector<double> fd_rgb, fd_density;
       finite_differences(options, b, with_d_acc, fd_rgb, fd_density);
       const auto r = run_ref(options, b, with_d_acc);
@@ -323,12 +323,12 @@ TEST_CASE("render: hard cases stay finite - sigma 0, sigma 1e10, empty intervals
   for (size_t k = 0; k <= n; ++k) b.t_edges[4 * (n + 1) + k] = 2.0f + 0.25f * k;  // no empty interval on ray 4
   for (auto background : kBackgrounds) {
     INFO("background " << static_cast<int>(background));
-    const ops::RenderOptions options{background};
+    const RenderOptions options{background};
     const auto dev = run_device(options, b, true);
     for (const auto* v : {&dev.comp_rgb, &dev.acc, &dev.distance, &dev.weights, &dev.d_rgb, &dev.d_density}) {
       CHECK(test::all_finite(*v));
     }
-    const float bg = background == ops::Background::white ? 1.0f : 0.0f;
+    const float bg = background == Background::white ? 1.0f : 0.0f;
     const auto t_at = [&](size_t ray, size_t k) { return b.t_edges[ray * (n + 1) + k]; };
     // σ = 0: nothing accumulates; the background shows; distance = t_0 (official nan_to_num + clip).
     CHECK(dev.acc[0] == 0.0f);
@@ -362,9 +362,9 @@ TEST_CASE("render: hard cases stay finite - sigma 0, sigma 1e10, empty intervals
 
 TEST_CASE("render: black and none composite the same, white adds 1 - acc") {
   const Batch b = random_batch(2000, 24, 404);
-  const auto none = run_device({ops::Background::none}, b, false);
-  const auto black = run_device({ops::Background::black}, b, false);
-  const auto white = run_device({ops::Background::white}, b, false);
+  const auto none = run_device({Background::none}, b, false);
+  const auto black = run_device({Background::black}, b, false);
+  const auto white = run_device({Background::white}, b, false);
   CHECK(none.comp_rgb == black.comp_rgb);
   CHECK(none.weights == black.weights);
   CHECK(white.acc == black.acc);
@@ -384,15 +384,15 @@ TEST_CASE("render: the fused activation and render kernels equal activations the
   std::normal_distribution<float> normal(0.0f, 4.0f);
   for (auto& x : raw.density) x = normal(rng);
   for (auto& x : raw.rgb) x = normal(rng);
-  ops::ActivationOptions nerf;
-  nerf.density = ops::DensityActivation::relu;
+  ActivationOptions nerf;
+  nerf.density = DensityActivation::relu;
   nerf.density_bias = 0.0f;
   nerf.rgb_padding = 0.0f;
-  for (const auto& activation : {ops::ActivationOptions{}, nerf}) {
+  for (const auto& activation : {ActivationOptions{}, nerf}) {
     for (auto background : kBackgrounds) {
       INFO("density activation " << static_cast<int>(activation.density) << ", background "
                                  << static_cast<int>(background));
-      const ops::RenderOptions options{background};
+      const RenderOptions options{background};
       const auto fused = run_device(options, raw, true, true, activation);
       // The composition on the device: activations_fwd, render_fwd, render_bwd, activations_bwd.
       const size_t rows = raw.n_rays * raw.n_samples;

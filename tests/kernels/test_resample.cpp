@@ -63,7 +63,7 @@ Histograms random_histograms(size_t n_rays, size_t n, unsigned seed, bool positi
 }
 
 // Resamples rays first .. first + count − 1 of `h` into m intervals (m = 0: as many as h has).
-std::vector<float> run_device(const ops::ResampleOptions& options, const Histograms& h, const ops::RngKey& key,
+std::vector<float> run_device(const ResampleOptions& options, const Histograms& h, const RngKey& key,
                               size_t first = 0, size_t count = SIZE_MAX, size_t m = 0) {
   auto& ctx = test::test_context();
   count = std::min(count, h.n_rays - first);
@@ -89,14 +89,14 @@ void check_sorted_inside(const std::vector<float>& t_new, const Histograms& h, s
   }
 }
 
-ops::ResampleOptions mipnerf_options(bool randomized) { return {0.01f, true, randomized}; }
-ops::ResampleOptions nerf_options(bool randomized) { return {0.0f, false, randomized}; }
+ResampleOptions mipnerf_options(bool randomized) { return {0.01f, true, randomized}; }
+ResampleOptions nerf_options(bool randomized) { return {0.0f, false, randomized}; }
 
 }  // namespace
 
 TEST_CASE("resample: new edges match the CPU reference on 10,000 rays, mip-NeRF and NeRF settings") {
   const size_t n = 32;
-  const ops::RngKey key{77, 12, 4000};
+  const RngKey key{77, 12, 4000};
   for (bool nerf : {false, true}) {
     const Histograms h = random_histograms(10000, n, 71, nerf);
     // mip-NeRF draws as many intervals as the coarse level has; the NeRF baseline its own count (here 48).

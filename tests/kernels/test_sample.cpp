@@ -30,8 +30,8 @@ Ranges random_ranges(size_t n_rays, unsigned seed) {
   return r;
 }
 
-std::vector<float> run_stratified(const ops::SampleOptions& options, const Ranges& r, size_t n_samples,
-                                  const ops::RngKey& key, size_t first = 0, size_t count = SIZE_MAX) {
+std::vector<float> run_stratified(const SampleOptions& options, const Ranges& r, size_t n_samples,
+                                  const RngKey& key, size_t first = 0, size_t count = SIZE_MAX) {
   auto& ctx = test::test_context();
   count = std::min(count, r.near.size() - first);
   const std::vector<float> near(r.near.begin() + first, r.near.begin() + first + count);
@@ -47,11 +47,11 @@ std::vector<float> run_stratified(const ops::SampleOptions& options, const Range
 TEST_CASE("sample: stratified edges match the CPU reference, linear in depth or disparity, plain or jittered") {
   const size_t n_rays = 10000, n = 16;
   const Ranges r = random_ranges(n_rays, 61);
-  const ops::RngKey key{2024, 3, 500};
+  const RngKey key{2024, 3, 500};
   for (bool lindisp : {false, true}) {
     for (bool randomized : {false, true}) {
       INFO("lindisp " << lindisp << ", randomized " << randomized);
-      const ops::SampleOptions options{lindisp, randomized};
+      const SampleOptions options{lindisp, randomized};
       const auto dev = run_stratified(options, r, n, key);
       std::vector<double> t_edges;
       ref::sample_stratified_fwd(options, test::to_double(r.near), test::to_double(r.far), t_edges, n_rays, n, key);
@@ -82,7 +82,7 @@ TEST_CASE("sample: stratified edges match the CPU reference, linear in depth or 
 TEST_CASE("sample: jitter depends only on seed, step and ray, not on the chunking") {
   const size_t n = 64;
   const Ranges r = random_ranges(3000, 62);
-  const ops::SampleOptions options{false, true};
+  const SampleOptions options{false, true};
   const auto whole = run_stratified(options, r, n, {5, 9, 0});
   // The same rays in two chunks, the second keyed from ray 1000 on.
   const auto head = run_stratified(options, r, n, {5, 9, 0}, 0, 1000);

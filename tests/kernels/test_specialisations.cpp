@@ -5,7 +5,7 @@
 
 #include <functional>
 
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 #include "kernel_checks.hpp"
 #include "ops/activations.hpp"
 #include "ops/encode.hpp"
@@ -40,7 +40,7 @@ struct SmallScene {
   std::vector<float> cameras;
   std::vector<uint32_t> camera_ids, pixel_ids;
   SmallScene() {
-    std::vector<data::Camera> cams(3);
+    std::vector<Camera> cams(3);
     for (size_t c = 0; c < cams.size(); ++c) {
       cams[c].width_px = 40 + 10 * c;
       cams[c].height_px = 30;
@@ -50,7 +50,7 @@ struct SmallScene {
       cams[c].camera_to_world[3] = 0.1 * c;
       cams[c].camera_to_world[11] = -0.2 * c;
     }
-    cameras = data::pack_cameras(cams);
+    cameras = pack_cameras(cams);
     for (uint32_t i = 0; i < 256; ++i) {
       camera_ids.push_back(i % 3);
       pixel_ids.push_back((i * 37) % (30 * 40));
@@ -58,7 +58,7 @@ struct SmallScene {
   }
 };
 
-void run_rays(const ops::RaysOptions& options) {
+void run_rays(const RaysOptions& options) {
   auto& ctx = test::test_context();
   const SmallScene s;
   const size_t n = s.camera_ids.size();
@@ -68,7 +68,7 @@ void run_rays(const ops::RaysOptions& options) {
   auto v = test::filled(ctx, 3 * n, 7.0f, "viewdirs"), r = test::filled(ctx, n, 7.0f, "radii");
   auto near = test::filled(ctx, n, 7.0f, "near"), far = test::filled(ctx, n, 7.0f, "far");
   auto lossmult = test::filled(ctx, n, 7.0f, "lossmult");
-  const ops::RngKey key{3, 4, 5};
+  const RngKey key{3, 4, 5};
   ops::Rays(ctx, options).fwd({cameras, ids, pixels, n}, {o, d, v, r, near, far, lossmult}, key);
   std::vector<double> ro, rd, rv, rr, rn, rf, rl;
   ref::rays_fwd(options, test::to_double(s.cameras), s.camera_ids, s.pixel_ids, ro, rd, rv, rr, rn, rf, rl, n, 3, key);
@@ -109,31 +109,31 @@ struct SmallRays {
   }
 };
 
-void run_sample(const ops::SampleOptions& options) {
+void run_sample(const SampleOptions& options) {
   auto& ctx = test::test_context();
   const SmallRays s;
   auto near = test::upload(ctx, s.near, "near"), far = test::upload(ctx, s.far, "far");
   ocl::DeviceArray<float> t(ctx, s.n_rays * (s.n + 1), "t_edges");
-  const ops::RngKey key{1, 2, 3};
+  const RngKey key{1, 2, 3};
   ops::Sample(ctx, options).stratified({near, far, s.n_rays, s.n}, t, key);
   std::vector<double> expected;
   ref::sample_stratified_fwd(options, test::to_double(s.near), test::to_double(s.far), expected, s.n_rays, s.n, key);
   check_matches("t_edges", t.download(ctx), expected);
 }
 
-void run_resample(const ops::ResampleOptions& options) {
+void run_resample(const ResampleOptions& options) {
   auto& ctx = test::test_context();
   const SmallRays s;
   auto t = test::upload(ctx, s.t_edges, "t_edges"), w = test::upload(ctx, s.weights, "weights");
   ocl::DeviceArray<float> out(ctx, s.n_rays * (s.n + 1), "t_new");
-  const ops::RngKey key{1, 2, 3};
+  const RngKey key{1, 2, 3};
   ops::Resample(ctx).fwd(options, {t, w, s.n_rays, s.n, s.n}, out, key);
   std::vector<double> expected;
   ref::resample_fwd(options, test::to_double(s.t_edges), test::to_double(s.weights), expected, s.n_rays, s.n, s.n, key);
   check_matches("t_new", out.download(ctx), expected);
 }
 
-void run_gaussian_and_encode(const ops::GaussianOptions& options) {
+void run_gaussian_and_encode(const GaussianOptions& options) {
   auto& ctx = test::test_context();
   const SmallRays s;
   auto o = test::upload(ctx, s.origins, "origins"), d = test::upload(ctx, s.directions, "directions");
@@ -147,7 +147,7 @@ void run_gaussian_and_encode(const ops::GaussianOptions& options) {
                     test::to_double(s.t_edges), rm, rc, s.n_rays, s.n);
   check_matches("means", means.download(ctx), rm);
   check_matches("covs", covs.download(ctx), rc);
-  ops::EncodingOptions encoding;
+  EncodingOptions encoding;
   encoding.max_deg = 8;  // low degrees: the 1e-4 check stays meaningful for features of these means
   ocl::DeviceArray<float> features(ctx, rows * encoding.ipe_width(), "features");
   ops::Encode(ctx, options).gaussian_ipe(encoding, in, features);
@@ -157,7 +157,7 @@ void run_gaussian_and_encode(const ops::GaussianOptions& options) {
   check_matches("gaussian_ipe features", features.download(ctx), rf);
 }
 
-void run_render(const ops::RenderOptions& options, const ops::ActivationOptions& activation) {
+void run_render(const RenderOptions& options, const ActivationOptions& activation) {
   auto& ctx = test::test_context();
   const SmallRays s;
   const size_t rows = s.n_rays * s.n;
@@ -199,11 +199,11 @@ struct Specialisation {
 
 std::vector<Specialisation> all_specialisations() {
   std::vector<Specialisation> list;
-  for (auto shape : {ops::RayShape::cone, ops::RayShape::cylinder}) {
-    const std::string shape_name = shape == ops::RayShape::cone ? "cone" : "cylinder";
+  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
+    const std::string shape_name = shape == RayShape::cone ? "cone" : "cylinder";
     for (bool view : {true, false}) {
       for (bool jitter : {false, true}) {
-        ops::RaysOptions options;
+        RaysOptions options;
         options.ray_shape = shape;
         options.view_dependence = view;
         options.jitter_subpixel = jitter;
@@ -225,14 +225,14 @@ std::vector<Specialisation> all_specialisations() {
                       run_resample({blur ? 0.01f : 0.0f, blur, true});
                     }});
   }
-  ops::ActivationOptions nerf;
-  nerf.density = ops::DensityActivation::relu;
+  ActivationOptions nerf;
+  nerf.density = DensityActivation::relu;
   nerf.density_bias = 0.0f;
   nerf.rgb_padding = 0.0f;
-  for (auto background : {ops::Background::none, ops::Background::black, ops::Background::white}) {
-    for (const auto& activation : {ops::ActivationOptions{}, nerf}) {
+  for (auto background : {Background::none, Background::black, Background::white}) {
+    for (const auto& activation : {ActivationOptions{}, nerf}) {
       list.push_back({"render background " + std::to_string(static_cast<int>(background)) +
-                          (activation.density == ops::DensityActivation::relu ? " relu" : " softplus"),
+                          (activation.density == DensityActivation::relu ? " relu" : " softplus"),
                       [=] { run_render({background}, activation); }});
     }
   }

@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/adam.hpp"
 #include "mlp_checks.hpp"
 #include "ref/adam.hpp"

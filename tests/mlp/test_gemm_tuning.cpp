@@ -10,7 +10,7 @@
 #include <random>
 #include <unordered_map>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm.hpp"
 #include "mlp/gemm_tuning.hpp"
@@ -91,7 +91,7 @@ void check_product(bool transpose_a, bool transpose_b) {
   const auto a = test::random_floats(s.m * s.k, rng), b = test::random_floats(s.k * s.n, rng);
   auto a_dev = test::device_copy(ctx, a, "A"), b_dev = test::device_copy(ctx, b, "B");
   ocl::DeviceArray<float> c_dev(ctx, s.m * s.n, "C");
-  mlp::gemm(ctx, s, 1.0f, mlp::view(a_dev, lda), mlp::view(b_dev, ldb), 0.0f, mlp::view(c_dev, s.n), "tuned");
+  mlp::gemm(ctx, s, 1.0f, ocl::view(a_dev, lda), ocl::view(b_dev, ldb), 0.0f, ocl::view(c_dev, s.n), "tuned");
   const auto ad = test::as_double(a), bd = test::as_double(b);
   std::vector<double> c(s.m * s.n);
   ref::gemm<double>(s, 1.0, ad.data(), lda, bd.data(), ldb, 0.0, c.data(), s.n);

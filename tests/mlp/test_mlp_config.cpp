@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/mlp_config.hpp"
 
 using namespace mipnerf;

@@ -9,7 +9,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/mlp.hpp"
 #include "mlp_checks.hpp"
@@ -70,16 +70,16 @@ struct DevicePass {
 };
 
 mlp::MlpInputs inputs_for(const DevicePass& d, const Pass& p, const mlp::MlpConfig& config) {
-  return {mlp::view(d.features, p.features_ld, p.features_offset), mlp::view(d.view_encoding, config.view_width),
+  return {ocl::view(d.features, p.features_ld, p.features_offset), ocl::view(d.view_encoding, config.view_width),
           p.n_rays, p.samples_per_ray};
 }
 
 mlp::MlpOutputs outputs_for(DevicePass& d, const mlp::MlpConfig& config) {
-  return {mlp::view(d.raw_density, config.density_outputs), mlp::view(d.raw_rgb, config.rgb_outputs)};
+  return {ocl::view(d.raw_density, config.density_outputs), ocl::view(d.raw_rgb, config.rgb_outputs)};
 }
 
 mlp::MlpOutputGradients gradients_for(const DevicePass& d, const mlp::MlpConfig& config) {
-  return {mlp::view(d.d_density, config.density_outputs), mlp::view(d.d_rgb, config.rgb_outputs)};
+  return {ocl::view(d.d_density, config.density_outputs), ocl::view(d.d_rgb, config.rgb_outputs)};
 }
 
 // Two passes (think coarse and fine, different sample counts) through one MLP: forward A, forward B,
@@ -134,7 +134,7 @@ void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t
   ocl::DeviceArray<float> density2(ctx, a.rows() * config.density_outputs, "raw_density (inference)");
   ocl::DeviceArray<float> rgb2(ctx, a.rows() * config.rgb_outputs, "raw_rgb (inference)");
   net.forward(inputs_for(da, a, config),
-              {mlp::view(density2, config.density_outputs), mlp::view(rgb2, config.rgb_outputs)}, ws_infer);
+              {ocl::view(density2, config.density_outputs), ocl::view(rgb2, config.rgb_outputs)}, ws_infer);
   CHECK(density2.download(ctx) == da.raw_density.download(ctx));
   CHECK(rgb2.download(ctx) == da.raw_rgb.download(ctx));
 }
@@ -244,7 +244,7 @@ TEST_CASE("mlp device: misuse is refused with a message that says what to do") {
   CHECK_THROWS_WITH_AS(net.upload_params(std::vector<float>(3)), doctest::Contains("parameter values"), Error);
   ocl::DeviceArray<float> short_density(ctx, p.rows() - 1, "raw_density too short");
   CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config),
-                                   {mlp::view(short_density, 1), mlp::view(d.raw_rgb, config.rgb_outputs)}, ws),
+                                   {ocl::view(short_density, 1), ocl::view(d.raw_rgb, config.rgb_outputs)}, ws),
                        doctest::Contains("raw_density too short"), Error);
   mlp::MlpInputs no_view = inputs_for(d, p, config);
   no_view.view_encoding = {};

@@ -63,11 +63,11 @@ class Fit {
         d_density_(ctx, rows_, "d_raw_density"),
         d_rgb_(ctx, rows_ * 3, "d_raw_rgb") {}
 
-  mlp::MlpInputs inputs() const { return {mlp::view(features_, kFeatures), mlp::view(view_, 3), s_.n_rays, s_.samples_per_ray}; }
+  mlp::MlpInputs inputs() const { return {ocl::view(features_, kFeatures), ocl::view(view_, 3), s_.n_rays, s_.samples_per_ray}; }
 
   // Mean squared error over rows and the 4 outputs; with gradients, uploads ∂loss/∂raw outputs.
   double loss(mlp::Mlp& net, mlp::Workspace& ws, bool upload_gradients) {
-    net.forward(inputs(), {mlp::view(density_, 1), mlp::view(rgb_, 3)}, ws);
+    net.forward(inputs(), {ocl::view(density_, 1), ocl::view(rgb_, 3)}, ws);
     const auto density = density_.download(ctx_), rgb = rgb_.download(ctx_);
     std::vector<float> d_density(rows_), d_rgb(rows_ * 3);
     double sum = 0.0;
@@ -89,7 +89,7 @@ class Fit {
     return sum / static_cast<double>(rows_ * 4);
   }
 
-  mlp::MlpOutputGradients gradients() const { return {mlp::view(d_density_, 1), mlp::view(d_rgb_, 3)}; }
+  mlp::MlpOutputGradients gradients() const { return {ocl::view(d_density_, 1), ocl::view(d_rgb_, 3)}; }
   size_t rows() const { return rows_; }
 
  private:

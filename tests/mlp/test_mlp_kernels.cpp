@@ -29,7 +29,7 @@ TEST_CASE("mlp kernels: bias + activation forward, with and without ReLU, NaN ke
     const auto params = test::random_floats(bias_offset + cols, rng);
     auto z_dev = test::device_copy(ctx, z, "z");
     const auto params_dev = test::device_copy(ctx, params, "params");
-    kernels.bias_act_fwd(mlp::view(z_dev, ld, offset), rows, cols, params_dev, bias_offset, relu);
+    kernels.bias_act_fwd(ocl::view(z_dev, ld, offset), rows, cols, params_dev, bias_offset, relu);
     const auto out = z_dev.download(ctx);
     auto expected = test::as_double(z);
     const auto params_d = test::as_double(params);
@@ -55,14 +55,14 @@ TEST_CASE("mlp kernels: per-ray view term added to every sample of its ray") {
   auto z_dev = test::device_copy(ctx, z, "z");
   const auto params_dev = test::device_copy(ctx, params, "params");
   const auto ray_dev = test::device_copy(ctx, ray_term, "ray term");
-  kernels.bias_ray_relu_fwd(mlp::view(z_dev, ld, offset), rows, cols, params_dev, bias_offset, ray_dev, samples);
+  kernels.bias_ray_relu_fwd(ocl::view(z_dev, ld, offset), rows, cols, params_dev, bias_offset, ray_dev, samples);
   auto expected = test::as_double(z);
   const auto params_d = test::as_double(params), ray_d = test::as_double(ray_term);
   ref::mlp_bias_ray_relu_fwd(expected.data(), offset, ld, rows, cols, params_d.data(), bias_offset, ray_d.data(),
                              samples);
   // Two float additions of values in [−1, 1]: |error| ≤ 2·u·3.
   test::check_close(z_dev.download(ctx), expected, 0, z.size(), 0.0, 6.0 * kFloatEps, "bias_ray_relu_fwd");
-  CHECK_THROWS_AS(kernels.bias_ray_relu_fwd(mlp::view(z_dev, ld, offset), rows - 1, cols, params_dev, bias_offset,
+  CHECK_THROWS_AS(kernels.bias_ray_relu_fwd(ocl::view(z_dev, ld, offset), rows - 1, cols, params_dev, bias_offset,
                                             ray_dev, samples),
                   Error);
 }
@@ -81,8 +81,8 @@ TEST_CASE("mlp kernels: activation backward with per-block column sums, then the
       auto dz_dev = test::device_copy(ctx, dz, "dz");
       const auto act_dev = test::device_copy(ctx, act, "act");
       ocl::DeviceArray<float> partials_dev(ctx, blocks * cols, "partials");
-      const mlp::MatrixView act_view = mlp::view(act_dev, act_ld, act_offset);
-      kernels.act_bwd_partial(mlp::view(dz_dev, ld, offset), relu ? &act_view : nullptr, rows, cols, rows_per_block,
+      const ocl::MatrixView act_view = ocl::view(act_dev, act_ld, act_offset);
+      kernels.act_bwd_partial(ocl::view(dz_dev, ld, offset), relu ? &act_view : nullptr, rows, cols, rows_per_block,
                               partials_dev);
       const auto grad0 = test::random_floats(7 + cols, rng);
       auto grad_dev = test::device_copy(ctx, grad0, "grad");

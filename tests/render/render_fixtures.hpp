@@ -49,7 +49,7 @@ inline train::TrainedModel& trained_model() {
 }
 
 // A renderer of trained_model() over `cameras`.
-inline eval::ImageRenderer trained_renderer(const std::vector<data::Camera>& cameras,
+inline eval::ImageRenderer trained_renderer(const std::vector<Camera>& cameras,
                                             const eval::RenderSettings& settings) {
   return eval::ImageRenderer(test_context(), trained_model().spec, trained_model().network_pointers(), cameras,
                              settings);

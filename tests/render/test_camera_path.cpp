@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "data/procedural.hpp"
 #include "render_fixtures.hpp"
@@ -205,7 +205,7 @@ TEST_CASE("render: every bad camera path file is one error naming the file and t
 }
 
 TEST_CASE("render: a resized camera sees the same view, with pixels (and cone radii) of the new size") {
-  data::Camera camera;
+  Camera camera;
   camera.width_px = 64;
   camera.height_px = 48;
   camera.focal_x_px = 70.0;
@@ -213,7 +213,7 @@ TEST_CASE("render: a resized camera sees the same view, with pixels (and cone ra
   camera.center_x_px = 31.0;
   camera.center_y_px = 25.0;
   camera.camera_to_world = {0, -1, 0, 1, 1, 0, 0, 2, 0, 0, 1, 3};
-  auto same_direction = [](const data::Ray& a, const data::Ray& b) {
+  auto same_direction = [](const Ray& a, const Ray& b) {
     for (int i = 0; i < 3; ++i) {
       // Directions (camera-frame z = −1) of the same image point; exact up to rounding.
       if (std::abs(a.direction_world[i] - b.direction_world[i]) > 1e-12) return false;
@@ -232,13 +232,13 @@ TEST_CASE("render: a resized camera sees the same view, with pixels (and cone ra
     // The image point (x, y) of the original is (x/2, y/2) of the half-size image.
     for (double x : {0.0, 10.5, 63.0}) {
       for (double y : {0.0, 20.25, 47.5}) {
-        CHECK(same_direction(data::camera_ray(camera, x, y), data::camera_ray(half, x / 2, y / 2)));
+        CHECK(same_direction(camera_ray(camera, x, y), camera_ray(half, x / 2, y / 2)));
       }
     }
     // The cone radius at t = 1 is the distance between neighbouring pixels' directions · 2/√12 (rays.cl):
     // twice as large at half the resolution.
-    auto pixel_width = [](const data::Camera& c) {
-      const auto a = data::camera_ray(c, 10.5, 7.5).direction_world, b = data::camera_ray(c, 11.5, 7.5).direction_world;
+    auto pixel_width = [](const Camera& c) {
+      const auto a = camera_ray(c, 10.5, 7.5).direction_world, b = camera_ray(c, 11.5, 7.5).direction_world;
       return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
     };
     CHECK(pixel_width(half) == doctest::Approx(2.0 * pixel_width(camera)).epsilon(1e-12));
@@ -251,7 +251,7 @@ TEST_CASE("render: a resized camera sees the same view, with pixels (and cone ra
     CHECK(wide.width_px == 128);
     CHECK(wide.height_px == 96);
     CHECK(wide.focal_x_px == 140.0);
-    CHECK(same_direction(data::camera_ray(camera, 5, 7), data::camera_ray(wide, 10, 14)));
+    CHECK(same_direction(camera_ray(camera, 5, 7), camera_ray(wide, 10, 14)));
     const auto tall = data::resize_camera(camera, {0.0, 0, 24});
     CHECK(tall.width_px == 32);
     CHECK(tall.center_x_px == 15.5);
@@ -265,8 +265,8 @@ TEST_CASE("render: a resized camera sees the same view, with pixels (and cone ra
     CHECK(other.center_x_px == 62.0);
     CHECK(other.center_y_px == 50.0 + 0.5 * (128 - 96));  // the extra rows are added evenly above and below
     // Left and right edges see what they saw.
-    CHECK(same_direction(data::camera_ray(camera, 0, 25), data::camera_ray(other, 0, other.center_y_px)));
-    CHECK(same_direction(data::camera_ray(camera, 64, 25), data::camera_ray(other, 128, other.center_y_px)));
+    CHECK(same_direction(camera_ray(camera, 0, 25), camera_ray(other, 0, other.center_y_px)));
+    CHECK(same_direction(camera_ray(camera, 64, 25), camera_ray(other, 128, other.center_y_px)));
   }
   SUBCASE("bad requests") {
     CHECK_THROWS_WITH_AS(data::resize_camera(camera, {-1.0, 0, 0}), doctest::Contains("scale factor must be positive"),

@@ -9,7 +9,7 @@
 #include <limits>
 #include <map>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "data/dataset.hpp"
 #include "eval/evaluate.hpp"

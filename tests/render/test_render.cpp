@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "data/dataset.hpp"
 #include "eval/image_output.hpp"
@@ -27,7 +27,7 @@ const data::Split& test_split() {
   return dataset.split("test");
 }
 
-eval::RenderedImage render(const std::vector<data::Camera>& cameras, size_t index, eval::RenderSettings settings) {
+eval::RenderedImage render(const std::vector<Camera>& cameras, size_t index, eval::RenderSettings settings) {
   auto renderer = test::trained_renderer(cameras, settings);
   return renderer.render(index);
 }
@@ -70,7 +70,7 @@ std::vector<float> downsample2(const std::vector<float>& rgb, uint32_t width, ui
   return out;
 }
 
-void check_plausible(const eval::RenderedImage& image, const data::Camera& camera) {
+void check_plausible(const eval::RenderedImage& image, const Camera& camera) {
   REQUIRE(image.rgb.size() == 3u * image.width * image.height);
   for (float v : image.rgb) REQUIRE(std::isfinite(v));
   for (float a : image.acc) {
@@ -127,7 +127,7 @@ TEST_CASE("render: supersampling averages jittered rays, reproducibly and whatev
   CHECK(max_abs_difference(jittered.rgb, centre.rgb) > 1e-4);
   // ... but stay inside the pixels: averaging within each pixel changes the image far less than a shift of one
   // whole pixel does.
-  data::Camera shifted = cameras[0];
+  Camera shifted = cameras[0];
   shifted.center_x_px += 1.0;
   const auto moved = render({shifted}, 0, {1024, 1, 0});
   const double jitter_change = mean_abs_difference(jittered.rgb, centre.rgb);
@@ -137,7 +137,7 @@ TEST_CASE("render: supersampling averages jittered rays, reproducibly and whatev
   // More passes converge: 16 passes lie closer to 64 than 4 passes do (independent seeds: the difference's
   // variance is σ²(1/16 + 1/64) against σ²(1/4 + 1/64), over 768 values). If the passes shared their jitter, all
   // three would be one pass and equally far apart. At 8×8 pixels (a quarter of the rays).
-  const std::vector<data::Camera> small{data::resize_camera(cameras[0], {0.5, 0, 0})};
+  const std::vector<Camera> small{data::resize_camera(cameras[0], {0.5, 0, 0})};
   const auto many = render(small, 0, {1024, 64, 3});
   const auto sixteen = render(small, 0, {1024, 16, 5});
   const auto four = render(small, 0, {1024, 4, 6});
@@ -148,9 +148,9 @@ TEST_CASE("render: supersampling averages jittered rays, reproducibly and whatev
 }
 
 TEST_CASE("render: at half and double resolution the model renders the same view at the new pixel size") {
-  const data::Camera camera = test_split().cameras[1];
+  const Camera camera = test_split().cameras[1];
   const auto full = render({camera}, 0, {1024, 1, 0});
-  const data::Camera half_camera = data::resize_camera(camera, {0.5, 0, 0});
+  const Camera half_camera = data::resize_camera(camera, {0.5, 0, 0});
   const auto half = render({half_camera}, 0, {1024, 1, 0});
   check_plausible(half, half_camera);
   CHECK(half.width == 8);
@@ -159,7 +159,7 @@ TEST_CASE("render: at half and double resolution the model renders the same view
   CHECK(double_size.width == 32);
   // The box-filtered full-resolution render is what the half-size pixels cover: close to the half-size render.
   // A half-size camera whose focal length was not scaled (a 2x zoom of the centre) is much further from it.
-  data::Camera zoomed = half_camera;
+  Camera zoomed = half_camera;
   zoomed.focal_x_px = camera.focal_x_px;
   zoomed.focal_y_px = camera.focal_y_px;
   const auto wrong = render({zoomed}, 0, {1024, 1, 0});

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <memory>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::test {
 

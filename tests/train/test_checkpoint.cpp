@@ -9,7 +9,7 @@
 #include <limits>
 #include <unistd.h>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "io/checkpoint.hpp"
 
 using namespace mipnerf;

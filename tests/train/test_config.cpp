@@ -1,7 +1,7 @@
 // Training configuration: presets and variants as data, parsing, validation, JSON round trip.
 #include <doctest/doctest.h>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "train/config.hpp"
 
 using namespace mipnerf;

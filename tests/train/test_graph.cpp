@@ -33,7 +33,7 @@ struct ReferenceStep {
 ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std::vector<double>>& params,
                              const std::vector<double>& cameras, const std::vector<uint32_t>& camera_ids,
                              const std::vector<uint32_t>& pixel_ids, const std::vector<double>& target,
-                             const std::vector<double>& lossmult, size_t n_cameras, ops::RngKey key) {
+                             const std::vector<double>& lossmult, size_t n_cameras, RngKey key) {
   const size_t R = camera_ids.size();
   std::vector<double> origins, directions, viewdirs, radii, near, far, ray_lossmult, view_features;
   ref::rays_fwd(spec.rays, cameras, camera_ids, pixel_ids, origins, directions, viewdirs, radii, near, far,

@@ -8,7 +8,7 @@
 #include <limits>
 #include <sstream>
 
-#include "cl/error.hpp"
+#include "core/error.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/metrics.hpp"
 #include "io/checkpoint.hpp"

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace mipnerf::data {
+namespace mipnerf {
 
 // One image's camera. Axes are OpenGL's: the camera looks down −z_camera, y_camera is up, x_camera
 // right; `camera_to_world` maps camera-frame points to world points (Blender's transform_matrix).
@@ -53,4 +53,4 @@ struct Ray {
 // in front of the camera, so near and far are depths along the optical axis.
 Ray camera_ray(const Camera& camera, double x_px, double y_px);
 
-}  // namespace mipnerf::data
+}  // namespace mipnerf

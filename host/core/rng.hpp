@@ -4,7 +4,7 @@
 #include <array>
 #include <cstdint>
 
-namespace mipnerf::ref {
+namespace mipnerf {
 
 // RNG streams: one per purpose, so no two uses share numbers (same values as RNG_STREAM_* in common.cl).
 enum RngStream : uint32_t { rng_stream_stratified = 0, rng_stream_resample = 1, rng_stream_batch = 2,
@@ -33,4 +33,4 @@ inline std::array<float, 4> rng_uniform4(uint64_t seed, uint32_t item, uint32_t 
   return out;
 }
 
-}  // namespace mipnerf::ref
+}  // namespace mipnerf

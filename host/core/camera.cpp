@@ -1,7 +1,7 @@
 // Camera packing and the ray of a pixel (double precision; the ray kernel implements the same math).
-#include "data/camera.hpp"
+#include "core/camera.hpp"
 
-namespace mipnerf::data {
+namespace mipnerf {
 
 std::vector<float> pack_cameras(const std::vector<Camera>& cameras) {
   namespace L = camera_layout;
@@ -36,4 +36,4 @@ Ray camera_ray(const Camera& camera, double x_px, double y_px) {
   return ray;
 }
 
-}  // namespace mipnerf::data
+}  // namespace mipnerf

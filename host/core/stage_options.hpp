@@ -6,7 +6,7 @@
 
 #include <cstdint>
 
-namespace mipnerf::ops {
+namespace mipnerf {
 
 // RAY_SHAPE: how an interval of a ray becomes a Gaussian (and, for rays, which space they live in).
 enum class RayShape : int {
@@ -79,4 +79,4 @@ struct ActivationOptions {
   float rgb_padding = 0.001f;                               // RGB_PADDING ε (mip-NeRF 0.001; NeRF 0: plain sigmoid)
 };
 
-}  // namespace mipnerf::ops
+}  // namespace mipnerf

@@ -1,0 +1,26 @@
+// The one exception type of the library: a failed OpenCL/CLBlast call, a failed kernel build, or bad input.
+// It lives on the ground floor so that readers of outside data (PNG, JSON, datasets) throw it without
+// compiling against the OpenCL headers; cl/error.hpp turns OpenCL statuses into it.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace mipnerf {
+
+// Every failure the library reports. what() is one line a person can act on (the CLI prints it as is);
+// details() holds what does not fit on a line, e.g. a kernel's full build log.
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const std::string& message, std::string details = {}, int status = 0)
+      : std::runtime_error(message), details_(std::move(details)), status_(status) {}
+  const std::string& details() const { return details_; }
+  // The OpenCL or CLBlast status code, 0 for errors that did not come from a call.
+  int status() const { return status_; }
+
+ private:
+  std::string details_;
+  int status_;
+};
+
+}  // namespace mipnerf
