@@ -28,6 +28,7 @@
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "support/temp_scene.hpp"
+#include "support/mlp_fixtures.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -202,14 +203,7 @@ TEST_CASE("bench gemm: zero rows or reps are refused") {
 }
 
 TEST_CASE("bench gemm: the whole network on one chunk") {
-  mlp::MlpConfig config;
-  config.input_width = 12;
-  config.depth = 2;
-  config.width = 16;
-  config.skip_layer = 0;
-  config.view_branch_width = 8;
-  config.bottleneck_width = 16;
-  mlp::Mlp net(test::test_context(), config);
+  mlp::Mlp net(test::test_context(), test::small_mlp_config());
   const auto t = bench::time_mlp_chunk(test::test_context(), net, 4, 8, 1);
   CHECK(t.rows == 32);
   CHECK(positive_finite(t.forward));

@@ -10,7 +10,7 @@
 #include "data/dataset.hpp"
 #include "data/device_dataset.hpp"
 #include "data/procedural.hpp"
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 #include "ops/batch.hpp"
 #include "ops/rays.hpp"
 #include "ref/batch.hpp"

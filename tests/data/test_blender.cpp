@@ -6,7 +6,7 @@
 
 #include "data/dataset.hpp"
 #include "data/intrinsics.hpp"
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 
 using namespace mipnerf;
 using test::contains;

@@ -8,7 +8,7 @@
 #include "data/dataset.hpp"
 #include "data/multiscale.hpp"
 #include "data/pose.hpp"
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 
 using namespace mipnerf;
 using test::contains;

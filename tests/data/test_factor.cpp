@@ -5,7 +5,7 @@
 
 #include "core/error.hpp"
 #include "data/dataset.hpp"
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 #include "train/trainer.hpp"
 
 using namespace mipnerf;

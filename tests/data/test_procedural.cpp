@@ -9,7 +9,7 @@
 #include "data/dataset.hpp"
 #include "data/inspect.hpp"
 #include "data/procedural.hpp"
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 
 using namespace mipnerf;
 

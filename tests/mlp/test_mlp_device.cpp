@@ -14,6 +14,7 @@
 #include "mlp/mlp.hpp"
 #include "mlp_checks.hpp"
 #include "ref/mlp.hpp"
+#include "support/mlp_fixtures.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -139,22 +140,6 @@ void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t
   CHECK(rgb2.download(ctx) == da.raw_rgb.download(ctx));
 }
 
-mlp::MlpConfig small_config(bool view_dependence) {
-  mlp::MlpConfig c;
-  c.input_width = 6;
-  c.depth = 4;
-  c.width = 16;
-  c.skip_layer = 2;
-  c.view_dependence = view_dependence;
-  c.view_width = 5;
-  c.view_branch_width = 12;
-  c.bottleneck_width = 10;
-  c.density_outputs = 1;
-  c.rgb_outputs = 3;
-  c.seed = 3;
-  return c;
-}
-
 // Sets CLBlast's direct/indirect switch for this test and restores the database value afterwards.
 class GemmRoutineOverride {
  public:
@@ -177,11 +162,11 @@ class GemmRoutineOverride {
 }  // namespace
 
 TEST_CASE("mlp device: small network with view dependence matches the reference") {
-  check_against_reference(small_config(true), 5, 6, 9, 101);
+  check_against_reference(test::small_mlp_config(true), 5, 6, 9, 101);
 }
 
 TEST_CASE("mlp device: small network without view dependence matches the reference") {
-  check_against_reference(small_config(false), 4, 7, 3, 102);
+  check_against_reference(test::small_mlp_config(false), 4, 7, 3, 102);
 }
 
 TEST_CASE("mlp device: the paper's network (8x256, skip, view branch) matches the reference") {
@@ -201,7 +186,7 @@ TEST_CASE("mlp device: the paper's network through CLBlast's indirect GEMM path 
 
 TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exactly twice") {
   auto& ctx = test::test_context();
-  const auto config = small_config(true);
+  const auto config = test::small_mlp_config(true);
   std::mt19937 rng(7);
   mlp::Mlp net(ctx, config);
   const Pass p = make_pass(config, 3, 4, rng);
@@ -224,7 +209,7 @@ TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exa
 
 TEST_CASE("mlp device: misuse is refused with a message that says what to do") {
   auto& ctx = test::test_context();
-  const auto config = small_config(true);
+  const auto config = test::small_mlp_config(true);
   std::mt19937 rng(8);
   mlp::Mlp net(ctx, config);
   const Pass p = make_pass(config, 4, 4, rng);
@@ -238,7 +223,7 @@ TEST_CASE("mlp device: misuse is refused with a message that says what to do") {
   net.forward(inputs_for(d, p, config), outputs_for(d, config), infer);
   CHECK_THROWS_WITH_AS(net.backward(infer, gradients_for(d, config)), doctest::Contains("inference workspace"),
                        Error);
-  auto other = mlp::Mlp(ctx, small_config(false)).make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+  auto other = mlp::Mlp(ctx, test::small_mlp_config(false)).make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
   CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), outputs_for(d, config), other),
                        doctest::Contains("another MLP configuration"), Error);
   CHECK_THROWS_WITH_AS(net.upload_params(std::vector<float>(3)), doctest::Contains("parameter values"), Error);

@@ -15,7 +15,7 @@
 #include "support/test_context.hpp"
 #include "train/model.hpp"
 #include "train/trainer.hpp"
-#include "train_fixtures.hpp"
+#include "support/train_fixtures.hpp"
 
 using namespace mipnerf;
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "data/procedural.hpp"
-#include "render_fixtures.hpp"
+#include "support/temp_scene.hpp"
 
 using namespace mipnerf;
 namespace fs = std::filesystem;
@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string write_text(const std::string& name, const std::string& text) {
-  const auto dir = test::render_temp("paths");
+  const auto dir = test::temp_path("camera-paths");
   fs::create_directories(dir);
   const std::string path = (dir / name).string();
   std::ofstream(path) << text;
@@ -147,7 +147,7 @@ TEST_CASE("render: camera path files give intrinsics, poses and ranges, per fram
   CHECK(b[0].center_y_px == 25.0);
   CHECK(b[0].near == 2.0);
   // What write_camera_path writes reads back as the same cameras.
-  const std::string written = (test::render_temp("paths") / "written.json").string();
+  const std::string written = (test::temp_path("camera-paths") / "written.json").string();
   data::write_camera_path(written, cameras, {"a.png", "b.png", "c.png"});
   const auto again = data::read_camera_path(written, {});
   REQUIRE(again.size() == 3);
@@ -200,7 +200,7 @@ TEST_CASE("render: every bad camera path file is one error naming the file and t
     const std::string path = write_text(c.name, c.text);
     CHECK_THROWS_WITH_AS(data::read_camera_path(path, {}), doctest::Contains(c.message), Error);
   }
-  CHECK_THROWS_WITH_AS(data::read_camera_path((test::render_temp("paths") / "nowhere.json").string(), {}),
+  CHECK_THROWS_WITH_AS(data::read_camera_path((test::temp_path("camera-paths") / "nowhere.json").string(), {}),
                        doctest::Contains("nowhere.json: no such file"), Error);
 }
 

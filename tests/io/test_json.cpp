@@ -1,7 +1,7 @@
 // JSON files: malformed text reports the file, line and column; missing keys and wrong types name the key.
 #include <doctest/doctest.h>
 
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 #include "io/json.hpp"
 
 using namespace mipnerf;

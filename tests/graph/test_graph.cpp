@@ -16,7 +16,7 @@
 #include "ref/sample.hpp"
 #include "support/test_context.hpp"
 #include "train/model.hpp"
-#include "train_fixtures.hpp"
+#include "support/train_fixtures.hpp"
 
 using namespace mipnerf;
 

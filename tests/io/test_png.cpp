@@ -6,7 +6,7 @@
 
 #include <png.h>
 
-#include "data_fixtures.hpp"
+#include "support/data_fixtures.hpp"
 #include "io/file.hpp"
 #include "io/png.hpp"
 

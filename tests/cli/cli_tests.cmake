@@ -1,0 +1,192 @@
+# The CLI's tests through the real executable (included by tests/CMakeLists.txt, whose folder the paths below are
+# relative to): every user-facing error is one line and a non-zero exit; the quick-start path, train, render, eval and
+# bench end to end.
+# The CLI's user-facing errors, checked through the real executable:
+# mipnerf_add_cli_error_test(name PATTERN regex ARGS args...) expects a non-zero exit and exactly one
+# line on stderr matching the regex.
+function(mipnerf_add_cli_error_test name)
+  cmake_parse_arguments(T "" "PATTERN" "ARGS" ${ARGN})
+  string(REPLACE ";" "|" joined_args "${T_ARGS}")
+  add_test(NAME "cli: ${name}" COMMAND ${CMAKE_COMMAND}
+    "-DEXE=$<TARGET_FILE:mipnerf-cl>" "-DARGS=${joined_args}" "-DPATTERN=${T_PATTERN}"
+    -P "${CMAKE_CURRENT_SOURCE_DIR}/cli/expect_cli_error.cmake")
+  set_tests_properties("cli: ${name}" PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV}")
+endfunction()
+
+add_test(NAME "cli: devices lists a device" COMMAND mipnerf-cl devices)
+set_tests_properties("cli: devices lists a device" PROPERTIES
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "\\[0\\] .*compute units")
+mipnerf_add_cli_error_test("unknown device" PATTERN "--device 'nosuch' matches no OpenCL device.*\\[0\\]"
+  ARGS devices --device nosuch)
+mipnerf_add_cli_error_test("unknown subcommand" PATTERN "nosuch" ARGS nosuch)
+
+# Datasets (host/data): every kind of bad input is one line on stderr and a non-zero exit, through the real
+# executable. The inputs are small committed files under tests/data/fixtures.
+set(MIPNERF_DATA_FIXTURES "${CMAKE_CURRENT_SOURCE_DIR}/data/fixtures")
+mipnerf_add_cli_error_test("dataset inspect: missing folder" PATTERN "nowhere: no such file or folder"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/nowhere")
+mipnerf_add_cli_error_test("dataset inspect: folder without a dataset" PATTERN "fixtures: no dataset here: expected transforms_train.json"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}")
+mipnerf_add_cli_error_test("dataset inspect: missing image" PATTERN "missing_image/train/r_0.png: no such file \\(listed by .*missing_image/transforms_train.json: frames\\[0\\]\\)"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/missing_image")
+mipnerf_add_cli_error_test("dataset inspect: malformed JSON" PATTERN "malformed_json/transforms_train.json: malformed JSON at line 4, column 31: "
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/malformed_json")
+mipnerf_add_cli_error_test("dataset inspect: missing key" PATTERN "missing_key/transforms_train.json: frames\\[0\\]: missing key 'transform_matrix'"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/missing_key")
+mipnerf_add_cli_error_test("dataset inspect: non-rigid pose" PATTERN "frames\\[0\\]: the pose's rotation is not orthonormal"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/nonrigid_pose")
+mipnerf_add_cli_error_test("dataset inspect: mirrored pose" PATTERN "frames\\[0\\]: the pose's rotation has determinant -1 instead of \\+1"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/mirrored_pose")
+mipnerf_add_cli_error_test("dataset inspect: non-finite pose" PATTERN "nonfinite_pose/transforms_train.json: malformed JSON at line 1, column 88: .*non-finite"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/nonfinite_pose")
+mipnerf_add_cli_error_test("dataset inspect: unreadable PNG" PATTERN "unreadable_png/train/r_0.png: unreadable PNG \\(not a PNG file"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/unreadable_png")
+mipnerf_add_cli_error_test("dataset inspect: truncated PNG" PATTERN "truncated_png/train/r_0.png: unreadable PNG \\(the file is truncated\\)"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/truncated_png")
+mipnerf_add_cli_error_test("dataset inspect: images of differing size" PATTERN "differing_sizes/train/r_1.png: the image is 4x2 but .*r_0.png is 4x4"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/differing_sizes")
+mipnerf_add_cli_error_test("dataset inspect: lens distortion" PATTERN "distortion/transforms.json: lens distortion k1 = -0.12.* is not supported"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/distortion")
+mipnerf_add_cli_error_test("dataset inspect: scales that do not divide the size" PATTERN "r_0.png: 4x4 is not divisible by 8 for 4 scales"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --scales 4)
+mipnerf_add_cli_error_test("make-multiscale: output folder is the input" PATTERN "the output folder must differ from the input folder"
+  ARGS make-multiscale "${MIPNERF_DATA_FIXTURES}/valid" "${MIPNERF_DATA_FIXTURES}/valid")
+mipnerf_add_cli_error_test("make-scene: size not divisible for the scales" PATTERN "--size 60 is not divisible by 8 for 4 scales"
+  ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --size 60 --scales 4)
+# The quick-start path: make-scene, then inspect what it wrote (multiscale), in order.
+add_test(NAME "cli: make-scene writes a small scene" COMMAND mipnerf-cl make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
+  --size 16 --views 3 --val-views 1 --test-views 1 --scales 2 --samples 2)
+set_tests_properties("cli: make-scene writes a small scene" PROPERTIES FIXTURES_SETUP cli_scene
+  PASS_REGULAR_EXPRESSION "wrote .*cli-scene: 3 train, 1 val, 1 test views at 16x16; multiscale \\(2 scales\\)")
+add_test(NAME "cli: dataset inspect shows scales and the look-at centre" COMMAND mipnerf-cl dataset inspect
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-scene/multiscale")
+set_tests_properties("cli: dataset inspect shows scales and the look-at centre" PROPERTIES FIXTURES_REQUIRED cli_scene
+  PASS_REGULAR_EXPRESSION "scale 1 \\(/2\\): 3 images 8x8, focal x [0-9.]+ px, focal y [0-9.]+ px, lossmult 4.*look-at centre \\(closest to all optical axes\\): \\(0.000, 0.000, 0.000\\), in front of 6/6 cameras")
+
+# Training (host/train, cli/cmd_train.cpp): bad settings are one line; a short run on the fixture scene trains,
+# writes its outputs, refuses to overwrite, and resumes.
+mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosuch'; the presets are: paper, quick, small, tiny"
+  ARGS train --preset nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: bad setting value" PATTERN "setting 'num_samples' = '12x': expected an integer"
+  ARGS train --num_samples 12x --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'"
+  ARGS train --set sampels=3 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: invalid combination" PATTERN "invalid configuration: lr_warmup_mult must be in"
+  ARGS train --lr_warmup_mult 2 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: missing data" PATTERN "nowhere: no such file or folder"
+  ARGS train --data "${MIPNERF_DATA_FIXTURES}/nowhere" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: unknown key in a config file" PATTERN "bogus_key"
+  ARGS train --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/unknown_key.toml" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+add_test(NAME "cli: train output starts empty" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-train")
+set_tests_properties("cli: train output starts empty" PROPERTIES FIXTURES_SETUP cli_train_clean)
+add_test(NAME "cli: train a few steps from a config file" COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
+  --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
+set_tests_properties("cli: train a few steps from a config file" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_train_clean" FIXTURES_SETUP cli_train
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "val PSNR [0-9.]+ dB, SSIM [0-9.]+ over 1 images; trained 4 steps")
+mipnerf_add_cli_error_test("train: refuses to overwrite a run" PATTERN "already holds checkpoints \\(newest: step 4\\): pass --resume"
+  ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train" --preset tiny
+       --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
+set_tests_properties("cli: train: refuses to overwrite a run" PROPERTIES FIXTURES_REQUIRED cli_train)
+add_test(NAME "cli: train --resume continues to more steps" COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
+  --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml"
+  --resume --steps 6)
+set_tests_properties("cli: train --resume continues to more steps" PROPERTIES FIXTURES_REQUIRED cli_train
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "trained 6 steps")
+
+# Render and eval (cli/cmd_render.cpp, cli/cmd_eval.cpp, host/eval): tests/eval trains a tiny model in-process and
+# also runs the real executable for end-to-end checks of what it writes.
+if(TARGET test_eval)
+  add_dependencies(test_eval mipnerf-cl)
+  target_compile_definitions(test_eval PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
+endif()
+
+# mipnerf-cl render / eval through the executable: a model trained a few steps on the CLI scene, an orbit and an
+# evaluation of the multiscale data from it, and every kind of bad input as one line and a non-zero exit.
+set(MIPNERF_RENDER_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-render-run")
+set(MIPNERF_RENDER_FIXTURES "${CMAKE_CURRENT_SOURCE_DIR}/eval/fixtures")
+add_test(NAME "cli: render: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_RENDER_RUN}")
+add_test(NAME "cli: render: train a model to render" COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
+  --out "${MIPNERF_RENDER_RUN}" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
+set_tests_properties("cli: render: clear the run folder" PROPERTIES FIXTURES_SETUP cli_render_clean)
+set_tests_properties("cli: render: train a model to render" PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV}"
+  FIXTURES_REQUIRED "cli_scene;cli_render_clean" FIXTURES_SETUP cli_render_model PASS_REGULAR_EXPRESSION "trained 4 steps")
+add_test(NAME "cli: render an orbit from a training folder" COMMAND mipnerf-cl render --checkpoint "${MIPNERF_RENDER_RUN}"
+  --path orbit --frames 4 --size 24x24 --format both)
+set_tests_properties("cli: render an orbit from a training folder" PROPERTIES FIXTURES_REQUIRED cli_render_model
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "rendered 4 frames of an orbit \\(24x24\\) from step 4 .*render_orbit")
+add_test(NAME "cli: eval scores every scale of multiscale data" COMMAND mipnerf-cl eval --checkpoint "${MIPNERF_RENDER_RUN}"
+  --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene/multiscale")
+set_tests_properties("cli: eval scores every scale of multiscale data" PROPERTIES FIXTURES_REQUIRED cli_render_model
+  ENVIRONMENT "${MIPNERF_TEST_ENV}"
+  PASS_REGULAR_EXPRESSION "\\| 1 \\(full\\) \\| 16x16 \\| 1 \\| [0-9.]+ \\| [0-9.]+ \\|.*\\| 1/2 \\| 8x8 \\| 1 \\| [0-9.]+ \\| – \\|.*mean PSNR [0-9.]+ dB.*eval_test/metrics.json")
+# The errors. Those that need a model use the run above.
+mipnerf_add_cli_error_test("render: missing checkpoint" PATTERN "nowhere: no checkpoint found \\(expected a .mnck file"
+  ARGS render --checkpoint "${MIPNERF_RENDER_FIXTURES}/nowhere")
+mipnerf_add_cli_error_test("render: not a checkpoint" PATTERN "not_a_checkpoint.mnck: not a mipnerf-cl checkpoint"
+  ARGS render --checkpoint "${MIPNERF_RENDER_FIXTURES}/not_a_checkpoint.mnck")
+mipnerf_add_cli_error_test("render: --checkpoint is required" PATTERN "--checkpoint is required"
+  ARGS render --path orbit)
+mipnerf_add_cli_error_test("eval: missing checkpoint" PATTERN "nowhere: no checkpoint found"
+  ARGS eval --checkpoint "${MIPNERF_RENDER_FIXTURES}/nowhere")
+mipnerf_add_cli_error_test("render: missing camera path file" PATTERN "nowhere.json: no such camera path file"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/nowhere.json")
+mipnerf_add_cli_error_test("render: malformed camera path file" PATTERN "truncated_path.json: malformed JSON at line 3"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/truncated_path.json")
+mipnerf_add_cli_error_test("render: camera path frame without a pose" PATTERN "pose_missing_path.json: frames\\[0\\]: missing key 'transform_matrix'"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/pose_missing_path.json")
+mipnerf_add_cli_error_test("render: camera path without a size" PATTERN "no_size_path.json: frames\\[0\\]: no image size: give 'w' and 'h'"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/no_size_path.json")
+mipnerf_add_cli_error_test("render: bad size" PATTERN "--size '12y4': expected WIDTHxHEIGHT in pixels"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --size 12y4)
+mipnerf_add_cli_error_test("render: zero width" PATTERN "--size '0x4': width and height must be at least 1 pixel"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --size 0x4)
+mipnerf_add_cli_error_test("render: negative scale" PATTERN "--scale -0.5.*: the scale factor must be positive"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --scale=-0.5)
+mipnerf_add_cli_error_test("render: scale and size together" PATTERN "give --scale or a size \\(--size, --width, --height\\), not both"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --scale 2 --width 10)
+mipnerf_add_cli_error_test("render: too many pixels" PATTERN "has more than 2\\^32 - 1 pixels"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --size 100000x100000)
+mipnerf_add_cli_error_test("render: zero supersampling" PATTERN "--supersample must be at least 1 ray per pixel"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --supersample 0)
+mipnerf_add_cli_error_test("render: unknown format" PATTERN "output format 'gif': expected png, exr or both"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --format gif)
+mipnerf_add_cli_error_test("render: split and path together" PATTERN "give --split .* or --path .*, not both"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --split test --path orbit)
+mipnerf_add_cli_error_test("render: orbit option without an orbit" PATTERN "--fov applies to --path orbit only"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --split test --fov 40)
+mipnerf_add_cli_error_test("render: elevation out of range" PATTERN "orbit: the elevation must lie strictly between -90 and 90 degrees, got 95"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --elevation 95)
+mipnerf_add_cli_error_test("render: unknown split" PATTERN "transforms_nosuch.json: no such file \\(this dataset has the splits: "
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --split nosuch)
+mipnerf_add_cli_error_test("eval: missing data" PATTERN "nowhere: no such file or folder"
+  ARGS eval --checkpoint "${MIPNERF_RENDER_RUN}" --data "${MIPNERF_DATA_FIXTURES}/nowhere")
+mipnerf_add_cli_error_test("eval: zero views" PATTERN "--views must be at least 1"
+  ARGS eval --checkpoint "${MIPNERF_RENDER_RUN}" --views 0)
+foreach(name "render: malformed camera path file" "render: camera path frame without a pose"
+             "render: camera path without a size" "render: too many pixels" "render: elevation out of range"
+             "render: unknown split" "eval: missing data")
+  set_tests_properties("cli: ${name}" PROPERTIES FIXTURES_REQUIRED cli_render_model)
+endforeach()
+
+# mipnerf-cl bench (cli/cmd_bench.cpp, host/bench): tests/bench runs the real executable with --quick on tiny sizes;
+# bad options are one line and a non-zero exit before anything is measured.
+if(TARGET test_bench)
+  add_dependencies(test_bench mipnerf-cl)
+  target_compile_definitions(test_bench PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
+endif()
+# Each also carries tiny sizes, so that a check that stopped working would cost seconds, not a full benchmark.
+set(MIPNERF_BENCH_TINY --sections kernels --kernel-rays 16 --kernel-samples 2 --kernel-reps 1
+    --out "${CMAKE_CURRENT_BINARY_DIR}/cli-bench-bad")
+mipnerf_add_cli_error_test("bench: unknown section" PATTERN "--sections: unknown section 'gpu'; the sections are: gemm, kernels, train"
+  ARGS bench ${MIPNERF_BENCH_TINY} --sections gemm,gpu)
+mipnerf_add_cli_error_test("bench: unknown preset" PATTERN "--presets: unknown preset 'huge'; the presets are: paper, quick, small, tiny"
+  ARGS bench --presets tiny,huge ${MIPNERF_BENCH_TINY})
+mipnerf_add_cli_error_test("bench: zero warm steps" PATTERN "--steps and --paper-steps must be at least 1"
+  ARGS bench --steps 0 ${MIPNERF_BENCH_TINY})
+mipnerf_add_cli_error_test("bench: bad render size" PATTERN "--render-size '8by8': expected WIDTHxHEIGHT"
+  ARGS bench --render-size 8by8 ${MIPNERF_BENCH_TINY})
+mipnerf_add_cli_error_test("bench: malformed --set" PATTERN "--set 'batch_size': expected name=value"
+  ARGS bench --set batch_size ${MIPNERF_BENCH_TINY})
+mipnerf_add_cli_error_test("bench: unknown --set name" PATTERN "unknown setting 'sampels'"
+  ARGS bench --set sampels=3 ${MIPNERF_BENCH_TINY})
+
