@@ -3,66 +3,94 @@
 
 #include <algorithm>
 #include <functional>
+#include <map>
+#include <optional>
 #include <random>
 
 #include "cl/buffer.hpp"
-#include "core/error.hpp"
 #include "core/camera.hpp"
+#include "core/error.hpp"
 #include "ops/activations.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
+#include "ops/ray_bundle.hpp"
 #include "ops/rays.hpp"
 #include "ops/render.hpp"
 #include "ops/resample.hpp"
 #include "ops/sample.hpp"
+#include "ops/stage_list.hpp"
 
 namespace mipnerf::bench {
 namespace {
 
-// One program per stage and specialisation, each first build timed.
+// Every stage's host/ops object (each builds its program once), filled in the stage list's order.
 struct Stages {
-  ops::Rays rays;
-  ops::Sample sample;
-  ops::Resample resample;
-  ops::Gaussian gaussian;
-  ops::Encode encode;
-  ops::Activations activations;
-  ops::Render render;
+  std::optional<ops::Rays> rays;
+  std::optional<ops::Sample> sample;
+  std::optional<ops::Gaussian> gaussian;
+  std::optional<ops::Encode> encode;
+  std::optional<ops::Activations> activations;
+  std::optional<ops::Render> render;
+  std::optional<ops::Resample> resample;
 };
 
-template <typename Make>
-auto timed_build(std::vector<ProgramBuild>& builds, const std::string& name, Make make) {
-  const auto start = Clock::now();
-  auto stage = make();
-  builds.push_back({name, seconds_since(start)});
-  return stage;
+using Options = ops::RayMathOptions;
+using Builder = std::function<void(ocl::Context&, const Options&, Stages&)>;
+
+// How to build each stage of ops::ray_math_stages(), by its name.
+const std::map<std::string, Builder>& builders() {
+  static const std::map<std::string, Builder> table = {
+      {"rays", [](ocl::Context& ctx, const Options& o, Stages& s) { s.rays.emplace(ctx, o.rays); }},
+      {"sample", [](ocl::Context& ctx, const Options& o, Stages& s) { s.sample.emplace(ctx, o.sample); }},
+      {"gaussian", [](ocl::Context& ctx, const Options& o, Stages& s) { s.gaussian.emplace(ctx, o.gaussian); }},
+      {"encode", [](ocl::Context& ctx, const Options& o, Stages& s) { s.encode.emplace(ctx, o.gaussian); }},
+      {"activations", [](ocl::Context& ctx, const Options& o, Stages& s) { s.activations.emplace(ctx, o.activation); }},
+      {"render", [](ocl::Context& ctx, const Options& o, Stages& s) { s.render.emplace(ctx, o.render, o.activation); }},
+      {"resample", [](ocl::Context& ctx, const Options&, Stages& s) { s.resample.emplace(ctx); }},
+  };
+  return table;
 }
 
-Stages build_stages(ocl::Context& ctx, const KernelStageOptions& o, std::vector<ProgramBuild>& builds) {
-  return Stages{
-      timed_build(builds, "rays.cl", [&] { return ops::Rays(ctx, o.rays); }),
-      timed_build(builds, "sample.cl", [&] { return ops::Sample(ctx, o.sample); }),
-      timed_build(builds, "resample.cl", [&] { return ops::Resample(ctx); }),
-      timed_build(builds, "gaussian.cl", [&] { return ops::Gaussian(ctx, o.gaussian); }),
-      timed_build(builds, "gaussian.cl + encode.cl", [&] { return ops::Encode(ctx, o.gaussian); }),
-      timed_build(builds, "activations.cl", [&] { return ops::Activations(ctx, o.activation); }),
-      timed_build(builds, "activations.cl + render.cl", [&] { return ops::Render(ctx, o.render, o.activation); }),
-  };
+// Looks `name` up in `table`, or throws naming the benchmark's gap (a listed stage or kernel it cannot run).
+template <typename Table>
+const typename Table::mapped_type& find_in(const Table& table, const std::string& name, const char* what) {
+  const auto found = table.find(name);
+  if (found == table.end()) {
+    throw Error("kernel benchmark: no " + std::string(what) + " '" + name +
+                "' of the stage list (host/ops/stage_list.cpp) in host/bench/kernel_bench.cpp");
+  }
+  return found->second;
+}
+
+// Throws unless the benchmark's table holds exactly the `used` names, so neither side can keep an extra one.
+template <typename Table>
+void require_all_used(const Table& table, size_t used, const char* what) {
+  if (used != table.size()) {
+    throw Error("kernel benchmark: host/bench/kernel_bench.cpp knows " + std::to_string(table.size()) + " " + what +
+                "s, the stage list (host/ops/stage_list.cpp) names " + std::to_string(used));
+  }
+}
+
+// Builds every listed stage with the benchmark's options, each first build timed.
+Stages build_stages(ocl::Context& ctx, const ops::RayMathOptions& o, std::vector<ProgramBuild>& builds) {
+  Stages stages;
+  for (const auto& stage : ops::ray_math_stages()) {
+    const Builder& build = find_in(builders(), stage.name, "stage");
+    const auto start = Clock::now();
+    build(ctx, o, stages);
+    builds.push_back({stage.program, seconds_since(start)});
+  }
+  require_all_used(builders(), builds.size(), "stage");
+  return stages;
 }
 
 // The device buffers of one batch of R rays × N samples (layouts: docs/ARCHITECTURE.md, "Buffers and layouts").
 struct DeviceBuffers {
-  DeviceBuffers(ocl::Context& ctx, size_t R, size_t N, const KernelStageOptions& o)
+  DeviceBuffers(ocl::Context& ctx, size_t R, size_t N, const ops::RayMathOptions& o)
       : cameras(ctx, camera_layout::stride, "cameras"),
         camera_ids(ctx, R, "camera_ids"),
         pixel_ids(ctx, R, "pixel_ids"),
-        origins(ctx, 3 * R, "origins"),
-        directions(ctx, 3 * R, "directions"),
-        viewdirs(ctx, 3 * R, "viewdirs"),
-        radii(ctx, R, "radii"),
-        near(ctx, R, "near"),
-        far(ctx, R, "far"),
-        lossmult(ctx, R, "lossmult"),
+        rays(ctx, R),
         t_edges(ctx, R * (N + 1), "t_edges"),
         t_fine(ctx, R * (N + 1), "t_fine"),
         means(ctx, 3 * R * N, "means"),
@@ -84,7 +112,7 @@ struct DeviceBuffers {
         d_raw_density(ctx, R * N, "d_raw_density") {}
   ocl::DeviceArray<float> cameras;
   ocl::DeviceArray<uint32_t> camera_ids, pixel_ids;
-  ocl::DeviceArray<float> origins, directions, viewdirs, radii, near, far, lossmult;
+  ops::RayBundle rays;
   ocl::DeviceArray<float> t_edges, t_fine, means, covs, features, view_features;
   ocl::DeviceArray<float> raw_density, raw_rgb, density, rgb, comp, acc, distance, weights;
   ocl::DeviceArray<float> d_comp, d_rgb, d_density, d_raw_rgb, d_raw_density;
@@ -106,54 +134,86 @@ std::vector<double> download_double(ocl::Context& ctx, const ocl::DeviceArray<fl
   return {values.begin(), values.end()};
 }
 
-struct Stage {
-  std::string name, unit;
-  size_t items;
-  std::function<void()> device;
-};
+using DeviceCall = std::function<void()>;
 
-std::vector<Stage> stage_list(Stages& s, DeviceBuffers& b, const KernelStageOptions& o, size_t R, size_t N,
-                              const RngKey& key) {
+// Every listed kernel on the device, by name, over the benchmark's buffers (R rays × N samples).
+std::map<std::string, DeviceCall> device_calls(Stages& s, DeviceBuffers& b, const ops::RayMathOptions& o, size_t R,
+                                               size_t N, const RngKey& key) {
   const size_t rows = R * N;
   const ops::RaysInputs rays_in{b.cameras, b.camera_ids, b.pixel_ids, R};
-  const ops::RaysOutputs rays_out{b.origins, b.directions, b.viewdirs, b.radii, b.near, b.far, b.lossmult};
-  const ops::GaussianInputs gaussian_in{b.origins, b.directions, b.radii, b.t_edges, R, N};
+  const ops::GaussianInputs gaussian_in{b.rays, b.t_edges, R, N};
   const ops::ActivationInputs act_in{b.raw_density, b.raw_rgb, rows};
-  const ops::RenderInputs render_in{b.rgb, b.density, b.t_edges, b.directions, R, N};
-  const ops::RenderInputs render_raw_in{b.raw_rgb, b.raw_density, b.t_edges, b.directions, R, N};
+  const ops::RenderInputs render_in{b.rgb, b.density, b.t_edges, b.rays, R, N};
+  const ops::RenderInputs render_raw_in{b.raw_rgb, b.raw_density, b.t_edges, b.rays, R, N};
   return {
-      {"rays_fwd (cone)", "rays", R, [&s, rays_in, rays_out, key] { s.rays.fwd(rays_in, rays_out, key); }},
-      {"sample_stratified_fwd (jittered)", "edges", R * (N + 1),
-       [&s, &b, R, N, key] { s.sample.stratified({b.near, b.far, R, N}, b.t_edges, key); }},
-      {"gaussian_fwd (cone)", "intervals", rows, [&s, &b, gaussian_in] { s.gaussian.fwd(gaussian_in, {b.means, b.covs}); }},
-      {"ipe_fwd (L = 16, 96 features)", "intervals", rows,
-       [&s, &b, &o, rows] { s.encode.ipe(o.ipe, {b.means, b.covs, rows}, b.features); }},
-      {"gaussian_ipe_fwd (fused)", "intervals", rows,
-       [&s, &b, &o, gaussian_in] { s.encode.gaussian_ipe(o.ipe, gaussian_in, b.features); }},
-      {"pe_fwd (view directions, 27 features)", "rays", R,
-       [&s, &b, &o, R] { s.encode.pe(o.view, {b.viewdirs, R}, b.view_features); }},
-      {"activations_fwd", "samples", rows, [&s, &b, act_in] { s.activations.fwd(act_in, {b.density, b.rgb}); }},
-      {"activations_bwd", "samples", rows,
-       [&s, &b, act_in] { s.activations.bwd(act_in, {b.density, b.rgb}, {b.d_raw_density, b.d_raw_rgb}); }},
-      {"render_fwd (white)", "samples", rows,
-       [&s, &b, render_in] { s.render.fwd(render_in, {b.comp, b.acc, b.distance, b.weights}); }},
-      {"render_bwd (white)", "samples", rows,
-       [&s, &b, render_in] { s.render.bwd(render_in, b.weights, {b.d_comp, nullptr}, {b.d_rgb, b.d_density}); }},
-      {"render_raw_fwd (fused activations)", "samples", rows,
-       [&s, &b, render_raw_in] { s.render.raw_fwd(render_raw_in, {b.comp, b.acc, b.distance, b.weights}); }},
-      {"render_raw_bwd (fused activations)", "samples", rows,
-       [&s, &b, render_raw_in] {
-         s.render.raw_bwd(render_raw_in, b.weights, {b.d_comp, nullptr}, {b.d_raw_rgb, b.d_raw_density});
+      {"rays_fwd", [&s, &b, rays_in, key] { s.rays->fwd(rays_in, b.rays, key); }},
+      {"sample_stratified_fwd",
+       [&s, &b, R, N, key] {
+         s.sample->stratified({b.rays, R, N}, b.t_edges, key);
        }},
-      {"resample_fwd (α = 0.01, jittered)", "edges", R * (N + 1),
-       [&s, &b, &o, R, N, key] { s.resample.fwd(o.resample, {b.t_edges, b.weights, R, N, N}, b.t_fine, key); }},
+      {"gaussian_fwd",
+       [&s, &b, gaussian_in] {
+         s.gaussian->fwd(gaussian_in, {b.means, b.covs});
+       }},
+      {"ipe_fwd",
+       [&s, &b, &o, rows] {
+         s.encode->ipe(o.ipe, {b.means, b.covs, rows}, b.features);
+       }},
+      {"gaussian_ipe_fwd", [&s, &b, &o, gaussian_in] { s.encode->gaussian_ipe(o.ipe, gaussian_in, b.features); }},
+      {"pe_fwd",
+       [&s, &b, &o, R] {
+         s.encode->pe(o.view, {b.rays.viewdirs, R}, b.view_features);
+       }},
+      {"activations_fwd",
+       [&s, &b, act_in] {
+         s.activations->fwd(act_in, {b.density, b.rgb});
+       }},
+      {"activations_bwd",
+       [&s, &b, act_in] {
+         s.activations->bwd(act_in, {b.density, b.rgb}, {b.d_raw_density, b.d_raw_rgb});
+       }},
+      {"render_fwd",
+       [&s, &b, render_in] {
+         s.render->fwd(render_in, {b.comp, b.acc, b.distance, b.weights});
+       }},
+      {"render_bwd",
+       [&s, &b, render_in] {
+         s.render->bwd(render_in, b.weights, {b.d_comp, nullptr}, {b.d_rgb, b.d_density});
+       }},
+      {"render_raw_fwd",
+       [&s, &b, render_raw_in] {
+         s.render->raw_fwd(render_raw_in, {b.comp, b.acc, b.distance, b.weights});
+       }},
+      {"render_raw_bwd",
+       [&s, &b, render_raw_in] {
+         s.render->raw_bwd(render_raw_in, b.weights, {b.d_comp, nullptr}, {b.d_raw_rgb, b.d_raw_density});
+       }},
+      {"resample_fwd",
+       [&s, &b, &o, R, N, key] {
+         s.resample->fwd(o.resample, {b.t_edges, b.weights, R, N, N}, b.t_fine, key);
+       }},
   };
+}
+
+// One row of the benchmark: a listed kernel and how to run it.
+struct Row {
+  const ops::StageKernel* kernel;
+  DeviceCall device;
+};
+
+// The listed kernels in the list's order, each with its device call.
+std::vector<Row> rows(const std::map<std::string, DeviceCall>& calls) {
+  std::vector<Row> list;
+  for (const auto& stage : ops::ray_math_stages()) {
+    for (const auto& kernel : stage.kernels) list.push_back({&kernel, find_in(calls, kernel.kernel, "kernel")});
+  }
+  require_all_used(calls, list.size(), "kernel");
+  return list;
 }
 
 // Random pixels and network outputs, then one pass of the pipeline so every stage's inputs hold realistic values;
 // returns the reference's copies of them.
-KernelBenchInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, const KernelStageOptions& o, size_t R, size_t N,
-                            const RngKey& key) {
+KernelBenchInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, size_t R, size_t N, const RngKey& key) {
   const size_t rows = R * N;
   std::mt19937 rng(1);
   const Camera cam = blender_camera();
@@ -176,21 +236,20 @@ KernelBenchInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, co
   for (auto& v : host) v = 0.1f * normal(rng);
   b.d_comp.upload(ctx, host);
 
-  s.rays.fwd({b.cameras, b.camera_ids, b.pixel_ids, R},
-             {b.origins, b.directions, b.viewdirs, b.radii, b.near, b.far, b.lossmult}, key);
-  s.sample.stratified({b.near, b.far, R, N}, b.t_edges, key);
-  s.activations.fwd({b.raw_density, b.raw_rgb, rows}, {b.density, b.rgb});
-  s.render.fwd({b.rgb, b.density, b.t_edges, b.directions, R, N}, {b.comp, b.acc, b.distance, b.weights});
-  s.gaussian.fwd({b.origins, b.directions, b.radii, b.t_edges, R, N}, {b.means, b.covs});
+  s.rays->fwd({b.cameras, b.camera_ids, b.pixel_ids, R}, b.rays, key);
+  s.sample->stratified({b.rays, R, N}, b.t_edges, key);
+  s.activations->fwd({b.raw_density, b.raw_rgb, rows}, {b.density, b.rgb});
+  s.render->fwd({b.rgb, b.density, b.t_edges, b.rays, R, N}, {b.comp, b.acc, b.distance, b.weights});
+  s.gaussian->fwd({b.rays, b.t_edges, R, N}, {b.means, b.covs});
   ctx.finish();
 
   r.cameras.assign(cameras.begin(), cameras.end());
-  r.origins = download_double(ctx, b.origins);
-  r.directions = download_double(ctx, b.directions);
-  r.radii = download_double(ctx, b.radii);
-  r.near = download_double(ctx, b.near);
-  r.far = download_double(ctx, b.far);
-  r.viewdirs = download_double(ctx, b.viewdirs);
+  r.origins = download_double(ctx, b.rays.origins);
+  r.directions = download_double(ctx, b.rays.directions);
+  r.radii = download_double(ctx, b.rays.radii);
+  r.near = download_double(ctx, b.rays.near);
+  r.far = download_double(ctx, b.rays.far);
+  r.viewdirs = download_double(ctx, b.rays.viewdirs);
   r.t_edges = download_double(ctx, b.t_edges);
   r.weights = download_double(ctx, b.weights);
   r.raw_density = download_double(ctx, b.raw_density);
@@ -203,14 +262,14 @@ KernelBenchInputs make_inputs(ocl::Context& ctx, Stages& s, DeviceBuffers& b, co
   return r;
 }
 
-StageTiming time_stage(ocl::Context& ctx, const Stage& stage, const std::function<void()>& reference,
+StageTiming time_stage(ocl::Context& ctx, const Row& row, const std::function<void()>& reference,
                        const KernelBenchOptions& options) {
   StageTiming t;
-  t.stage = stage.name;
-  t.unit = stage.unit;
-  t.items = stage.items;
+  t.stage = row.kernel->row();
+  t.unit = ops::unit_name(row.kernel->unit);
+  t.items = ops::items(row.kernel->unit, options.rays, options.samples);
   const auto on_device = [&] {
-    stage.device();
+    row.device();
     ctx.finish();
   };
   t.first_call_seconds = time_call(on_device);  // first launch: buffers touched, work-group code generated
@@ -235,17 +294,18 @@ KernelBenchResult run_kernel_bench(ocl::Context& ctx, const KernelBenchOptions& 
   KernelBenchResult result;
   result.options = options;
   if (!reference) result.options.reference_reps = 0;
-  const KernelStageOptions stage_options;
+  const ops::RayMathOptions stage_options;  // the paper's Blender configuration
   Stages stages = build_stages(ctx, stage_options, result.builds);
   DeviceBuffers buffers(ctx, R, N, stage_options);
   const RngKey key{20200823, 1, 0};
-  KernelBenchInputs inputs = make_inputs(ctx, stages, buffers, stage_options, R, N, key);
-  const std::vector<Stage> list = stage_list(stages, buffers, stage_options, R, N, key);
+  KernelBenchInputs inputs = make_inputs(ctx, stages, buffers, R, N, key);
+  const auto calls = device_calls(stages, buffers, stage_options, R, N, key);
+  const std::vector<Row> list = rows(calls);
   for (size_t i = 0; i < list.size(); ++i) {
-    if (progress) progress(list[i].name, i, list.size());
-    const std::function<void()> on_cpu =
-        reference && result.options.reference_reps > 0 ? reference(list[i].name, stage_options, inputs, R, N, key)
-                                                       : std::function<void()>{};
+    if (progress) progress(list[i].kernel->row(), i, list.size());
+    const std::function<void()> on_cpu = reference && result.options.reference_reps > 0
+                                             ? reference(list[i].kernel->kernel, stage_options, inputs, R, N, key)
+                                             : std::function<void()>{};
     result.stages.push_back(time_stage(ctx, list[i], on_cpu, result.options));
   }
   if (progress) progress("done", list.size(), list.size());

@@ -1,5 +1,6 @@
 // Throughput of every ray-math stage (rays … activations, forward and backward) on one OpenCL device, and, when a
-// CPU implementation of the stages is handed in, beside it on the same inputs. Shared by `mipnerf-cl bench` (device
+// CPU implementation of the stages is handed in, beside it on the same inputs. The stages, their kernels and the
+// options they run with come from the one stage list (host/ops/stage_list.hpp) that the specialisation test walks too. Shared by `mipnerf-cl bench` (device
 // only) and bench/bench_kernels (beside the double-precision reference, bench/kernel_reference: the library does not
 // link the reference, the test oracle).
 //
@@ -17,6 +18,7 @@
 #include "bench/timing.hpp"
 #include "cl/context.hpp"
 #include "core/stage_options.hpp"
+#include "ops/stage_list.hpp"
 
 namespace mipnerf::bench {
 
@@ -25,22 +27,6 @@ struct KernelBenchOptions {
   size_t samples = 128;       // N: intervals per ray (the paper's per level)
   size_t reps = 10;           // timed device calls per stage, after the first call
   size_t reference_reps = 2;  // timed CPU reference calls per stage (best kept); 0 leaves the reference out
-};
-
-// Every stage's options, as the paper's Blender configuration has them.
-struct KernelStageOptions {
-  RaysOptions rays;
-  SampleOptions sample{false, true};  // depth-linear, jittered
-  ResampleOptions resample;           // α = 0.01, blur, jittered
-  GaussianOptions gaussian;           // cone
-  RenderOptions render;               // white background
-  ActivationOptions activation;
-  EncodingOptions ipe;   // degrees 0..15: 96 features
-  EncodingOptions view;  // degrees 0..3 + identity: 27 features
-  KernelStageOptions() {
-    view.max_deg = 4;
-    view.append_identity = true;
-  }
 };
 
 // The device's inputs after one pass of the pipeline, in double, for a CPU implementation of the stages; o1…o7 are
@@ -52,22 +38,23 @@ struct KernelBenchInputs {
   std::vector<double> o1, o2, o3, o4, o5, o6, o7;
 };
 
-// Given a stage's name (StageTiming::stage), the call that runs that stage on the CPU over `inputs` (R rays × N
-// samples); it throws mipnerf::Error for a stage it does not know, so the two lists cannot drift apart.
-using ReferenceStages = std::function<std::function<void()>(const std::string& stage, const KernelStageOptions& options,
-                                                            KernelBenchInputs& inputs, size_t R, size_t N,
-                                                            const RngKey& key)>;
+// Given a kernel's name (ops::StageKernel::kernel, e.g. "render_fwd"), the call that runs it on the CPU over
+// `inputs` (R rays × N samples) with `options` (the benchmark's: the default ops::RayMathOptions); it throws
+// mipnerf::Error for a kernel it does not know, so it cannot drift from the stage list unnoticed.
+using ReferenceStages =
+    std::function<std::function<void()>(const std::string& kernel, const ops::RayMathOptions& options,
+                                        KernelBenchInputs& inputs, size_t R, size_t N, const RngKey& key)>;
 
 // One program's first clBuildProgram in this context (PoCL's on-disk cache may serve it: POCL_KERNEL_CACHE=0 gives
 // a true cold compile).
 struct ProgramBuild {
-  std::string program;  // its kernel files, e.g. "gaussian.cl + encode.cl"
+  std::string program;  // its kernel files, e.g. "gaussian.cl + encode.cl" (ops::StageDescription::program)
   double seconds = 0.0;
 };
 
 struct StageTiming {
-  std::string stage;    // kernel and variant, e.g. "render_fwd (white)"
-  std::string unit;     // what an item is: "rays", "edges", "intervals", "samples"
+  std::string stage;    // kernel and setting, e.g. "render_fwd (white)" (ops::StageKernel::row())
+  std::string unit;     // what an item is: "rays", "edges", "intervals", "samples" (ops::unit_name)
   size_t items = 0;     // items per call
   double first_call_seconds = 0.0;  // the first launch (work-group code generation on PoCL), then clFinish
   Timings device;                   // the `reps` timed calls after it
@@ -80,13 +67,13 @@ struct StageTiming {
 
 struct KernelBenchResult {
   KernelBenchOptions options;
-  std::vector<ProgramBuild> builds;  // in build order
-  std::vector<StageTiming> stages;   // in pipeline order
+  std::vector<ProgramBuild> builds;  // one per stage of ops::ray_math_stages(), in its order
+  std::vector<StageTiming> stages;   // one per kernel of those stages, in their order
 };
 
 // Builds every stage's program (timed), makes the inputs, and times each stage, and `reference`'s version of it when
 // given (else reference_reps is recorded as 0). `progress` is called before each stage with its name. Throws
-// mipnerf::Error for zero sizes or device errors.
+// mipnerf::Error for zero sizes, device errors, or a listed stage or kernel this benchmark cannot run.
 KernelBenchResult run_kernel_bench(ocl::Context& ctx, const KernelBenchOptions& options,
                                    const ProgressFn& progress = {}, const ReferenceStages& reference = {});
 

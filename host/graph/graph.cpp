@@ -18,8 +18,9 @@ struct BufferPlan {
   size_t partial_slots = 0;   // per level (training)
   bool training = false;
 
+  // Floats of every buffer but the ray bundle (RayBundle::bytes_for).
   size_t float_count() const {
-    size_t n = rays * (3 * 3 + 4) + rays * view_width + samples * feature_width + samples * 4 + drawn_edges;
+    size_t n = rays * view_width + samples * feature_width + samples * 4 + drawn_edges;
     if (needs_points) n += 2 * 3 * samples;
     if (training) n += rays * 3 + samples * 4;
     for (size_t intervals : level_intervals) {
@@ -73,7 +74,7 @@ constexpr size_t kSmallestLossGroup = 64;
 size_t Graph::bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays) {
   size_t bytes =
       plan_for(spec, mode, max_chunk_rays, max_batch_rays, kSmallestLossGroup).float_count() * sizeof(float);
-  bytes += 2 * max_chunk_rays * sizeof(uint32_t);
+  bytes += ops::RayBundle::bytes_for(max_chunk_rays) + 2 * max_chunk_rays * sizeof(uint32_t);
   for (size_t i = 0; i < spec.mlps.size(); ++i) {
     bytes += mlp::Workspace::bytes_for(spec.mlps[i], std::max<size_t>(1, max_rows(spec, i, max_chunk_rays)),
                                        max_chunk_rays, workspace_mode(mode));
@@ -120,13 +121,7 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> ne
   const size_t R = plan.rays, S = plan.samples;
   camera_ids_ = ocl::DeviceArray<uint32_t>(ctx, R, "chunk camera_ids [R]");
   pixel_ids_ = ocl::DeviceArray<uint32_t>(ctx, R, "chunk pixel_ids [R]");
-  origins_ = ocl::DeviceArray<float>(ctx, 3 * R, "origins [R][3]");
-  directions_ = ocl::DeviceArray<float>(ctx, 3 * R, "directions [R][3]");
-  viewdirs_ = ocl::DeviceArray<float>(ctx, 3 * R, "viewdirs [R][3]");
-  radii_ = ocl::DeviceArray<float>(ctx, R, "radii [R]");
-  near_ = ocl::DeviceArray<float>(ctx, R, "near [R]");
-  far_ = ocl::DeviceArray<float>(ctx, R, "far [R]");
-  ray_lossmult_ = ocl::DeviceArray<float>(ctx, R, "ray lossmult [R]");
+  chunk_rays_ = ops::RayBundle(ctx, R);
   view_features_ = ocl::DeviceArray<float>(ctx, R * plan.view_width, "view_encoding [R][view]");
   features_ = ocl::DeviceArray<float>(ctx, S * plan.feature_width, "features [samples][F]");
   if (plan.needs_points) {
@@ -169,9 +164,10 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
   const RngKey rng{key.seed, key.step, first_ray};
-  rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count},
-             {origins_, directions_, viewdirs_, radii_, near_, far_, ray_lossmult_}, rng);
-  if (spec_.rays.view_dependence) encode_->pe(spec_.view_encoding, {viewdirs_, chunk.count}, view_features_);
+  rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count}, chunk_rays_, rng);
+  if (spec_.rays.view_dependence) {
+    encode_->pe(spec_.view_encoding, {chunk_rays_.viewdirs, chunk.count}, view_features_);
+  }
 }
 
 void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ray) {
@@ -180,7 +176,7 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
   const RngKey rng{key.seed, key.step, first_ray};
   switch (level.sampling) {
     case Sampling::stratified:
-      sample_->stratified({near_, far_, n_rays, out.intervals}, out.t_edges, rng);
+      sample_->stratified({chunk_rays_, n_rays, out.intervals}, out.t_edges, rng);
       break;
     case Sampling::resample: {
       const LevelBuffers& previous = levels_[l - 1];
@@ -204,7 +200,7 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
 void Graph::encode_level(size_t l, size_t n_rays) {
   const LevelSpec& level = spec_.levels[l];
   const LevelBuffers& buffers = levels_[l];
-  const ops::GaussianInputs intervals{origins_, directions_, radii_, buffers.t_edges, n_rays, buffers.intervals};
+  const ops::GaussianInputs intervals{chunk_rays_, buffers.t_edges, n_rays, buffers.intervals};
   const size_t rows = n_rays * buffers.intervals;
   switch (level.encoding) {
     case Encoding::integrated:
@@ -233,7 +229,7 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws) {
   in.samples_per_ray = buffers.intervals;
   network.forward(in, {mlp::view(raw_density_, 1), mlp::view(raw_rgb_, 3)}, ws);
   // The activations are fused into rendering: raw MLP outputs in, composited colour out.
-  render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, directions_, n_rays, buffers.intervals},
+  render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                    {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights});
 }
 
@@ -243,7 +239,7 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   const ops::LossChunk loss_chunk{n_rays, chunk.first, step_groups_};
   loss_->fwd_bwd(buffers.outputs.comp_rgb, targets.target_rgb, targets.lossmult,
                  {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
-  render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, directions_, n_rays, buffers.intervals},
+  render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                    buffers.weights, {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_});
   networks_[level.mlp_index]->backward(workspaces_[level.mlp_index],
                                        {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)});

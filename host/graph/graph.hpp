@@ -19,6 +19,7 @@
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
 #include "ops/loss.hpp"
+#include "ops/ray_bundle.hpp"
 #include "ops/rays.hpp"
 #include "ops/render.hpp"
 #include "ops/resample.hpp"
@@ -131,8 +132,7 @@ class Graph {
 
   // Chunk buffers, R = max_chunk_rays, S = R · max intervals.
   ocl::DeviceArray<uint32_t> camera_ids_, pixel_ids_;                  // [R]
-  ocl::DeviceArray<float> origins_, directions_, viewdirs_, radii_;   // [R][3], radii [R]
-  ocl::DeviceArray<float> near_, far_, ray_lossmult_;                  // [R]
+  ops::RayBundle chunk_rays_;                                          // R rays: the chunk's, from rays_
   ocl::DeviceArray<float> view_features_;                              // [R][view width]
   ocl::DeviceArray<float> features_;                                   // [S][position features]
   ocl::DeviceArray<float> means_, covs_;                               // [S][3] (PE encodings only)

@@ -66,15 +66,15 @@ void Encode::pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceA
 void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& in, ocl::DeviceArray<float>& features) {
   const std::string where = "gaussian_ipe_fwd";
   check_degrees(options, where, false);
-  detail::require(in.origins, 3 * in.n_rays, where);
-  detail::require(in.directions, 3 * in.n_rays, where);
-  detail::require(in.radii, in.n_rays, where);
+  detail::require(in.rays.origins, 3 * in.n_rays, where);
+  detail::require(in.rays.directions, 3 * in.n_rays, where);
+  detail::require(in.rays.radii, in.n_rays, where);
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
   const size_t rows = in.n_rays * in.n_samples;
   detail::require(features, rows * options.ipe_width(), where);
   const size_t items = fused_per_row_ ? rows : rows * options.degrees();
   detail::to_uint(items, where, "items");
-  ocl::set_args(*gaussian_ipe_, where, in.origins, in.directions, in.radii, in.t_edges, features,
+  ocl::set_args(*gaussian_ipe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
                 static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
   ocl::launch_1d(*ctx_, *gaussian_ipe_, items, where);

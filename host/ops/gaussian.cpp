@@ -17,9 +17,9 @@ Gaussian::Gaussian(ocl::Context& ctx, const GaussianOptions& options) : ctx_(&ct
 }
 
 void Gaussian::check(const GaussianInputs& in, const GaussianOutputs& out, const std::string& where, bool radii) const {
-  detail::require(in.origins, 3 * in.n_rays, where);
-  detail::require(in.directions, 3 * in.n_rays, where);
-  if (radii) detail::require(in.radii, in.n_rays, where);
+  detail::require(in.rays.origins, 3 * in.n_rays, where);
+  detail::require(in.rays.directions, 3 * in.n_rays, where);
+  if (radii) detail::require(in.rays.radii, in.n_rays, where);
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
   detail::require(out.means, 3 * in.n_rays * in.n_samples, where);
   detail::require(out.covs, 3 * in.n_rays * in.n_samples, where);
@@ -29,7 +29,7 @@ void Gaussian::check(const GaussianInputs& in, const GaussianOutputs& out, const
 void Gaussian::fwd(const GaussianInputs& in, const GaussianOutputs& out) {
   const std::string where = "gaussian_fwd";
   check(in, out, where, true);
-  ocl::set_args(*fwd_, where, in.origins, in.directions, in.radii, in.t_edges, out.means, out.covs,
+  ocl::set_args(*fwd_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, out.means, out.covs,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
   ocl::launch_1d(*ctx_, *fwd_, in.n_rays * in.n_samples, where);
 }
@@ -37,7 +37,7 @@ void Gaussian::fwd(const GaussianInputs& in, const GaussianOutputs& out) {
 void Gaussian::points(const GaussianInputs& in, const GaussianOutputs& out) {
   const std::string where = "gaussian_points_fwd";
   check(in, out, where, false);
-  ocl::set_args(*points_, where, in.origins, in.directions, in.t_edges, out.means, out.covs,
+  ocl::set_args(*points_, where, in.rays.origins, in.rays.directions, in.t_edges, out.means, out.covs,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
   ocl::launch_1d(*ctx_, *points_, in.n_rays * in.n_samples, where);
 }

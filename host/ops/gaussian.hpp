@@ -7,18 +7,17 @@
 #include "cl/context.hpp"
 #include "cl/program.hpp"
 #include "core/stage_options.hpp"
+#include "ops/ray_bundle.hpp"
 
 namespace mipnerf::ops {
 
 ocl::BuildOptions gaussian_build_options(const GaussianOptions& options);  // RAY_SHAPE
 
 struct GaussianInputs {
-  const ocl::DeviceArray<float>& origins;     // [R][3]
-  const ocl::DeviceArray<float>& directions;  // [R][3] unnormalised
-  const ocl::DeviceArray<float>& radii;       // [R] (not read by points())
-  const ocl::DeviceArray<float>& t_edges;     // [R][N+1]
-  size_t n_rays;
-  size_t n_samples;  // N
+  const RayBundle& rays;                   // reads origins, directions and radii (radii not by points())
+  const ocl::DeviceArray<float>& t_edges;  // [R][N+1]
+  size_t n_rays;                           // R ≤ rays.n_rays(): the bundle's first R rays
+  size_t n_samples;                        // N
 };
 
 struct GaussianOutputs {

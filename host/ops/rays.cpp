@@ -20,7 +20,7 @@ Rays::Rays(ocl::Context& ctx, const RaysOptions& options) : ctx_(&ctx), options_
   fwd_ = &ctx.program({"common.cl", "rays.cl"}, rays_build_options(options_)).kernel("rays_fwd");
 }
 
-void Rays::fwd(const RaysInputs& in, const RaysOutputs& out, const RngKey& key) {
+void Rays::fwd(const RaysInputs& in, RayBundle& out, const RngKey& key) {
   const std::string where = "rays_fwd";
   const size_t stride = camera_layout::stride;
   if (in.cameras.size() % stride != 0) {

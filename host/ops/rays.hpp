@@ -8,6 +8,7 @@
 #include "cl/context.hpp"
 #include "cl/program.hpp"
 #include "core/stage_options.hpp"
+#include "ops/ray_bundle.hpp"
 
 namespace mipnerf::ops {
 
@@ -21,25 +22,16 @@ struct RaysInputs {
   size_t n_rays;
 };
 
-struct RaysOutputs {
-  ocl::DeviceArray<float>& origins;     // [R][3] world (NDC for cylinder rays)
-  ocl::DeviceArray<float>& directions;  // [R][3] unnormalised, camera-frame z = −1 (NDC direction for cylinder)
-  ocl::DeviceArray<float>& viewdirs;    // [R][3] unit world direction; not written without view dependence
-  ocl::DeviceArray<float>& radii;       // [R] cone radius at t = 1 (cylinder: radius in NDC)
-  ocl::DeviceArray<float>& near;        // [R]
-  ocl::DeviceArray<float>& far;         // [R]
-  ocl::DeviceArray<float>& lossmult;    // [R]
-};
-
 // The ray stage for one specialisation (built on construction).
 class Rays {
  public:
   Rays(ocl::Context& ctx, const RaysOptions& options);
   const RaysOptions& options() const { return options_; }
 
-  // Enqueues rays_fwd. `key` matters only with jitter_subpixel. A camera id ≥ C or a pixel id outside its image
-  // gives NaN in every output of that ray. Throws mipnerf::Error for undersized buffers.
-  void fwd(const RaysInputs& in, const RaysOutputs& out, const RngKey& key = {});
+  // Enqueues rays_fwd: rays 0 .. in.n_rays − 1 of `out` (every array but viewdirs without view dependence).
+  // `key` matters only with jitter_subpixel. A camera id ≥ C or a pixel id outside its image gives NaN in every
+  // output of that ray. Throws mipnerf::Error for undersized buffers.
+  void fwd(const RaysInputs& in, RayBundle& out, const RngKey& key = {});
 
  private:
   ocl::Context* ctx_;

@@ -12,7 +12,7 @@ void check_inputs(const RenderInputs& in, const std::string& where) {
   detail::require(in.rgb, 3 * in.n_rays * in.n_samples, where);
   detail::require(in.density, in.n_rays * in.n_samples, where);
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
-  detail::require(in.directions, 3 * in.n_rays, where);
+  detail::require(in.rays.directions, 3 * in.n_rays, where);
   detail::to_uint(in.n_rays * in.n_samples, where, "rows");
 }
 
@@ -38,7 +38,7 @@ void Render::launch_fwd(::cl::Kernel& kernel, const std::string& where, const Re
   detail::require(out.acc, in.n_rays, where);
   detail::require(out.distance, in.n_rays, where);
   detail::require(out.weights, in.n_rays * in.n_samples, where);
-  ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.directions, out.comp_rgb, out.acc, out.distance,
+  ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, out.comp_rgb, out.acc, out.distance,
                 out.weights, detail::to_uint(in.n_rays, where, "rays"),
                 detail::to_uint(in.n_samples, where, "samples"));
   ocl::launch_1d(*ctx_, kernel, in.n_rays, where);
@@ -55,7 +55,7 @@ void Render::launch_bwd(::cl::Kernel& kernel, const std::string& where, const Re
   detail::require(out.d_density, in.n_rays * in.n_samples, where);
   // Without d_acc the kernel never reads that argument; any valid buffer stands in for it.
   const ocl::DeviceArray<float>& d_acc = grads.d_acc ? *grads.d_acc : grads.d_comp_rgb;
-  ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.directions, weights, grads.d_comp_rgb, d_acc,
+  ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, weights, grads.d_comp_rgb, d_acc,
                 static_cast<cl_uint>(grads.d_acc ? 1 : 0), out.d_rgb, out.d_density,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
   ocl::launch_1d(*ctx_, kernel, in.n_rays, where);

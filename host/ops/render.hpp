@@ -7,6 +7,7 @@
 #include "cl/context.hpp"
 #include "cl/program.hpp"
 #include "core/stage_options.hpp"
+#include "ops/ray_bundle.hpp"
 
 namespace mipnerf::ops {
 
@@ -17,9 +18,9 @@ struct RenderInputs {
   const ocl::DeviceArray<float>& rgb;         // [R][N][3]
   const ocl::DeviceArray<float>& density;     // [R][N]
   const ocl::DeviceArray<float>& t_edges;     // [R][N+1]
-  const ocl::DeviceArray<float>& directions;  // [R][3] unnormalised (δ = Δt·|d|)
-  size_t n_rays;
-  size_t n_samples;  // N
+  const RayBundle& rays;                      // reads directions, unnormalised (δ = Δt·|d|)
+  size_t n_rays;                              // R ≤ rays.n_rays(): the bundle's first R rays
+  size_t n_samples;                           // N
 };
 
 struct RenderOutputs {

@@ -19,10 +19,10 @@ Sample::Sample(ocl::Context& ctx, const SampleOptions& options) : ctx_(&ctx), op
 void Sample::stratified(const StratifiedInputs& in, ocl::DeviceArray<float>& t_edges, const RngKey& key) {
   const std::string where = "sample_stratified_fwd";
   if (in.n_samples == 0) throw Error(where + ": n_samples must be at least 1");
-  detail::require(in.near, in.n_rays, where);
-  detail::require(in.far, in.n_rays, where);
+  detail::require(in.rays.near, in.n_rays, where);
+  detail::require(in.rays.far, in.n_rays, where);
   detail::require(t_edges, in.n_rays * (in.n_samples + 1), where);
-  ocl::set_args(*stratified_, where, in.near, in.far, t_edges, detail::to_uint(in.n_rays, where, "rays"),
+  ocl::set_args(*stratified_, where, in.rays.near, in.rays.far, t_edges, detail::to_uint(in.n_rays, where, "rays"),
                 detail::to_uint(in.n_samples, where, "samples"), static_cast<cl_uint>(options_.randomized ? 1 : 0),
                 static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));
   const size_t groups = (in.n_samples + 1 + 3) / 4;  // one item per 4 edges of a ray

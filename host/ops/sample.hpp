@@ -7,16 +7,16 @@
 #include "cl/context.hpp"
 #include "cl/program.hpp"
 #include "core/stage_options.hpp"
+#include "ops/ray_bundle.hpp"
 
 namespace mipnerf::ops {
 
 ocl::BuildOptions sample_build_options(const SampleOptions& options);  // SAMPLE_LINDISP
 
 struct StratifiedInputs {
-  const ocl::DeviceArray<float>& near;  // [R]
-  const ocl::DeviceArray<float>& far;   // [R]
-  size_t n_rays;
-  size_t n_samples;  // N intervals → N + 1 edges per ray
+  const RayBundle& rays;  // reads near and far
+  size_t n_rays;          // R ≤ rays.n_rays(): the bundle's first R rays
+  size_t n_samples;       // N intervals → N + 1 edges per ray
 };
 
 struct MergeInputs {

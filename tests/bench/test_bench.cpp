@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -27,6 +28,7 @@
 #include "io/json.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
+#include "ops/stage_list.hpp"
 #include "support/temp_scene.hpp"
 #include "support/mlp_fixtures.hpp"
 #include "support/test_context.hpp"
@@ -164,6 +166,42 @@ TEST_CASE("bench kernels: every ray-math stage gives positive finite timings bes
     for (const auto& n : names) found = found || n.rfind(std::string(kernel) + " ", 0) == 0 || n == kernel;
     CHECK_MESSAGE(found, kernel);
   }
+}
+
+TEST_CASE("bench kernels: builds and rows are the stage list's, and the reference knows exactly its kernels") {
+  const auto& r = kernel_result();
+  const auto o = tiny_kernel_options();
+  std::vector<std::string> programs, kernels;
+  std::vector<const ops::StageKernel*> listed;
+  for (const auto& stage : ops::ray_math_stages()) {
+    programs.push_back(stage.program);
+    for (const auto& kernel : stage.kernels) {
+      listed.push_back(&kernel);
+      kernels.push_back(kernel.kernel);
+    }
+  }
+  REQUIRE(r.builds.size() == programs.size());
+  for (size_t i = 0; i < programs.size(); ++i) CHECK(r.builds[i].program == programs[i]);
+  REQUIRE(r.stages.size() == listed.size());
+  for (size_t i = 0; i < listed.size(); ++i) {
+    INFO(listed[i]->row());
+    CHECK(r.stages[i].stage == listed[i]->row());
+    CHECK(r.stages[i].unit == ops::unit_name(listed[i]->unit));
+    CHECK(r.stages[i].items == ops::items(listed[i]->unit, o.rays, o.samples));
+  }
+  // The rows of bench/results, in their order: the list reproduces them.
+  const std::vector<std::string> committed = {
+      "rays_fwd (cone)", "sample_stratified_fwd (jittered)", "gaussian_fwd (cone)", "ipe_fwd (L = 16, 96 features)",
+      "gaussian_ipe_fwd (fused)", "pe_fwd (view directions, 27 features)", "activations_fwd", "activations_bwd",
+      "render_fwd (white)", "render_bwd (white)", "render_raw_fwd (fused activations)",
+      "render_raw_bwd (fused activations)", "resample_fwd (α = 0.01, jittered)"};
+  for (size_t i = 0; i < committed.size() && i < r.stages.size(); ++i) CHECK(r.stages[i].stage == committed[i]);
+  // The CPU reference has one entry per listed kernel, no more, and refuses a name it does not know.
+  std::sort(kernels.begin(), kernels.end());
+  CHECK(bench::reference_kernels() == kernels);
+  bench::KernelBenchInputs inputs;
+  CHECK_THROWS_WITH_AS(bench::reference_stages()("no_such_kernel", ops::RayMathOptions{}, inputs, 1, 1, RngKey{}),
+                       doctest::Contains("no_such_kernel"), Error);
 }
 
 TEST_CASE("bench gemm: forward, backward data and backward weights per width, every configuration, defaults after") {

@@ -186,15 +186,12 @@ TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match came
   const size_t rays = 700;
   ops::BatchArrays batch(ctx, rays);
   ops::batch_sample(ctx, device, {77, ops::Batching::all_images}, 5, batch);
-  ocl::DeviceArray<float> origins(ctx, 3 * rays, "origins [R][3]"), directions(ctx, 3 * rays, "directions [R][3]"),
-      viewdirs(ctx, 3 * rays, "viewdirs [R][3]"), radii(ctx, rays, "radii [R]"), near(ctx, rays, "near [R]"),
-      far(ctx, rays, "far [R]"), lossmult(ctx, rays, "lossmult [R]");
+  ops::RayBundle bundle(ctx, rays);
   ops::Rays stage(ctx, RaysOptions{});
-  stage.fwd({device.cameras(), batch.camera_ids, batch.pixel_ids, rays},
-            {origins, directions, viewdirs, radii, near, far, lossmult});
+  stage.fwd({device.cameras(), batch.camera_ids, batch.pixel_ids, rays}, bundle);
   const auto camera_ids = batch.camera_ids.download(ctx), pixel_ids = batch.pixel_ids.download(ctx);
-  const auto o = origins.download(ctx), d = directions.download(ctx), r = radii.download(ctx),
-             n = near.download(ctx), f = far.download(ctx), l = lossmult.download(ctx),
+  const auto o = bundle.origins.download(ctx), d = bundle.directions.download(ctx), r = bundle.radii.download(ctx),
+             n = bundle.near.download(ctx), f = bundle.far.download(ctx), l = bundle.lossmult.download(ctx),
              batch_lossmult = batch.lossmult.download(ctx);
   std::map<uint32_t, int> levels_seen;
   for (size_t i = 0; i < rays; ++i) {

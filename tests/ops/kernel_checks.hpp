@@ -13,6 +13,7 @@
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
+#include "ops/ray_bundle.hpp"
 
 namespace mipnerf::test {
 
@@ -39,6 +40,16 @@ inline ocl::DeviceArray<float> filled(ocl::Context& ctx, size_t count, float val
   ocl::DeviceArray<float> array(ctx, count, name);
   array.upload(ctx, std::vector<float>(count, value));
   return array;
+}
+
+// A bundle of `n_rays` rays, every element of every array set to `value` (a sentinel, as filled()).
+inline ops::RayBundle filled_rays(ocl::Context& ctx, size_t n_rays, float value) {
+  ops::RayBundle rays(ctx, n_rays);
+  for (auto* array : {&rays.origins, &rays.directions, &rays.viewdirs, &rays.radii, &rays.near, &rays.far,
+                      &rays.lossmult}) {
+    array->upload(ctx, std::vector<float>(array->size(), value));
+  }
+  return rays;
 }
 
 // Compares device[i] with reference[i] under tolerance(i) and reports the worst element. Every device value

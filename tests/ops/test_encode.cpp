@@ -216,15 +216,18 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
       t += static_cast<float>(test::log_uniform(rng, 1e-4, 0.1));
     }
   }
-  auto o = test::upload(ctx, origins, "origins"), d = test::upload(ctx, directions, "directions");
-  auto r = test::upload(ctx, radii, "radii"), t = test::upload(ctx, t_edges, "t_edges");
+  ops::RayBundle rays(ctx, n_rays);
+  rays.origins.upload(ctx, origins);
+  rays.directions.upload(ctx, directions);
+  rays.radii.upload(ctx, radii);
+  auto t = test::upload(ctx, t_edges, "t_edges");
   const size_t rows = n_rays * n_samples;
   const EncodingOptions options;
   for (auto shape : {RayShape::cone, RayShape::cylinder}) {
     INFO("ray shape " << static_cast<int>(shape));
     ocl::DeviceArray<float> means(ctx, 3 * rows, "means"), covs(ctx, 3 * rows, "covs");
     ocl::DeviceArray<float> separate(ctx, rows * 96, "separate"), fused(ctx, rows * 96, "fused");
-    const ops::GaussianInputs in{o, d, r, t, n_rays, n_samples};
+    const ops::GaussianInputs in{rays, t, n_rays, n_samples};
     ops::Gaussian(ctx, {shape}).fwd(in, {means, covs});
     ops::Encode encode(ctx, {shape});
     encode.ipe(options, {means, covs, rows}, separate);

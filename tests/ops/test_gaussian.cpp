@@ -55,12 +55,15 @@ struct Gaussians {
 
 Gaussians run_device(const GaussianOptions& options, const Rays& r, bool points = false) {
   auto& ctx = test::test_context();
-  auto origins = test::upload(ctx, r.origins, "origins"), directions = test::upload(ctx, r.directions, "directions");
-  auto radii = test::upload(ctx, r.radii, "radii"), t_edges = test::upload(ctx, r.t_edges, "t_edges");
+  ops::RayBundle rays(ctx, r.n_rays);
+  rays.origins.upload(ctx, r.origins);
+  rays.directions.upload(ctx, r.directions);
+  rays.radii.upload(ctx, r.radii);
+  auto t_edges = test::upload(ctx, r.t_edges, "t_edges");
   const size_t rows = r.n_rays * r.n_samples;
   auto means = test::filled(ctx, 3 * rows, 7.0f, "means"), covs = test::filled(ctx, 3 * rows, 7.0f, "covs");
   ops::Gaussian stage(ctx, options);
-  const ops::GaussianInputs in{origins, directions, radii, t_edges, r.n_rays, r.n_samples};
+  const ops::GaussianInputs in{rays, t_edges, r.n_rays, r.n_samples};
   if (points) {
     stage.points(in, {means, covs});
   } else {
@@ -299,9 +302,9 @@ TEST_CASE("gaussian: point samples sit at interval midpoints with zero covarianc
 
 TEST_CASE("gaussian: undersized buffers are refused with the buffer's name") {
   auto& ctx = test::test_context();
-  ocl::DeviceArray<float> origins(ctx, 6, "origins"), directions(ctx, 6, "directions"), radii(ctx, 2, "radii");
+  ops::RayBundle rays(ctx, 2);
   ocl::DeviceArray<float> t_edges(ctx, 2 * 5, "t_edges"), means(ctx, 3 * 8, "means"), covs(ctx, 3 * 7, "covs [short]");
   ops::Gaussian stage(ctx, {});
-  CHECK_THROWS_WITH_AS(stage.fwd({origins, directions, radii, t_edges, 2, 4}, {means, covs}),
+  CHECK_THROWS_WITH_AS(stage.fwd({rays, t_edges, 2, 4}, {means, covs}),
                        doctest::Contains("covs [short]"), Error);
 }

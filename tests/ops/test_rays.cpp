@@ -78,14 +78,11 @@ RayArrays run_device(const RaysOptions& options, const Scene& s, const RngKey& k
   auto cameras = test::upload(ctx, packed, "cameras");
   auto camera_ids = test::upload(ctx, s.camera_ids, "camera_ids"),
        pixel_ids = test::upload(ctx, s.pixel_ids, "pixel_ids");
-  auto origins = test::filled(ctx, 3 * n, 7.0f, "origins"), directions = test::filled(ctx, 3 * n, 7.0f, "directions");
-  auto viewdirs = test::filled(ctx, 3 * n, 7.0f, "viewdirs"), radii = test::filled(ctx, n, 7.0f, "radii");
-  auto near = test::filled(ctx, n, 7.0f, "near"), far = test::filled(ctx, n, 7.0f, "far");
-  auto lossmult = test::filled(ctx, n, 7.0f, "lossmult");
-  ops::Rays(ctx, options)
-      .fwd({cameras, camera_ids, pixel_ids, n}, {origins, directions, viewdirs, radii, near, far, lossmult}, key);
-  return {origins.download(ctx), directions.download(ctx), viewdirs.download(ctx), radii.download(ctx),
-          near.download(ctx),    far.download(ctx),        lossmult.download(ctx)};
+  auto rays = test::filled_rays(ctx, n, 7.0f);
+  ops::Rays(ctx, options).fwd({cameras, camera_ids, pixel_ids, n}, rays, key);
+  return {rays.origins.download(ctx), rays.directions.download(ctx), rays.viewdirs.download(ctx),
+          rays.radii.download(ctx),   rays.near.download(ctx),       rays.far.download(ctx),
+          rays.lossmult.download(ctx)};
 }
 
 struct RefArrays {
@@ -269,9 +266,10 @@ TEST_CASE("rays: an unknown camera or a pixel outside the image gives NaN, not a
   for (size_t i : {size_t(0), size_t(3)}) CHECK(std::isfinite(dev.radii[i]));
   // A cameras buffer that is not whole cameras is refused before the launch.
   auto& ctx = test::test_context();
-  ocl::DeviceArray<float> cameras(ctx, 25, "cameras [25]"), out(ctx, 12, "out");
+  ocl::DeviceArray<float> cameras(ctx, 25, "cameras [25]");
   ocl::DeviceArray<uint32_t> ids(ctx, 4, "ids");
+  ops::RayBundle out(ctx, 4);
   ops::Rays rays(ctx, {});
-  CHECK_THROWS_WITH_AS(rays.fwd({cameras, ids, ids, 4}, {out, out, out, out, out, out, out}),
+  CHECK_THROWS_WITH_AS(rays.fwd({cameras, ids, ids, 4}, out),
                        doctest::Contains("cameras [25]"), Error);
 }

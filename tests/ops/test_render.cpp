@@ -59,14 +59,16 @@ DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_
                         const ActivationOptions& activation = {}) {
   auto& ctx = test::test_context();
   auto rgb = test::upload(ctx, b.rgb, "rgb"), density = test::upload(ctx, b.density, "density");
-  auto t_edges = test::upload(ctx, b.t_edges, "t_edges"), directions = test::upload(ctx, b.directions, "directions");
+  auto t_edges = test::upload(ctx, b.t_edges, "t_edges");
+  ops::RayBundle rays(ctx, b.n_rays);  // only the directions are read
+  rays.directions.upload(ctx, b.directions);
   auto d_comp = test::upload(ctx, b.d_comp_rgb, "d_comp_rgb"), d_acc = test::upload(ctx, b.d_acc, "d_acc");
   const size_t rows = b.n_rays * b.n_samples;
   ocl::DeviceArray<float> comp(ctx, 3 * b.n_rays, "comp_rgb"), acc(ctx, b.n_rays, "acc");
   ocl::DeviceArray<float> distance(ctx, b.n_rays, "distance"), weights(ctx, rows, "weights");
   ocl::DeviceArray<float> d_rgb(ctx, 3 * rows, "d_rgb"), d_density(ctx, rows, "d_density");
   ops::Render render(ctx, options, activation);
-  const ops::RenderInputs in{rgb, density, t_edges, directions, b.n_rays, b.n_samples};
+  const ops::RenderInputs in{rgb, density, t_edges, rays, b.n_rays, b.n_samples};
   const ops::RenderOutputs out{comp, acc, distance, weights};
   const ops::RenderGradients grads{d_comp, with_d_acc ? &d_acc : nullptr};
   if (raw) {

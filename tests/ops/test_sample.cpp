@@ -36,9 +36,11 @@ std::vector<float> run_stratified(const SampleOptions& options, const Ranges& r,
   count = std::min(count, r.near.size() - first);
   const std::vector<float> near(r.near.begin() + first, r.near.begin() + first + count);
   const std::vector<float> far(r.far.begin() + first, r.far.begin() + first + count);
-  auto near_dev = test::upload(ctx, near, "near"), far_dev = test::upload(ctx, far, "far");
+  ops::RayBundle rays(ctx, count);
+  rays.near.upload(ctx, near);
+  rays.far.upload(ctx, far);
   auto t_edges = test::filled(ctx, count * (n_samples + 1), 7.0f, "t_edges");
-  ops::Sample(ctx, options).stratified({near_dev, far_dev, count, n_samples}, t_edges, key);
+  ops::Sample(ctx, options).stratified({rays, count, n_samples}, t_edges, key);
   return t_edges.download(ctx);
 }
 

@@ -1,9 +1,12 @@
 // Every compile-time specialisation of the ray-math kernels is built and run against the reference: ray shape
 // (cone/cylinder), background (none/black/white), view dependence (on/off), sub-pixel jitter, disparity sampling,
-// and the density activations. The list below is the registry: a new option value must be added here.
+// and the density activations. The registry is the stage list (host/ops/stage_list.cpp), which the kernel benchmark
+// walks too: a new stage or option value is added there, and each stage has its check here (checkers()).
 #include <doctest/doctest.h>
 
 #include <functional>
+#include <map>
+#include <set>
 
 #include "core/camera.hpp"
 #include "kernel_checks.hpp"
@@ -14,6 +17,7 @@
 #include "ops/render.hpp"
 #include "ops/resample.hpp"
 #include "ops/sample.hpp"
+#include "ops/stage_list.hpp"
 #include "ref/activations.hpp"
 #include "ref/encode.hpp"
 #include "ref/gaussian.hpp"
@@ -64,21 +68,18 @@ void run_rays(const RaysOptions& options) {
   const size_t n = s.camera_ids.size();
   auto cameras = test::upload(ctx, s.cameras, "cameras");
   auto ids = test::upload(ctx, s.camera_ids, "camera_ids"), pixels = test::upload(ctx, s.pixel_ids, "pixel_ids");
-  auto o = test::filled(ctx, 3 * n, 7.0f, "origins"), d = test::filled(ctx, 3 * n, 7.0f, "directions");
-  auto v = test::filled(ctx, 3 * n, 7.0f, "viewdirs"), r = test::filled(ctx, n, 7.0f, "radii");
-  auto near = test::filled(ctx, n, 7.0f, "near"), far = test::filled(ctx, n, 7.0f, "far");
-  auto lossmult = test::filled(ctx, n, 7.0f, "lossmult");
+  auto rays = test::filled_rays(ctx, n, 7.0f);
   const RngKey key{3, 4, 5};
-  ops::Rays(ctx, options).fwd({cameras, ids, pixels, n}, {o, d, v, r, near, far, lossmult}, key);
+  ops::Rays(ctx, options).fwd({cameras, ids, pixels, n}, rays, key);
   std::vector<double> ro, rd, rv, rr, rn, rf, rl;
   ref::rays_fwd(options, test::to_double(s.cameras), s.camera_ids, s.pixel_ids, ro, rd, rv, rr, rn, rf, rl, n, 3, key);
-  check_matches("origins", o.download(ctx), ro);
-  check_matches("directions", d.download(ctx), rd);
-  check_matches("radii", r.download(ctx), rr);
+  check_matches("origins", rays.origins.download(ctx), ro);
+  check_matches("directions", rays.directions.download(ctx), rd);
+  check_matches("radii", rays.radii.download(ctx), rr);
   if (options.view_dependence) {
-    check_matches("viewdirs", v.download(ctx), rv);
+    check_matches("viewdirs", rays.viewdirs.download(ctx), rv);
   } else {
-    for (float x : v.download(ctx)) REQUIRE(x == 7.0f);
+    for (float x : rays.viewdirs.download(ctx)) REQUIRE(x == 7.0f);
   }
 }
 
@@ -86,6 +87,17 @@ void run_rays(const RaysOptions& options) {
 struct SmallRays {
   size_t n_rays = 64, n = 32;
   std::vector<float> origins, directions, radii, near, far, t_edges, density, rgb, weights, d_comp, d_acc;
+  // The rays on the device (origins, directions, radii, near, far; viewdirs and lossmult unset: no stage here reads
+  // them).
+  ops::RayBundle upload(ocl::Context& ctx) const {
+    ops::RayBundle rays(ctx, n_rays);
+    rays.origins.upload(ctx, origins);
+    rays.directions.upload(ctx, directions);
+    rays.radii.upload(ctx, radii);
+    rays.near.upload(ctx, near);
+    rays.far.upload(ctx, far);
+    return rays;
+  }
   SmallRays() {
     std::mt19937 rng(9);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -112,10 +124,10 @@ struct SmallRays {
 void run_sample(const SampleOptions& options) {
   auto& ctx = test::test_context();
   const SmallRays s;
-  auto near = test::upload(ctx, s.near, "near"), far = test::upload(ctx, s.far, "far");
+  const auto rays = s.upload(ctx);
   ocl::DeviceArray<float> t(ctx, s.n_rays * (s.n + 1), "t_edges");
   const RngKey key{1, 2, 3};
-  ops::Sample(ctx, options).stratified({near, far, s.n_rays, s.n}, t, key);
+  ops::Sample(ctx, options).stratified({rays, s.n_rays, s.n}, t, key);
   std::vector<double> expected;
   ref::sample_stratified_fwd(options, test::to_double(s.near), test::to_double(s.far), expected, s.n_rays, s.n, key);
   check_matches("t_edges", t.download(ctx), expected);
@@ -133,20 +145,29 @@ void run_resample(const ResampleOptions& options) {
   check_matches("t_new", out.download(ctx), expected);
 }
 
-void run_gaussian_and_encode(const GaussianOptions& options) {
+void run_gaussian(const GaussianOptions& options) {
   auto& ctx = test::test_context();
   const SmallRays s;
-  auto o = test::upload(ctx, s.origins, "origins"), d = test::upload(ctx, s.directions, "directions");
-  auto r = test::upload(ctx, s.radii, "radii"), t = test::upload(ctx, s.t_edges, "t_edges");
+  const auto rays = s.upload(ctx);
+  auto t = test::upload(ctx, s.t_edges, "t_edges");
   const size_t rows = s.n_rays * s.n;
   ocl::DeviceArray<float> means(ctx, 3 * rows, "means"), covs(ctx, 3 * rows, "covs");
-  const ops::GaussianInputs in{o, d, r, t, s.n_rays, s.n};
-  ops::Gaussian(ctx, options).fwd(in, {means, covs});
+  ops::Gaussian(ctx, options).fwd({rays, t, s.n_rays, s.n}, {means, covs});
   std::vector<double> rm, rc;
   ref::gaussian_fwd(options, test::to_double(s.origins), test::to_double(s.directions), test::to_double(s.radii),
                     test::to_double(s.t_edges), rm, rc, s.n_rays, s.n);
   check_matches("means", means.download(ctx), rm);
   check_matches("covs", covs.download(ctx), rc);
+}
+
+// The fused Gaussian + IPE (encode.cl includes gaussian.cl, so it has the ray shapes too).
+void run_encode(const GaussianOptions& options) {
+  auto& ctx = test::test_context();
+  const SmallRays s;
+  const auto rays = s.upload(ctx);
+  auto t = test::upload(ctx, s.t_edges, "t_edges");
+  const size_t rows = s.n_rays * s.n;
+  const ops::GaussianInputs in{rays, t, s.n_rays, s.n};
   EncodingOptions encoding;
   encoding.max_deg = 8;  // low degrees: the 1e-4 check stays meaningful for features of these means
   ocl::DeviceArray<float> features(ctx, rows * encoding.ipe_width(), "features");
@@ -157,25 +178,35 @@ void run_gaussian_and_encode(const GaussianOptions& options) {
   check_matches("gaussian_ipe features", features.download(ctx), rf);
 }
 
-void run_render(const RenderOptions& options, const ActivationOptions& activation) {
+// The activations stage on its own.
+void run_activations(const ActivationOptions& activation) {
   auto& ctx = test::test_context();
   const SmallRays s;
   const size_t rows = s.n_rays * s.n;
   auto raw_rgb = test::upload(ctx, s.rgb, "raw_rgb"), raw_density = test::upload(ctx, s.density, "raw_density");
-  auto t = test::upload(ctx, s.t_edges, "t_edges"), d = test::upload(ctx, s.directions, "directions");
-  auto d_comp = test::upload(ctx, s.d_comp, "d_comp_rgb"), d_acc = test::upload(ctx, s.d_acc, "d_acc");
-  ocl::DeviceArray<float> comp(ctx, 3 * s.n_rays, "comp_rgb"), acc(ctx, s.n_rays, "acc");
-  ocl::DeviceArray<float> distance(ctx, s.n_rays, "distance"), weights(ctx, rows, "weights");
-  ocl::DeviceArray<float> d_raw_rgb(ctx, 3 * rows, "d_raw_rgb"), d_raw_density(ctx, rows, "d_raw_density");
-  // The activations stage on its own, then the fused render on raw values (which exercises both sets of options).
   ocl::DeviceArray<float> density(ctx, rows, "density"), rgb(ctx, 3 * rows, "rgb");
   ops::Activations(ctx, activation).fwd({raw_density, raw_rgb, rows}, {density, rgb});
   std::vector<double> ref_density, ref_rgb;
   ref::activations_fwd(activation, test::to_double(s.density), test::to_double(s.rgb), ref_density, ref_rgb, rows);
   check_matches("density", density.download(ctx), ref_density);
   check_matches("rgb", rgb.download(ctx), ref_rgb);
+}
+
+void run_render(const RenderOptions& options, const ActivationOptions& activation) {
+  // The activations stage on its own, then the fused render on raw values (which exercises both sets of options).
+  run_activations(activation);
+  auto& ctx = test::test_context();
+  const SmallRays s;
+  const size_t rows = s.n_rays * s.n;
+  auto raw_rgb = test::upload(ctx, s.rgb, "raw_rgb"), raw_density = test::upload(ctx, s.density, "raw_density");
+  auto t = test::upload(ctx, s.t_edges, "t_edges");
+  const auto rays = s.upload(ctx);
+  auto d_comp = test::upload(ctx, s.d_comp, "d_comp_rgb"), d_acc = test::upload(ctx, s.d_acc, "d_acc");
+  ocl::DeviceArray<float> comp(ctx, 3 * s.n_rays, "comp_rgb"), acc(ctx, s.n_rays, "acc");
+  ocl::DeviceArray<float> distance(ctx, s.n_rays, "distance"), weights(ctx, rows, "weights");
+  ocl::DeviceArray<float> d_raw_rgb(ctx, 3 * rows, "d_raw_rgb"), d_raw_density(ctx, rows, "d_raw_density");
   ops::Render render(ctx, options, activation);
-  const ops::RenderInputs in{raw_rgb, raw_density, t, d, s.n_rays, s.n};
+  const ops::RenderInputs in{raw_rgb, raw_density, t, rays, s.n_rays, s.n};
   render.raw_fwd(in, {comp, acc, distance, weights});
   render.raw_bwd(in, weights, {d_comp, &d_acc}, {d_raw_rgb, d_raw_density});
   std::vector<double> rc, ra, rd, rw, rgr, rgd;
@@ -192,60 +223,47 @@ void run_render(const RenderOptions& options, const ActivationOptions& activatio
   check_matches("d_raw_density", d_raw_density.download(ctx), rgd);
 }
 
-struct Specialisation {
-  std::string name;
-  std::function<void()> run;
-};
+// How to check one specialisation of each stage of the list against the reference, by the stage's name.
+using Checker = std::function<void(const ops::RayMathOptions&)>;
 
-std::vector<Specialisation> all_specialisations() {
-  std::vector<Specialisation> list;
-  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
-    const std::string shape_name = shape == RayShape::cone ? "cone" : "cylinder";
-    for (bool view : {true, false}) {
-      for (bool jitter : {false, true}) {
-        RaysOptions options;
-        options.ray_shape = shape;
-        options.view_dependence = view;
-        options.jitter_subpixel = jitter;
-        list.push_back({"rays " + shape_name + (view ? " view" : " no-view") + (jitter ? " jitter" : ""),
-                        [options] { run_rays(options); }});
-      }
-    }
-    list.push_back({"gaussian+encode " + shape_name, [shape] { run_gaussian_and_encode({shape}); }});
-  }
-  for (bool lindisp : {false, true}) {
-    for (bool randomized : {false, true}) {
-      list.push_back({std::string("sample") + (lindisp ? " lindisp" : "") + (randomized ? " jitter" : ""), [=] {
-                        run_sample({lindisp, randomized});
-                      }});
-    }
-  }
-  for (bool blur : {true, false}) {
-    list.push_back({std::string("resample") + (blur ? " mipnerf" : " nerf"), [blur] {
-                      run_resample({blur ? 0.01f : 0.0f, blur, true});
-                    }});
-  }
-  ActivationOptions nerf;
-  nerf.density = DensityActivation::relu;
-  nerf.density_bias = 0.0f;
-  nerf.rgb_padding = 0.0f;
-  for (auto background : {Background::none, Background::black, Background::white}) {
-    for (const auto& activation : {ActivationOptions{}, nerf}) {
-      list.push_back({"render background " + std::to_string(static_cast<int>(background)) +
-                          (activation.density == DensityActivation::relu ? " relu" : " softplus"),
-                      [=] { run_render({background}, activation); }});
-    }
-  }
-  return list;
+const std::map<std::string, Checker>& checkers() {
+  static const std::map<std::string, Checker> table = {
+      {"rays", [](const ops::RayMathOptions& o) { run_rays(o.rays); }},
+      {"sample", [](const ops::RayMathOptions& o) { run_sample(o.sample); }},
+      {"gaussian", [](const ops::RayMathOptions& o) { run_gaussian(o.gaussian); }},
+      {"encode", [](const ops::RayMathOptions& o) { run_encode(o.gaussian); }},
+      {"activations", [](const ops::RayMathOptions& o) { run_activations(o.activation); }},
+      {"render", [](const ops::RayMathOptions& o) { run_render(o.render, o.activation); }},
+      {"resample", [](const ops::RayMathOptions& o) { run_resample(o.resample); }},
+  };
+  return table;
 }
 
 }  // namespace
 
 TEST_CASE("specialisations: every ray shape, background, view dependence and activation builds and runs") {
-  const auto list = all_specialisations();
-  CHECK(list.size() == 8 + 2 + 4 + 2 + 6);
-  for (const auto& s : list) {
-    INFO("specialisation: " << s.name);
-    s.run();
+  size_t count = 0;
+  for (const auto& stage : ops::ray_math_stages()) {
+    const auto checker = checkers().find(stage.name);
+    REQUIRE_MESSAGE(checker != checkers().end(), "no check for stage " << stage.name);
+    for (const auto& variant : stage.variants) {
+      INFO("specialisation: " << stage.name << " " << variant.name);
+      checker->second(variant.options);
+      ++count;
+    }
   }
+  // rays: shape × view × jitter; sample: lindisp × jitter; gaussian, encode: shape; activations: mip-NeRF, NeRF;
+  // render: background × activations; resample: mip-NeRF, NeRF.
+  CHECK(count == 8 + 4 + 2 + 2 + 2 + 6 + 2);
+}
+
+TEST_CASE("specialisations: the stage list and the checks name the same stages, each with a specialisation") {
+  std::set<std::string> listed;
+  for (const auto& stage : ops::ray_math_stages()) {
+    INFO("stage " << stage.name);
+    CHECK(listed.insert(stage.name).second);  // names are unique
+    CHECK(checkers().count(stage.name) == 1);
+    CHECK_FALSE(stage.variants.empty());
+  }
+  for (const auto& entry : checkers()) CHECK_MESSAGE(listed.count(entry.first) == 1, "not listed: " << entry.first);
 }
