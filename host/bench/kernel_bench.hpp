@@ -1,8 +1,8 @@
 // Throughput of every ray-math stage (rays … activations, forward and backward) on one OpenCL device, and, when a
 // CPU implementation of the stages is handed in, beside it on the same inputs. The stages, their kernels and the
-// options they run with come from the one stage list (host/ops/stage_list.hpp) that the specialisation test walks too. Shared by `mipnerf-cl bench` (device
-// only) and bench/bench_kernels (beside the double-precision reference, bench/kernel_reference: the library does not
-// link the reference, the test oracle).
+// options they run with come from the one stage list (host/ops/stage_list.hpp) that the specialisation test walks
+// too. Shared by `mipnerf-cl bench` (device only) and bench/bench_kernels (beside the double-precision reference,
+// bench/reference/kernel_reference: the library does not link the reference, the test oracle).
 //
 // Inputs: a 800×800 Blender-like camera, R random pixels, then the pipeline's own outputs (one pass of rays,
 // sampling, activations and rendering first), so every stage reads realistic values. Per stage: one untimed-but-
