@@ -4,10 +4,14 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "common.hpp"
+#include "core/error.hpp"
+#include "core/stage_options.hpp"
 #include "data/dataset.hpp"
 #include "data/inspect.hpp"
+#include "train/config.hpp"
 
 namespace mipnerf::cli {
 namespace {
@@ -15,7 +19,7 @@ namespace {
 struct InspectArgs {
   std::string path;
   int scales = 1;
-  std::string background = "white";
+  std::string background = enum_name(Background::white);  // parsed in run_inspect by its name table
   double near = 0.0, far = 0.0;
   std::vector<std::string> splits;
 };
@@ -77,10 +81,16 @@ void print_split(const data::SplitSummary& s) {
   std::cout << "  mean colour " << vec({s.mean_rgb[0], s.mean_rgb[1], s.mean_rgb[2]}) << "\n";
 }
 
+Background parse_background_flag(const std::string& value) {
+  const std::optional<Background> parsed = enum_from_name<Background>(value);
+  if (!parsed) throw Error("--background '" + value + "': expected " + enum_choices<Background>());
+  return *parsed;
+}
+
 void run_inspect(const InspectArgs& args) {
   data::LoadOptions options;
   options.scales = args.scales;
-  options.background = data::parse_background(args.background);
+  options.background = parse_background_flag(args.background);
   if (args.near > 0.0) options.near = args.near;
   if (args.far > 0.0) options.far = args.far;
   options.splits = args.splits;
@@ -104,8 +114,8 @@ void register_dataset(CLI::App& app) {
   inspect->add_option("DIR", args->path, "Dataset folder, transforms.json or metadata.json")->required();
   inspect->add_option("--scales", args->scales, "Build this many scales on the fly (the paper's multiscale: 4)")
       ->check(CLI::Range(1, 8));
-  inspect->add_option("--background", args->background, "Composite alpha onto white, black or none")
-      ->check(CLI::IsMember({"white", "black", "none"}));
+  // The training setting's help: the dataset composites its images exactly as training does.
+  inspect->add_option("--background", args->background, train::find_setting("background").help);
   inspect->add_option("--near", args->near, "Override near (depth along the optical axis)")
       ->check(CLI::PositiveNumber);
   inspect->add_option("--far", args->far, "Override far")->check(CLI::PositiveNumber);

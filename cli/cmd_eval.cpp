@@ -98,7 +98,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   record.split = args.split;
   record.date = eval::utc_timestamp();
   record.device = eval::device_record(ctx->device_info());
-  record.model = {{"variant", model.config.variant},
+  record.model = {{"variant", enum_name(model.config.variant)},
                   {"parameters", eval::parameter_count(model)},
                   {"config", nlohmann::json::parse(train::to_json(model.config))}};
   record.supersample = args.supersample;

@@ -157,8 +157,8 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   train::Trainer trainer(*ctx, config, data_path, args.out, args.resume);
   mlp::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
   const auto& spec = trainer.spec();
-  std::cerr << "mipnerf-cl: training " << config.variant << " (preset " << args.preset << ") on " << device << ": "
-            << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()
+  std::cerr << "mipnerf-cl: training " << enum_name(config.variant) << " (preset " << args.preset << ") on " << device
+            << ": " << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()
             << " parameters, " << spec.describe() << "\n"
             << "mipnerf-cl: " << trainer.memory().describe() << "\n";
 
@@ -212,7 +212,10 @@ void register_train(CLI::App& app) {
                                         "default: the built-in procedural scene, made in OUT/scene");
   cmd->add_option("--out", args->out, "Output folder: checkpoints, logs, config, val renders")->capture_default_str();
   cmd->add_option("--preset", args->preset, "Settings bundle: " + train::describe_bundles())->capture_default_str();
-  cmd->add_option("--variant", args->variant, "Model variant (rows of the paper's tables)")->capture_default_str();
+  cmd->add_option("--variant", args->variant,
+                  "Model variant, a row of the paper's tables: " + enum_choices<train::Variant>() +
+                      " (recorded in OUT/config.json as variant_bundle)")
+      ->capture_default_str();
   cmd->add_flag("--resume", args->resume, "Continue from the newest checkpoint in OUT/checkpoints");
   cmd->add_option("--set", args->sets, "Any setting as name=value (repeatable)");
   cmd->add_option("--config", args->config_file,

@@ -1,10 +1,13 @@
 // Options of the ray-math stages (rays, sampling, resampling, Gaussians, encodings, rendering, activations):
 // plain structs with the paper's defaults, shared by the OpenCL wrappers (host/ops) and the CPU reference
 // (host/ref), so both always run the same specialisation. Compile-time options become -D defines; the rest are
-// kernel arguments.
+// kernel arguments. The enums' name tables (enum_names) are the settings' vocabulary: train/config parses them.
 #pragma once
 
+#include <array>
 #include <cstdint>
+
+#include "core/enum_names.hpp"
 
 namespace mipnerf {
 
@@ -13,18 +16,30 @@ enum class RayShape : int {
   cone = 0,      // conical frustums of the pixel's footprint (mip-NeRF)
   cylinder = 1,  // cylinders, rays in NDC space (forward-facing scenes, official LLFF)
 };
+constexpr std::array<EnumName<RayShape>, 2> enum_names(RayShape) {
+  return {{{RayShape::cone, "cone"}, {RayShape::cylinder, "cylinder"}}};
+}
 
-// BACKGROUND: what shows through where acc < 1.
+// BACKGROUND: what shows through where acc < 1, and what the dataset composites its RGBA images onto (the
+// values are the kernel's, so the enum is the -D define as it is).
 enum class Background : int {
   none = 0,   // nothing added: a premultiplied colour (the caller composites with acc); same values as black
   black = 1,  // + 0·(1 − acc)
   white = 2,  // + 1·(1 − acc) (Blender scenes, paper §5)
 };
+// White first: the paper's choice for Blender scenes, listed first in help and errors.
+constexpr std::array<EnumName<Background>, 3> enum_names(Background) {
+  return {{{Background::white, "white"}, {Background::black, "black"}, {Background::none, "none"}}};
+}
 
+// DENSITY_ACTIVATION: what turns the MLP's raw density into a non-negative one.
 enum class DensityActivation : int {
   softplus = 0,  // mip-NeRF
   relu = 1,      // NeRF baseline
 };
+constexpr std::array<EnumName<DensityActivation>, 2> enum_names(DensityActivation) {
+  return {{{DensityActivation::softplus, "softplus"}, {DensityActivation::relu, "relu"}}};
+}
 
 // Everything random is a function of (seed, step, ray): the ray's index in its batch is first_ray + (index in
 // the launch), so a batch gives the same numbers however it is split into chunks.

@@ -30,24 +30,6 @@ RgbaImage downsample2(const RgbaImage& image) {
   return out;
 }
 
-Background parse_background(const std::string& name) {
-  if (name == "white") return Background::white;
-  if (name == "black") return Background::black;
-  if (name == "none") return Background::none;
-  throw Error("unknown background '" + name + "': use white, black or none");
-}
-
-const char* background_name(Background background) {
-  switch (background) {
-    case Background::white:
-      return "white";
-    case Background::black:
-      return "black";
-    default:
-      return "none";
-  }
-}
-
 void composite(const RgbaImage& image, Background background, float* rgb_out) {
   const size_t pixels = static_cast<size_t>(image.width) * image.height;
   const float bg = background == Background::white ? 1.0f : 0.0f;

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/stage_options.hpp"
+
 namespace mipnerf::data {
 
 // Straight (not premultiplied) RGBA, [height][width][4], values in [0, 1]: the stored 8- or 16-bit
@@ -25,14 +27,9 @@ RgbaImage load_rgba_png(const std::string& path);
 // alpha included (not premultiplied). Width and height must be even.
 RgbaImage downsample2(const RgbaImage& image);
 
-// What transparent pixels show: the paper composites Blender scenes onto white.
-enum class Background { white, black, none };
-// "white" | "black" | "none"; throws mipnerf::Error naming the accepted values.
-Background parse_background(const std::string& name);
-const char* background_name(Background background);
-
 // rgb_out [height][width][3] = rgb · α + background · (1 − α), in the stored (sRGB-encoded) values, as the
-// official code does; Background::none drops alpha and keeps rgb as stored.
+// official code does (the paper composites Blender scenes onto white); Background::none drops alpha and keeps rgb
+// as stored. Background is the renderer's (core/stage_options.hpp): the same choice made once for both.
 void composite(const RgbaImage& image, Background background, float* rgb_out);
 
 }  // namespace mipnerf::data

@@ -1,16 +1,9 @@
 // Training-batch sampling: the one place batch_sample's arguments are set.
 #include "ops/batch.hpp"
 
-#include "core/error.hpp"
 #include "cl/launch.hpp"
 
 namespace mipnerf::ops {
-
-Batching parse_batching(const std::string& name) {
-  if (name == "all_images") return Batching::all_images;
-  if (name == "single_image") return Batching::single_image;
-  throw Error("unknown batching '" + name + "': use all_images or single_image");
-}
 
 BatchArrays::BatchArrays(ocl::Context& ctx, size_t rays)
     : rays(rays),

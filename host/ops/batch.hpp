@@ -1,11 +1,12 @@
 // Training-batch sampling on the device (kernels/batch.cl): where batch_sample's arguments are set.
 #pragma once
 
+#include <array>
 #include <cstdint>
-#include <string>
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
+#include "core/enum_names.hpp"
 #include "data/device_dataset.hpp"
 
 namespace mipnerf::ops {
@@ -14,8 +15,10 @@ enum class Batching {
   all_images,   // every ray picks a pixel uniformly among all pixels of the split (the paper's default)
   single_image  // one image per step, pixels uniform in it
 };
-// "all_images" | "single_image" (TrainConfig::batching); throws naming the accepted values.
-Batching parse_batching(const std::string& name);
+// The names of TrainConfig::batching (train/config parses them).
+constexpr std::array<EnumName<Batching>, 2> enum_names(Batching) {
+  return {{{Batching::all_images, "all_images"}, {Batching::single_image, "single_image"}}};
+}
 
 struct BatchOptions {
   uint64_t seed = 0;  // with the step, decides every choice (RNG_STREAM_BATCH)

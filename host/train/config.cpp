@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <optional>
 #include <sstream>
 #include <variant>
 
@@ -15,78 +16,80 @@
 namespace mipnerf::train {
 namespace {
 
-using Member = std::variant<std::string TrainConfig::*, bool TrainConfig::*, int TrainConfig::*,
-                            int64_t TrainConfig::*, uint64_t TrainConfig::*, double TrainConfig::*>;
+using Member = std::variant<bool TrainConfig::*, int TrainConfig::*, int64_t TrainConfig::*, uint64_t TrainConfig::*,
+                            double TrainConfig::*, Background TrainConfig::*, RayShape TrainConfig::*,
+                            ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*>;
 
+// One row of the table. An enum setting's `help` says what it does; its allowed values are prepended from the
+// enum's name table (with_full_help), so they are written once.
 struct Entry {
   Setting setting;
   Member member;
-  std::vector<std::string> choices;  // accepted values of a string setting; empty = any
 };
+
+constexpr const char* kVariantBundleKey = "variant_bundle";  // the record's JSON key (TrainConfig::variant_bundle)
 
 const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
-      {{"background", "white | black | none: what shows where the scene is empty", "scene"},
-       &TrainConfig::background, {"white", "black", "none"}},
+      {{"background", "what shows where the scene is empty", "scene"}, &TrainConfig::background},
       {{"factor", "box-downsample the stored images by this power of two first (official factor)", "scene"},
-       &TrainConfig::factor, {}},
+       &TrainConfig::factor},
       {{"multiscale", "build x2 x4 x8 box-downsampled copies of the data on the fly", "scene"},
-       &TrainConfig::multiscale, {}},
+       &TrainConfig::multiscale},
       {{"area_loss", "weight each pixel's loss by its area relative to full resolution", "scene"},
-       &TrainConfig::area_loss, {}},
-      {{"near", "near bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::near, {}},
-      {{"far", "far bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::far, {}},
-      {{"ray_shape", "cone | cylinder", "scene"}, &TrainConfig::ray_shape, {"cone", "cylinder"}},
-      {{"lindisp", "sample linearly in disparity instead of depth", "scene"}, &TrainConfig::lindisp, {}},
-      {{"batching", "all_images | single_image", "scene"}, &TrainConfig::batching, {"all_images", "single_image"}},
+       &TrainConfig::area_loss},
+      {{"near", "near bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::near},
+      {{"far", "far bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::far},
+      {{"ray_shape", "conical frustums, or cylinders in NDC space (forward-facing scenes)", "scene"},
+       &TrainConfig::ray_shape},
+      {{"lindisp", "sample linearly in disparity instead of depth", "scene"}, &TrainConfig::lindisp},
+      {{"batching", "a step's rays come from every image, or from one image", "scene"}, &TrainConfig::batching},
       {{"pixel_center", "offset of a pixel's ray inside the pixel (0.5 = centre)", "scene"},
-       &TrainConfig::pixel_center, {}},
+       &TrainConfig::pixel_center},
       {{"jitter_pixels", "train on rays through random points of their pixels (supersampling)", "scene"},
-       &TrainConfig::jitter_pixels, {}},
-      {{"variant", "mipnerf | nerf", "model"}, &TrainConfig::variant, {"mipnerf", "nerf"}},
-      {{"num_samples", "intervals per level", "model"}, &TrainConfig::num_samples, {}},
-      {{"num_levels", "sampling levels (coarse + fine = 2)", "model"}, &TrainConfig::num_levels, {}},
-      {{"single_mlp", "one MLP shared by all levels", "model"}, &TrainConfig::single_mlp, {}},
+       &TrainConfig::jitter_pixels},
+      {{"variant", "model family: frustums with IPE, or NeRF's points with PE (--variant sets it)", "model"},
+       &TrainConfig::variant},
+      {{"num_samples", "intervals per level", "model"}, &TrainConfig::num_samples},
+      {{"num_levels", "sampling levels (coarse + fine = 2)", "model"}, &TrainConfig::num_levels},
+      {{"single_mlp", "one MLP shared by all levels", "model"}, &TrainConfig::single_mlp},
       {{"integrated_encoding", "IPE of frustum Gaussians (false: PE of their means)", "model"},
-       &TrainConfig::integrated_encoding, {}},
-      {{"pos_min_deg", "lowest positional-encoding degree", "model"}, &TrainConfig::pos_min_deg, {}},
-      {{"pos_max_deg", "positional-encoding degrees end before this", "model"}, &TrainConfig::pos_max_deg, {}},
-      {{"pos_identity", "append the raw position to its encoding", "model"}, &TrainConfig::pos_identity, {}},
-      {{"view_dependence", "condition colour on the view direction", "model"}, &TrainConfig::view_dependence, {}},
-      {{"view_max_deg", "view-direction encoding degrees end before this", "model"}, &TrainConfig::view_max_deg, {}},
-      {{"density_activation", "softplus | relu", "model"}, &TrainConfig::density_activation, {"softplus", "relu"}},
-      {{"density_bias", "added to the raw density before its activation", "model"}, &TrainConfig::density_bias, {}},
-      {{"rgb_padding", "epsilon of the widened colour sigmoid", "model"}, &TrainConfig::rgb_padding, {}},
-      {{"resample_padding", "alpha added to the weights before resampling", "model"},
-       &TrainConfig::resample_padding, {}},
-      {{"resample_blur", "blur-pool the weights before resampling", "model"}, &TrainConfig::resample_blur, {}},
-      {{"mlp_depth", "dense layers of the MLP trunk", "model"}, &TrainConfig::mlp_depth, {}},
-      {{"mlp_width", "width of the MLP trunk", "model"}, &TrainConfig::mlp_width, {}},
+       &TrainConfig::integrated_encoding},
+      {{"pos_min_deg", "lowest positional-encoding degree", "model"}, &TrainConfig::pos_min_deg},
+      {{"pos_max_deg", "positional-encoding degrees end before this", "model"}, &TrainConfig::pos_max_deg},
+      {{"pos_identity", "append the raw position to its encoding", "model"}, &TrainConfig::pos_identity},
+      {{"view_dependence", "condition colour on the view direction", "model"}, &TrainConfig::view_dependence},
+      {{"view_max_deg", "view-direction encoding degrees end before this", "model"}, &TrainConfig::view_max_deg},
+      {{"density_activation", "activation of the raw density", "model"}, &TrainConfig::density_activation},
+      {{"density_bias", "added to the raw density before its activation", "model"}, &TrainConfig::density_bias},
+      {{"rgb_padding", "epsilon of the widened colour sigmoid", "model"}, &TrainConfig::rgb_padding},
+      {{"resample_padding", "alpha added to the weights before resampling", "model"}, &TrainConfig::resample_padding},
+      {{"resample_blur", "blur-pool the weights before resampling", "model"}, &TrainConfig::resample_blur},
+      {{"mlp_depth", "dense layers of the MLP trunk", "model"}, &TrainConfig::mlp_depth},
+      {{"mlp_width", "width of the MLP trunk", "model"}, &TrainConfig::mlp_width},
       {{"mlp_skip", "trunk layer (0-based) after which the input is concatenated again", "model"},
-       &TrainConfig::mlp_skip, {}},
-      {{"view_branch_width", "width of the view-dependent colour branch", "model"},
-       &TrainConfig::view_branch_width, {}},
-      {{"batch_size", "rays per optimisation step", "optimisation"}, &TrainConfig::batch_size, {}},
-      {{"steps", "optimisation steps of the run", "optimisation"}, &TrainConfig::steps, {}},
-      {{"lr_init", "initial learning rate", "optimisation"}, &TrainConfig::lr_init, {}},
-      {{"lr_final", "final learning rate", "optimisation"}, &TrainConfig::lr_final, {}},
-      {{"lr_warmup_steps", "steps of the sine warm-up", "optimisation"}, &TrainConfig::lr_warmup_steps, {}},
+       &TrainConfig::mlp_skip},
+      {{"view_branch_width", "width of the view-dependent colour branch", "model"}, &TrainConfig::view_branch_width},
+      {{"batch_size", "rays per optimisation step", "optimisation"}, &TrainConfig::batch_size},
+      {{"steps", "optimisation steps of the run", "optimisation"}, &TrainConfig::steps},
+      {{"lr_init", "initial learning rate", "optimisation"}, &TrainConfig::lr_init},
+      {{"lr_final", "final learning rate", "optimisation"}, &TrainConfig::lr_final},
+      {{"lr_warmup_steps", "steps of the sine warm-up", "optimisation"}, &TrainConfig::lr_warmup_steps},
       {{"lr_warmup_mult", "learning-rate multiplier at step 0 of the warm-up", "optimisation"},
-       &TrainConfig::lr_warmup_mult, {}},
-      {{"grad_max_norm", "clip the global gradient norm (0 = off)", "optimisation"}, &TrainConfig::grad_max_norm, {}},
+       &TrainConfig::lr_warmup_mult},
+      {{"grad_max_norm", "clip the global gradient norm (0 = off)", "optimisation"}, &TrainConfig::grad_max_norm},
       {{"coarse_loss_mult", "lambda: weight of the coarse level's loss", "optimisation"},
-       &TrainConfig::coarse_loss_mult, {}},
-      {{"randomized", "jitter samples during training", "optimisation"}, &TrainConfig::randomized, {}},
-      {{"seed", "seed of every random choice", "optimisation"}, &TrainConfig::seed, {}},
+       &TrainConfig::coarse_loss_mult},
+      {{"randomized", "jitter samples during training", "optimisation"}, &TrainConfig::randomized},
+      {{"seed", "seed of every random choice", "optimisation"}, &TrainConfig::seed},
       {{"chunk_rays", "rays per chunk of a training step (0 = from device memory)", "execution"},
-       &TrainConfig::chunk_rays, {}},
-      {{"render_chunk_rays", "rays per chunk when rendering", "execution"}, &TrainConfig::render_chunk_rays, {}},
-      {{"log_every", "steps between log rows", "execution"}, &TrainConfig::log_every, {}},
-      {{"checkpoint_every", "steps between checkpoints", "execution"}, &TrainConfig::checkpoint_every, {}},
-      {{"keep_checkpoints", "checkpoint files to keep", "execution"}, &TrainConfig::keep_checkpoints, {}},
-      {{"max_bad_steps", "consecutive non-finite steps before stopping", "execution"},
-       &TrainConfig::max_bad_steps, {}},
-      {{"val_views", "val views rendered after training (0 = all)", "execution"}, &TrainConfig::val_views, {}},
+       &TrainConfig::chunk_rays},
+      {{"render_chunk_rays", "rays per chunk when rendering", "execution"}, &TrainConfig::render_chunk_rays},
+      {{"log_every", "steps between log rows", "execution"}, &TrainConfig::log_every},
+      {{"checkpoint_every", "steps between checkpoints", "execution"}, &TrainConfig::checkpoint_every},
+      {{"keep_checkpoints", "checkpoint files to keep", "execution"}, &TrainConfig::keep_checkpoints},
+      {{"max_bad_steps", "consecutive non-finite steps before stopping", "execution"}, &TrainConfig::max_bad_steps},
+      {{"val_views", "val views rendered after training (0 = all)", "execution"}, &TrainConfig::val_views},
   };
   return entries;
 }
@@ -133,15 +136,55 @@ std::string format_double(double v) {
   return out.str();
 }
 
+template <typename E>
+E parse_enum(const std::string& name, const std::string& v) {
+  const std::optional<E> parsed = enum_from_name<E>(v);
+  if (!parsed) bad_value(name, v, enum_choices<E>());
+  return *parsed;
+}
+
+// The entry's help as --help shows it: an enum setting's allowed values, then what it does.
+Setting with_full_help(const Entry& e) {
+  Setting s = e.setting;
+  std::visit(
+      [&](auto member) {
+        using T = std::decay_t<decltype(TrainConfig{}.*member)>;
+        if constexpr (has_enum_names_v<T>) s.help = enum_choices<T>() + ": " + s.help;
+      },
+      e.member);
+  return s;
+}
+
+Variant parse_variant(const std::string& name) {
+  const std::optional<Variant> parsed = enum_from_name<Variant>(name);
+  if (!parsed) throw Error("unknown variant '" + name + "'; the variants are: " + enum_choices<Variant>(", "));
+  return *parsed;
+}
+
+// A configuration JSON's "variant_bundle": a --variant name; anything else names the file and what is accepted.
+Variant variant_bundle_from_json(const nlohmann::json& value, const std::string& where) {
+  const std::string text = value.is_string() ? value.get<std::string>() : value.dump();
+  const std::optional<Variant> parsed = enum_from_name<Variant>(text);
+  if (!parsed) {
+    throw Error(where + ": '" + kVariantBundleKey + "' = '" + text + "': expected " + enum_choices<Variant>());
+  }
+  return *parsed;
+}
+
 }  // namespace
 
 const std::vector<Setting>& settings() {
   static const std::vector<Setting> list = [] {
     std::vector<Setting> out;
-    for (const auto& e : table()) out.push_back(e.setting);
+    for (const auto& e : table()) out.push_back(with_full_help(e));
     return out;
   }();
   return list;
+}
+
+const Setting& find_setting(const std::string& name) {
+  const Entry& entry = find(name);
+  return settings()[static_cast<size_t>(&entry - table().data())];
 }
 
 void set_value(TrainConfig& config, const std::string& name, const std::string& value) {
@@ -149,17 +192,8 @@ void set_value(TrainConfig& config, const std::string& name, const std::string& 
   std::visit(
       [&](auto member) {
         using T = std::decay_t<decltype(config.*member)>;
-        if constexpr (std::is_same_v<T, std::string>) {
-          if (!e.choices.empty()) {
-            bool known = false;
-            std::string accepted;
-            for (const auto& c : e.choices) {
-              known = known || c == value;
-              accepted += (accepted.empty() ? "" : " | ") + c;
-            }
-            if (!known) bad_value(name, value, accepted);
-          }
-          config.*member = value;
+        if constexpr (has_enum_names_v<T>) {
+          config.*member = parse_enum<T>(name, value);
         } else if constexpr (std::is_same_v<T, bool>) {
           config.*member = parse_bool(name, value);
         } else if constexpr (std::is_same_v<T, double>) {
@@ -188,8 +222,8 @@ std::string get_value(const TrainConfig& config, const std::string& name) {
   return std::visit(
       [&](auto member) -> std::string {
         using T = std::decay_t<decltype(config.*member)>;
-        if constexpr (std::is_same_v<T, std::string>) {
-          return config.*member;
+        if constexpr (has_enum_names_v<T>) {
+          return enum_name(config.*member);
         } else if constexpr (std::is_same_v<T, bool>) {
           return config.*member ? "true" : "false";
         } else if constexpr (std::is_same_v<T, double>) {
@@ -224,21 +258,38 @@ const std::map<std::string, Bundle>& presets() {
   return bundles;
 }
 
+namespace {
+// Rows of the paper's tables. The NeRF baseline follows the original NeRF: point samples with PE of
+// degree 0..9 plus identity, a coarse and a fine MLP, ReLU density, plain sigmoid, resampling without
+// blur or padding, fine samples added to the coarse ones, corner-offset pixels, no area loss.
+Bundle variant_settings(Variant variant) {
+  switch (variant) {
+    case Variant::mipnerf:
+      return {};
+    case Variant::nerf:
+      return {{"variant", "nerf"},        {"single_mlp", "false"},  {"integrated_encoding", "false"},
+              {"pos_max_deg", "10"},      {"pos_identity", "true"}, {"density_activation", "relu"},
+              {"density_bias", "0"},      {"rgb_padding", "0"},     {"resample_padding", "0"},
+              {"resample_blur", "false"}, {"pixel_center", "0"},    {"area_loss", "false"}};
+    case Variant::mipnerf_no_ipe:  // w/o IPE
+      return {{"integrated_encoding", "false"}};
+    case Variant::mipnerf_two_mlps:  // w/o the single MLP
+      return {{"single_mlp", "false"}};
+    case Variant::mipnerf_no_misc:  // w/o misc.
+      return {{"density_activation", "relu"}, {"density_bias", "0"}, {"rgb_padding", "0"}};
+    case Variant::mipnerf_no_area_loss:  // w/o the area loss
+      return {{"area_loss", "false"}};
+  }
+  throw Error("internal error: variant " + std::to_string(static_cast<int>(variant)) + " has no settings");
+}
+}  // namespace
+
 const std::map<std::string, Bundle>& variants() {
-  // Rows of the paper's tables. The NeRF baseline follows the original NeRF: point samples with PE of
-  // degree 0..9 plus identity, a coarse and a fine MLP, ReLU density, plain sigmoid, resampling without
-  // blur or padding, fine samples added to the coarse ones, corner-offset pixels, no area loss.
-  static const std::map<std::string, Bundle> bundles = {
-      {"mipnerf", {}},
-      {"nerf",
-       {{"variant", "nerf"}, {"single_mlp", "false"}, {"integrated_encoding", "false"}, {"pos_max_deg", "10"},
-        {"pos_identity", "true"}, {"density_activation", "relu"}, {"density_bias", "0"}, {"rgb_padding", "0"},
-        {"resample_padding", "0"}, {"resample_blur", "false"}, {"pixel_center", "0"}, {"area_loss", "false"}}},
-      {"mipnerf-no-ipe", {{"integrated_encoding", "false"}}},                  // w/o IPE
-      {"mipnerf-two-mlps", {{"single_mlp", "false"}}},                          // w/o the single MLP
-      {"mipnerf-no-misc", {{"density_activation", "relu"}, {"density_bias", "0"}, {"rgb_padding", "0"}}},  // w/o misc.
-      {"mipnerf-no-area-loss", {{"area_loss", "false"}}},                       // w/o the area loss
-  };
+  static const std::map<std::string, Bundle> bundles = [] {
+    std::map<std::string, Bundle> out;
+    for (const auto& row : enum_names(Variant{})) out[row.name] = variant_settings(row.value);
+    return out;
+  }();
   return bundles;
 }
 
@@ -264,8 +315,10 @@ TrainConfig resolve_config(const std::string& preset, const std::string& variant
                            const std::map<std::string, std::string>& explicit_settings) {
   TrainConfig config;
   for (const auto& [name, value] : find_bundle(presets(), preset, "preset")) set_value(config, name, value);
-  for (const auto& [name, value] : find_bundle(variants(), variant, "variant")) set_value(config, name, value);
+  const Variant parsed_variant = parse_variant(variant);
+  for (const auto& [name, value] : variant_settings(parsed_variant)) set_value(config, name, value);
   for (const auto& [name, value] : explicit_settings) set_value(config, name, value);
+  config.variant_bundle = parsed_variant;
   validate(config);
   return config;
 }
@@ -277,7 +330,8 @@ void validate(const TrainConfig& c) {
   require(c.factor >= 1 && c.factor <= 64 && (c.factor & (c.factor - 1)) == 0, "factor must be a power of two, 1 to 64");
   require(c.num_samples >= 2, "num_samples must be at least 2");
   require(c.num_levels >= 1, "num_levels must be at least 1");
-  require(c.variant != "nerf" || c.num_samples % 2 == 0, "the nerf variant needs an even num_samples (coarse = half)");
+  require(c.variant != ModelFamily::nerf || c.num_samples % 2 == 0,
+          "the nerf variant needs an even num_samples (coarse = half)");
   require(c.pos_max_deg > c.pos_min_deg && c.pos_min_deg >= 0, "need 0 <= pos_min_deg < pos_max_deg");
   require(c.pos_max_deg <= 24, "pos_max_deg above 24 makes 2^deg exceed float32's exact integers");
   require(c.view_max_deg >= 1, "view_max_deg must be at least 1");
@@ -307,13 +361,16 @@ std::string to_json(const TrainConfig& config) {
     std::visit(
         [&](auto member) {
           using T = std::decay_t<decltype(config.*member)>;
-          if constexpr (std::is_same_v<T, std::string>) {
+          if constexpr (has_enum_names_v<T>) {
             j[e.setting.name] = text;
           } else {
             j[e.setting.name] = config.*member;
           }
         },
         e.member);
+    if (e.setting.name == "variant" && config.variant_bundle) {
+      j[kVariantBundleKey] = enum_name(*config.variant_bundle);
+    }
   }
   return j.dump(2);
 }
@@ -328,6 +385,10 @@ TrainConfig from_json(const std::string& json_text, const std::string& where) {
   if (!j.is_object()) throw Error(where + ": the configuration must be a JSON object");
   TrainConfig config;
   for (const auto& [name, value] : j.items()) {
+    if (name == kVariantBundleKey) {
+      config.variant_bundle = variant_bundle_from_json(value, where);
+      continue;
+    }
     try {
       set_value(config, name, value.is_string() ? value.get<std::string>() : value.dump());
     } catch (const Error& e) {

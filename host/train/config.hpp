@@ -2,30 +2,57 @@
 // (name, help, parse, print) that flags, config files, presets, checkpoints and run records all use.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/enum_names.hpp"
+#include "core/stage_options.hpp"
+#include "ops/batch.hpp"
+
 namespace mipnerf::train {
+
+// The `variant` setting: which family of model the levels are built from (train/model.cpp).
+enum class ModelFamily {
+  mipnerf,  // conical frustums: IPE of their Gaussians, N stratified then N resampled intervals
+  nerf,     // points: PE of interval midpoints, N/2 stratified then N more merged with them (original NeRF)
+};
+constexpr std::array<EnumName<ModelFamily>, 2> enum_names(ModelFamily) {
+  return {{{ModelFamily::mipnerf, "mipnerf"}, {ModelFamily::nerf, "nerf"}}};
+}
+
+// The --variant bundles: rows of the paper's tables, each a set of settings (variants()).
+enum class Variant { mipnerf, mipnerf_no_area_loss, mipnerf_no_ipe, mipnerf_no_misc, mipnerf_two_mlps, nerf };
+// Alphabetical: the order --help and the unknown-variant error have always listed them in.
+constexpr std::array<EnumName<Variant>, 6> enum_names(Variant) {
+  return {{{Variant::mipnerf, "mipnerf"},
+           {Variant::mipnerf_no_area_loss, "mipnerf-no-area-loss"},
+           {Variant::mipnerf_no_ipe, "mipnerf-no-ipe"},
+           {Variant::mipnerf_no_misc, "mipnerf-no-misc"},
+           {Variant::mipnerf_two_mlps, "mipnerf-two-mlps"},
+           {Variant::nerf, "nerf"}}};
+}
 
 // Every setting of a run. Defaults are the paper's (mip-NeRF, Blender); see presets() for smaller ones.
 struct TrainConfig {
   // --- scene: what the data calls for (each switch compiles a path in or out of the kernels) ---
-  std::string background = "white";  // white | black | none; white for Blender scenes (paper §5)
+  Background background = Background::white;  // white for Blender scenes (paper §5)
   int factor = 1;                    // box-downsample the stored images by this power of two first (lego 400 → 100: 4)
   bool multiscale = false;           // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
   bool area_loss = true;             // weight each pixel's loss by its area (lossmult); the "w/o area loss" ablation turns it off
   double near = 0.0;                 // sampling range in t; 0 takes the dataset's value (Blender: 2)
   double far = 0.0;                  // 0 takes the dataset's value (Blender: 6)
-  std::string ray_shape = "cone";    // cone | cylinder (cylinder: forward-facing scenes in NDC)
+  RayShape ray_shape = RayShape::cone;  // cylinder: forward-facing scenes in NDC
   bool lindisp = false;              // sample linearly in disparity instead of depth
-  std::string batching = "all_images";  // all_images | single_image: where a batch's rays come from
+  ops::Batching batching = ops::Batching::all_images;  // where a batch's rays come from
   double pixel_center = 0.5;         // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
   bool jitter_pixels = false;        // each training ray through a random point of its pixel (supersampling baselines)
 
   // --- model ---
-  std::string variant = "mipnerf";  // mipnerf | nerf: nerf = point samples, PE, two MLPs, union fine samples
+  ModelFamily variant = ModelFamily::mipnerf;  // set by --variant's bundle (nerf for the NeRF baseline)
   int num_samples = 128;            // intervals per level (NeRF: coarse num_samples/2, fine num_samples on top)
   int num_levels = 2;               // coarse + fine
   bool single_mlp = true;           // one MLP shared by both levels (mip-NeRF) or one per level (NeRF)
@@ -35,7 +62,7 @@ struct TrainConfig {
   bool pos_identity = false;        // append the raw position (NeRF does, mip-NeRF does not)
   bool view_dependence = true;      // condition colour on the view direction (PE degrees 0..view_max_deg-1 + identity)
   int view_max_deg = 4;
-  std::string density_activation = "softplus";  // softplus | relu
+  DensityActivation density_activation = DensityActivation::softplus;
   double density_bias = -1.0;       // added to the raw density before the activation
   double rgb_padding = 0.001;       // ε of the widened sigmoid (1 + 2ε)·sigmoid − ε
   double resample_padding = 0.01;   // α added to the blurred weights before resampling (mip-NeRF; NeRF: 0)
@@ -65,19 +92,29 @@ struct TrainConfig {
   int keep_checkpoints = 3;         // how many checkpoint files to keep
   int max_bad_steps = 5;            // consecutive non-finite steps before the run stops
   int val_views = 0;                // val views rendered at the end of training; 0 = all
+
+  // --- record, not a setting ---
+  // The --variant bundle resolve_config applied, written to config.json and every checkpoint so a run says which
+  // row of the paper's tables it is. Empty for configurations written before it was recorded (they load as
+  // "unknown") and for configs not made by resolve_config. No flag, file or --set can change it, and
+  // differences() leaves it out: runs with the same settings are the same run however they were spelled.
+  std::optional<Variant> variant_bundle;
 };
 
 // One named setting: how to read it from text and write it back, with its help line.
 struct Setting {
   std::string name;
-  std::string help;
+  std::string help;   // one line; an enum setting's starts with its allowed values, "white | black | none: ..."
   std::string group;  // "scene", "model", "optimisation", "execution"
 };
 
 // Every setting, in a stable order.
 const std::vector<Setting>& settings();
+// The setting called `name`; throws mipnerf::Error listing the settings when there is none.
+const Setting& find_setting(const std::string& name);
 
-// Sets `name` from text; throws mipnerf::Error naming the setting and the accepted values.
+// Sets `name` from text; throws mipnerf::Error naming the setting, the value and the accepted values. This is
+// where enum settings are parsed (by their name tables), so no later code sees an unknown value.
 void set_value(TrainConfig& config, const std::string& name, const std::string& value);
 // The setting's value as text (parsable by set_value).
 std::string get_value(const TrainConfig& config, const std::string& name);
@@ -90,19 +127,20 @@ const std::map<std::string, Bundle>& variants();
 // A one-line description of each preset and variant, for --help.
 std::string describe_bundles();
 
-// defaults → preset → variant → explicit settings (config file, then flags). Unknown names and bad
-// values throw mipnerf::Error saying which and what is accepted.
+// defaults → preset → variant → explicit settings (config file, then flags), recording the variant in
+// variant_bundle. Unknown names and bad values throw mipnerf::Error saying which and what is accepted.
 TrainConfig resolve_config(const std::string& preset, const std::string& variant,
                            const std::map<std::string, std::string>& explicit_settings);
 
-// Checks the combination (positive sizes, known enum values, levels vs variant, ...).
+// Checks the combination (positive sizes, ranges, sample counts vs the model family, ...).
 void validate(const TrainConfig& config);
 
-// All settings as a flat JSON object text, and back (unknown keys are refused).
+// All settings as a flat JSON object text (enums by name, as the settings spell them) with "variant_bundle" after
+// "variant" when recorded, and back (unknown keys are refused; a missing "variant_bundle" leaves it empty).
 std::string to_json(const TrainConfig& config);
 TrainConfig from_json(const std::string& json_text, const std::string& where);
 
-// Settings that differ between two configs, "name: a → b" each (for resume checks).
+// Settings that differ between two configs, "name: a → b" each (for resume checks); variant_bundle is no setting.
 std::vector<std::string> differences(const TrainConfig& a, const TrainConfig& b);
 
 }  // namespace mipnerf::train

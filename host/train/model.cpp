@@ -33,7 +33,7 @@ mlp::MlpConfig network(const TrainConfig& c, size_t input_width, size_t index) {
 
 graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   graph::GraphSpec spec;
-  const bool nerf = c.variant == "nerf";
+  const bool nerf = c.variant == ModelFamily::nerf;
   spec.position_encoding = position_encoding(c);
   spec.view_encoding.min_deg = 0;
   spec.view_encoding.max_deg = c.view_max_deg;
@@ -63,7 +63,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   const size_t n_networks = c.single_mlp ? 1 : static_cast<size_t>(c.num_levels);
   for (size_t i = 0; i < n_networks; ++i) spec.mlps.push_back(network(c, input_width, i));
 
-  spec.rays.ray_shape = c.ray_shape == "cylinder" ? RayShape::cylinder : RayShape::cone;
+  spec.rays.ray_shape = c.ray_shape;
   spec.rays.pixel_center_offset = static_cast<float>(c.pixel_center);
   spec.rays.jitter_subpixel = c.jitter_pixels;  // training only: rendering decides its own supersampling
   spec.rays.view_dependence = c.view_dependence;
@@ -73,13 +73,10 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.resample.padding = static_cast<float>(c.resample_padding);
   spec.resample.blur = c.resample_blur;
   spec.resample.randomized = c.randomized;
-  spec.activation.density =
-      c.density_activation == "relu" ? DensityActivation::relu : DensityActivation::softplus;
+  spec.activation.density = c.density_activation;
   spec.activation.density_bias = static_cast<float>(c.density_bias);
   spec.activation.rgb_padding = static_cast<float>(c.rgb_padding);
-  spec.render.background = c.background == "black"  ? Background::black
-                           : c.background == "none" ? Background::none
-                                                    : Background::white;
+  spec.render.background = c.background;
   spec.loss.multiscale = multiscale_data && c.area_loss;
   spec.validate();
   return spec;

@@ -189,7 +189,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   const mlp::LrSchedule schedule = schedule_of(config_);
   const size_t batch_rays = static_cast<size_t>(config_.batch_size);
   const size_t chunk = memory_.chunk_rays;
-  const ops::BatchOptions batch_options{config_.seed, ops::parse_batching(config_.batching)};
+  const ops::BatchOptions batch_options{config_.seed, config_.batching};
   auto& batch = impl_->batch;
   const graph::RaySource source{impl_->device_data.cameras(), batch.camera_ids, batch.pixel_ids};
   const graph::TrainTargets targets{batch.target_rgb, spec_.loss.multiscale ? &batch.lossmult : nullptr};
@@ -315,7 +315,7 @@ TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint
 data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path,
                                std::vector<std::string> splits, int scales) {
   data::LoadOptions options;
-  options.background = data::parse_background(config.background);
+  options.background = config.background;
   options.factor = static_cast<uint32_t>(config.factor);
   // A folder that is multiscale on disk (metadata.json) already holds its scales; build them otherwise.
   const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;

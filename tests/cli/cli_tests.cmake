@@ -49,6 +49,8 @@ mipnerf_add_cli_error_test("dataset inspect: lens distortion" PATTERN "distortio
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/distortion")
 mipnerf_add_cli_error_test("dataset inspect: scales that do not divide the size" PATTERN "r_0.png: 4x4 is not divisible by 8 for 4 scales"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --scales 4)
+mipnerf_add_cli_error_test("dataset inspect: unknown background" PATTERN "--background 'green': expected white \\| black \\| none"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --background green)
 mipnerf_add_cli_error_test("make-multiscale: output folder is the input" PATTERN "the output folder must differ from the input folder"
   ARGS make-multiscale "${MIPNERF_DATA_FIXTURES}/valid" "${MIPNERF_DATA_FIXTURES}/valid")
 mipnerf_add_cli_error_test("make-scene: size not divisible for the scales" PATTERN "--size 60 is not divisible by 8 for 4 scales"
@@ -69,6 +71,10 @@ mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosu
   ARGS train --preset nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: bad setting value" PATTERN "setting 'num_samples' = '12x': expected an integer"
   ARGS train --num_samples 12x --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: unknown value of an enum setting" PATTERN "setting 'ray_shape' = 'sphere': expected cone \\| cylinder"
+  ARGS train --ray_shape sphere --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: unknown variant" PATTERN "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-no-area-loss, mipnerf-no-ipe, mipnerf-no-misc, mipnerf-two-mlps, nerf"
+  ARGS train --variant nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'"
   ARGS train --set sampels=3 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: invalid combination" PATTERN "invalid configuration: lr_warmup_mult must be in"
@@ -83,6 +89,10 @@ add_test(NAME "cli: train a few steps from a config file" COMMAND mipnerf-cl tra
   --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
 set_tests_properties("cli: train a few steps from a config file" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_train_clean" FIXTURES_SETUP cli_train
   ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "val PSNR [0-9.]+ dB, SSIM [0-9.]+ over 1 images; trained 4 steps")
+add_test(NAME "cli: train records the variant in config.json" COMMAND ${CMAKE_COMMAND} -E cat
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-train/config.json")
+set_tests_properties("cli: train records the variant in config.json" PROPERTIES FIXTURES_REQUIRED cli_train
+  PASS_REGULAR_EXPRESSION "\"variant\": \"mipnerf\",[ \n]*\"variant_bundle\": \"mipnerf\"")
 mipnerf_add_cli_error_test("train: refuses to overwrite a run" PATTERN "already holds checkpoints \\(newest: step 4\\): pass --resume"
   ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train" --preset tiny
        --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")

@@ -27,7 +27,7 @@ TEST_CASE("blender: a small set loads with composited pixels, cameras from camer
   const uint32_t w = 6, h = 4;
   test::write_blender_split(dir.path(), "train", 3, w, h, 0.9);
   test::write_blender_split(dir.path(), "val", 2, w, h, 0.9);
-  for (auto background : {data::Background::white, data::Background::black, data::Background::none}) {
+  for (auto background : {Background::white, Background::black, Background::none}) {
     data::LoadOptions options;
     options.background = background;
     const auto dataset = data::load_dataset(dir.path(), options);
@@ -56,9 +56,9 @@ TEST_CASE("blender: a small set loads with composited pixels, cameras from camer
         for (uint32_t x = 0; x < w; ++x) {
           for (int c = 0; c < 3; ++c) {
             const float got = train.image_rgb(k)[3 * (y * w + x) + c];
-            const float want = background == data::Background::none
+            const float want = background == Background::none
                                    ? test::test_code(k, x, y, c) / 255.0f
-                                   : composited(k, x, y, c, background == data::Background::white ? 1.0f : 0.0f);
+                                   : composited(k, x, y, c, background == Background::white ? 1.0f : 0.0f);
             REQUIRE(got == want);
           }
         }

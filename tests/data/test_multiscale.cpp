@@ -26,7 +26,7 @@ TEST_CASE("multiscale: the box filter averages straight RGBA, alpha included, th
   const float expected[8] = {0.5f, 0.5f, 0.5f, 0.5f, 0.3f, 0.3f, 0.5f, 0.7f};
   for (int i = 0; i < 8; ++i) CHECK(half.rgba[i] == doctest::Approx(expected[i]).epsilon(1e-7));
   float rgb[6];
-  data::composite(half, data::Background::white, rgb);
+  data::composite(half, Background::white, rgb);
   // Official semantics (convert_blender_data.py averages the stored RGBA; the loader composites after):
   // 0.5·0.5 + (1 − 0.5) = 0.75 in every channel. Compositing each pixel first would give (0.75, 0.75, 0.5):
   // the two differ at edges between opaque and transparent pixels, and we follow the official data.

@@ -143,11 +143,11 @@ TEST_CASE("render: eval and render find the data a checkpoint records, or say to
   // Load options follow training: a multiscale run builds 4 scales on the fly, except from data already multiscale.
   train::TrainConfig config;
   config.multiscale = true;
-  config.background = "black";
+  config.background = Background::black;
   config.near = 1.5;
   const auto blender = train::load_options(config, test::render_scene(), {"test"});
   CHECK(blender.scales == 4);
-  CHECK(blender.background == data::Background::black);
+  CHECK(blender.background == Background::black);
   CHECK(blender.near == 1.5);
   CHECK(!blender.far.has_value());
   CHECK(train::load_options(config, test::render_scene() + "/multiscale", {"test"}).scales == 1);

@@ -1,6 +1,12 @@
 // Training configuration: presets and variants as data, parsing, validation, JSON round trip.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <optional>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
 #include "core/error.hpp"
 #include "train/config.hpp"
 
@@ -19,7 +25,7 @@ TEST_CASE("config: the paper preset is exactly the paper's settings") {
   CHECK(c.mlp_width == 256);
   CHECK(c.mlp_skip == 4);
   CHECK(c.view_branch_width == 128);
-  CHECK(c.density_activation == "softplus");
+  CHECK(c.density_activation == DensityActivation::softplus);
   CHECK(c.density_bias == -1.0);
   CHECK(c.rgb_padding == 0.001);
   CHECK(c.batch_size == 4096);
@@ -27,7 +33,7 @@ TEST_CASE("config: the paper preset is exactly the paper's settings") {
   CHECK(c.lr_final == 5e-6);
   CHECK(c.lr_warmup_steps == 2500);
   CHECK(c.lr_warmup_mult == 0.01);
-  CHECK(c.background == "white");
+  CHECK(c.background == Background::white);
   CHECK(c.pixel_center == 0.5);
   CHECK(c.single_mlp);
   CHECK(c.integrated_encoding);
@@ -36,7 +42,7 @@ TEST_CASE("config: the paper preset is exactly the paper's settings") {
 TEST_CASE("config: order is defaults, preset, variant, explicit settings") {
   const auto c = train::resolve_config("tiny", "nerf", {{"pos_max_deg", "8"}, {"steps", "7"}});
   CHECK(c.num_samples == 16);  // from the preset
-  CHECK(c.variant == "nerf");  // from the variant
+  CHECK(c.variant == train::ModelFamily::nerf);  // from the variant
   CHECK(!c.single_mlp);
   CHECK(c.pos_identity);
   CHECK(c.pos_max_deg == 8);  // explicit beats the variant's 10
@@ -79,4 +85,167 @@ TEST_CASE("config: JSON round trip keeps every setting, and differences are list
   CHECK(diff[0] == "batch_size: 512 -> 17");
   CHECK_THROWS_WITH_AS(train::from_json("{\"bogus\": 1}", "cfg.json"), doctest::Contains("cfg.json"), Error);
   CHECK_THROWS_WITH_AS(train::from_json("{oops", "cfg.json"), doctest::Contains("malformed"), Error);
+}
+
+namespace {
+
+// parse(name(x)) == x for every value of E's name table, and no two values share a name.
+template <typename E>
+void check_names_round_trip() {
+  std::set<std::string> seen;
+  for (const auto& row : enum_names(E{})) {
+    INFO("name " << row.name);
+    CHECK(std::string(enum_name(row.value)) == row.name);
+    const std::optional<E> back = enum_from_name<E>(enum_name(row.value));
+    REQUIRE(back.has_value());
+    CHECK(*back == row.value);
+    CHECK(seen.insert(row.name).second);
+  }
+  CHECK(!enum_from_name<E>("bogus").has_value());
+}
+
+// Every enum-valued setting with the allowed values its errors and help must list.
+const std::vector<std::pair<std::string, std::string>> kEnumSettings = {
+    {"background", "white | black | none"},    {"ray_shape", "cone | cylinder"},
+    {"batching", "all_images | single_image"}, {"variant", "mipnerf | nerf"},
+    {"density_activation", "softplus | relu"},
+};
+
+}  // namespace
+
+TEST_CASE("config: each enum's names round-trip, by type and through the settings table") {
+  check_names_round_trip<Background>();
+  check_names_round_trip<RayShape>();
+  check_names_round_trip<DensityActivation>();
+  check_names_round_trip<ops::Batching>();
+  check_names_round_trip<train::ModelFamily>();
+  check_names_round_trip<train::Variant>();
+  for (const auto& [name, choices] : kEnumSettings) {
+    const std::string allowed = choices;  // a structured binding cannot be captured by INFO in C++17
+    for (size_t start = 0; start < allowed.size();) {
+      const size_t end = std::min(allowed.find(" | ", start), allowed.size());
+      const std::string value = allowed.substr(start, end - start);
+      INFO("setting " << name << " = " << value);
+      train::TrainConfig c;
+      train::set_value(c, name, value);
+      CHECK(train::get_value(c, name) == value);
+      start = end + 3;
+    }
+  }
+}
+
+TEST_CASE("config: an unknown value of an enum setting is refused with the setting, the value and the allowed ones") {
+  for (const auto& [name, choices] : kEnumSettings) {
+    train::TrainConfig c;
+    const std::string expected = "setting '" + name + "' = 'bogus': expected " + choices;
+    CHECK_THROWS_WITH_AS(train::set_value(c, name, "bogus"), expected.c_str(), Error);
+    CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{name, "bogus"}}), expected.c_str(), Error);
+    // Names are exact: no case folding, no surrounding spaces.
+    CHECK_THROWS_AS(train::set_value(c, name, " " + train::get_value(c, name)), Error);
+    // The help line lists the same values, from the same table.
+    CHECK(train::find_setting(name).help.rfind(choices + ": ", 0) == 0);
+  }
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "nosuch", {}),
+                       "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-no-area-loss, mipnerf-no-ipe, "
+                       "mipnerf-no-misc, mipnerf-two-mlps, nerf",
+                       Error);
+  CHECK_THROWS_WITH_AS(train::find_setting("nosuch"), doctest::Contains("unknown setting 'nosuch'"), Error);
+}
+
+TEST_CASE("config: JSON spells enums as before, and records the --variant bundle beside the model family") {
+  const auto c = train::resolve_config("tiny", "mipnerf-no-ipe", {});
+  REQUIRE(c.variant_bundle.has_value());
+  CHECK(*c.variant_bundle == train::Variant::mipnerf_no_ipe);
+  const auto j = nlohmann::json::parse(train::to_json(c));
+  CHECK(j.at("variant_bundle") == "mipnerf-no-ipe");
+  CHECK(j.at("variant") == "mipnerf");  // the model family, as config.json has always said
+  CHECK(j.at("background") == "white");
+  CHECK(j.at("ray_shape") == "cone");
+  CHECK(j.at("batching") == "all_images");
+  CHECK(j.at("density_activation") == "softplus");
+  CHECK(train::from_json(j.dump(), "config.json").variant_bundle == c.variant_bundle);
+  for (const auto& [name, bundle] : train::variants()) {
+    INFO("variant " << name);
+    const auto resolved = train::resolve_config("tiny", name, {});
+    REQUIRE(resolved.variant_bundle.has_value());
+    CHECK(enum_name(*resolved.variant_bundle) == name);
+  }
+  CHECK(train::resolve_config("tiny", "nerf", {}).variant == train::ModelFamily::nerf);
+  // A record, not a setting: nothing but --variant sets it, and runs that differ only in it do not differ.
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"variant_bundle", "nerf"}}),
+                       doctest::Contains("unknown setting 'variant_bundle'"), Error);
+  auto same_settings = c;
+  same_settings.variant_bundle = train::Variant::mipnerf;
+  CHECK(train::differences(c, same_settings).empty());
+  auto bad = j;
+  bad["variant_bundle"] = "mipnerf-no-everything";
+  CHECK_THROWS_WITH_AS(train::from_json(bad.dump(), "cfg.json"),
+                       "cfg.json: 'variant_bundle' = 'mipnerf-no-everything': expected mipnerf | mipnerf-no-area-loss "
+                       "| mipnerf-no-ipe | mipnerf-no-misc | mipnerf-two-mlps | nerf",
+                       Error);
+}
+
+// config.json of a tiny-preset mipnerf run exactly as commit 357d2e4 (before variant_bundle) wrote it.
+const char* const kConfigBeforeVariantBundle = R"json({
+  "background": "white",
+  "factor": 1,
+  "multiscale": false,
+  "area_loss": true,
+  "near": 0.0,
+  "far": 0.0,
+  "ray_shape": "cone",
+  "lindisp": false,
+  "batching": "all_images",
+  "pixel_center": 0.5,
+  "jitter_pixels": false,
+  "variant": "mipnerf",
+  "num_samples": 16,
+  "num_levels": 2,
+  "single_mlp": true,
+  "integrated_encoding": true,
+  "pos_min_deg": 0,
+  "pos_max_deg": 10,
+  "pos_identity": false,
+  "view_dependence": true,
+  "view_max_deg": 4,
+  "density_activation": "softplus",
+  "density_bias": -1.0,
+  "rgb_padding": 0.001,
+  "resample_padding": 0.01,
+  "resample_blur": true,
+  "mlp_depth": 4,
+  "mlp_width": 64,
+  "mlp_skip": 2,
+  "view_branch_width": 32,
+  "batch_size": 256,
+  "steps": 300,
+  "lr_init": 0.002,
+  "lr_final": 0.0002,
+  "lr_warmup_steps": 20,
+  "lr_warmup_mult": 0.01,
+  "grad_max_norm": 0.0,
+  "coarse_loss_mult": 0.1,
+  "randomized": true,
+  "seed": 20200823,
+  "chunk_rays": 0,
+  "render_chunk_rays": 4096,
+  "log_every": 25,
+  "checkpoint_every": 100,
+  "keep_checkpoints": 3,
+  "max_bad_steps": 5,
+  "val_views": 2
+})json";
+
+TEST_CASE("config: a configuration written before the variant was recorded loads, with the variant unknown") {
+  const auto old = train::from_json(kConfigBeforeVariantBundle, "old/config.json");
+  CHECK(!old.variant_bundle.has_value());
+  const auto today = train::resolve_config("tiny", "mipnerf", {});
+  CHECK(train::differences(old, today).empty());
+  // Today's file is the old one plus the record, byte for byte: every other key and value is spelled as before.
+  auto written = nlohmann::ordered_json::parse(train::to_json(today));
+  CHECK(written.at("variant_bundle") == "mipnerf");
+  written.erase("variant_bundle");
+  CHECK(written.dump(2) == kConfigBeforeVariantBundle);
+  // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
+  CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
 }

@@ -8,6 +8,8 @@
 #include <limits>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "core/error.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/metrics.hpp"
@@ -132,6 +134,40 @@ TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for b
                        doctest::Contains("batch_size: 96 -> 64"), Error);
   fs::remove_all(straight_dir);
   fs::remove_all(resumed_dir);
+}
+
+TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoint from before that loads and resumes") {
+  auto& ctx = test::test_context();
+  const std::string out = test::fresh_run_dir("variant-record");
+  const auto two_steps = tiny({{"steps", "2"}, {"batch_size", "64"}}, "mipnerf-two-mlps");
+  {
+    train::Trainer trainer(ctx, two_steps, test::small_scene(), out, false);
+    trainer.run();
+  }
+  std::ifstream config_file(fs::path(out) / "config.json");
+  const auto written = nlohmann::json::parse(config_file);
+  CHECK(written.at("variant_bundle") == "mipnerf-two-mlps");
+  CHECK(written.at("variant") == "mipnerf");
+  const std::string path = train::find_checkpoint(out);
+  io::Checkpoint checkpoint = io::read_checkpoint(path);
+  CHECK(checkpoint.header.at("config").at("variant_bundle") == "mipnerf-two-mlps");
+  const auto model = train::load_trained_model(ctx, path);
+  REQUIRE(model.config.variant_bundle.has_value());
+  CHECK(*model.config.variant_bundle == train::Variant::mipnerf_two_mlps);
+
+  // The same checkpoint as written before the variant was recorded: its configuration has no such key.
+  checkpoint.header["config"].erase("variant_bundle");
+  io::write_checkpoint(path, checkpoint);
+  const auto old = train::load_trained_model(ctx, path);
+  CHECK(!old.config.variant_bundle.has_value());
+  CHECK(old.networks.size() == 2);
+  CHECK(old.step == 2);
+  auto more_steps = two_steps;
+  more_steps.steps = 3;
+  train::Trainer resumed(ctx, more_steps, test::small_scene(), out, true);
+  CHECK(resumed.step() == 2);
+  CHECK(resumed.run().last_step == 3);
+  fs::remove_all(out);
 }
 
 TEST_CASE("train: a NaN in the gradients skips that step and the run goes on") {
