@@ -27,6 +27,7 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
+#include "io/temporary_folder.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tune_steps.hpp"
 #include "mlp/gemm_tuner.hpp"
@@ -101,15 +102,12 @@ class ChildStepRunner {
         device_index_(device.index),
         time_box_s_(minutes * 60.0),
         start_(Clock::now()),
-        progress_("tune", static_cast<int64_t>(minutes * 60.0)) {
-    char pattern[] = "/tmp/mipnerf-tune-XXXXXX";
-    if (!::mkdtemp(pattern)) throw Error("cannot create a temporary folder under /tmp for the tuning steps");
-    work_ = pattern;
-  }
+        progress_("tune", static_cast<int64_t>(minutes * 60.0)),
+        work_("/tmp", "mipnerf-tune-") {}
   ~ChildStepRunner() {
     std::error_code error;
-    std::filesystem::remove_all(work_, error);
-    if (error) std::cerr << "mipnerf-cl: could not remove " << work_ << " (" << error.message() << ")\n";
+    work_.remove(error);
+    if (error) std::cerr << "mipnerf-cl: could not remove " << work_.path().string() << "\n";
   }
   ChildStepRunner(const ChildStepRunner&) = delete;
   ChildStepRunner& operator=(const ChildStepRunner&) = delete;
@@ -124,8 +122,8 @@ class ChildStepRunner {
       return outcome;
     }
     const std::string id = std::to_string(step_count_++);
-    const std::string spec_path = work_ + "/step" + id + ".json", result_path = work_ + "/result" + id + ".json";
-    const std::string log_path = work_ + "/step" + id + ".log";
+    const std::string spec_path = in_work("step" + id + ".json"), result_path = in_work("result" + id + ".json");
+    const std::string log_path = in_work("step" + id + ".log");
     io::write_bytes_atomically(spec_path, spec.dump());
     const auto started = Clock::now();
     const pid_t pid = start_child(spec_path, result_path, log_path);
@@ -146,6 +144,8 @@ class ChildStepRunner {
   }
 
  private:
+  std::string in_work(const std::string& name) const { return (work_.path() / name).string(); }
+
   pid_t start_child(const std::string& spec_path, const std::string& result_path, const std::string& log_path) {
     std::vector<std::string> argv_text = {
         exe_, "--device", std::to_string(device_index_), "__tune-step", "--spec", spec_path, "--result", result_path};
@@ -209,7 +209,7 @@ class ChildStepRunner {
   double time_box_s_;
   Clock::time_point start_;
   Progress progress_;
-  std::string work_;
+  io::TemporaryFolder work_;  // the steps' specs, results and logs
   int step_count_ = 0;
 };
 
