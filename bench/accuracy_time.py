@@ -5,7 +5,10 @@ Trains mip-NeRF with 16, 32, 64 and 128 samples per level, the NeRF baseline, an
 supersampling (trained on rays through random points of their pixels, evaluated with 4 jittered rays per
 pixel, supplement section 6) on multiscale scenes, then evaluates each on every scale. Writes, per scene, a
 table like the supplement's table 1 (PSNR per scale, SSIM, train time, render s/MP, parameter count) and a
-plot of mean PSNR against training time (SVG), plus everything measured as JSON.
+plot of mean PSNR against training time (SVG, drawn with matplotlib), plus everything measured as JSON.
+
+Needs matplotlib: bench/setup.sh installs it (Debian's python3-matplotlib; run the script with /usr/bin/python3
+when another python3 comes first in PATH). --plot-only redraws the plot from the JSON in --results alone.
 
 Every run goes through the real command-line tool (mipnerf-cl train / eval), so the figures are what a user
 gets. Runs that already finished (their summary.json / metrics.json exist) are reused, so an interrupted
@@ -14,6 +17,7 @@ study continues where it stopped.
 Example (the committed results were made with this):
   python3 bench/accuracy_time.py --build build --work /tmp/study --results bench/results \
       --steps 400 --lego-views 2 --lego ../shared/data/nerf_synthetic/lego      (about 95 minutes on 2 CPU cores)
+  python3 bench/accuracy_time.py --results bench/results --plot-only                 (the plot again, seconds)
 """
 
 import argparse
@@ -96,64 +100,65 @@ def markdown(scene_name, rows, meta):
     return (f"### {scene_name}\n\n{meta}\n\n" + head + body + "\n")
 
 
-def svg_plot(title, series_by_scene, path):
-    """Mean PSNR against training seconds (log axis), one colour per scene, one labelled point per setting."""
-    width, height, left, right, top, bottom = 760, 460, 70, 230, 40, 60
-    points = [p for rows in series_by_scene.values() for p in rows]
-    xs = [max(p["train_seconds"], 1.0) for p in points]
-    ys = [p["mean_psnr"] for p in points]
-    import math
-    x_lo, x_hi = math.log10(min(xs)) - 0.1, math.log10(max(xs)) + 0.1
-    y_lo, y_hi = math.floor(min(ys) - 1), math.ceil(max(ys) + 1)
+def import_pyplot():
+    """matplotlib's pyplot on the Agg backend (no display needed), or an error that says how to install it."""
+    try:
+        import matplotlib
+    except ImportError:
+        sys.exit("accuracy_time: matplotlib is missing: run bench/setup.sh (Debian package python3-matplotlib); if "
+                 "another python3 comes first in PATH (pyenv, a venv), run this script with /usr/bin/python3")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as pyplot
+    return pyplot
 
-    def px(x):
-        return left + (math.log10(max(x, 1.0)) - x_lo) / (x_hi - x_lo) * (width - left - right)
 
-    def py(y):
-        return height - bottom - (y - y_lo) / (y_hi - y_lo) * (height - top - bottom)
-
-    colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"]
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif" '
-           f'font-size="12">', f'<rect width="{width}" height="{height}" fill="white"/>',
-           f'<text x="{left}" y="22" font-size="15">{title}</text>']
-    # Axes and grid.
-    out.append(f'<line x1="{left}" y1="{height - bottom}" x2="{width - right}" y2="{height - bottom}" stroke="black"/>')
-    out.append(f'<line x1="{left}" y1="{top}" x2="{left}" y2="{height - bottom}" stroke="black"/>')
-    for e in range(int(math.floor(x_lo)), int(math.ceil(x_hi)) + 1):
-        for mult in (1, 2, 5):
-            v = mult * 10 ** e
-            if x_lo <= math.log10(v) <= x_hi:
-                x = px(v)
-                out.append(f'<line x1="{x:.1f}" y1="{top}" x2="{x:.1f}" y2="{height - bottom}" stroke="#ddd"/>')
-                out.append(f'<text x="{x:.1f}" y="{height - bottom + 16}" text-anchor="middle">{v:g}</text>')
-    for y in range(int(y_lo), int(y_hi) + 1):
-        out.append(f'<line x1="{left}" y1="{py(y):.1f}" x2="{width - right}" y2="{py(y):.1f}" stroke="#eee"/>')
-        out.append(f'<text x="{left - 8}" y="{py(y) + 4:.1f}" text-anchor="end">{y}</text>')
-    out.append(f'<text x="{(left + width - right) / 2}" y="{height - 18}" text-anchor="middle">training time (s, log '
-               f'scale)</text>')
-    out.append(f'<text x="18" y="{(top + height - bottom) / 2}" text-anchor="middle" '
-               f'transform="rotate(-90 18 {(top + height - bottom) / 2})">mean PSNR over scales (dB)</text>')
+def plot(title, series_by_scene, path):
+    """Mean PSNR against training seconds (log axis), one colour per scene, one labelled point per setting:
+    mip-NeRF's sample counts as filled circles joined in time order, the NeRF settings as open squares."""
+    pyplot = import_pyplot()
+    # Text stays text in the SVG, and no date or random ids, so redrawing the same results gives the same file.
+    pyplot.rcParams.update({"svg.fonttype": "none", "svg.hashsalt": "accuracy_time", "font.size": 10})
+    figure, axes = pyplot.subplots(figsize=(8.0, 4.8))
+    colours = pyplot.rcParams["axes.prop_cycle"].by_key()["color"]
     for i, (scene, rows) in enumerate(series_by_scene.items()):
-        c = colours[i % len(colours)]
+        colour = colours[i % len(colours)]
         mip = sorted([r for r in rows if r["variant"] == "mipnerf"], key=lambda r: r["train_seconds"])
-        if len(mip) > 1:
-            pts = " ".join(f"{px(r['train_seconds']):.1f},{py(r['mean_psnr']):.1f}" for r in mip)
-            out.append(f'<polyline points="{pts}" fill="none" stroke="{c}" stroke-width="1.5"/>')
+        nerf = [r for r in rows if r["variant"] != "mipnerf"]
+        axes.plot([max(r["train_seconds"], 1.0) for r in mip], [r["mean_psnr"] for r in mip], "o-", color=colour,
+                  label=f"{scene}: mip-NeRF")
+        axes.plot([max(r["train_seconds"], 1.0) for r in nerf], [r["mean_psnr"] for r in nerf], "s", color=colour,
+                  markerfacecolor="none", markeredgewidth=1.5, label=f"{scene}: NeRF")
         for r in rows:
-            x, y = px(r["train_seconds"]), py(r["mean_psnr"])
-            shape = (f'<circle cx="{x:.1f}" cy="{y:.1f}" r="4" fill="{c}"/>' if r["variant"] == "mipnerf" else
-                     f'<rect x="{x - 4:.1f}" y="{y - 4:.1f}" width="8" height="8" fill="none" stroke="{c}" '
-                     f'stroke-width="1.5"/>')
-            out.append(shape)
-            out.append(f'<text x="{x + 7:.1f}" y="{y - 5:.1f}" font-size="10">{r["key"]}</text>')
-        ly = top + 20 + 40 * i
-        out.append(f'<circle cx="{width - right + 20}" cy="{ly}" r="4" fill="{c}"/>')
-        out.append(f'<text x="{width - right + 30}" y="{ly + 4}">{scene}: mip-NeRF</text>')
-        out.append(f'<rect x="{width - right + 16}" y="{ly + 14}" width="8" height="8" fill="none" stroke="{c}"/>')
-        out.append(f'<text x="{width - right + 30}" y="{ly + 22}">{scene}: NeRF</text>')
-    out.append("</svg>")
-    with open(path, "w") as f:
-        f.write("\n".join(out) + "\n")
+            axes.annotate(r["key"], (max(r["train_seconds"], 1.0), r["mean_psnr"]), xytext=(5, 4),
+                          textcoords="offset points", fontsize=8)
+    axes.set_xscale("log")
+    # Plain seconds at 1, 2, 3 and 5 × 10^n (the default "2×10²" labels read badly), unlabelled ticks between.
+    ticker = pyplot.matplotlib.ticker
+    axes.xaxis.set_major_locator(ticker.LogLocator(base=10.0, subs=(1.0, 2.0, 3.0, 5.0)))
+    axes.xaxis.set_major_formatter(ticker.FuncFormatter(lambda seconds, _: f"{seconds:g}"))
+    axes.xaxis.set_minor_locator(ticker.LogLocator(base=10.0, subs=(4.0, 6.0, 7.0, 8.0, 9.0)))
+    axes.xaxis.set_minor_formatter(ticker.NullFormatter())
+    axes.margins(x=0.08, y=0.08)  # room for the point labels inside the frame
+    axes.set_xlabel("training time (s, log scale)")
+    axes.set_ylabel("mean PSNR over scales (dB)")
+    axes.set_title(title)
+    axes.grid(True, which="major", color="#e4e4e4", linewidth=0.8)
+    axes.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
+    figure.tight_layout()
+    figure.savefig(path, format="svg", metadata={"Date": None})
+    pyplot.close(figure)
+
+
+def plot_title(device, date):
+    return f"mean PSNR vs training time ({device.get('name')}, {date})"
+
+
+def plot_only(results_folder):
+    """Redraws the plot from the committed results (accuracy_time.json) without running the study."""
+    results = read_json(os.path.join(results_folder, "accuracy_time.json"))
+    path = os.path.join(results_folder, "accuracy_time.svg")
+    plot(plot_title(results["device"], results["date"]), results["scenes"], path)
+    print(f"accuracy_time: wrote {path}")
 
 
 def main():
@@ -170,7 +175,12 @@ def main():
     parser.add_argument("--lego-views", type=int, default=4, help="val views evaluated (every scale)")
     parser.add_argument("--only", help="comma-separated config keys to run (default: all)")
     parser.add_argument("--set", action="append", default=[], help="extra setting for every run, name=value")
+    parser.add_argument("--plot-only", action="store_true",
+                        help="only redraw accuracy_time.svg from accuracy_time.json in --results (no runs)")
     args = parser.parse_args()
+    if args.plot_only:
+        return plot_only(args.results)
+    import_pyplot()  # before the runs: a missing matplotlib should not be found after an hour and a half
     args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
     args.work = os.path.abspath(args.work)
     args.base_settings = dict(s.split("=", 1) for s in args.set)
@@ -208,8 +218,7 @@ def main():
     with open(os.path.join(args.results, "accuracy_time.json"), "w") as f:
         json.dump({"date": date, "device": device, "preset": args.preset, "steps": args.steps,
                    "batch_size": args.batch_size, "settings": args.base_settings, "scenes": results}, f, indent=2)
-    svg_plot(f"mean PSNR vs training time ({device.get('name')}, {date})", results,
-             os.path.join(args.results, "accuracy_time.svg"))
+    plot(plot_title(device, date), results, os.path.join(args.results, "accuracy_time.svg"))
     print(text)
 
 

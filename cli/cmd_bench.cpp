@@ -1,7 +1,6 @@
 // `mipnerf-cl bench`: what each device costs — GEMM GFLOP/s on the MLP's products (CLBlast's defaults and the tuned
 // file), every ray-math kernel's throughput, training steps of each preset (rays/s, seconds per step, memory) and
 // rendering (seconds per megapixel), cold and warm apart — written as bench.json and bench.md.
-#include <stdlib.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +24,7 @@
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "io/atomic_file.hpp"
+#include "io/temporary_folder.hpp"
 #include "mlp/clblast_check.hpp"
 #include "progress.hpp"
 #include "train/config.hpp"
@@ -138,29 +138,6 @@ class SectionProgress {
  private:
   std::string what_;
   std::unique_ptr<Progress> line_;
-};
-
-// ---- a scratch folder for the scene and the training runs, removed at the end ----
-
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    std::string pattern = (fs::temp_directory_path() / "mipnerf-cl-bench-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      throw Error("cannot create a temporary folder in " + fs::temp_directory_path().string() + " (set TMPDIR)");
-    }
-    path_ = pattern;
-  }
-  ~ScratchFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
 };
 
 std::string make_scene(const BenchArgs& a, const fs::path& folder) {
@@ -319,7 +296,7 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   run.presets.settings = explicit_settings(a);
   for (const auto& preset : a.presets) train::resolve_config(preset, "mipnerf", run.presets.settings);  // bad --set
 
-  ScratchFolder scratch;
+  io::TemporaryFolder scratch(fs::temp_directory_path(), "mipnerf-cl-bench-");  // scene and runs, removed at the end
   std::string scene = a.data;
   if (wants(a, "train") && !a.presets.empty()) {
     if (scene.empty()) scene = make_scene(a, scratch.path() / "scene");

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <string>
 
+#include "core/duration.hpp"
+
 namespace mipnerf::cli {
 
 class Progress {
@@ -33,7 +35,7 @@ class Progress {
   std::chrono::steady_clock::time_point last_draw_;
 };
 
-// "1h02m", "3m07s", "12s": a duration for humans.
-std::string format_duration(double seconds);
+// "1h02m", "3m07s", "12s": a duration for humans (the library's, host/core/duration.hpp).
+using mipnerf::format_duration;
 
 }  // namespace mipnerf::cli
