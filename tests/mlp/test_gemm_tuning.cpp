@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <unordered_map>
@@ -41,8 +42,9 @@ class ScratchCache {
     } else {
       ::unsetenv("XDG_CACHE_HOME");
     }
-    const std::string command = "rm -rf '" + folder_ + "'";
-    CHECK(std::system(command.c_str()) == 0);
+    std::error_code error;
+    std::filesystem::remove_all(folder_, error);
+    CHECK_MESSAGE(!error, "could not remove " << folder_ << ": " << error.message());
   }
   const std::string& folder() const { return folder_; }
 
