@@ -1,7 +1,6 @@
 // `mipnerf-cl bench`: what each device costs — GEMM GFLOP/s on the MLP's products (CLBlast's defaults and the tuned
 // file), every ray-math kernel's throughput, training steps of each preset (rays/s, seconds per step, memory) and
 // rendering (seconds per megapixel), cold and warm apart — written as bench.json and bench.md.
-#include <stdlib.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -140,28 +139,7 @@ class SectionProgress {
   std::unique_ptr<Progress> line_;
 };
 
-// ---- a scratch folder for the scene and the training runs, removed at the end ----
-
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    std::string pattern = (fs::temp_directory_path() / "mipnerf-cl-bench-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) {
-      throw Error("cannot create a temporary folder in " + fs::temp_directory_path().string() + " (set TMPDIR)");
-    }
-    path_ = pattern;
-  }
-  ~ScratchFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+// ---- the scene, in the scratch folder (common.hpp) that also holds the training runs ----
 
 std::string make_scene(const BenchArgs& a, const fs::path& folder) {
   data::SceneOptions options;
@@ -225,16 +203,9 @@ void bench_kernels(const BenchArgs& a, const ocl::DeviceInfo& device, bench::Dev
   progress.finish();
 }
 
+// --set assignments over each preset.
 std::map<std::string, std::string> explicit_settings(const BenchArgs& a) {
-  std::map<std::string, std::string> out;
-  for (const auto& assignment : a.sets) {
-    const auto eq = assignment.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw Error("--set '" + assignment + "': expected name=value, e.g. --set batch_size=256");
-    }
-    out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
-  }
-  return out;
+  return parse_set_assignments(a.sets, "batch_size=256");
 }
 
 void bench_preset(const BenchArgs& a, const std::string& preset, const std::string& scene, const fs::path& scratch,

@@ -300,7 +300,7 @@ void validate(const TrainConfig& c) {
   require(c.near >= 0 && c.far >= 0 && (c.far == 0 || c.far > c.near), "need 0 <= near < far (0 = from data)");
 }
 
-std::string to_json(const TrainConfig& config) {
+nlohmann::ordered_json config_json(const TrainConfig& config) {
   nlohmann::ordered_json j;
   for (const auto& e : table()) {
     const std::string text = get_value(config, e.setting.name);
@@ -315,8 +315,10 @@ std::string to_json(const TrainConfig& config) {
         },
         e.member);
   }
-  return j.dump(2);
+  return j;
 }
+
+std::string to_json(const TrainConfig& config) { return config_json(config).dump(2); }
 
 TrainConfig from_json(const std::string& json_text, const std::string& where) {
   nlohmann::json j;
@@ -325,6 +327,10 @@ TrainConfig from_json(const std::string& json_text, const std::string& where) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(where + ": malformed configuration JSON: " + e.what());
   }
+  return config_from_json(j, where);
+}
+
+TrainConfig config_from_json(const nlohmann::json& j, const std::string& where) {
   if (!j.is_object()) throw Error(where + ": the configuration must be a JSON object");
   TrainConfig config;
   for (const auto& [name, value] : j.items()) {

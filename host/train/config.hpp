@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace mipnerf::train {
 
 // Every setting of a run. Defaults are the paper's (mip-NeRF, Blender); see presets() for smaller ones.
@@ -98,7 +100,11 @@ TrainConfig resolve_config(const std::string& preset, const std::string& variant
 // Checks the combination (positive sizes, known enum values, levels vs variant, ...).
 void validate(const TrainConfig& config);
 
-// All settings as a flat JSON object text, and back (unknown keys are refused).
+// All settings as a flat JSON object (checkpoints and run records hold it as such), and back: unknown keys and
+// bad values throw mipnerf::Error naming `where`.
+nlohmann::ordered_json config_json(const TrainConfig& config);
+TrainConfig config_from_json(const nlohmann::json& object, const std::string& where);
+// The same as text (OUT/config.json), and back from text.
 std::string to_json(const TrainConfig& config);
 TrainConfig from_json(const std::string& json_text, const std::string& where);
 
