@@ -202,16 +202,9 @@ void bench_kernels(const BenchArgs& a, const ocl::DeviceInfo& device, bench::Dev
   progress.finish();
 }
 
+// --set assignments over each preset.
 std::map<std::string, std::string> explicit_settings(const BenchArgs& a) {
-  std::map<std::string, std::string> out;
-  for (const auto& assignment : a.sets) {
-    const auto eq = assignment.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw Error("--set '" + assignment + "': expected name=value, e.g. --set batch_size=256");
-    }
-    out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
-  }
-  return out;
+  return parse_set_assignments(a.sets, "batch_size=256");
 }
 
 void bench_preset(const BenchArgs& a, const std::string& preset, const std::string& scene, const fs::path& scratch,

@@ -15,7 +15,8 @@
 #include "io/png.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "progress.hpp"
-#include "train/trainer.hpp"
+#include "train/checkpoint.hpp"
+#include "train/model.hpp"
 
 namespace mipnerf::cli {
 namespace fs = std::filesystem;
@@ -100,7 +101,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   record.device = eval::device_record(ctx->device_info());
   record.model = {{"variant", enum_name(model.config.variant)},
                   {"parameters", eval::parameter_count(model)},
-                  {"config", nlohmann::json::parse(train::to_json(model.config))}};
+                  {"config", train::config_json(model.config)}};
   record.supersample = args.supersample;
   record.chunk_rays = chunk;
   record.warm_up_seconds = warm_up;

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "core/error.hpp"
 #include "common.hpp"
@@ -13,10 +14,10 @@
 #include "eval/image_output.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
-#include "io/atomic_file.hpp"
+#include "eval/view_cameras.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "progress.hpp"
-#include "train/trainer.hpp"
+#include "train/checkpoint.hpp"
 
 namespace mipnerf::cli {
 namespace fs = std::filesystem;
@@ -51,14 +52,10 @@ struct RenderArgs {
 
 bool given(const CLI::App& cmd, const char* flag) { return cmd.count(flag) > 0; }
 
-// What the frames are, with their cameras and output names.
-struct Frames {
-  std::string source;          // for messages and render.json: "the test split of DIR", "an orbit", "path FILE"
-  std::string default_folder;  // under the run folder
-  std::vector<Camera> cameras;
-  std::vector<std::string> stems;
-  nlohmann::ordered_json details = nlohmann::ordered_json::object();
-};
+// The flag's value when it was given.
+std::optional<double> if_given(const CLI::App& cmd, const char* flag, double value) {
+  return given(cmd, flag) ? std::optional<double>(value) : std::nullopt;
+}
 
 data::ResolutionRequest resolution_of(const RenderArgs& args, const CLI::App& cmd) {
   data::ResolutionRequest request;
@@ -121,115 +118,27 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
   resolution_of(args, cmd);
 }
 
-std::string frame_stem(size_t index) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "frame_%04zu", index);
-  return text;
-}
-
-Frames split_frames(const RenderArgs& args, const train::TrainedModel& model, const std::string& checkpoint,
-                    const data::ResolutionRequest& resolution) {
-  const std::string name = args.split.empty() ? "test" : args.split;
-  const std::string data_path = eval::resolve_data_path(args.data, model, checkpoint);
-  const data::Dataset dataset =
-      data::load_dataset(data_path, train::load_options(model.config, data_path, {name}, args.scales));
-  const data::Split& split = dataset.split(name);
-  Frames frames;
-  frames.source = "the " + name + " split of " + data_path;
-  frames.default_folder = "render_" + name;
-  const std::vector<std::string> stems = eval::split_image_stems(split);
-  for (size_t i : eval::select_views(split, args.views)) {
-    frames.cameras.push_back(data::resize_camera(split.cameras[i], resolution));
-    frames.stems.push_back(stems[i]);
+// The frames --split, --path orbit or --path FILE asks for, at the requested resolution.
+eval::ViewFrames frames_of(const RenderArgs& args, const CLI::App& cmd, const train::TrainedModel& model,
+                           const std::string& checkpoint, const data::ResolutionRequest& resolution) {
+  if (args.path == "orbit") {
+    eval::OrbitRequest orbit;
+    orbit.data = args.data;
+    orbit.radius = if_given(cmd, "--radius", args.radius);
+    orbit.elevation_deg = args.elevation;
+    orbit.start_azimuth_deg = args.azimuth;
+    orbit.frames = args.frames;
+    orbit.fov_deg = if_given(cmd, "--fov", args.fov);
+    orbit.focal_px = if_given(cmd, "--focal", args.focal);
+    return eval::orbit_views(model, orbit, resolution);
   }
-  frames.details = {{"kind", "split"}, {"data", data_path}, {"split", name}};
-  return frames;
-}
-
-// The training cameras (full resolution) when the data can be found; empty otherwise.
-std::vector<Camera> training_cameras(const RenderArgs& args, const train::TrainedModel& model) {
-  std::string path = args.data;
-  std::error_code ec;
-  if (path.empty() && !model.data_path.empty() && fs::exists(model.data_path, ec)) path = model.data_path;
-  if (path.empty()) return {};
-  const data::Dataset dataset = data::load_dataset(path, train::load_options(model.config, path, {"train"}, 1));
-  const data::Split& train = dataset.split("train");
-  std::vector<Camera> cameras;
-  for (size_t i = 0; i < train.num_images(); ++i) {
-    if (train.scale_levels[i] == 0) cameras.push_back(train.cameras[i]);
-  }
-  return cameras;
-}
-
-Frames orbit_frames(const RenderArgs& args, const CLI::App& cmd, const train::TrainedModel& model,
-                    const data::ResolutionRequest& resolution) {
-  const auto cameras = training_cameras(args, model);
-  data::OrbitOptions orbit;
-  if (!cameras.empty()) {
-    orbit = data::orbit_around(cameras);
-  } else {
-    // Nothing to fit to: Blender's camera, 400x400, at the Blender scenes' distance around the origin.
-    Camera& c = orbit.intrinsics;
-    c.width_px = c.height_px = 400;
-    c.focal_x_px = c.focal_y_px = 0.5 * c.width_px / std::tan(0.5 * data::kDefaultCameraAngleX);
-    c.center_x_px = c.center_y_px = 200.0;
-    c.near = model.config.near > 0 ? model.config.near : 2.0;
-    c.far = model.config.far > 0 ? model.config.far : 6.0;
-  }
-  if (given(cmd, "--radius")) orbit.radius = args.radius;
-  orbit.elevation_deg = args.elevation;
-  orbit.start_azimuth_deg = args.azimuth;
-  orbit.frames = args.frames;
-  orbit.intrinsics = data::resize_camera(orbit.intrinsics, resolution);
-  Camera& c = orbit.intrinsics;
-  if (given(cmd, "--fov")) c.focal_x_px = c.focal_y_px = 0.5 * c.width_px / std::tan(0.5 * args.fov * M_PI / 180.0);
-  if (given(cmd, "--focal")) c.focal_x_px = c.focal_y_px = args.focal;
-  Frames frames;
-  frames.source = "an orbit";
-  frames.default_folder = "render_orbit";
-  frames.cameras = data::orbit_cameras(orbit);
-  for (size_t i = 0; i < frames.cameras.size(); ++i) frames.stems.push_back(frame_stem(i));
-  frames.details = {{"kind", "orbit"},
-                    {"fitted_to_training_cameras", !cameras.empty()},
-                    {"target", orbit.target},
-                    {"up", orbit.up},
-                    {"radius", orbit.radius},
-                    {"elevation_deg", orbit.elevation_deg},
-                    {"start_azimuth_deg", orbit.start_azimuth_deg},
-                    {"frames", orbit.frames}};
-  return frames;
-}
-
-Frames path_frames(const RenderArgs& args, const train::TrainedModel& model,
-                   const data::ResolutionRequest& resolution) {
-  data::CameraPathDefaults defaults;
-  // Without w/h in the file, an explicit size is the frames' size.
-  if (resolution.scale <= 0.0 && resolution.width && resolution.height) {
-    defaults.width = resolution.width;
-    defaults.height = resolution.height;
-  }
-  if (model.config.near > 0) defaults.near = model.config.near;
-  if (model.config.far > 0) defaults.far = model.config.far;
-  Frames frames;
-  frames.source = "the camera path " + args.path;
-  frames.default_folder = "render_" + fs::path(args.path).stem().string();
-  for (const auto& camera : data::read_camera_path(args.path, defaults)) {
-    frames.cameras.push_back(data::resize_camera(camera, resolution));
-    frames.stems.push_back(frame_stem(frames.stems.size()));
-  }
-  frames.details = {{"kind", "path"}, {"file", fs::absolute(args.path).lexically_normal().string()}};
-  return frames;
-}
-
-void apply_range(const RenderArgs& args, const CLI::App& cmd, std::vector<Camera>& cameras) {
-  for (auto& camera : cameras) {
-    if (given(cmd, "--near")) camera.near = args.near;
-    if (given(cmd, "--far")) camera.far = args.far;
-    if (!(camera.far > camera.near)) {
-      throw Error("near " + std::to_string(camera.near) + " is not below far " + std::to_string(camera.far) +
-                  ": fix --near/--far");
-    }
-  }
+  if (!args.path.empty()) return eval::path_views(model, args.path, resolution);
+  eval::SplitViewRequest split;
+  split.data = args.data;
+  split.split = args.split.empty() ? "test" : args.split;
+  split.views = args.views;
+  split.scales = args.scales;
+  return eval::split_views(model, checkpoint, split, resolution);
 }
 
 void run_render(const RenderArgs& args, const CLI::App& cmd) {
@@ -241,10 +150,8 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
 
   auto ctx = open_context();
   const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
-  Frames frames = args.path == "orbit" ? orbit_frames(args, cmd, model, resolution)
-                  : !args.path.empty() ? path_frames(args, model, resolution)
-                                       : split_frames(args, model, checkpoint, resolution);
-  apply_range(args, cmd, frames.cameras);
+  eval::ViewFrames frames = frames_of(args, cmd, model, checkpoint, resolution);
+  eval::apply_depth_range(frames.cameras, if_given(cmd, "--near", args.near), if_given(cmd, "--far", args.far));
   const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
   const std::string out =
       args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
@@ -278,21 +185,20 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   progress.finish();
 
   data::write_camera_path((fs::path(out) / "transforms.json").string(), frames.cameras, file_paths);
-  nlohmann::ordered_json record;
-  record["checkpoint"] = checkpoint;
-  record["step"] = model.step;
-  record["source"] = frames.details;
-  record["date"] = eval::utc_timestamp();
-  record["device"] = eval::device_record(ctx->device_info());
-  record["frames"] = frames.cameras.size();
-  record["formats"] = formats.png && formats.exr ? "png, exr" : formats.png ? "png" : "exr";
-  record["rays_per_pixel"] = args.supersample;
-  record["chunk_rays"] = chunk;
-  record["warm_up_seconds"] = warm_up;
-  record["render_seconds"] = seconds;
-  record["megapixels"] = megapixels;
-  record["seconds_per_megapixel"] = megapixels > 0 ? seconds / megapixels : 0.0;
-  io::write_bytes_atomically((fs::path(out) / "render.json").string(), record.dump(2) + "\n");
+  eval::RenderRecord record;
+  record.checkpoint = checkpoint;
+  record.step = model.step;
+  record.source = frames.details;
+  record.date = eval::utc_timestamp();
+  record.device = eval::device_record(ctx->device_info());
+  record.frames = frames.cameras.size();
+  record.formats = formats;
+  record.rays_per_pixel = args.supersample;
+  record.chunk_rays = chunk;
+  record.warm_up_seconds = warm_up;
+  record.render_seconds = seconds;
+  record.megapixels = megapixels;
+  eval::write_render_record(out, record);
 
   const auto& first = frames.cameras.front();
   std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s; images in %s\n",

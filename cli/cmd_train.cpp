@@ -6,20 +6,16 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <unistd.h>
-
-#include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
 #include "common.hpp"
 #include "data/procedural.hpp"
-#include "eval/evaluate.hpp"
-#include "io/atomic_file.hpp"
-#include "io/png.hpp"
+#include "eval/report.hpp"
+#include "eval/train_and_evaluate.hpp"
 #include "mlp/gemm_tuning.hpp"
-#include "mlp/mlp_config.hpp"
 #include "progress.hpp"
-#include "train/trainer.hpp"
 
 namespace mipnerf::cli {
 namespace fs = std::filesystem;
@@ -78,13 +74,7 @@ std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI:
     auto* option = cmd.get_option_no_throw("--" + s.name);
     if (option != nullptr && option->count() > 0) out[s.name] = option->as<std::string>();
   }
-  for (const auto& assignment : args.sets) {
-    const auto eq = assignment.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw Error("--set '" + assignment + "': expected name=value, e.g. --set num_samples=64");
-    }
-    out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
-  }
+  for (const auto& [name, value] : parse_set_assignments(args.sets, "num_samples=64")) out[name] = value;
   return out;
 }
 
@@ -98,53 +88,31 @@ std::string default_scene(const std::string& out_dir) {
   return scene.string();
 }
 
-void write_summary(const std::string& out_dir, const train::Trainer& trainer, const train::TrainResult& result,
-                   const eval::SplitScores* val, const std::string& device) {
-  nlohmann::ordered_json j;
-  j["device"] = device;
-  j["steps"] = result.last_step;
-  j["interrupted"] = result.interrupted;
-  j["train_seconds"] = result.train_seconds;
-  j["skipped_steps"] = result.skipped_steps;
-  j["parameters"] = trainer.parameter_count();
-  j["chunk_rays"] = trainer.memory().chunk_rays;
-  j["planned_device_bytes"] = trainer.memory().total();
-  j["checkpoint"] = result.checkpoint;
-  if (val) {
-    j["val"]["views"] = val->images.size();
-    j["val"]["mean_psnr"] = val->mean_psnr;
-    j["val"]["mean_ssim"] = val->mean_ssim;
-    j["val"]["render_seconds_per_megapixel"] = val->seconds_per_megapixel();
-    for (const auto& s : val->scales) {
-      j["val"]["scales"].push_back({{"scale_level", s.scale_level}, {"images", s.images},
-                                    {"mean_psnr", s.mean_psnr}, {"mean_ssim", s.mean_ssim}});
-    }
-  }
-  io::write_bytes_atomically((fs::path(out_dir) / "summary.json").string(), j.dump(2) + "\n");
+// Before the first step: the GEMM tuning, what is being trained, and the Ctrl-C handler.
+void on_setup(train::Trainer& trainer, ocl::Context& ctx, const std::string& preset) {
+  mlp::load_gemm_tuning(ctx);  // after the inputs are checked, before the first product
+  const auto& config = trainer.config();
+  std::cerr << "mipnerf-cl: training " << enum_name(config.variant) << " (preset " << preset << ") on " << ctx.device_info().name
+            << ": " << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()
+            << " parameters, " << trainer.spec().describe() << "\n"
+            << "mipnerf-cl: " << trainer.memory().describe() << "\n";
 }
 
-eval::SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const std::string& data_path,
-                               const std::string& out_dir) {
-  const auto& c = trainer.config();
-  const data::Dataset val_data = data::load_dataset(data_path, train::load_options(c, data_path, {"val"}));
-  const data::Split& val = val_data.split("val");
-  std::vector<mlp::Mlp*> networks;
-  for (auto& n : trainer.networks()) networks.push_back(n.get());
-  eval::ImageRenderer renderer(ctx, trainer.spec(), networks, val.cameras, static_cast<size_t>(c.render_chunk_rays));
-  const fs::path folder = fs::path(out_dir) / "val";
-  eval::EvaluateOptions options;
-  options.max_views = static_cast<size_t>(c.val_views);
-  const size_t total = eval::select_views(val, options.max_views).size();
-  Progress progress("render val", static_cast<int64_t>(total));
-  options.progress = [&](size_t done, size_t) { progress.update(static_cast<int64_t>(done)); };
-  options.on_image = [&](const eval::ImageScore& score, const eval::RenderedImage& image, const float*) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "%03zu_scale%u.png", score.index, score.scale_level);
-    io::write_png((folder / name).string(), image.width, image.height, 3, image.rgb.data());
-  };
-  const auto scores = eval::evaluate_split(renderer, val, options);
-  progress.finish();
-  return scores;
+std::string step_detail(const train::StepReport& r) {
+  char detail[160];
+  std::snprintf(detail, sizeof(detail), "loss %.5f  psnr %.2f dB  lr %.2e  %.0f rays/s%s", r.loss, r.psnr,
+                r.learning_rate, r.rays_per_second, r.skipped ? "  (skipped: non-finite)" : "");
+  return detail;
+}
+
+void report_trained(const train::TrainResult& result, const std::string& device) {
+  if (result.interrupted) {
+    std::cerr << "mipnerf-cl: interrupted at step " << result.last_step << "; checkpoint " << result.checkpoint
+              << " (continue with --resume)\n";
+  } else {
+    std::cerr << "mipnerf-cl: trained " << result.last_step << " steps in " << format_duration(result.train_seconds)
+              << " on " << device << "; checkpoint " << result.checkpoint << "\n";
+  }
 }
 
 void run_train(TrainArgs& args, CLI::App& cmd) {
@@ -154,52 +122,42 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   auto ctx = open_context();
   const std::string device = ctx->device_info().name;
 
-  train::Trainer trainer(*ctx, config, data_path, args.out, args.resume);
-  mlp::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
-  const auto& spec = trainer.spec();
-  std::cerr << "mipnerf-cl: training " << enum_name(config.variant) << " (preset " << args.preset << ") on " << device
-            << ": " << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()
-            << " parameters, " << spec.describe() << "\n"
-            << "mipnerf-cl: " << trainer.memory().describe() << "\n";
-
-  g_stop_requested = false;
-  auto previous_handler = std::signal(SIGINT, on_interrupt);
-  Progress progress("train", config.steps);
-  train::TrainHooks hooks;
-  hooks.should_stop = [] { return g_stop_requested.load(); };
-  hooks.on_step = [&](const train::StepReport& r) {
-    char detail[160];
-    std::snprintf(detail, sizeof(detail), "loss %.5f  psnr %.2f dB  lr %.2e  %.0f rays/s%s", r.loss, r.psnr,
-                  r.learning_rate, r.rays_per_second, r.skipped ? "  (skipped: non-finite)" : "");
-    progress.update(r.step, detail);
+  std::optional<Progress> train_progress, val_progress;
+  void (*previous_handler)(int) = SIG_DFL;
+  eval::TrainAndEvaluateOptions run;
+  run.data_path = data_path;
+  run.out_dir = args.out;
+  run.resume = args.resume;
+  run.val_image_folder = (fs::path(args.out) / "val").string();
+  run.on_setup = [&](train::Trainer& trainer) {
+    on_setup(trainer, *ctx, args.preset);
+    g_stop_requested = false;
+    previous_handler = std::signal(SIGINT, on_interrupt);
+    train_progress.emplace("train", config.steps);
   };
-  const train::TrainResult result = trainer.run(hooks);
-  std::signal(SIGINT, previous_handler);
-  progress.finish();
-  if (result.interrupted) {
-    std::cerr << "mipnerf-cl: interrupted at step " << result.last_step << "; checkpoint " << result.checkpoint
-              << " (continue with --resume)\n";
-    write_summary(args.out, trainer, result, nullptr, device);
-    return;
-  }
-  std::cerr << "mipnerf-cl: trained " << result.last_step << " steps in " << format_duration(result.train_seconds)
-            << " on " << device << "; checkpoint " << result.checkpoint << "\n";
+  run.hooks.should_stop = [] { return g_stop_requested.load(); };
+  run.hooks.on_step = [&](const train::StepReport& r) { train_progress->update(r.step, step_detail(r)); };
+  run.on_trained = [&](train::Trainer&, const train::TrainResult& result) {
+    std::signal(SIGINT, previous_handler);
+    train_progress->finish();
+    report_trained(result, device);
+  };
+  run.on_val_start = [&](size_t images) { val_progress.emplace("render val", static_cast<int64_t>(images)); };
+  run.val_progress = [&](size_t done, size_t) { val_progress->update(static_cast<int64_t>(done)); };
+  const eval::TrainAndEvaluateResult result = eval::train_and_evaluate(*ctx, config, run);
+  if (result.val) val_progress->finish();
+  val_progress.reset();  // a failed evaluation's line ends before the warning
+  if (!result.val_error.empty()) std::cerr << "mipnerf-cl: warning: no val evaluation: " << result.val_error << "\n";
 
-  const eval::SplitScores* val_scores = nullptr;
-  eval::SplitScores scores;
-  try {
-    scores = evaluate_val(*ctx, trainer, data_path, args.out);
-    val_scores = &scores;
-  } catch (const Error& e) {
-    std::cerr << "mipnerf-cl: warning: no val evaluation: " << e.what() << "\n";
-  }
-  write_summary(args.out, trainer, result, val_scores, device);
-  if (val_scores) {
-    std::printf("val PSNR %.2f dB, SSIM %.4f over %zu images; trained %lld steps in %.1f s; rendering %.2f s/MP on %s\n",
-                scores.mean_psnr, scores.mean_ssim, scores.images.size(), static_cast<long long>(result.last_step),
-                result.train_seconds, scores.seconds_per_megapixel(), device.c_str());
-    std::printf("images in %s, summary in %s\n", (fs::path(args.out) / "val").string().c_str(),
-                (fs::path(args.out) / "summary.json").string().c_str());
+  const std::string summary =
+      eval::write_summary(args.out, result.record, result.train, result.val ? &*result.val : nullptr);
+  if (result.val) {
+    const eval::SplitScores& scores = *result.val;
+    std::printf(
+        "val PSNR %.2f dB, SSIM %.4f over %zu images; trained %lld steps in %.1f s; rendering %.2f s/MP on %s\n",
+        scores.mean_psnr, scores.mean_ssim, scores.images.size(), static_cast<long long>(result.train.last_step),
+        result.train.train_seconds, scores.seconds_per_megapixel(), device.c_str());
+    std::printf("images in %s, summary in %s\n", (fs::path(args.out) / "val").string().c_str(), summary.c_str());
   }
 }
 

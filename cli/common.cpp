@@ -1,6 +1,7 @@
 // Global options and the shared device opening of the CLI.
 #include "common.hpp"
 
+
 #include <iostream>
 
 #include "core/error.hpp"
@@ -33,6 +34,19 @@ void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t 
   if (cmd.count("--views") && views == 0) throw Error("--views must be at least 1 (leave it out for all views)");
   if (cmd.count("--scales") && scales < 1) throw Error("--scales must be at least 1");
   if (supersample == 0) throw Error("--supersample must be at least 1 ray per pixel");
+}
+
+std::map<std::string, std::string> parse_set_assignments(const std::vector<std::string>& assignments,
+                                                         const std::string& example) {
+  std::map<std::string, std::string> out;
+  for (const auto& assignment : assignments) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw Error("--set '" + assignment + "': expected name=value, e.g. --set " + example);
+    }
+    out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
+  }
+  return out;
 }
 
 }  // namespace mipnerf::cli

@@ -1,10 +1,13 @@
-// What every subcommand shares: the global options, opening the device, and printing to the terminal.
+// What every subcommand shares: the global options, opening the device, --set parsing, a scratch folder, and
+// printing to the terminal.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -26,6 +29,11 @@ std::unique_ptr<ocl::Context> open_context(bool profiling = false);
 // The view selection and sampling options that render and eval share (--views, --scales, --supersample):
 // throws mipnerf::Error naming the flag when one is out of range. --views and --scales are checked only when given.
 void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t supersample);
+
+// --set name=value assignments as a map, later ones winning; throws mipnerf::Error naming a malformed one, with
+// `example` ("num_samples=64") to show the form.
+std::map<std::string, std::string> parse_set_assignments(const std::vector<std::string>& assignments,
+                                                         const std::string& example);
 
 // Prints a library log message to stderr ("mipnerf-cl: warning: ...").
 void print_log(LogLevel level, const std::string& message);

@@ -22,4 +22,9 @@ DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
   pixel_offsets_.upload(ctx, offsets);
 }
 
+size_t DeviceDataset::bytes_for(const Split& split) {
+  return split.cameras.size() * camera_layout::stride * sizeof(float) + split.rgb.size() * sizeof(float) +
+         split.pixel_offsets.size() * sizeof(uint32_t);
+}
+
 }  // namespace mipnerf::data

@@ -17,6 +17,9 @@ class DeviceDataset {
   // 32-bit on the device), or a buffer exceeds the device's allocation limit.
   DeviceDataset(ocl::Context& ctx, const Split& split);
 
+  // Bytes the device arrays of `split` take (cameras [C][camera_layout::stride], pixels, offsets), for memory plans.
+  static size_t bytes_for(const Split& split);
+
   uint32_t num_cameras() const { return static_cast<uint32_t>(host_cameras_.size()); }
   uint64_t num_pixels() const { return num_pixels_; }
   const std::vector<Camera>& host_cameras() const { return host_cameras_; }

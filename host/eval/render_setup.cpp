@@ -23,10 +23,15 @@ std::string resolve_data_path(const std::string& requested, const train::Trained
 }
 
 size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested) {
-  const size_t networks = parameter_count(model) * sizeof(float);
-  const size_t upper = requested > 0 ? requested : static_cast<size_t>(model.config.render_chunk_rays);
-  const train::MemoryPlan plan = train::plan_memory(model.spec, device, upper, networks, requested, false);
-  return plan.chunk_rays;
+  return render_chunk_rays(model.spec, parameter_count(model), static_cast<size_t>(model.config.render_chunk_rays),
+                           device, requested);
+}
+
+size_t render_chunk_rays(const graph::GraphSpec& spec, size_t parameters, size_t configured_chunk,
+                         const ocl::DeviceInfo& device, size_t requested) {
+  const size_t network_bytes = parameters * sizeof(float);  // the parameters only, as render plans always counted
+  const size_t upper = requested > 0 ? requested : configured_chunk;
+  return train::plan_memory(spec, device, upper, network_bytes, requested, false).chunk_rays;
 }
 
 std::string run_folder_of(const std::string& checkpoint) {

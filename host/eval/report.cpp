@@ -1,12 +1,14 @@
-// metrics.json and metrics.md of an evaluation.
+// metrics.json and metrics.md of an evaluation, summary.json of a training run, render.json of a render.
 #include "eval/report.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <sstream>
 
 #include "eval/image_output.hpp"
+#include "io/atomic_file.hpp"
 
 namespace mipnerf::eval {
 
@@ -34,6 +36,27 @@ std::string fixed(double v, int decimals) {
 
 std::string scale_name(uint32_t level) {
   return level == 0 ? std::string("1 (full)") : "1/" + std::to_string(1u << level);
+}
+
+std::string formats_name(const OutputFormats& formats) {
+  return formats.png && formats.exr ? "png, exr" : formats.png ? "png" : "exr";
+}
+
+void write_json_atomically(const std::string& path, const Ordered& j) {
+  io::write_bytes_atomically(path, j.dump(2) + "\n");
+}
+
+Ordered val_summary(const SplitScores& val) {
+  Ordered j;
+  j["views"] = val.images.size();
+  j["mean_psnr"] = val.mean_psnr;
+  j["mean_ssim"] = val.mean_ssim;
+  j["render_seconds_per_megapixel"] = val.seconds_per_megapixel();
+  for (const auto& s : val.scales) {
+    j["scales"].push_back(
+        {{"scale_level", s.scale_level}, {"images", s.images}, {"mean_psnr", s.mean_psnr}, {"mean_ssim", s.mean_ssim}});
+  }
+  return j;
 }
 
 }  // namespace
@@ -145,6 +168,59 @@ std::string utc_timestamp() {
   char text[32];
   std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
   return text;
+}
+
+TrainRecord train_record(const train::Trainer& trainer, const std::string& device) {
+  TrainRecord r;
+  r.device = device;
+  r.parameters = trainer.parameter_count();
+  r.chunk_rays = trainer.memory().chunk_rays;
+  r.planned_device_bytes = trainer.memory().total();
+  return r;
+}
+
+Ordered summary_json(const TrainRecord& record, const train::TrainResult& result, const SplitScores* val) {
+  Ordered j;
+  j["device"] = record.device;
+  j["steps"] = result.last_step;
+  j["interrupted"] = result.interrupted;
+  j["train_seconds"] = result.train_seconds;
+  j["skipped_steps"] = result.skipped_steps;
+  j["parameters"] = record.parameters;
+  j["chunk_rays"] = record.chunk_rays;
+  j["planned_device_bytes"] = record.planned_device_bytes;
+  j["checkpoint"] = result.checkpoint;
+  if (val) j["val"] = val_summary(*val);
+  return j;
+}
+
+std::string write_summary(const std::string& out_dir, const TrainRecord& record, const train::TrainResult& result,
+                          const SplitScores* val) {
+  const std::string path = (std::filesystem::path(out_dir) / "summary.json").string();
+  write_json_atomically(path, summary_json(record, result, val));
+  return path;
+}
+
+Ordered render_json(const RenderRecord& r) {
+  Ordered j;
+  j["checkpoint"] = r.checkpoint;
+  j["step"] = r.step;
+  j["source"] = r.source;
+  j["date"] = r.date;
+  j["device"] = r.device;
+  j["frames"] = r.frames;
+  j["formats"] = formats_name(r.formats);
+  j["rays_per_pixel"] = r.rays_per_pixel;
+  j["chunk_rays"] = r.chunk_rays;
+  j["warm_up_seconds"] = r.warm_up_seconds;
+  j["render_seconds"] = r.render_seconds;
+  j["megapixels"] = r.megapixels;
+  j["seconds_per_megapixel"] = r.megapixels > 0 ? r.render_seconds / r.megapixels : 0.0;
+  return j;
+}
+
+void write_render_record(const std::string& folder, const RenderRecord& record) {
+  write_json_atomically((std::filesystem::path(folder) / "render.json").string(), render_json(record));
 }
 
 }  // namespace mipnerf::eval

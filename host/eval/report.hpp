@@ -1,5 +1,6 @@
-// The record of an evaluation: metrics.json (every score, per image, per scale and overall, with the metric
-// definitions, the device, the checkpoint and the render time per megapixel) and a markdown table of the same.
+// The records of a run: an evaluation's metrics.json (every score, per image, per scale and overall, with the
+// metric definitions, the device, the checkpoint and the render time per megapixel) and a markdown table of the
+// same; a training run's summary.json; a render's render.json.
 #pragma once
 
 #include <cstdint>
@@ -7,7 +8,9 @@
 #include <vector>
 
 #include "eval/evaluate.hpp"
+#include "eval/image_output.hpp"
 #include "io/json.hpp"
+#include "train/trainer.hpp"
 
 namespace mipnerf::eval {
 
@@ -45,5 +48,41 @@ std::string metrics_markdown(const SplitScores& scores, const EvalRecord& record
 
 // The current UTC time as "2026-11-21T09:13:56Z".
 std::string utc_timestamp();
+
+// What summary.json records of a training run beside its result.
+struct TrainRecord {
+  std::string device;               // the device's name
+  size_t parameters = 0;            // of all networks
+  size_t chunk_rays = 0;            // rays per chunk, as planned
+  size_t planned_device_bytes = 0;  // train::MemoryPlan::total()
+};
+TrainRecord train_record(const train::Trainer& trainer, const std::string& device);
+
+// summary.json's content: device, steps, interrupted, train_seconds, skipped_steps, parameters, chunk_rays,
+// planned_device_bytes, checkpoint and, when `val` is given, its views, mean PSNR/SSIM, render s/MP and scales.
+nlohmann::ordered_json summary_json(const TrainRecord& record, const train::TrainResult& result,
+                                    const SplitScores* val);
+// Writes out_dir/summary.json (atomically); returns its path.
+std::string write_summary(const std::string& out_dir, const TrainRecord& record, const train::TrainResult& result,
+                          const SplitScores* val);
+
+// What render.json records of a render.
+struct RenderRecord {
+  std::string checkpoint;                                            // the .mnck file (absolute)
+  int64_t step = 0;                                                  // its training step
+  nlohmann::ordered_json source = nlohmann::ordered_json::object();  // ViewFrames::details
+  std::string date;                                                  // ISO 8601, UTC
+  io::Json device = io::Json::object();                              // device_record
+  size_t frames = 0;
+  OutputFormats formats;
+  uint32_t rays_per_pixel = 1;
+  size_t chunk_rays = 0;
+  double warm_up_seconds = 0.0;  // the untimed first chunk
+  double render_seconds = 0.0;   // of every frame, warm-up excluded
+  double megapixels = 0.0;       // of every frame
+};
+nlohmann::ordered_json render_json(const RenderRecord& record);
+// Writes folder/render.json (atomically).
+void write_render_record(const std::string& folder, const RenderRecord& record);
 
 }  // namespace mipnerf::eval

@@ -43,6 +43,11 @@ double learning_rate(const LrSchedule& s, int64_t step) {
 
 bool GradientStats::finite() const { return non_finite == 0 && std::isfinite(norm); }
 
+size_t Adam::bytes_for(size_t n_params) {
+  const size_t n_partials = std::max<size_t>(1, std::min(kNormPartials, n_params));
+  return 2 * n_params * sizeof(float) + n_partials * (sizeof(float) + sizeof(cl_uint));
+}
+
 Adam::Adam(ocl::Context& ctx, size_t n_params, const AdamHyper& hyper)
     : ctx_(&ctx),
       n_params_(n_params),

@@ -60,6 +60,8 @@ class Adam {
  public:
   // Moments start at zero, step at 0.
   Adam(ocl::Context& ctx, size_t n_params, const AdamHyper& hyper = {});
+  // Bytes an optimiser of `n_params` parameters takes on the device: the two moments and the reduction's partials.
+  static size_t bytes_for(size_t n_params);
   ~Adam();
   Adam(const Adam&) = delete;
   Adam& operator=(const Adam&) = delete;

@@ -104,6 +104,8 @@ Mlp::Mlp(ocl::Context& ctx, const MlpConfig& config)
 
 Mlp::~Mlp() = default;
 
+size_t Mlp::bytes_for(const MlpConfig& config) { return 2 * parameter_layout(config).total * sizeof(float); }
+
 std::vector<float> Mlp::download_params() const { return params_.download(*ctx_); }
 
 void Mlp::upload_params(const std::vector<float>& values) {

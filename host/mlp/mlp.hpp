@@ -92,6 +92,8 @@ class Mlp {
   // Parameters from glorot_uniform_init(config); gradients zero.
   Mlp(ocl::Context& ctx, const MlpConfig& config);
   ~Mlp();
+  // Bytes a network of `config` takes on the device: its parameters and its gradients (workspaces aside).
+  static size_t bytes_for(const MlpConfig& config);
   Mlp(const Mlp&) = delete;
   Mlp& operator=(const Mlp&) = delete;
 

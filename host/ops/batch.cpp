@@ -12,6 +12,10 @@ BatchArrays::BatchArrays(ocl::Context& ctx, size_t rays)
       target_rgb(ctx, 3 * rays, "target_rgb [R][3]"),
       lossmult(ctx, rays, "lossmult [R]") {}
 
+size_t BatchArrays::bytes_for(size_t rays) {
+  return 2 * rays * sizeof(uint32_t) + 4 * rays * sizeof(float);  // ids; target_rgb [R][3] and lossmult [R]
+}
+
 void batch_sample(ocl::Context& ctx, const data::DeviceDataset& dataset, const BatchOptions& options, uint32_t step,
                   BatchArrays& batch) {
   const char* name = "batch_sample";

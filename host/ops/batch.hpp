@@ -29,6 +29,8 @@ struct BatchOptions {
 struct BatchArrays {
   BatchArrays() = default;
   BatchArrays(ocl::Context& ctx, size_t rays);
+  // Bytes the four arrays take for `rays` rays, for memory plans.
+  static size_t bytes_for(size_t rays);
   size_t rays = 0;
   ocl::DeviceArray<uint32_t> camera_ids;  // [R] index into the split's cameras
   ocl::DeviceArray<uint32_t> pixel_ids;   // [R] y·width + x in that image

@@ -354,7 +354,7 @@ void validate(const TrainConfig& c) {
   require(c.near >= 0 && c.far >= 0 && (c.far == 0 || c.far > c.near), "need 0 <= near < far (0 = from data)");
 }
 
-std::string to_json(const TrainConfig& config) {
+nlohmann::ordered_json config_json(const TrainConfig& config) {
   nlohmann::ordered_json j;
   for (const auto& e : table()) {
     const std::string text = get_value(config, e.setting.name);
@@ -372,8 +372,10 @@ std::string to_json(const TrainConfig& config) {
       j[kVariantBundleKey] = enum_name(*config.variant_bundle);
     }
   }
-  return j.dump(2);
+  return j;
 }
+
+std::string to_json(const TrainConfig& config) { return config_json(config).dump(2); }
 
 TrainConfig from_json(const std::string& json_text, const std::string& where) {
   nlohmann::json j;
@@ -382,6 +384,10 @@ TrainConfig from_json(const std::string& json_text, const std::string& where) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(where + ": malformed configuration JSON: " + e.what());
   }
+  return config_from_json(j, where);
+}
+
+TrainConfig config_from_json(const nlohmann::json& j, const std::string& where) {
   if (!j.is_object()) throw Error(where + ": the configuration must be a JSON object");
   TrainConfig config;
   for (const auto& [name, value] : j.items()) {

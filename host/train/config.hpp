@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/enum_names.hpp"
 #include "core/stage_options.hpp"
 #include "ops/batch.hpp"
@@ -135,8 +137,12 @@ TrainConfig resolve_config(const std::string& preset, const std::string& variant
 // Checks the combination (positive sizes, ranges, sample counts vs the model family, ...).
 void validate(const TrainConfig& config);
 
-// All settings as a flat JSON object text (enums by name, as the settings spell them) with "variant_bundle" after
-// "variant" when recorded, and back (unknown keys are refused; a missing "variant_bundle" leaves it empty).
+// All settings as a flat JSON object (checkpoints and run records hold it as such; enums by name, as the settings
+// spell them) with "variant_bundle" after "variant" when recorded, and back: unknown keys and bad values throw
+// mipnerf::Error naming `where`; a missing "variant_bundle" leaves it unknown (configurations written before it).
+nlohmann::ordered_json config_json(const TrainConfig& config);
+TrainConfig config_from_json(const nlohmann::json& object, const std::string& where);
+// The same as text (OUT/config.json), and back from text.
 std::string to_json(const TrainConfig& config);
 TrainConfig from_json(const std::string& json_text, const std::string& where);
 

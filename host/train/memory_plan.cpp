@@ -5,7 +5,11 @@
 #include <cstdio>
 
 #include "core/error.hpp"
+#include "data/device_dataset.hpp"
 #include "graph/graph.hpp"
+#include "mlp/adam.hpp"
+#include "mlp/mlp.hpp"
+#include "ops/batch.hpp"
 
 namespace mipnerf::train {
 namespace {
@@ -20,6 +24,16 @@ std::string MemoryPlan::describe() const {
                 chunk_rays, mib(total()).c_str(), mib(graph_bytes).c_str(), mib(fixed_bytes).c_str(),
                 mib(budget_bytes).c_str());
   return text;
+}
+
+size_t training_fixed_bytes(const data::Split& train_split, const graph::GraphSpec& spec, size_t batch_rays) {
+  // Summed from the owners rather than copied here: an earlier hand-written sum counted 32 floats per camera where
+  // the device stride is camera_layout::stride = 24, and left out the pixel offsets and Adam's reduction partials.
+  size_t bytes = data::DeviceDataset::bytes_for(train_split) + ops::BatchArrays::bytes_for(batch_rays);
+  for (const auto& network : spec.mlps) {
+    bytes += mlp::Mlp::bytes_for(network) + mlp::Adam::bytes_for(mlp::parameter_layout(network).total);
+  }
+  return bytes;
 }
 
 size_t largest_graph_buffer(const graph::GraphSpec& spec, size_t chunk_rays) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cl/device.hpp"
+#include "data/dataset.hpp"
 #include "graph/graph_spec.hpp"
 
 namespace mipnerf::train {
@@ -27,6 +28,11 @@ constexpr double kMemoryBudgetFraction = 0.75;
 // Throws mipnerf::Error saying which setting to lower when nothing fits.
 MemoryPlan plan_memory(const graph::GraphSpec& spec, const ocl::DeviceInfo& device, size_t batch_rays,
                        size_t fixed_bytes, size_t requested_chunk, bool training);
+
+// What a training run keeps on the device whatever the chunk size, summed from each owner's bytes_for: the
+// training split (data::DeviceDataset), every network's parameters and gradients (mlp::Mlp), their optimisers
+// (mlp::Adam) and the batch arrays (ops::BatchArrays). The `fixed_bytes` of a training plan.
+size_t training_fixed_bytes(const data::Split& train_split, const graph::GraphSpec& spec, size_t batch_rays);
 
 // The largest single buffer the graph allocates for a chunk of `chunk_rays` (features or an MLP layer).
 size_t largest_graph_buffer(const graph::GraphSpec& spec, size_t chunk_rays);

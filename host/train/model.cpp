@@ -1,4 +1,5 @@
-// TrainConfig → GraphSpec: the levels and options of mip-NeRF, the NeRF baseline and the ablations.
+// TrainConfig → GraphSpec (the levels and options of mip-NeRF, the NeRF baseline and the ablations), the
+// networks, and the data-loading options.
 #include "train/model.hpp"
 
 namespace mipnerf::train {
@@ -80,6 +81,32 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.loss.multiscale = multiscale_data && c.area_loss;
   spec.validate();
   return spec;
+}
+
+std::vector<std::unique_ptr<mlp::Mlp>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec) {
+  std::vector<std::unique_ptr<mlp::Mlp>> networks;
+  for (const auto& config : spec.mlps) networks.push_back(std::make_unique<mlp::Mlp>(ctx, config));
+  return networks;
+}
+
+std::vector<mlp::Mlp*> network_pointers(const std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
+  std::vector<mlp::Mlp*> out;
+  for (const auto& n : networks) out.push_back(n.get());
+  return out;
+}
+
+data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path, std::vector<std::string> splits,
+                               int scales) {
+  data::LoadOptions options;
+  options.background = config.background;
+  options.factor = static_cast<uint32_t>(config.factor);
+  // A folder that is multiscale on disk (metadata.json) already holds its scales; build them otherwise.
+  const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
+  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? 4 : 1;
+  if (config.near > 0) options.near = config.near;
+  if (config.far > 0) options.far = config.far;
+  options.splits = std::move(splits);
+  return options;
 }
 
 }  // namespace mipnerf::train

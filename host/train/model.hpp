@@ -1,8 +1,16 @@
-// From a training configuration to the model it describes: the graph spec (levels, stages, options) and
-// the networks' configurations. Variants (mip-NeRF, NeRF, ablations) differ only in what this returns.
+// From a training configuration to the model it describes: the graph spec (levels, stages, options), the
+// networks' configurations and the networks themselves, and how the configuration loads its data.
+// Variants (mip-NeRF, NeRF, ablations) differ only in what make_graph_spec returns.
 #pragma once
 
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cl/context.hpp"
+#include "data/dataset.hpp"
 #include "graph/graph_spec.hpp"
+#include "mlp/mlp.hpp"
 #include "train/config.hpp"
 
 namespace mipnerf::train {
@@ -10,5 +18,16 @@ namespace mipnerf::train {
 // `multiscale_data`: the training split holds several scales (its pixels carry lossmult ≠ 1); the area
 // loss is compiled in only then, and only when config.area_loss asks for it.
 graph::GraphSpec make_graph_spec(const TrainConfig& config, bool multiscale_data);
+
+// One network per entry of spec.mlps, freshly initialised (MlpConfig::seed).
+std::vector<std::unique_ptr<mlp::Mlp>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec);
+// The networks as the graph and the renderer take them (not owning).
+std::vector<mlp::Mlp*> network_pointers(const std::vector<std::unique_ptr<mlp::Mlp>>& networks);
+
+// How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
+// (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0
+// forces that many scales.
+data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path, std::vector<std::string> splits,
+                               int scales = 0);
 
 }  // namespace mipnerf::train

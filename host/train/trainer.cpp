@@ -11,17 +11,14 @@
 #include "data/device_dataset.hpp"
 #include "graph/graph.hpp"
 #include "io/atomic_file.hpp"
-#include "io/checkpoint.hpp"
 #include "ops/batch.hpp"
+#include "train/checkpoint.hpp"
 #include "train/model.hpp"
 
 namespace mipnerf::train {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr const char* kCheckpointFormat = "mipnerf-cl checkpoint";
-constexpr int kCheckpointVersion = 1;
 
 mlp::LrSchedule schedule_of(const TrainConfig& c) {
   mlp::LrSchedule s;
@@ -31,27 +28,6 @@ mlp::LrSchedule schedule_of(const TrainConfig& c) {
   s.warmup_steps = c.lr_warmup_steps;
   s.warmup_mult = c.lr_warmup_mult;
   return s;
-}
-
-// Settings that may change between a run and its resume without changing what is learnt.
-bool is_execution_setting(const std::string& difference) {
-  const std::string name = difference.substr(0, difference.find(':'));
-  for (const auto& s : settings()) {
-    if (s.name == name) return s.group == "execution";
-  }
-  return false;
-}
-
-std::vector<std::unique_ptr<mlp::Mlp>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec) {
-  std::vector<std::unique_ptr<mlp::Mlp>> networks;
-  for (const auto& config : spec.mlps) networks.push_back(std::make_unique<mlp::Mlp>(ctx, config));
-  return networks;
-}
-
-std::vector<mlp::Mlp*> pointers(const std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
-  std::vector<mlp::Mlp*> out;
-  for (const auto& n : networks) out.push_back(n.get());
-  return out;
 }
 
 }  // namespace
@@ -88,15 +64,13 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   }
 
   const size_t batch_rays = static_cast<size_t>(config_.batch_size);
-  size_t fixed = train.num_pixels() * 3 * sizeof(float) + train.num_images() * 32 * sizeof(float);
-  fixed += parameter_count() * 4 * sizeof(float);  // parameters, gradients, two Adam moments
-  fixed += batch_rays * 6 * sizeof(float);         // batch arrays
+  const size_t fixed = training_fixed_bytes(train, spec_, batch_rays);
   memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, fixed, static_cast<size_t>(config_.chunk_rays), true);
-  impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, pointers(networks_), memory_.chunk_rays);
+  impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, network_pointers(), memory_.chunk_rays);
 
   fs::create_directories(out_dir_);
-  const std::string checkpoints = (fs::path(out_dir_) / "checkpoints").string();
-  const auto existing = io::list_checkpoints(checkpoints);
+  const std::string checkpoints = checkpoint_folder();
+  const auto existing = list_checkpoints(checkpoints);
   if (resume && !existing.empty()) {
     restore(existing.back().second);
   } else if (resume) {
@@ -122,64 +96,29 @@ size_t Trainer::parameter_count() const {
   return n;
 }
 
+std::vector<mlp::Mlp*> Trainer::network_pointers() const { return train::network_pointers(networks_); }
+
+std::string Trainer::checkpoint_folder() const { return (fs::path(out_dir_) / "checkpoints").string(); }
+
 std::string Trainer::save_checkpoint() {
-  io::Checkpoint c;
-  c.header["format"] = kCheckpointFormat;
-  c.header["version"] = kCheckpointVersion;
-  c.header["step"] = step_;
-  c.header["train_seconds"] = seconds_before_;
-  c.header["config"] = nlohmann::json::parse(to_json(config_));
-  c.header["multiscale_data"] = dataset_.split("train").num_scales() > 1;
-  c.header["device"] = ctx_->device_info().name;
+  CheckpointRecord record;
+  record.step = step_;
+  record.train_seconds = seconds_before_;
+  record.multiscale_data = dataset_.split("train").num_scales() > 1;
+  record.device = ctx_->device_info().name;
   // Where the training data was (absolute), so render and eval find the scene without being told.
-  c.header["data"] = fs::absolute(dataset_.path).lexically_normal().string();
-  nlohmann::json adam_steps = nlohmann::json::array();
-  for (size_t i = 0; i < networks_.size(); ++i) {
-    const std::string prefix = "network" + std::to_string(i) + ".";
-    c.add(prefix + "params", networks_[i]->download_params());
-    mlp::AdamState state = optimisers_[i]->state();
-    adam_steps.push_back(state.step);
-    c.add(prefix + "adam_m", std::move(state.m));
-    c.add(prefix + "adam_v", std::move(state.v));
-  }
-  c.header["adam_steps"] = adam_steps;
-  const std::string folder = (fs::path(out_dir_) / "checkpoints").string();
-  const std::string path = io::checkpoint_path(folder, step_);
-  io::write_checkpoint(path, c);
-  io::prune_checkpoints(folder, config_.keep_checkpoints);
+  record.data_path = fs::absolute(dataset_.path).lexically_normal().string();
+  const std::string path = checkpoint_path(checkpoint_folder(), step_);
+  save_training_checkpoint(path, config_, record, networks_, optimisers_);
+  prune_checkpoints(checkpoint_folder(), config_.keep_checkpoints);
   return path;
 }
 
 void Trainer::restore(const std::string& path) {
-  const io::Checkpoint c = io::read_checkpoint(path);
-  if (c.header.value("format", "") != kCheckpointFormat) throw Error(path + ": not a training checkpoint");
-  const TrainConfig saved = from_json(c.header.at("config").dump(), path);
-  std::string mismatched;
-  for (const auto& d : differences(saved, config_)) {
-    if (d.rfind("steps:", 0) == 0) {
-      // Training longer (or shorter) is allowed: the schedule then spans the new step count from here on.
-      ctx_->log(LogLevel::warning, "--resume with " + d + ": the learning-rate schedule now spans " +
-                                       std::to_string(config_.steps) + " steps");
-    } else if (!is_execution_setting(d)) {
-      mismatched += (mismatched.empty() ? "" : "; ") + d;
-    }
-  }
-  if (!mismatched.empty()) {
-    throw Error("--resume: the settings differ from the checkpoint's (" + mismatched + "); run with the same "
-                "settings, or start a new --out");
-  }
-  const auto& adam_steps = c.header.at("adam_steps");
-  for (size_t i = 0; i < networks_.size(); ++i) {
-    const std::string prefix = "network" + std::to_string(i) + ".";
-    networks_[i]->upload_params(c.tensor(prefix + "params", path));
-    mlp::AdamState state;
-    state.step = adam_steps.at(i).get<int64_t>();
-    state.m = c.tensor(prefix + "adam_m", path);
-    state.v = c.tensor(prefix + "adam_v", path);
-    optimisers_[i]->restore(state);
-  }
-  step_ = c.header.at("step").get<int64_t>();
-  seconds_before_ = c.header.value("train_seconds", 0.0);
+  LogFn log = [this](LogLevel level, const std::string& message) { ctx_->log(level, message); };
+  const CheckpointRecord record = restore_training_checkpoint(path, config_, networks_, optimisers_, log);
+  step_ = record.step;
+  seconds_before_ = record.train_seconds;
   ctx_->log(LogLevel::info, "resuming from " + path + " at step " + std::to_string(step_));
 }
 
@@ -236,7 +175,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
       ctx_->log(LogLevel::warning, "step " + std::to_string(step) +
                                        ": non-finite loss or gradients; the update was skipped");
       if (consecutive_bad >= config_.max_bad_steps) {
-        const auto saved = io::list_checkpoints((fs::path(out_dir_) / "checkpoints").string());
+        const auto saved = list_checkpoints(checkpoint_folder());
         throw Error("training stopped at step " + std::to_string(step) + " after " + std::to_string(consecutive_bad) +
                     " consecutive non-finite steps; the last good checkpoint is " +
                     (saved.empty() ? std::string("none") : saved.back().second) +
@@ -291,49 +230,6 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   result.train_seconds = seconds_before_ + result.seconds_this_run;
   seconds_before_ = result.train_seconds;
   return result;
-}
-
-std::vector<mlp::Mlp*> TrainedModel::network_pointers() const { return pointers(networks); }
-
-TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path) {
-  const io::Checkpoint c = io::read_checkpoint(checkpoint_path);
-  if (c.header.value("format", "") != kCheckpointFormat) throw Error(checkpoint_path + ": not a training checkpoint");
-  TrainedModel model;
-  model.config = from_json(c.header.at("config").dump(), checkpoint_path);
-  model.spec = make_graph_spec(model.config, c.header.value("multiscale_data", false));
-  model.networks = make_networks(ctx, model.spec);
-  for (size_t i = 0; i < model.networks.size(); ++i) {
-    model.networks[i]->upload_params(c.tensor("network" + std::to_string(i) + ".params", checkpoint_path));
-  }
-  model.step = c.header.at("step").get<int64_t>();
-  model.data_path = c.header.value("data", "");
-  model.train_seconds = c.header.value("train_seconds", 0.0);
-  model.trained_on = c.header.value("device", "");
-  return model;
-}
-
-data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path,
-                               std::vector<std::string> splits, int scales) {
-  data::LoadOptions options;
-  options.background = config.background;
-  options.factor = static_cast<uint32_t>(config.factor);
-  // A folder that is multiscale on disk (metadata.json) already holds its scales; build them otherwise.
-  const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
-  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? 4 : 1;
-  if (config.near > 0) options.near = config.near;
-  if (config.far > 0) options.far = config.far;
-  options.splits = std::move(splits);
-  return options;
-}
-
-std::string find_checkpoint(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_regular_file(path, ec)) return path;
-  for (const auto& folder : {(fs::path(path) / "checkpoints").string(), path}) {
-    const auto found = io::list_checkpoints(folder);
-    if (!found.empty()) return found.back().second;
-  }
-  throw Error(path + ": no checkpoint found (expected a .mnck file, or a training --out folder holding checkpoints/)");
 }
 
 }  // namespace mipnerf::train

@@ -64,15 +64,18 @@ class Trainer {
   const MemoryPlan& memory() const { return memory_; }
   const data::Dataset& dataset() const { return dataset_; }
   std::vector<std::unique_ptr<mlp::Mlp>>& networks() { return networks_; }
+  std::vector<mlp::Mlp*> network_pointers() const;  // as the graph and the renderer take them
   int64_t step() const { return step_; }
   size_t parameter_count() const;
 
-  // Writes out_dir/checkpoints/ckpt_<step>.mnck (atomically) and prunes old ones; returns its path.
+  // Writes out_dir/checkpoints/ckpt_<step>.mnck (atomically, train/checkpoint.hpp) and prunes old ones; returns
+  // its path.
   std::string save_checkpoint();
 
  private:
   struct Impl;
   void restore(const std::string& path);
+  std::string checkpoint_folder() const;  // out_dir/checkpoints
 
   ocl::Context* ctx_;
   TrainConfig config_;
@@ -86,28 +89,5 @@ class Trainer {
   int64_t step_ = 0;              // steps completed
   double seconds_before_ = 0.0;   // training seconds of earlier runs (resume)
 };
-
-// Loads networks from a checkpoint for rendering: the configuration it was trained with, its graph spec
-// (for `multiscale_data` as the caller's data has it) and the networks with their trained parameters.
-struct TrainedModel {
-  TrainConfig config;
-  graph::GraphSpec spec;
-  std::vector<std::unique_ptr<mlp::Mlp>> networks;
-  int64_t step = 0;
-  std::string data_path;     // the training data's folder or file (absolute); empty in older checkpoints
-  double train_seconds = 0;  // training time up to this checkpoint
-  std::string trained_on;    // the device that trained it
-  std::vector<mlp::Mlp*> network_pointers() const;
-};
-TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path);
-
-// How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
-// (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0
-// forces that many scales.
-data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path,
-                               std::vector<std::string> splits, int scales = 0);
-
-// The checkpoint a path names: a .mnck file, or the newest in DIR/checkpoints or DIR.
-std::string find_checkpoint(const std::string& path);
 
 }  // namespace mipnerf::train

@@ -6,7 +6,7 @@
 #include "core/error.hpp"
 #include "data/dataset.hpp"
 #include "support/data_fixtures.hpp"
-#include "train/trainer.hpp"
+#include "train/model.hpp"
 
 using namespace mipnerf;
 

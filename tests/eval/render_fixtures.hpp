@@ -15,6 +15,8 @@
 #include "eval/image_renderer.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
+#include "train/checkpoint.hpp"
+#include "train/model.hpp"
 #include "train/trainer.hpp"
 
 namespace mipnerf::test {

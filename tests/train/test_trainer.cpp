@@ -13,8 +13,8 @@
 #include "core/error.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/metrics.hpp"
-#include "io/checkpoint.hpp"
 #include "support/test_context.hpp"
+#include "train/checkpoint.hpp"
 #include "train/model.hpp"
 #include "train/trainer.hpp"
 #include "support/train_fixtures.hpp"
@@ -123,8 +123,10 @@ TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for b
   CHECK(result.last_step == 8);
   CHECK(bitwise_equal(second.networks()[0]->download_params(), straight_params));
   // Both runs' final checkpoints hold the same Adam moments too.
-  const auto a = io::read_checkpoint(io::checkpoint_path((fs::path(straight_dir) / "checkpoints").string(), 8));
-  const auto b = io::read_checkpoint(io::checkpoint_path((fs::path(resumed_dir) / "checkpoints").string(), 8));
+  const auto a =
+      train::read_checkpoint_file(train::checkpoint_path((fs::path(straight_dir) / "checkpoints").string(), 8));
+  const auto b =
+      train::read_checkpoint_file(train::checkpoint_path((fs::path(resumed_dir) / "checkpoints").string(), 8));
   CHECK(bitwise_equal(a.tensor("network0.adam_m", "a"), b.tensor("network0.adam_m", "b")));
   CHECK(bitwise_equal(a.tensor("network0.adam_v", "a"), b.tensor("network0.adam_v", "b")));
   CHECK(a.header["adam_steps"] == b.header["adam_steps"]);
@@ -149,7 +151,7 @@ TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoi
   CHECK(written.at("variant_bundle") == "mipnerf-two-mlps");
   CHECK(written.at("variant") == "mipnerf");
   const std::string path = train::find_checkpoint(out);
-  io::Checkpoint checkpoint = io::read_checkpoint(path);
+  train::CheckpointFile checkpoint = train::read_checkpoint_file(path);
   CHECK(checkpoint.header.at("config").at("variant_bundle") == "mipnerf-two-mlps");
   const auto model = train::load_trained_model(ctx, path);
   REQUIRE(model.config.variant_bundle.has_value());
@@ -157,7 +159,7 @@ TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoi
 
   // The same checkpoint as written before the variant was recorded: its configuration has no such key.
   checkpoint.header["config"].erase("variant_bundle");
-  io::write_checkpoint(path, checkpoint);
+  train::write_checkpoint_file(path, checkpoint);
   const auto old = train::load_trained_model(ctx, path);
   CHECK(!old.config.variant_bundle.has_value());
   CHECK(old.networks.size() == 2);
@@ -206,10 +208,10 @@ TEST_CASE("train: repeated non-finite steps stop the run and keep the last good 
     networks[0]->grads().upload(ctx, &inf, 1, 0);
   };
   CHECK_THROWS_WITH_AS(trainer.run(hooks), doctest::Contains("ckpt_000000004.mnck"), Error);
-  const auto saved = io::list_checkpoints((fs::path(out) / "checkpoints").string());
+  const auto saved = train::list_checkpoints((fs::path(out) / "checkpoints").string());
   REQUIRE(!saved.empty());
   CHECK(saved.back().first == 4);
-  const auto checkpoint = io::read_checkpoint(saved.back().second);
+  const auto checkpoint = train::read_checkpoint_file(saved.back().second);
   for (float p : checkpoint.tensor("network0.params", "ckpt")) REQUIRE(std::isfinite(p));
   fs::remove_all(out);
 }

@@ -1,0 +1,62 @@
+// A training run followed by the val evaluation of the networks it trained.
+#include "eval/train_and_evaluate.hpp"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "core/error.hpp"
+#include "eval/image_renderer.hpp"
+#include "io/png.hpp"
+#include "train/model.hpp"
+
+namespace mipnerf::eval {
+namespace fs = std::filesystem;
+namespace {
+
+// Writes a val render as folder/NNN_scaleK.png (view number, scale level).
+void write_val_png(const std::string& folder, const ImageScore& score, const RenderedImage& image) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "%03zu_scale%u.png", score.index, score.scale_level);
+  io::write_png((fs::path(folder) / name).string(), image.width, image.height, 3, image.rgb.data());
+}
+
+// The first config.val_views views of the val split (all: 0), rendered in chunks of config.render_chunk_rays.
+SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const TrainAndEvaluateOptions& options) {
+  const auto& c = trainer.config();
+  const data::Dataset val_data =
+      data::load_dataset(options.data_path, train::load_options(c, options.data_path, {"val"}));
+  const data::Split& val = val_data.split("val");
+  ImageRenderer renderer(ctx, trainer.spec(), trainer.network_pointers(), val.cameras,
+                         static_cast<size_t>(c.render_chunk_rays));
+  EvaluateOptions evaluate;
+  evaluate.max_views = static_cast<size_t>(c.val_views);
+  evaluate.progress = options.val_progress;
+  if (!options.val_image_folder.empty()) {
+    evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float*) {
+      write_val_png(options.val_image_folder, score, image);
+    };
+  }
+  if (options.on_val_start) options.on_val_start(select_views(val, evaluate.max_views).size());
+  return evaluate_split(renderer, val, evaluate);
+}
+
+}  // namespace
+
+TrainAndEvaluateResult train_and_evaluate(ocl::Context& ctx, const train::TrainConfig& config,
+                                          const TrainAndEvaluateOptions& options) {
+  train::Trainer trainer(ctx, config, options.data_path, options.out_dir, options.resume);
+  if (options.on_setup) options.on_setup(trainer);
+  TrainAndEvaluateResult result;
+  result.record = train_record(trainer, ctx.device_info().name);
+  result.train = trainer.run(options.hooks);
+  if (options.on_trained) options.on_trained(trainer, result.train);
+  if (!options.evaluate_val || result.train.interrupted) return result;
+  try {
+    result.val = evaluate_val(ctx, trainer, options);
+  } catch (const Error& e) {
+    result.val_error = e.what();
+  }
+  return result;
+}
+
+}  // namespace mipnerf::eval

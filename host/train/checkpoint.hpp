@@ -1,0 +1,90 @@
+// Training checkpoints, all in one place: the file format (magic, JSON header, float32 tensors, CRC-32), the
+// keys the trainer records, saving and restoring a run (resume), and loading trained networks for rendering.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cl/context.hpp"
+#include "core/log.hpp"
+#include "graph/graph_spec.hpp"
+#include "mlp/adam.hpp"
+#include "mlp/mlp.hpp"
+#include "train/config.hpp"
+
+namespace mipnerf::train {
+
+// ---- The file: a JSON header and named float32 tensors ----
+
+struct CheckpointFile {
+  nlohmann::json header = nlohmann::json::object();  // what the trainer records: step, configuration, ...
+  std::vector<std::pair<std::string, std::vector<float>>> tensors;
+
+  void add(const std::string& name, std::vector<float> values) { tensors.emplace_back(name, std::move(values)); }
+  // The tensor called `name`; throws mipnerf::Error naming `where` (the file) when it is absent.
+  const std::vector<float>& tensor(const std::string& name, const std::string& where) const;
+};
+
+// Layout: "MNCKPT01" (8 bytes), header length (uint64 LE), the header JSON (which also lists every
+// tensor's name, element count and CRC-32), then each tensor's float32 values (LE) in order. Atomic.
+void write_checkpoint_file(const std::string& path, const CheckpointFile& checkpoint);
+// Throws mipnerf::Error naming the file and what is wrong: not a checkpoint, truncated, corrupted.
+CheckpointFile read_checkpoint_file(const std::string& path);
+
+// ---- Where a run's checkpoints are ----
+
+// Checkpoints of a run live in one folder as ckpt_<step, 9 digits>.mnck.
+std::string checkpoint_path(const std::string& folder, int64_t step);
+// (step, path) of every checkpoint in `folder`, by increasing step; empty when there is none.
+std::vector<std::pair<int64_t, std::string>> list_checkpoints(const std::string& folder);
+// Deletes all but the newest `keep` checkpoints.
+void prune_checkpoints(const std::string& folder, int keep);
+// The checkpoint a path names: a .mnck file, or the newest in DIR/checkpoints or DIR.
+std::string find_checkpoint(const std::string& path);
+
+// ---- A training run's state ----
+
+// What a training checkpoint records beside the configuration and the tensors.
+struct CheckpointRecord {
+  int64_t step = 0;              // steps completed
+  double train_seconds = 0.0;    // training time up to this checkpoint, over every resume
+  bool multiscale_data = false;  // the training split held several scales (decides the graph spec's area loss)
+  std::string device;            // the device that trained it
+  std::string data_path;         // the training data's folder or file (absolute); empty in older checkpoints
+};
+
+// Writes `path`: the record, the configuration (a JSON object), and per network i the tensors
+// network<i>.params, network<i>.adam_m, network<i>.adam_v with the Adam step counts.
+void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
+                              const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                              const std::vector<std::unique_ptr<mlp::Adam>>& optimisers);
+
+// Restores networks and optimisers from `path` exactly, and returns its record. The checkpoint's configuration
+// must equal `config` except for execution settings and `steps` (logged as a warning through `log`); otherwise
+// throws mipnerf::Error naming the differing settings.
+CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
+                                             std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                                             std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log);
+
+// ---- Trained networks, for rendering ----
+
+// The configuration a checkpoint was trained with, its graph spec (for `multiscale_data` as the training data had
+// it) and the networks with their trained parameters.
+struct TrainedModel {
+  TrainConfig config;
+  graph::GraphSpec spec;
+  std::vector<std::unique_ptr<mlp::Mlp>> networks;
+  int64_t step = 0;
+  std::string data_path;     // the training data's folder or file (absolute); empty in older checkpoints
+  double train_seconds = 0;  // training time up to this checkpoint
+  std::string trained_on;    // the device that trained it
+  std::vector<mlp::Mlp*> network_pointers() const;
+};
+// Throws mipnerf::Error naming the file when it is not a training checkpoint or does not fit its configuration.
+TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path);
+
+}  // namespace mipnerf::train

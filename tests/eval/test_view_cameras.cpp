@@ -1,0 +1,118 @@
+// The cameras `mipnerf-cl render` draws (eval/view_cameras.hpp): a split's views with their scales and names, an
+// orbit with and without training cameras to fit, a camera path file, and the near/far override.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/error.hpp"
+#include "data/camera_path.hpp"
+#include "eval/view_cameras.hpp"
+#include "render_fixtures.hpp"
+
+using namespace mipnerf;
+namespace fs = std::filesystem;
+
+namespace {
+
+double distance_from_origin(const Camera& c) {
+  const auto& m = c.camera_to_world;  // the translation is the last column of the 3×4
+  return std::sqrt(m[3] * m[3] + m[7] * m[7] + m[11] * m[11]);
+}
+
+}  // namespace
+
+TEST_CASE("view cameras: an orbit without training cameras is Blender's camera around the origin") {
+  const train::TrainedModel model;  // records no data: nothing to fit the orbit to
+  eval::OrbitRequest request;
+  request.radius = 5.0;
+  request.frames = 8;
+  request.fov_deg = 90.0;
+  const eval::ViewFrames frames = eval::orbit_views(model, request, {});
+  REQUIRE(frames.cameras.size() == 8);
+  CHECK(frames.stems.front() == "frame_0000");
+  CHECK(frames.stems.back() == "frame_0007");
+  CHECK(frames.default_folder == "render_orbit");
+  CHECK(frames.source == "an orbit");
+  CHECK(frames.details["kind"] == "orbit");
+  CHECK(frames.details["fitted_to_training_cameras"] == false);
+  CHECK(frames.details["frames"] == 8);
+  for (const auto& c : frames.cameras) {
+    CHECK(c.width_px == 400);
+    CHECK(c.height_px == 400);
+    CHECK(c.near == 2.0);  // the model sets no near/far: Blender's
+    CHECK(c.far == 6.0);
+    CHECK(c.focal_x_px == doctest::Approx(200.0).epsilon(1e-12));  // 90°: half the width over tan 45°
+    CHECK(distance_from_origin(c) == doctest::Approx(5.0).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("view cameras: an orbit fitted to the training cameras takes their size, resized on request") {
+  train::TrainedModel model;
+  model.data_path = test::render_scene();
+  eval::OrbitRequest request;
+  request.frames = 3;
+  request.focal_px = 30.0;
+  data::ResolutionRequest half;
+  half.scale = 0.5;
+  const eval::ViewFrames frames = eval::orbit_views(model, request, half);
+  REQUIRE(frames.cameras.size() == 3);
+  CHECK(frames.details["fitted_to_training_cameras"] == true);
+  CHECK(frames.cameras[0].width_px == 8);  // the scene's 16×16 training views, halved
+  CHECK(frames.cameras[0].focal_x_px == 30.0);
+  CHECK(eval::training_cameras(model, "").size() == 8);
+  CHECK(eval::training_cameras(train::TrainedModel{}, "").empty());
+}
+
+TEST_CASE("view cameras: a split's first view with all its scales, then a near and far range") {
+  train::TrainedModel model;
+  model.data_path = test::render_scene();
+  eval::SplitViewRequest request;
+  request.views = 1;
+  request.scales = 2;
+  data::ResolutionRequest half;
+  half.scale = 0.5;
+  eval::ViewFrames frames = eval::split_views(model, "ckpt.mnck", request, half);
+  REQUIRE(frames.cameras.size() == 2);  // view 0 at full resolution and ×2 downsampled
+  CHECK(frames.cameras[0].width_px == 8);
+  CHECK(frames.cameras[1].width_px == 4);
+  CHECK(frames.stems[0] != frames.stems[1]);
+  CHECK(frames.stems[1].find("_scale1") != std::string::npos);
+  CHECK(frames.default_folder == "render_test");
+  CHECK(frames.source == "the test split of " + test::render_scene());
+  CHECK(frames.details["kind"] == "split");
+  CHECK(frames.details["split"] == "test");
+
+  eval::apply_depth_range(frames.cameras, 1.0, 3.0);
+  for (const auto& c : frames.cameras) {
+    CHECK(c.near == 1.0);
+    CHECK(c.far == 3.0);
+  }
+  eval::apply_depth_range(frames.cameras, std::nullopt, 4.0);  // only far: near stays
+  CHECK(frames.cameras[0].near == 1.0);
+  CHECK(frames.cameras[0].far == 4.0);
+  CHECK_THROWS_WITH_AS(eval::apply_depth_range(frames.cameras, 5.0, std::nullopt),
+                       doctest::Contains("fix --near/--far"), Error);
+  CHECK_THROWS_WITH_AS(eval::split_views(train::TrainedModel{}, "old.mnck", request, {}),
+                       doctest::Contains("old.mnck does not record the data"), Error);
+}
+
+TEST_CASE("view cameras: a camera path file's frames, named by index, its folder by the file") {
+  const auto dir = test::fresh_temp_dir("view-path");
+  data::OrbitOptions orbit;
+  orbit.frames = 4;
+  orbit.intrinsics.width_px = orbit.intrinsics.height_px = 20;
+  orbit.intrinsics.focal_x_px = orbit.intrinsics.focal_y_px = 25.0;
+  const auto cameras = data::orbit_cameras(orbit);
+  const std::string file = (dir / "flyby.json").string();
+  data::write_camera_path(file, cameras, {"a.png", "b.png", "c.png", "d.png"});
+  const eval::ViewFrames frames = eval::path_views(train::TrainedModel{}, file, {});
+  REQUIRE(frames.cameras.size() == 4);
+  CHECK(frames.stems[3] == "frame_0003");
+  CHECK(frames.default_folder == "render_flyby");
+  CHECK(frames.details["kind"] == "path");
+  CHECK(frames.details["file"] == fs::absolute(file).lexically_normal().string());
+  CHECK(frames.cameras[2].width_px == 20);
+  CHECK(frames.cameras[2].camera_to_world[3] == doctest::Approx(cameras[2].camera_to_world[3]).epsilon(1e-9));
+  fs::remove_all(dir);
+}
