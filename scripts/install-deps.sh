@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs every Debian package mipnerf-cl needs to build, test and benchmark.
+# Installs every Debian package mipnerf-cl needs to build, test and benchmark, plus any package named as an
+# argument (bench/setup.sh adds what the studies need: scripts/install-deps.sh python3-matplotlib).
 # Idempotent and non-interactive: packages already installed are skipped; uses sudo when not root.
 set -euo pipefail
 
@@ -9,6 +10,7 @@ packages=(
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev zlib1g-dev
   libopenblas-dev   # the GEMM benchmark's CPU BLAS only
+  "$@"
 )
 
 missing=()

@@ -16,6 +16,11 @@ struct GemmShape {
   size_t m = 0, n = 0, k = 0;
 };
 
+// GemmShape{transpose_a, transpose_b, m, n, k} written in the order people read a product: m×k times k×n.
+inline GemmShape gemm_shape(size_t m, size_t n, size_t k, bool transpose_a = false, bool transpose_b = false) {
+  return GemmShape{transpose_a, transpose_b, m, n, k};
+}
+
 // The products read and write ocl::MatrixView (cl/buffer.hpp); the names are kept here for the MLP.
 using ocl::MatrixView;
 using ocl::view;

@@ -109,16 +109,6 @@ std::vector<float> random_values(size_t count, std::mt19937& rng) {
   return values;
 }
 
-GemmShape shape_of(size_t m, size_t n, size_t k, bool transpose_a, bool transpose_b) {
-  GemmShape s;
-  s.m = m;
-  s.n = n;
-  s.k = k;
-  s.transpose_a = transpose_a;
-  s.transpose_b = transpose_b;
-  return s;
-}
-
 // Worst error ratio over every element of small products of awkward sizes (not multiples of any tile), each
 // kind, computed with `set` and the indirect kernel forced (at these sizes CLBlast would otherwise run its
 // direct kernel and the candidate's Xgemm would go unchecked). Correct results give ≈ 0.01.
@@ -131,7 +121,7 @@ double probe_correctness(ocl::Context& ctx, const ParameterSet& set) {
   double worst = 0.0;
   for (const auto& [m, n, k] : {std::tuple<size_t, size_t, size_t>{1000, 256, 96}, {333, 130, 257}, {96, 256, 1000}}) {
     for (int kind = 0; kind < 3; ++kind) {
-      const GemmShape s = shape_of(m, n, k, kind == 2, kind == 1);
+      const GemmShape s = gemm_shape(m, n, k, kind == 2, kind == 1);
       const std::vector<float> a = random_values(m * k, rng), b = random_values(k * n, rng);
       ocl::DeviceArray<float> a_dev(ctx, a.size(), "A"), b_dev(ctx, b.size(), "B"), c_dev(ctx, m * n, "C");
       a_dev.upload(ctx, a);
@@ -168,7 +158,7 @@ double sampled_error_ratio(ocl::Context& ctx, const GemmShape& s, const Operands
 std::vector<GemmShape> shapes_of(const Json& problems) {
   std::vector<GemmShape> shapes;
   for (const auto& p : problems) {
-    shapes.push_back(shape_of(p.at("m").get<size_t>(), p.at("n").get<size_t>(), p.at("k").get<size_t>(),
+    shapes.push_back(gemm_shape(p.at("m").get<size_t>(), p.at("n").get<size_t>(), p.at("k").get<size_t>(),
                               p.at("ta").get<bool>(), p.at("tb").get<bool>()));
   }
   return shapes;
@@ -249,7 +239,7 @@ Json run_crossover(ocl::Context& ctx, const Json& spec, const LogFn& log) {
   b.fill(ctx, 0.25f);
   Json indirect = Json::array(), direct = Json::array();
   for (const auto& r : spec.at("rows")) {
-    const GemmShape s = shape_of(r.get<size_t>(), width, width, false, false);
+    const GemmShape s = gemm_shape(r.get<size_t>(), width, width, false, false);
     indirect.push_back(time_forced(ctx, base, 0, s, a, b, c));
     direct.push_back(time_forced(ctx, base, size_t{1} << 20, s, a, b, c));
     if (log) {

@@ -31,16 +31,6 @@ MatrixView weights(const ocl::DeviceArray<float>& flat, const DenseLayer& layer,
   return view(flat, layer.out, layer.weight_offset + first_row * layer.out);
 }
 
-GemmShape shape(size_t m, size_t n, size_t k, bool transpose_a = false, bool transpose_b = false) {
-  GemmShape s;
-  s.m = m;
-  s.n = n;
-  s.k = k;
-  s.transpose_a = transpose_a;
-  s.transpose_b = transpose_b;
-  return s;
-}
-
 }  // namespace
 
 // ---- Workspace ----
@@ -168,12 +158,12 @@ void Mlp::trunk_forward(const MlpInputs& in, Workspace& ws, bool save) {
     const auto& out_array = ws.activations_[save ? i : i % 2];
     const MatrixView out = view(out_array, W);
     if (i == 0) {
-      gemm(*ctx_, shape(rows, W, config_.input_width), 1.0f, in.features, weights(params_, layer), 0.0f, out, name);
+      gemm(*ctx_, gemm_shape(rows, W, config_.input_width), 1.0f, in.features, weights(params_, layer), 0.0f, out, name);
     } else {
       const MatrixView prev = view(ws.activations_[save ? i - 1 : (i - 1) % 2], W);
-      gemm(*ctx_, shape(rows, W, W), 1.0f, prev, weights(params_, layer), 0.0f, out, name);
+      gemm(*ctx_, gemm_shape(rows, W, W), 1.0f, prev, weights(params_, layer), 0.0f, out, name);
       if (skip_after(config_, i - 1)) {
-        gemm(*ctx_, shape(rows, W, config_.input_width), 1.0f, in.features, weights(params_, layer, W), 1.0f, out,
+        gemm(*ctx_, gemm_shape(rows, W, config_.input_width), 1.0f, in.features, weights(params_, layer, W), 1.0f, out,
              name + " (skip input)");
       }
     }
@@ -188,13 +178,13 @@ void Mlp::heads_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& w
   const MatrixView h = view(ws.activations_[save ? last : last % 2], W);
 
   const DenseLayer& density = layout_.density;
-  gemm(*ctx_, shape(rows, density.out, W), 1.0f, h, weights(params_, density), 0.0f, out.raw_density,
+  gemm(*ctx_, gemm_shape(rows, density.out, W), 1.0f, h, weights(params_, density), 0.0f, out.raw_density,
        "density forward");
   kernels_->bias_act_fwd(out.raw_density, rows, density.out, params_, density.bias_offset, false);
 
   const DenseLayer& rgb = layout_.rgb;
   if (!config_.view_dependence) {
-    gemm(*ctx_, shape(rows, rgb.out, W), 1.0f, h, weights(params_, rgb), 0.0f, out.raw_rgb, "rgb forward");
+    gemm(*ctx_, gemm_shape(rows, rgb.out, W), 1.0f, h, weights(params_, rgb), 0.0f, out.raw_rgb, "rgb forward");
     kernels_->bias_act_fwd(out.raw_rgb, rows, rgb.out, params_, rgb.bias_offset, false);
     return;
   }
@@ -205,14 +195,14 @@ void Mlp::heads_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& w
   const size_t Wb = bottleneck.out, Wv = view_layer.out;
   const MatrixView bneck = save ? view(ws.bottleneck_, Wb) : view(ws.activations_[(last + 1) % 2], Wb);
   const MatrixView hidden = save ? view(ws.view_hidden_, Wv) : view(ws.activations_[last % 2], Wv);
-  gemm(*ctx_, shape(rows, Wb, W), 1.0f, h, weights(params_, bottleneck), 0.0f, bneck, "bottleneck forward");
+  gemm(*ctx_, gemm_shape(rows, Wb, W), 1.0f, h, weights(params_, bottleneck), 0.0f, bneck, "bottleneck forward");
   kernels_->bias_act_fwd(bneck, rows, Wb, params_, bottleneck.bias_offset, false);
   // View layer: [bottleneck | view_encoding] · W_view = bottleneck · W_view[0:Wb] + (per ray) view · W_view[Wb:].
-  gemm(*ctx_, shape(in.n_rays, Wv, config_.view_width), 1.0f, in.view_encoding, weights(params_, view_layer, Wb),
+  gemm(*ctx_, gemm_shape(in.n_rays, Wv, config_.view_width), 1.0f, in.view_encoding, weights(params_, view_layer, Wb),
        0.0f, view(ws.ray_term_, Wv), "view forward (per-ray view encoding)");
-  gemm(*ctx_, shape(rows, Wv, Wb), 1.0f, bneck, weights(params_, view_layer), 0.0f, hidden, "view forward");
+  gemm(*ctx_, gemm_shape(rows, Wv, Wb), 1.0f, bneck, weights(params_, view_layer), 0.0f, hidden, "view forward");
   kernels_->bias_ray_relu_fwd(hidden, rows, Wv, params_, view_layer.bias_offset, ws.ray_term_, in.samples_per_ray);
-  gemm(*ctx_, shape(rows, rgb.out, Wv), 1.0f, hidden, weights(params_, rgb), 0.0f, out.raw_rgb, "rgb forward");
+  gemm(*ctx_, gemm_shape(rows, rgb.out, Wv), 1.0f, hidden, weights(params_, rgb), 0.0f, out.raw_rgb, "rgb forward");
   kernels_->bias_act_fwd(out.raw_rgb, rows, rgb.out, params_, rgb.bias_offset, false);
 }
 
@@ -246,14 +236,14 @@ void Mlp::heads_backward(Workspace& ws, const MlpOutputGradients& d_out) {
   const DenseLayer& rgb = layout_.rgb;
 
   bias_gradient(d_out.d_raw_density, nullptr, rows, density.out, density.bias_offset, ws);
-  gemm(*ctx_, shape(W, density.out, rows, true), 1.0f, h, d_out.d_raw_density, 1.0f, weights(grads_, density),
+  gemm(*ctx_, gemm_shape(W, density.out, rows, true), 1.0f, h, d_out.d_raw_density, 1.0f, weights(grads_, density),
        "density weight gradient");
 
   if (!config_.view_dependence) {
     bias_gradient(d_out.d_raw_rgb, nullptr, rows, rgb.out, rgb.bias_offset, ws);
-    gemm(*ctx_, shape(W, rgb.out, rows, true), 1.0f, h, d_out.d_raw_rgb, 1.0f, weights(grads_, rgb),
+    gemm(*ctx_, gemm_shape(W, rgb.out, rows, true), 1.0f, h, d_out.d_raw_rgb, 1.0f, weights(grads_, rgb),
          "rgb weight gradient");
-    gemm(*ctx_, shape(rows, W, rgb.out, false, true), 1.0f, d_out.d_raw_rgb, weights(params_, rgb), 0.0f, dh,
+    gemm(*ctx_, gemm_shape(rows, W, rgb.out, false, true), 1.0f, d_out.d_raw_rgb, weights(params_, rgb), 0.0f, dh,
          "rgb input gradient");
   } else {
     const DenseLayer& bottleneck = layout_.bottleneck;
@@ -265,28 +255,28 @@ void Mlp::heads_backward(Workspace& ws, const MlpOutputGradients& d_out) {
     const MatrixView d_bneck = view(ws.grad_b_, Wb);
 
     bias_gradient(d_out.d_raw_rgb, nullptr, rows, rgb.out, rgb.bias_offset, ws);
-    gemm(*ctx_, shape(Wv, rgb.out, rows, true), 1.0f, hidden, d_out.d_raw_rgb, 1.0f, weights(grads_, rgb),
+    gemm(*ctx_, gemm_shape(Wv, rgb.out, rows, true), 1.0f, hidden, d_out.d_raw_rgb, 1.0f, weights(grads_, rgb),
          "rgb weight gradient");
-    gemm(*ctx_, shape(rows, Wv, rgb.out, false, true), 1.0f, d_out.d_raw_rgb, weights(params_, rgb), 0.0f, d_hidden,
+    gemm(*ctx_, gemm_shape(rows, Wv, rgb.out, false, true), 1.0f, d_out.d_raw_rgb, weights(params_, rgb), 0.0f, d_hidden,
          "rgb input gradient");
     // View layer: mask by the ReLU, and sum each ray's samples (its view-encoding rows were shared).
     kernels_->act_bwd_partial(d_hidden, &hidden, rows, Wv, in.samples_per_ray, ws.partials_);
-    gemm(*ctx_, shape(config_.view_width, Wv, in.n_rays, true), 1.0f, in.view_encoding, view(ws.partials_, Wv), 1.0f,
+    gemm(*ctx_, gemm_shape(config_.view_width, Wv, in.n_rays, true), 1.0f, in.view_encoding, view(ws.partials_, Wv), 1.0f,
          weights(grads_, view_layer, Wb), "view weight gradient (per-ray view encoding)");
     kernels_->sum_partials(ws.partials_, in.n_rays, Wv, grads_, view_layer.bias_offset);
-    gemm(*ctx_, shape(Wb, Wv, rows, true), 1.0f, bneck, d_hidden, 1.0f, weights(grads_, view_layer),
+    gemm(*ctx_, gemm_shape(Wb, Wv, rows, true), 1.0f, bneck, d_hidden, 1.0f, weights(grads_, view_layer),
          "view weight gradient");
-    gemm(*ctx_, shape(rows, Wb, Wv, false, true), 1.0f, d_hidden, weights(params_, view_layer), 0.0f, d_bneck,
+    gemm(*ctx_, gemm_shape(rows, Wb, Wv, false, true), 1.0f, d_hidden, weights(params_, view_layer), 0.0f, d_bneck,
          "view input gradient");
     // Bottleneck (no activation).
     bias_gradient(d_bneck, nullptr, rows, Wb, bottleneck.bias_offset, ws);
-    gemm(*ctx_, shape(W, Wb, rows, true), 1.0f, h, d_bneck, 1.0f, weights(grads_, bottleneck),
+    gemm(*ctx_, gemm_shape(W, Wb, rows, true), 1.0f, h, d_bneck, 1.0f, weights(grads_, bottleneck),
          "bottleneck weight gradient");
-    gemm(*ctx_, shape(rows, W, Wb, false, true), 1.0f, d_bneck, weights(params_, bottleneck), 0.0f, dh,
+    gemm(*ctx_, gemm_shape(rows, W, Wb, false, true), 1.0f, d_bneck, weights(params_, bottleneck), 0.0f, dh,
          "bottleneck input gradient");
   }
   // h also feeds the density head: its share adds on.
-  gemm(*ctx_, shape(rows, W, density.out, false, true), 1.0f, d_out.d_raw_density, weights(params_, density), 1.0f,
+  gemm(*ctx_, gemm_shape(rows, W, density.out, false, true), 1.0f, d_out.d_raw_density, weights(params_, density), 1.0f,
        dh, "density input gradient");
 }
 
@@ -303,18 +293,18 @@ void Mlp::trunk_backward(Workspace& ws) {
     bias_gradient(dz, &act, rows, W, layer.bias_offset, ws);  // also turns ∂act into ∂z in place
     const std::string name = layer.name + " weight gradient";
     if (i == 0) {
-      gemm(*ctx_, shape(config_.input_width, W, rows, true), 1.0f, in.features, dz, 1.0f, weights(grads_, layer),
+      gemm(*ctx_, gemm_shape(config_.input_width, W, rows, true), 1.0f, in.features, dz, 1.0f, weights(grads_, layer),
            name);
       break;
     }
     const MatrixView prev = view(ws.activations_[i - 1], W);
-    gemm(*ctx_, shape(W, W, rows, true), 1.0f, prev, dz, 1.0f, weights(grads_, layer), name);
+    gemm(*ctx_, gemm_shape(W, W, rows, true), 1.0f, prev, dz, 1.0f, weights(grads_, layer), name);
     if (skip_after(config_, i - 1)) {
-      gemm(*ctx_, shape(config_.input_width, W, rows, true), 1.0f, in.features, dz, 1.0f,
+      gemm(*ctx_, gemm_shape(config_.input_width, W, rows, true), 1.0f, in.features, dz, 1.0f,
            weights(grads_, layer, W), name + " (skip input)");
     }
     // Only the first W input rows of a skip layer come from act_{i−1}; the features need no gradient.
-    gemm(*ctx_, shape(rows, W, W, false, true), 1.0f, dz, weights(params_, layer), 0.0f, view(*other, W),
+    gemm(*ctx_, gemm_shape(rows, W, W, false, true), 1.0f, dz, weights(params_, layer), 0.0f, view(*other, W),
          layer.name + " input gradient");
     std::swap(current, other);
   }
