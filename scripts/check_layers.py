@@ -7,7 +7,8 @@ line (folders on one line share a floor and may not include each other), then `b
 floor may include. A folder may include its own files and any folder on a lower floor. A folder under host/ that
 the document does not name, or a floor that includes upward or sideways, fails the check with one line per include.
 
-  scripts/check_layers.py [ROOT]      (ROOT: the project's root, default: this script's parent folder)
+  scripts/check_layers.py [ROOT]           (ROOT: the project's root, default: this script's parent folder)
+  scripts/check_layers.py --graph [ROOT]   prints each folder and the folders it includes, and checks nothing
 Exit status 0 when every include is allowed, 1 with the offending includes listed otherwise, 2 on a bad document.
 """
 import pathlib
@@ -59,8 +60,28 @@ def folder_of(root: pathlib.Path, path: pathlib.Path) -> str:
     return rel[1] if rel[0] == "host" else rel[0]  # host/<folder>/…, cli/…
 
 
+def include_graph(root: pathlib.Path):
+    """{folder: {folders it includes}} over host/ and cli/, whatever the document says."""
+    graph = {}
+    for path in source_files(root):
+        source = folder_of(root, path)
+        targets = graph.setdefault(source, set())
+        for match in INCLUDE.finditer(path.read_text(encoding="utf-8")):
+            target = match.group(1)
+            if target != source and ((root / "host" / target).is_dir() or target == "cli"):
+                targets.add(target)
+    return graph
+
+
 def main() -> int:
-    root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else pathlib.Path(__file__).resolve().parent.parent)
+    args = sys.argv[1:]
+    graph_only = "--graph" in args
+    args = [a for a in args if a != "--graph"]
+    root = pathlib.Path(args[0] if args else pathlib.Path(__file__).resolve().parent.parent)
+    if graph_only:
+        for folder, targets in sorted(include_graph(root).items()):
+            print(f"{folder} -> {' '.join(sorted(targets)) or '(nothing)'}")
+        return 0
     floor_of, beside = read_floors(root / "docs" / "ARCHITECTURE.md")
     known = set(floor_of) | set(beside)
     problems = []
