@@ -90,6 +90,8 @@ def parse_args(argv):
     p.add_argument("--quick-steps", type=int, default=8, help="warm steps per side and round, quick")
     p.add_argument("--paper-steps", type=int, default=3, help="warm steps per side and round, paper")
     p.add_argument("--render-reps", type=int, default=2, help="timed renders per side (quick config)")
+    p.add_argument("--train-steps", type=int, default=0,
+                   help="also train both (quick config) for this many steps and score val PSNR (0: off; long)")
     p.add_argument("--device-name", default="pocl_cpu", help="suffix of the results files")
     p.add_argument("--out-dir", default=os.path.join(REPO, "bench", "results"))
     p.add_argument("--report-only", metavar="JSON", help="rewrite the .md from a results .json, measure nothing")
@@ -274,6 +276,28 @@ def bench_config(args, worker, name, preset, batch):
     return result
 
 
+def train_psnr(args, worker, quick):
+    """Both trained from scratch on the scene for --train-steps (quick config), then val PSNR."""
+    import re
+    c = quick["our_config"]
+    with tempfile.TemporaryDirectory(prefix="vs_official_train_") as out:
+        cmd = [args.bin, "train", "--preset", "quick", "--data", args.data, "--set", f"factor={args.factor}",
+               "--set", f"batch_size={quick['batch_rays']}", "--set", f"steps={args.train_steps}", "--out", out]
+        t0 = time.time()
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        wall = time.time() - t0
+    m = re.search(r"val PSNR ([0-9.]+) dB.*?over (\d+) images; trained (\d+) steps in ([0-9.]+) s", r.stdout)
+    if r.returncode != 0 or not m:
+        fail(f"{' '.join(cmd)} failed or printed no val PSNR:\n{r.stdout[-1000:]}\n{r.stderr[-1000:]}")
+    ours = {"mean_psnr": float(m.group(1)), "val_views": int(m.group(2)), "steps": int(m.group(3)),
+            "train_seconds": float(m.group(4)), "command_wall_seconds": wall,
+            "command": " ".join(cmd[1:]).replace(out, "TMP")}
+    off = worker.call(cmd="train", model=quick["official_model"], mlp=quick["official_mlp"],
+                      config=quick["official_config"], steps=args.train_steps, val_views=c["val_views"],
+                      chunk=c["render_chunk_rays"])
+    return {"steps": args.train_steps, "ours": ours, "official": off}
+
+
 def bench_render(args, worker, record):
     ours = record["devices"][0]["render"]
     our_best = min(r["render_seconds_best"] for r in ours)
@@ -289,13 +313,14 @@ def bench_render(args, worker, record):
             "ratio": (our_best / mp) / (min(off["seconds"]) / mp)}
 
 
-def write_results(args, results, versions, load_before, load_after, started, seconds):
+def write_results(args, results, training, versions, load_before, load_after, started, seconds):
     os.makedirs(args.out_dir, exist_ok=True)
     base = os.path.join(args.out_dir, f"vs_official_{args.device_name}")
     doc = {"tool": "bench/vs_official.py", "date": started, "seconds": seconds,
            "command": "python3 bench/vs_official.py " + " ".join(sys.argv[1:]),
            "versions": versions, "stubs": [{"name": n, "what": w} for n, w in STUBS],
-           "load_average_before": load_before, "load_average_after": load_after, "configs": results}
+           "load_average_before": load_before, "load_average_after": load_after, "configs": results,
+           "training": training}
     with open(base + ".json", "w") as f:
         json.dump(doc, f, indent=1)
     with open(base + ".md", "w") as f:
@@ -332,6 +357,20 @@ def markdown(doc):
                       f"{', '.join(f'{s:.2f}' for s in x['official_seconds'])} |",
                       f"| s/MP (best) | {x['ours_s_per_mp']:.0f} | {x['official_s_per_mp']:.0f} |",
                       f"| ratio (time, lower is faster for us) | {x['ratio']:.2f}× | |", ""]
+    t = doc.get("training")
+    if t:
+        o, j = t["ours"], t["official"]
+        lines += [f"## Training on the scene for {t['steps']} steps (quick configuration), then val PSNR", "",
+                  "| | mipnerf-cl | official |", "|---|---:|---:|",
+                  f"| val PSNR (mean of the first {o['val_views']} val views) | {o['mean_psnr']:.2f} dB | "
+                  f"{j['mean_psnr']:.2f} dB |",
+                  f"| training wall time | {o['train_seconds']:.1f} s (whole command {o['command_wall_seconds']:.1f} s) "
+                  f"| {j['train_seconds']:.1f} s (+ {j['compile_s']:.1f} s XLA compile and 2 warm-up steps) |", "",
+                  f"Ours: `mipnerf-cl {o['command']}`; official: fresh parameters, its learning_rate_decay with "
+                  "our preset's schedule, a new batch of random rays over all images each step (made in the loop).",
+                  ""]
+    else:
+        lines += ["Training both to a val PSNR (`--train-steps N`) was not run.", ""]
     lines += ["## Every step time (s)", ""]
     for r in doc["configs"]:
         lines.append(f"- {r['name']}: mipnerf-cl {', '.join(f'{s:.3f}' for s in r['ours']['step_seconds'])}; "
@@ -397,13 +436,18 @@ def orchestrate(args):
     versions = worker.call(cmd="versions")
     results = [bench_config(args, worker, name, preset, batch)
                for name, preset, batch in CONFIGS if name in args.configs]
-    worker.close()
-    load_after = load_average()
     versions["machine"] = {"cpu": cpu_model(), "hardware_threads": os.cpu_count(),
                            "platform": platform.platform(), **results[0]["device"]}
     versions["mipnerf-cl"] = git_commit()
     versions["official_commit"] = official_commit(args.official)
-    write_results(args, results, versions, load_before, load_after, started, time.time() - t0)
+    write_results(args, results, None, versions, load_before, load_average(), started, time.time() - t0)
+    if args.train_steps > 0:  # long: the timing results above are written first
+        quick = [r for r in results if r["name"] == "quick"]
+        if not quick:
+            fail("--train-steps needs the quick configuration in --configs")
+        training = train_psnr(args, worker, quick[0])
+        write_results(args, results, training, versions, load_before, load_average(), started, time.time() - t0)
+    worker.close()
 
 
 # ----------------------------------------------------------------------------------------------
@@ -498,7 +542,7 @@ class Official:
         self.lr = functools.partial(self.train.math.learning_rate_decay, lr_init=cfg.lr_init,
                                     lr_final=cfg.lr_final, max_steps=cfg.max_steps,
                                     lr_delay_steps=cfg.lr_delay_steps, lr_delay_mult=cfg.lr_delay_mult)
-        self.step_index = 1
+        self.step_index, self.render_pfn = 1, None
         t0 = time.time()
         self.steps(2)  # compile + one warm-up step
         return {"parameters": params, "compile_s": time.time() - t0}
@@ -525,6 +569,57 @@ class Official:
         return out
 
     def render(self, reps, chunk):
+        """Warm renders of the first training view through models.render_image (first call apart)."""
+        import jax
+        rays = self.view_rays(0)
+        t0 = time.perf_counter()
+        jax.block_until_ready(self.render_view(rays, chunk))
+        first = time.perf_counter() - t0
+        seconds = []
+        for _ in range(reps):
+            t0 = time.perf_counter()
+            jax.block_until_ready(self.render_view(rays, chunk))
+            seconds.append(time.perf_counter() - t0)
+        h, w = rays.origins.shape[:2]
+        return {"seconds": seconds, "first_call_s": first, "megapixels": h * w / 1e6}
+
+    def train_and_score(self, model, mlp, config, steps, val_views, chunk):
+        """Train from scratch for `steps` (fresh random batches each step, made in the loop), then the
+        mean PSNR of the first `val_views` val views (eval: randomized = False)."""
+        import jax
+        import numpy as np
+        setup = self.setup(model, mlp, dict(config, max_steps=steps))  # compiles (2 steps taken) ...
+        self.setup_state_fresh()  # ... then fresh parameters and Adam state: training starts at step 1
+        rng = np.random.RandomState(20201473)
+        t0 = time.time()
+        for step in range(1, steps + 1):
+            idx = rng.randint(0, self.scene[1].shape[0], (self.config.batch_size,))
+            b = jax.device_put(self.utils.shard({"pixels": self.scene[1][idx],
+                                                 "rays": self.utils.namedtuple_map(lambda r: r[idx], self.scene[0])}))
+            self.state, stats, self.keys = self.pstep(self.keys, self.state, b, self.lr(step))
+        jax.block_until_ready(self.state)
+        train_s = time.time() - t0
+        views, images = load_blender(np, self.datasets, self.data, self.factor, self.config.near,
+                                     self.config.far, split="val")
+        psnrs = []
+        for i in range(val_views):
+            rays = self.utils.namedtuple_map(lambda r: jax.numpy.asarray(r[i]), views)
+            rgb = np.asarray(self.render_view(rays, chunk))
+            psnrs.append(float(self.train.math.mse_to_psnr(((rgb - images[i]) ** 2).mean())))
+        return {"train_seconds": train_s, "compile_s": setup["compile_s"], "psnrs": psnrs,
+                "mean_psnr": sum(psnrs) / len(psnrs), "steps": steps}
+
+    def setup_state_fresh(self):
+        """Fresh parameters and Adam state for the already compiled step (same shapes: no recompile)."""
+        import jax
+        from jax import random
+        key, self.rng = random.split(random.PRNGKey(20200823))
+        _, variables = self.models.construct_mipnerf(key, jax.device_put(self.batches[0]))
+        state = self.utils.TrainState(optimizer=self.Optimizer.create(variables))
+        self.state = jax.tree_util.tree_map(lambda x: jax.numpy.asarray(x)[None], state)
+        self.keys = random.split(self.rng, jax.local_device_count())
+
+    def render_view(self, rays, chunk):
         import functools
         import jax
         from jax import random
@@ -534,20 +629,13 @@ class Official:
             return jax.lax.all_gather(model.apply(variables, random.PRNGKey(0), rays, randomized=False,
                                                   white_bkgd=cfg.white_bkgd), axis_name="batch")
 
-        pfn = jax.pmap(render_eval_fn, in_axes=(None, None, 0), donate_argnums=(2,), axis_name="batch")
+        if getattr(self, "render_pfn", None) is None:
+            self.render_pfn = jax.pmap(render_eval_fn, in_axes=(None, None, 0), donate_argnums=(2,),
+                                       axis_name="batch")
         variables = jax.tree_util.tree_map(lambda x: x[0], self.state).optimizer.target
-        rays = self.view_rays(0)
-        fn = functools.partial(pfn, variables)
-        t0 = time.perf_counter()
-        jax.block_until_ready(self.models.render_image(fn, rays, self.keys[0], chunk=chunk))
-        first = time.perf_counter() - t0
-        seconds = []
-        for _ in range(reps):
-            t0 = time.perf_counter()
-            jax.block_until_ready(self.models.render_image(fn, rays, self.keys[0], chunk=chunk))
-            seconds.append(time.perf_counter() - t0)
-        h, w = rays.origins.shape[:2]
-        return {"seconds": seconds, "first_call_s": first, "megapixels": h * w / 1e6}
+        rgb, _, _ = self.models.render_image(functools.partial(self.render_pfn, variables), rays, self.keys[0],
+                                             chunk=chunk)
+        return rgb
 
     def view_rays(self, index):
         import jax.numpy as jnp
@@ -558,12 +646,12 @@ def gin_value(v):
     return repr(v) if isinstance(v, str) else ("True" if v is True else "False" if v is False else str(v))
 
 
-def load_blender(np, datasets, data, factor, near, far):
+def load_blender(np, datasets, data, factor, near, far, split="train"):
     """The scene's training rays by the official Blender._generate_rays (run on an object without its
     loader thread), with the images box-downsampled by `factor` and composited on white here
     (the official loader supports factor 0 or 2 only)."""
     from PIL import Image
-    with open(os.path.join(data, "transforms_train.json")) as f:
+    with open(os.path.join(data, f"transforms_{split}.json")) as f:
         meta = json.load(f)
     images, cams = [], []
     for frame in meta["frames"]:
@@ -601,6 +689,8 @@ def worker_main(args):
                 reply = {"seconds": off.steps(req["n"])}
             elif cmd == "render":
                 reply = off.render(req["reps"], req["chunk"])
+            elif cmd == "train":
+                reply = off.train_and_score(**req)
             else:
                 reply = {"error": f"unknown request {cmd}"}
         except Exception as e:
