@@ -27,8 +27,10 @@ environment the script creates (--venv) and fills from PyPI with jax[cpu], flax,
 numpy, pillow. The official checkout is only read (sys.path), never copied or patched on disk; the
 import-time stand-ins are installed in the worker's memory and listed in the results (STUBS below).
 
-Command used for the committed results:
+Command used for the committed results (the checkout: `git archive` of google/mipnerf 84c969e, so
+pass --official-commit next time; the commit was added to those results afterwards):
   python3 bench/vs_official.py --official /tmp/official --data /work/shared/data/nerf_synthetic/lego
+A quick look at the training path: add --configs quick --train-steps 30 (hours of steps for real PSNRs).
 
 Requirements: a built mipnerf-cl (--bin, default build/mipnerf-cl), a checkout of
 github:google/mipnerf (--official), the Blender lego scene (--data), network access to PyPI the
@@ -48,6 +50,7 @@ import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
+DEFAULT_DATA = os.path.normpath(os.path.join(REPO, "..", "shared", "data", "nerf_synthetic", "lego"))
 PIP_PACKAGES = ["jax[cpu]", "flax", "optax", "gin-config", "numpy", "pillow"]
 
 # The two configurations: our preset and the batch size; everything else comes from the preset.
@@ -80,7 +83,8 @@ def fail(message):
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--official", help="checkout of github:google/mipnerf (contains train.py and internal/)")
-    p.add_argument("--data", default="/work/shared/data/nerf_synthetic/lego", help="Blender scene folder")
+    p.add_argument("--official-commit", help="commit of --official when it is not a git work tree (e.g. a git archive)")
+    p.add_argument("--data", default=DEFAULT_DATA, help="Blender scene folder (default: ../shared's lego)")
     p.add_argument("--factor", type=int, default=4, help="downsample factor of the scene (both sides)")
     p.add_argument("--bin", default=os.path.join(REPO, "build", "mipnerf-cl"), help="mipnerf-cl executable")
     p.add_argument("--venv", default=DEFAULT_VENV, help="virtual environment for the official code")
@@ -94,6 +98,7 @@ def parse_args(argv):
                    help="also train both (quick config) for this many steps and score val PSNR (0: off; long)")
     p.add_argument("--device-name", default="pocl_cpu", help="suffix of the results files")
     p.add_argument("--out-dir", default=os.path.join(REPO, "bench", "results"))
+    p.add_argument("--note", action="append", default=[], help="a line for the results' Notes (repeatable)")
     p.add_argument("--report-only", metavar="JSON", help="rewrite the .md from a results .json, measure nothing")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -320,7 +325,7 @@ def write_results(args, results, training, versions, load_before, load_after, st
            "command": "python3 bench/vs_official.py " + " ".join(sys.argv[1:]),
            "versions": versions, "stubs": [{"name": n, "what": w} for n, w in STUBS],
            "load_average_before": load_before, "load_average_after": load_after, "configs": results,
-           "training": training}
+           "training": training, "notes": args.note}
     with open(base + ".json", "w") as f:
         json.dump(doc, f, indent=1)
     with open(base + ".md", "w") as f:
@@ -350,13 +355,16 @@ def markdown(doc):
             x = r["render"]
             lines += ["## Render (warm)", "",
                       f"{x['view']}, {x['width']}×{x['height']}, {x['chunk_rays']} rays per chunk, networks of "
-                      f"the `{r['name']}` configuration (ours: bench's trained-for-a-few-steps networks; official: "
-                      "its initial weights, which costs the same), s/MP from the best render.", "",
+                      f"the `{r['name']}` configuration after each side's timed steps, s/MP from the best render "
+                      "(ours: `mipnerf-cl bench`'s render of the same camera, its first chunk timed apart; "
+                      "official: models.render_image after one untimed render).", "",
                       "| | mipnerf-cl | official |", "|---|---:|---:|",
                       f"| render s | {', '.join(f'{s:.2f}' for s in x['ours_seconds'])} | "
                       f"{', '.join(f'{s:.2f}' for s in x['official_seconds'])} |",
                       f"| s/MP (best) | {x['ours_s_per_mp']:.0f} | {x['official_s_per_mp']:.0f} |",
                       f"| ratio (time, lower is faster for us) | {x['ratio']:.2f}× | |", ""]
+    if doc.get("notes"):
+        lines += ["## Notes", ""] + [f"- {n}" for n in doc["notes"]] + [""]
     t = doc.get("training")
     if t:
         o, j = t["ours"], t["official"]
@@ -412,8 +420,9 @@ scene (lego at the same factor, box-downsampled on both sides), the batch size, 
 
 Not identical:
 - Batches: ours draws its rays on the device inside the step (part of our timed step); the official
-  step gets batches of random rays over all images prepared beforehand (data loading is excluded on
-  its side; train.py prefetches them in a thread, so this is close to what it does in training).
+  step gets one of 8 batches of random rays over all images prepared beforehand, copied to the device
+  before its timer starts (train_step donates it), so data loading is excluded on its side (train.py
+  prefetches batches in a thread, so this is close to what it does in training). Random numbers differ.
 - The official train_step also computes gradient statistics (norm, max) and a pmean over one device,
   as train.py does; it is pmapped over the single CPU device like train.py. Weight decay is 0 (skipped
   at trace time in neither: it is multiplied by 0 as in train.py).
@@ -421,8 +430,8 @@ Not identical:
 - Our step times come from `mipnerf-cl bench` (a fresh process per round; the cold first step and
   kernel builds excluded); the official steps from one long-lived process (XLA compile excluded).
 - Rendering: the official render goes through models.render_image with a pmapped eval function as in
-  train.py, randomized = False, with the chunk size set to ours; its weights are its initial ones,
-  ours are after the bench's few steps (the cost of a render does not depend on the weights).
+  train.py, randomized = False, with the chunk size set to ours; both networks are the ones after
+  each side's few timed steps (the cost of a render does not depend on the weights).
 - XLA and PoCL choose their own threading on the 2 cores; neither is pinned.
 """
 
@@ -439,7 +448,7 @@ def orchestrate(args):
     versions["machine"] = {"cpu": cpu_model(), "hardware_threads": os.cpu_count(),
                            "platform": platform.platform(), **results[0]["device"]}
     versions["mipnerf-cl"] = git_commit()
-    versions["official_commit"] = official_commit(args.official)
+    versions["official_commit"] = args.official_commit or official_commit(args.official)
     write_results(args, results, None, versions, load_before, load_average(), started, time.time() - t0)
     if args.train_steps > 0:  # long: the timing results above are written first
         quick = [r for r in results if r["name"] == "quick"]
