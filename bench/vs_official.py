@@ -42,6 +42,7 @@ import datetime
 import json
 import os
 import platform
+import shlex
 import statistics
 import subprocess
 import sys
@@ -322,7 +323,7 @@ def write_results(args, results, training, versions, load_before, load_after, st
     os.makedirs(args.out_dir, exist_ok=True)
     base = os.path.join(args.out_dir, f"vs_official_{args.device_name}")
     doc = {"tool": "bench/vs_official.py", "date": started, "seconds": seconds,
-           "command": "python3 bench/vs_official.py " + " ".join(sys.argv[1:]),
+           "command": "python3 bench/vs_official.py " + shlex.join(sys.argv[1:]),
            "versions": versions, "stubs": [{"name": n, "what": w} for n, w in STUBS],
            "load_average_before": load_before, "load_average_after": load_after, "configs": results,
            "training": training, "notes": args.note}
