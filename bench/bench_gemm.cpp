@@ -167,6 +167,7 @@ int main(int argc, char** argv) try {
 
   auto configs = bench::clblast_configs(tuning);
   configs.push_back({"OpenBLAS", std::nullopt, time_openblas});
+  if (auto host = bench::host_backend_config(ctx)) configs.push_back(*host);  // OpenBLAS on the mapped device buffers
   const auto progress = [](const std::string& what, size_t, size_t) { std::fprintf(stderr, "%s\n", what.c_str()); };
   const auto result = bench::run_gemm_bench(ctx, args.options, configs, progress);
   print_products(ctx, result, tuning.has_value(), tuning_path);
