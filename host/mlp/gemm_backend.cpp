@@ -55,7 +55,7 @@ GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
     // environment can lower it (docs/ARCHITECTURE.md, "GEMM backends").
     set_host_blas_threads(static_cast<int>(std::max<cl_uint>(1, ctx.device_info().compute_units)));
   }
-  ctx.log(LogLevel::info, std::string("GEMM backend: ") + enum_name(backend) + " on '" + ctx.device_info().name +
+  ctx.log(LogLevel::debug, std::string("GEMM backend: ") + enum_name(backend) + " on '" + ctx.device_info().name +
                               "' (gemm_backend=" + enum_name(wanted) + ")");
   return backend;
 }
