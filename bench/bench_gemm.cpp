@@ -153,6 +153,14 @@ void print_network(ocl::Context& ctx, const Args& args, const std::vector<bench:
                 t.training_rows_per_second());
   }
   mlp::clear_gemm_tuning(ctx);
+  if (auto host = bench::host_backend_config(ctx)) {  // the same network with gemm_backend=host
+    ctx.set_gemm_on_host(true);
+    const auto t = bench::time_mlp_chunk(ctx, net, args.mlp_rays, args.mlp_samples, args.options.reps);
+    ctx.set_gemm_on_host(false);
+    std::printf("| %s | %.0f ms (%.0f GFLOP/s) | %.0f ms | %.0f ms | %.0f |\n", host->name.c_str(), t.forward * 1e3,
+                flops_per_row * rows / t.forward * 1e-9, t.backward * 1e3, t.inference * 1e3,
+                t.training_rows_per_second());
+  }
 }
 
 }  // namespace
