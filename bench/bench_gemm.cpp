@@ -153,6 +153,14 @@ void print_network(ocl::Context& ctx, const Args& args, const std::vector<bench:
                 t.training_rows_per_second());
   }
   mlp::clear_gemm_tuning(ctx);
+  if (auto host = bench::host_backend_config(ctx)) {  // the same network with gemm_backend=host
+    ctx.set_gemm_on_host(true);
+    const auto t = bench::time_mlp_chunk(ctx, net, args.mlp_rays, args.mlp_samples, args.options.reps);
+    ctx.set_gemm_on_host(false);
+    std::printf("| %s | %.0f ms (%.0f GFLOP/s) | %.0f ms | %.0f ms | %.0f |\n", host->name.c_str(), t.forward * 1e3,
+                flops_per_row * rows / t.forward * 1e-9, t.backward * 1e3, t.inference * 1e3,
+                t.training_rows_per_second());
+  }
 }
 
 }  // namespace
@@ -167,6 +175,7 @@ int main(int argc, char** argv) try {
 
   auto configs = bench::clblast_configs(tuning);
   configs.push_back({"OpenBLAS", std::nullopt, time_openblas});
+  if (auto host = bench::host_backend_config(ctx)) configs.push_back(*host);  // OpenBLAS on the mapped device buffers
   const auto progress = [](const std::string& what, size_t, size_t) { std::fprintf(stderr, "%s\n", what.c_str()); };
   const auto result = bench::run_gemm_bench(ctx, args.options, configs, progress);
   print_products(ctx, result, tuning.has_value(), tuning_path);

@@ -187,7 +187,9 @@ void bench_gemm(const BenchArgs& a, const ocl::DeviceInfo& device, bench::Device
   options.reps = a.gemm_reps;
   options.rounds = a.gemm_rounds;
   SectionProgress progress(device_label(device) + "gemm");
-  d.gemm = bench::run_gemm_bench(*ctx, options, bench::clblast_configs(tuning), progress.callback());
+  auto configs = bench::clblast_configs(tuning);
+  if (auto host = bench::host_backend_config(*ctx)) configs.push_back(*host);  // gemm_backend=host beside CLBlast
+  d.gemm = bench::run_gemm_bench(*ctx, options, configs, progress.callback());
   progress.finish();
 }
 

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
+#include "mlp/gemm_backend.hpp"
 
 namespace mipnerf::bench {
 
@@ -161,6 +162,25 @@ std::vector<GemmConfig> clblast_configs(const std::optional<mlp::GemmTuning>& tu
   std::vector<GemmConfig> configs = {{"CLBlast default", std::nullopt, {}}};
   if (tuning) configs.push_back({"CLBlast tuned", tuning, {}});
   return configs;
+}
+
+std::optional<GemmConfig> host_backend_config(ocl::Context& ctx) {
+  try {
+    mlp::resolve_gemm_backend(mlp::GemmBackend::host, ctx.device_info(), mlp::host_blas_available());
+  } catch (const Error&) {
+    return std::nullopt;  // a device with its own memory, or no host BLAS in this build
+  }
+  mlp::use_gemm_backend(ctx, mlp::GemmBackend::host);  // sets the BLAS's threads as a run would
+  ctx.set_gemm_on_host(false);
+  GemmConfig config;
+  config.name = "host BLAS (mapped)";
+  config.host_call = [&ctx](const GemmProduct& product, GemmOperands& operands) {
+    ctx.set_gemm_on_host(true);
+    const double seconds = time_clblast_gemm(ctx, operands, product);  // mlp::gemm, which now takes the host path
+    ctx.set_gemm_on_host(false);
+    return seconds;
+  };
+  return config;
 }
 
 MlpChunkTimes time_mlp_chunk(ocl::Context& ctx, mlp::Mlp& net, size_t rays, size_t samples, size_t reps) {

@@ -85,6 +85,11 @@ GemmBenchResult run_gemm_bench(ocl::Context& ctx, const GemmBenchOptions& option
 // The device configurations for a device: CLBlast's defaults, then the tuned file when `tuning` holds one.
 std::vector<GemmConfig> clblast_configs(const std::optional<mlp::GemmTuning>& tuning);
 
+// The host GEMM backend (mlp::gemm with gemm_backend=host: blocking maps of the device buffers, the CPU BLAS,
+// unmaps, clFinish), as a configuration beside CLBlast's; nothing when ctx's device cannot run it. Each timed call
+// switches ctx to the host backend and back, so the other configurations keep CLBlast. ctx must outlive the result.
+std::optional<GemmConfig> host_backend_config(ocl::Context& ctx);
+
 // The whole network on one chunk of rays × samples rows, with whatever GEMM parameters are installed: best of `reps`
 // (after one untimed pass that builds the programs) training forward, backward, and inference forward, each
 // followed by clFinish. Seconds.

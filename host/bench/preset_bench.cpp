@@ -55,6 +55,7 @@ void record_setup(const train::Trainer& trainer, ocl::Context& ctx, TrainTiming&
   t.planned_device_bytes = trainer.memory().total();
   t.memory_budget_bytes = trainer.memory().budget_bytes;
   t.gemm_tuned = mlp::gemm_tuning_installed(ctx);
+  t.gemm_on_host = ctx.gemm_on_host();  // the trainer has applied gemm_backend by now
 }
 
 RenderTiming time_render(ocl::Context& ctx, train::Trainer& trainer, const PresetBenchOptions& options) {

@@ -135,7 +135,7 @@ Ordered training_json(const PresetBenchResult& p) {
           {"levels", p.config.num_levels},
           {"parameters", t.parameters},
           {"chunk_rays", t.chunk_rays},
-          {"gemm_parameters", t.gemm_tuned ? "tuned" : "CLBlast defaults"},
+          {"gemm_parameters", t.gemm_on_host ? "host BLAS" : t.gemm_tuned ? "tuned" : "CLBlast defaults"},
           {"setup_seconds", t.setup_seconds},
           {"first_step_seconds", t.first_step_seconds},
           {"warm_steps", t.warm_steps.count()},
@@ -271,7 +271,7 @@ std::string training_markdown(const DeviceBench& d, const PresetBenchSettings& s
     const auto& t = p.train;
     md << "| " << p.preset << " | " << t.batch_rays << " × " << p.config.num_samples << " × " << p.config.num_levels
        << " | " << network_text(p.config) << " | " << t.parameters << " | " << t.chunk_rays << " | "
-       << (t.gemm_tuned ? "tuned" : "default") << " | " << fixed(t.setup_seconds, 2) << " | "
+       << t.gemm_label() << " | " << fixed(t.setup_seconds, 2) << " | "
        << fixed(t.first_step_seconds, 2) << " | " << fixed(t.warm_steps.best(), 3) << " ("
        << fixed(t.warm_steps.median(), 3) << ") | " << t.warm_steps.count() << (t.time_boxed ? " (time box)" : "")
        << " | " << fixed(t.rays_per_second(), 0) << " | " << fixed(t.planned_device_bytes / kMiB, 0) << " | "

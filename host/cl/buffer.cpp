@@ -1,7 +1,11 @@
-// Allocation checks for device arrays.
+// Allocation flags and checks for device arrays.
 #include "cl/buffer.hpp"
 
 namespace mipnerf::ocl {
+
+cl_mem_flags allocation_flags(const Context& ctx) {
+  return CL_MEM_READ_WRITE | (ctx.device_info().host_unified_memory ? CL_MEM_ALLOC_HOST_PTR : 0);
+}
 
 void check_allocation(const Context& ctx, size_t bytes, const std::string& name) {
   const auto& device = ctx.device_info();

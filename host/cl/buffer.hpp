@@ -10,6 +10,11 @@
 
 namespace mipnerf::ocl {
 
+// CL_MEM_READ_WRITE, plus CL_MEM_ALLOC_HOST_PTR on devices that share host memory: there the buffer is allocated
+// where the host can reach it, so clEnqueueMapBuffer returns a pointer to the buffer itself instead of a copy (the
+// host GEMM backend, mlp/host_gemm.cpp, runs the CPU BLAS on such pointers).
+cl_mem_flags allocation_flags(const Context& ctx);
+
 // Throws when `bytes` exceeds the device's single-allocation limit, naming the buffer and what to lower.
 void check_allocation(const Context& ctx, size_t bytes, const std::string& name);
 
@@ -23,7 +28,7 @@ class DeviceArray {
     const size_t bytes = std::max<size_t>(1, count) * sizeof(T);
     check_allocation(ctx, bytes, name_);
     cl_int status = CL_SUCCESS;
-    buffer_ = ::cl::Buffer(ctx.context(), CL_MEM_READ_WRITE, bytes, nullptr, &status);
+    buffer_ = ::cl::Buffer(ctx.context(), allocation_flags(ctx), bytes, nullptr, &status);
     check(status, "clCreateBuffer(" + name_ + ", " + std::to_string(bytes) + " bytes)");
   }
 

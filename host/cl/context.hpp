@@ -41,6 +41,12 @@ class Context {
 
   void finish();  // clFinish, checked
 
+  // Whether mlp::gemm runs this context's products on the host BLAS over mapped buffers (true) or through CLBlast
+  // (false, the default). mlp::use_gemm_backend decides it; it is kept here because every product is given the
+  // context, and the decision belongs to the device the context runs on.
+  bool gemm_on_host() const { return gemm_on_host_; }
+  void set_gemm_on_host(bool on) { gemm_on_host_ = on; }
+
   void set_log(LogFn log) { log_ = std::move(log); }
   void log(LogLevel level, const std::string& message) const {
     if (log_) log_(level, message);
@@ -53,6 +59,7 @@ class Context {
   ::cl::CommandQueue queue_;
   ProgramCache programs_;
   LogFn log_;
+  bool gemm_on_host_ = false;
 };
 
 }  // namespace mipnerf::ocl

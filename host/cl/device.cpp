@@ -52,6 +52,11 @@ DeviceInfo describe(const ::cl::Platform& platform, const ::cl::Device& device, 
   status = clGetDeviceInfo(device(), CL_DEVICE_DOUBLE_FP_CONFIG, sizeof(fp64), &fp64, nullptr);
   const std::string extensions = query<CL_DEVICE_EXTENSIONS, std::string>(device, "CL_DEVICE_EXTENSIONS");
   info.has_fp64 = (status == CL_SUCCESS && fp64 != 0) || extensions.find("cl_khr_fp64") != std::string::npos;
+  // Deprecated in OpenCL 2.0 but still answered by every ICD we know (PoCL: true on its CPU device); a device
+  // that does not answer is taken to have its own memory, so nothing relies on sharing it.
+  cl_bool unified = CL_FALSE;
+  status = clGetDeviceInfo(device(), CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof(unified), &unified, nullptr);
+  info.host_unified_memory = status == CL_SUCCESS && unified == CL_TRUE;
   return info;
 }
 

@@ -23,6 +23,7 @@ struct DeviceInfo {
   cl_ulong max_alloc_bytes = 0;
   size_t max_work_group_size = 0;
   bool has_fp64 = false;
+  bool host_unified_memory = false;   // CL_DEVICE_HOST_UNIFIED_MEMORY: device buffers live in host memory
   ::cl::Device device;
 
   std::string type_name() const;      // "GPU", "CPU", "accelerator", ...

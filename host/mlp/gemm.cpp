@@ -1,4 +1,4 @@
-// Row-major SGEMM through CLBlast, with shape checks that name the product.
+// Row-major SGEMM through CLBlast or the host BLAS (the context's backend), with shape checks that name the product.
 #include "mlp/gemm.hpp"
 
 #include <clblast.h>
@@ -6,6 +6,7 @@
 #include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
+#include "mlp/host_gemm.hpp"
 
 namespace mipnerf::mlp {
 namespace {
@@ -30,6 +31,11 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
   require_fits(a, s.transpose_a ? s.k : s.m, s.transpose_a ? s.m : s.k, "A", what);
   require_fits(b, s.transpose_b ? s.n : s.k, s.transpose_b ? s.k : s.n, "B", what);
   require_fits(c, s.m, s.n, "C", what);
+  // The context's backend (mlp/gemm_backend.hpp): the host BLAS on mapped buffers, or CLBlast on the queue.
+  if (ctx.gemm_on_host()) {
+    host_gemm(ctx, s, alpha, a, b, beta, c, what);
+    return;
+  }
   // Tuned parameters may differ per product kind (see gemm_tuning.hpp); a no-op when none are installed.
   select_gemm_kind(ctx, gemm_kind(s));
   using clblast::Transpose;

@@ -1,4 +1,5 @@
-// Row-major SGEMM on the device through CLBlast: the only matrix product the MLP uses.
+// Row-major SGEMM on the device's buffers, through CLBlast or the host BLAS (mlp/gemm_backend.hpp chooses per
+// context): the only matrix product the MLP uses.
 #pragma once
 
 #include <string>
@@ -25,8 +26,9 @@ inline GemmShape gemm_shape(size_t m, size_t n, size_t k, bool transpose_a = fal
 using ocl::MatrixView;
 using ocl::view;
 
-// Enqueues the product (asynchronous, in queue order). `what` names the product in error messages
-// (e.g. "layer 3 forward"). Sizes are checked against the buffers before CLBlast is called.
+// The product, in queue order: CLBlast enqueues it (asynchronous); the host backend waits for the queue, computes
+// it and unmaps before returning (mlp/host_gemm.hpp). `what` names the product in error messages
+// (e.g. "layer 3 forward"). Sizes are checked against the buffers before either backend is called.
 void gemm(ocl::Context& ctx, const GemmShape& shape, float alpha, const MatrixView& a, const MatrixView& b,
           float beta, const MatrixView& c, const std::string& what);
 

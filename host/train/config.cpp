@@ -18,7 +18,8 @@ namespace {
 
 using Member = std::variant<bool TrainConfig::*, int TrainConfig::*, int64_t TrainConfig::*, uint64_t TrainConfig::*,
                             double TrainConfig::*, Background TrainConfig::*, RayShape TrainConfig::*,
-                            ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*>;
+                            ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*,
+                            mlp::GemmBackend TrainConfig::*>;
 
 // One row of the table. An enum setting's `help` says what it does; its allowed values are prepended from the
 // enum's name table (with_full_help), so they are written once.
@@ -85,6 +86,11 @@ const std::vector<Entry>& table() {
       {{"chunk_rays", "rays per chunk of a training step (0 = from device memory)", "execution"},
        &TrainConfig::chunk_rays},
       {{"render_chunk_rays", "rays per chunk when rendering", "execution"}, &TrainConfig::render_chunk_rays},
+      {{"gemm_backend",
+        "who runs the MLP's matrix products: CLBlast, or the CPU BLAS on the buffers of a device that shares host "
+        "memory (auto: host on such CPU devices)",
+        "execution"},
+       &TrainConfig::gemm_backend},
       {{"log_every", "steps between log rows", "execution"}, &TrainConfig::log_every},
       {{"checkpoint_every", "steps between checkpoints", "execution"}, &TrainConfig::checkpoint_every},
       {{"keep_checkpoints", "checkpoint files to keep", "execution"}, &TrainConfig::keep_checkpoints},

@@ -11,6 +11,7 @@
 #include "data/device_dataset.hpp"
 #include "graph/graph.hpp"
 #include "io/atomic_file.hpp"
+#include "mlp/gemm_backend.hpp"
 #include "ops/batch.hpp"
 #include "train/checkpoint.hpp"
 #include "train/model.hpp"
@@ -49,6 +50,8 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
                  const std::string& out_dir, bool resume)
     : ctx_(&ctx), config_(config), out_dir_(out_dir) {
   validate(config_);
+  // Before the networks exist: every product from the first one on runs on the chosen backend.
+  mlp::use_gemm_backend(ctx, config_.gemm_backend);
   LogFn log = [&ctx](LogLevel level, const std::string& message) { ctx.log(level, message); };
   data::LoadOptions options = load_options(config_, data_path, {"train"});
   options.log = log;

@@ -27,6 +27,7 @@
 #include "eval/report.hpp"
 #include "io/json.hpp"
 #include "mlp/clblast_check.hpp"
+#include "mlp/gemm_backend.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "ops/stage_list.hpp"
 #include "support/temp_scene.hpp"
@@ -391,11 +392,12 @@ TEST_CASE("bench CLI: mipnerf-cl bench --quick on tiny sizes writes bench.json a
   // adds the tuned column; its one set equals CLBlast's default, so nothing new is compiled.
   CacheHome cache_home(cache);
   mlp::save_tuning(mlp::tuning_file_path(test::test_context().device_info()), same_as_defaults_tuning());
+  // gemm_backend=clblast: the training preset must show the file reaching CLBlast (auto takes the host BLAS on CPUs).
   const std::string log = (bench_temp("cli-log")).string();
   const std::string command = "XDG_CACHE_HOME=\"" + cache.string() + "\" \"" + MIPNERF_CLI_PATH + "\" --device " +
                               std::to_string(test::test_context().device_info().index) + " bench --quick --out \"" +
                               out.string() +
-                              "\" --presets tiny --set batch_size=32 --steps 1 --gemm-rows 64 --gemm-widths 8 "
+                              "\" --presets tiny --set batch_size=32 --set gemm_backend=clblast --steps 1 --gemm-rows 64 --gemm-widths 8 "
                               "--kernel-rays 16 --kernel-samples 4 --render-size 8x8 --scene-size 16 --scene-views 3 "
                               ">\"" + log + ".out\" 2>\"" + log + ".err\"";
   const int status = std::system(command.c_str());
@@ -419,10 +421,13 @@ TEST_CASE("bench CLI: mipnerf-cl bench --quick on tiny sizes writes bench.json a
   CHECK(d.at("gemm").at("tuned") == true);
   REQUIRE(d.at("gemm").at("products").size() == 3);
   CHECK(d.at("gemm").at("products")[2].at("CLBlast tuned").at("gflops_best").get<double>() > 0);
+  // The host GEMM backend stands beside CLBlast wherever the device can run it.
+  const bool host_backend = test::test_context().device_info().host_unified_memory && mlp::host_blas_available();
+  CHECK(d.at("gemm").at("products")[2].contains("host BLAS (mapped)") == host_backend);
   CHECK(d.at("kernels").at("stages").size() == 13);
   REQUIRE(d.at("training").size() == 1);
   CHECK(d.at("training")[0].at("warm_steps") == 1);
-  CHECK(d.at("training")[0].at("gemm_parameters") == "tuned");
+  CHECK(d.at("training")[0].at("gemm_parameters") == "tuned");  // gemm_backend=clblast, with the tuned file
   CHECK(d.at("render")[0].at("width") == 8);
 
   std::ifstream md_file(out / "bench.md");

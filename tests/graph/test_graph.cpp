@@ -1,5 +1,6 @@
 // The host graph against the CPU reference composed stage by stage in double: one training step of both
-// levels (chunked on the device, whole on the CPU) gives the same losses and parameter gradients.
+// levels (chunked on the device, whole on the CPU) gives the same losses and parameter gradients, on every GEMM
+// backend the test device supports.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -14,6 +15,7 @@
 #include "ref/render.hpp"
 #include "ref/resample.hpp"
 #include "ref/sample.hpp"
+#include "support/gemm_backends.hpp"
 #include "support/test_context.hpp"
 #include "train/model.hpp"
 #include "support/train_fixtures.hpp"
@@ -77,8 +79,11 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
   return out;
 }
 
-void check_step_against_reference(const std::string& variant, const std::string& data_path) {
+void check_step_against_reference_on(mlp::GemmBackend backend, const std::string& variant,
+                                     const std::string& data_path) {
   auto& ctx = test::test_context();
+  test::GemmBackendScope scope(ctx, backend);
+  INFO("gemm_backend = " << enum_name(backend));
   const auto config = train::resolve_config("tiny", variant, {{"num_samples", "12"}, {"batch_size", "90"}});
   const auto dataset = data::load_dataset(data_path, {});
   const auto& split = dataset.split("train");
@@ -134,6 +139,13 @@ void check_step_against_reference(const std::string& variant, const std::string&
     REQUIRE(norm > 0);
     // Gradients sum many float32 products over 90 rays × 24 samples: 1e-3 of the norm.
     CHECK(std::sqrt(diff / norm) < 1e-3);
+  }
+}
+
+// The same step, against the same reference and tolerances, on every GEMM backend the test device supports.
+void check_step_against_reference(const std::string& variant, const std::string& data_path) {
+  for (const mlp::GemmBackend backend : test::supported_gemm_backends(test::test_context())) {
+    check_step_against_reference_on(backend, variant, data_path);
   }
 }
 

@@ -1,6 +1,7 @@
-// The device MLP (CLBlast products + mlp.cl) against the double reference: outputs and every gradient, with
-// two passes accumulating into one gradient (coarse and fine through one shared MLP), at a small size and at
-// the paper's size, through CLBlast's direct and indirect GEMM paths. Also the API's errors.
+// The device MLP (products on each GEMM backend the test device supports + mlp.cl) against the double reference:
+// outputs and every gradient, with two passes accumulating into one gradient (coarse and fine through one shared
+// MLP), at a small size and at the paper's size, through CLBlast's direct and indirect GEMM paths; the backends
+// against each other. Also the API's errors.
 #include <doctest/doctest.h>
 
 #include <clblast.h>
@@ -14,6 +15,7 @@
 #include "mlp/mlp.hpp"
 #include "mlp_checks.hpp"
 #include "ref/mlp.hpp"
+#include "support/gemm_backends.hpp"
 #include "support/mlp_fixtures.hpp"
 #include "support/test_context.hpp"
 
@@ -85,9 +87,11 @@ mlp::MlpOutputGradients gradients_for(const DevicePass& d, const mlp::MlpConfig&
 
 // Two passes (think coarse and fine, different sample counts) through one MLP: forward A, forward B,
 // backward B, backward A, as the training graph orders them; gradients accumulate into one buffer.
-void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t samples_a, size_t samples_b,
-                             unsigned seed) {
+void check_against_reference_on(mlp::GemmBackend backend, const mlp::MlpConfig& config, size_t n_rays,
+                                size_t samples_a, size_t samples_b, unsigned seed) {
   auto& ctx = test::test_context();
+  test::GemmBackendScope scope(ctx, backend);
+  INFO("gemm_backend = " << enum_name(backend));
   std::mt19937 rng(seed);
   mlp::Mlp net(ctx, config);
   // Random biases (Glorot leaves them at zero) so every bias path carries a value.
@@ -140,6 +144,14 @@ void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t
   CHECK(rgb2.download(ctx) == da.raw_rgb.download(ctx));
 }
 
+// The same check on every GEMM backend the test device supports, same tolerances.
+void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t samples_a, size_t samples_b,
+                             unsigned seed) {
+  for (const mlp::GemmBackend backend : test::supported_gemm_backends(test::test_context())) {
+    check_against_reference_on(backend, config, n_rays, samples_a, samples_b, seed);
+  }
+}
+
 // Sets CLBlast's direct/indirect switch for this test and restores the database value afterwards.
 class GemmRoutineOverride {
  public:
@@ -181,7 +193,7 @@ TEST_CASE("mlp device: the paper's network through CLBlast's indirect GEMM path 
   GemmRoutineOverride indirect(test::test_context().raw_device(), 1);
   mlp::MlpConfig config;
   config.seed = 5;
-  check_against_reference(config, 3, 16, 8, 104);
+  check_against_reference_on(mlp::GemmBackend::clblast, config, 3, 16, 8, 104);
 }
 
 TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exactly twice") {
@@ -247,4 +259,57 @@ TEST_CASE("mlp device: workspace size estimate matches what it allocates, and bo
   CHECK(training < 12 * rows * 256 * sizeof(float));
   CHECK(inference < training / 5);
   CHECK(mlp::Workspace::bytes_for(config, 2 * rows, rays, mlp::WorkspaceMode::training) < 2 * training + 1);
+}
+
+namespace {
+
+struct BackendRun {
+  std::vector<float> raw_density, raw_rgb, grads;
+};
+
+// One forward and backward of the paper's network on `backend`, from the same seed (so the same data and weights).
+BackendRun run_on(mlp::GemmBackend backend, unsigned seed) {
+  auto& ctx = test::test_context();
+  test::GemmBackendScope scope(ctx, backend);
+  REQUIRE(ctx.gemm_on_host() == (backend == mlp::GemmBackend::host));
+  mlp::MlpConfig config;
+  config.seed = 6;
+  std::mt19937 rng(seed);
+  mlp::Mlp net(ctx, config);
+  const Pass p = make_pass(config, 6, 32, rng);
+  DevicePass d(ctx, config, p);
+  auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+  net.zero_grad();
+  net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+  net.backward(ws, gradients_for(d, config));
+  return {d.raw_density.download(ctx), d.raw_rgb.download(ctx), net.download_grads()};
+}
+
+}  // namespace
+
+TEST_CASE("mlp device: the host BLAS and CLBlast backends agree on outputs and gradients") {
+  const auto backends = test::supported_gemm_backends(test::test_context());
+  if (backends.size() < 2) {
+    MESSAGE("the test device cannot run the host GEMM backend; nothing to compare");
+    return;
+  }
+  const BackendRun clblast = run_on(mlp::GemmBackend::clblast, 105);
+  const BackendRun host = run_on(mlp::GemmBackend::host, 105);
+  // Both are float32 with different summation orders. Each stays within the float32 bound above (≈ 5.5e-6 of a
+  // tensor's largest value, from √(chain) · √K · u) of the exact result, so they differ by at most twice that:
+  // 1.1e-5 of the tensor's largest value (plus 1e-7 absolute for tensors that are all ~0). Not kRelative (3e-5):
+  // that bound has head room over the estimate, this one is the estimate itself for two float32 results.
+  constexpr double kBetweenBackends = 1.1e-5;
+  const auto as_ref = [](const std::vector<float>& v) { return test::as_double(v); };
+  test::check_close(host.raw_density, as_ref(clblast.raw_density), 0, clblast.raw_density.size(), kBetweenBackends,
+                    kAbsolute, "raw_density host vs clblast");
+  test::check_close(host.raw_rgb, as_ref(clblast.raw_rgb), 0, clblast.raw_rgb.size(), kBetweenBackends, kAbsolute,
+                    "raw_rgb host vs clblast");
+  const mlp::ParameterLayout layout = mlp::parameter_layout(mlp::MlpConfig{});  // all() points into it
+  for (const auto* layer : layout.all()) {
+    test::check_close(host.grads, as_ref(clblast.grads), layer->weight_offset, layer->in * layer->out,
+                      kBetweenBackends, kAbsolute, layer->name + " weight gradient host vs clblast");
+    test::check_close(host.grads, as_ref(clblast.grads), layer->bias_offset, layer->out, kBetweenBackends, kAbsolute,
+                      layer->name + " bias gradient host vs clblast");
+  }
 }

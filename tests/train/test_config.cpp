@@ -245,6 +245,10 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   auto written = nlohmann::ordered_json::parse(train::to_json(today));
   CHECK(written.at("variant_bundle") == "mipnerf");
   written.erase("variant_bundle");
+  // gemm_backend came later still (an execution setting); a configuration without it loads with its default, auto.
+  CHECK(written.at("gemm_backend") == "auto");
+  CHECK(old.gemm_backend == mlp::GemmBackend::automatic);
+  written.erase("gemm_backend");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));

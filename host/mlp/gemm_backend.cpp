@@ -1,0 +1,63 @@
+// Choosing the GEMM backend per device, and the host BLAS's thread count.
+#include "mlp/gemm_backend.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "core/error.hpp"
+#include "mlp/host_gemm.hpp"
+
+namespace mipnerf::mlp {
+
+bool host_blas_available() {
+#ifdef MIPNERF_HAVE_OPENBLAS
+  return true;
+#else
+  return false;
+#endif
+}
+
+GemmBackend resolve_gemm_backend(GemmBackend wanted, const ocl::DeviceInfo& device, bool host_blas) {
+  switch (wanted) {
+    case GemmBackend::clblast:
+      return GemmBackend::clblast;
+    case GemmBackend::host:
+      if (!device.host_unified_memory) {
+        throw Error("gemm_backend=host: device '" + device.name +
+                    "' has its own memory (CL_DEVICE_HOST_UNIFIED_MEMORY is false), so the host BLAS cannot work on "
+                    "its buffers without copies; use gemm_backend=clblast or auto");
+      }
+      if (!host_blas) {
+        throw Error(
+            "gemm_backend=host: this build has no host BLAS; install libopenblas-dev and rebuild, or use "
+            "gemm_backend=clblast");
+      }
+      return GemmBackend::host;
+    case GemmBackend::automatic:
+      // A rule for now: on a CPU device the kernels and the BLAS share the same cores, and OpenBLAS beats CLBlast on
+      // PoCL at every MLP product measured (bench/results). Not yet chosen per device from a measurement.
+      return host_blas && device.host_unified_memory && (device.type & CL_DEVICE_TYPE_CPU) != 0 ? GemmBackend::host
+                                                                                                : GemmBackend::clblast;
+  }
+  throw Error("internal error: gemm backend " + std::to_string(static_cast<int>(wanted)) + " has no rule");
+}
+
+GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
+  const GemmBackend backend = resolve_gemm_backend(wanted, ctx.device_info(), host_blas_available());
+  ctx.set_gemm_on_host(backend == GemmBackend::host);
+  if (backend == GemmBackend::host) {
+    // Threads: the device's kernels (PoCL's pthread pool, one worker per compute unit) and the BLAS never run at the
+    // same time, because every host product starts with a blocking map that drains the queue and ends before the
+    // next kernel is enqueued (host_gemm.hpp). So each may use every core while it runs: the BLAS gets as many
+    // threads as the device has compute units (the cores PoCL was given), not more, so the two pools stay the same
+    // size on the same cores. OpenBLAS's idle workers spin (sched_yield) for 2^OPENBLAS_THREAD_TIMEOUT cycles after
+    // each call before they sleep; that variable is read when libopenblas is loaded, before main(), so only the
+    // environment can lower it (docs/ARCHITECTURE.md, "GEMM backends").
+    set_host_blas_threads(static_cast<int>(std::max<cl_uint>(1, ctx.device_info().compute_units)));
+  }
+  ctx.log(LogLevel::debug, std::string("GEMM backend: ") + enum_name(backend) + " on '" + ctx.device_info().name +
+                              "' (gemm_backend=" + enum_name(wanted) + ")");
+  return backend;
+}
+
+}  // namespace mipnerf::mlp

@@ -1,0 +1,35 @@
+// Which library runs the MLP's products on a device, and the `gemm_backend` setting that chooses it: CLBlast (any
+// device, the fallback) or the host's CPU BLAS working directly on the device buffers (mlp/host_gemm.hpp; only on
+// devices whose buffers live in host memory, CL_DEVICE_HOST_UNIFIED_MEMORY).
+#pragma once
+
+#include <array>
+
+#include "cl/context.hpp"
+#include "core/enum_names.hpp"
+
+namespace mipnerf::mlp {
+
+enum class GemmBackend {
+  automatic,  // the host BLAS on CPU devices that share host memory (when built in), CLBlast elsewhere
+  clblast,    // CLBlast on the device, whatever the device
+  host,       // the host BLAS on mapped device buffers; refused on devices with their own memory
+};
+constexpr std::array<EnumName<GemmBackend>, 3> enum_names(GemmBackend) {
+  return {{{GemmBackend::automatic, "auto"}, {GemmBackend::clblast, "clblast"}, {GemmBackend::host, "host"}}};
+}
+
+// Whether this build links a host BLAS (OpenBLAS found when CMake configured it).
+bool host_blas_available();
+
+// What `wanted` means on `device` (never `automatic`). `automatic` is host on a CPU device with unified memory when
+// `host_blas` is true, else clblast; this is a rule, not yet a measurement per device. Throws mipnerf::Error when
+// host is wanted on a device without unified memory or without a host BLAS, saying why and what to do.
+GemmBackend resolve_gemm_backend(GemmBackend wanted, const ocl::DeviceInfo& device, bool host_blas);
+
+// Resolves `wanted` for ctx's device, makes mlp::gemm use it from the next product on, and for the host backend
+// sets the host BLAS's thread count to the device's compute units (see gemm_backend.cpp for why). Logs the choice.
+// Returns the backend in use.
+GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted);
+
+}  // namespace mipnerf::mlp
