@@ -28,6 +28,7 @@
 #include "io/json.hpp"
 #include "io/temporary_folder.hpp"
 #include "mlp/clblast_check.hpp"
+#include "mlp/gemm_backend.hpp"
 #include "mlp/gemm_tune_steps.hpp"
 #include "mlp/gemm_tuner.hpp"
 #include "progress.hpp"
@@ -242,6 +243,15 @@ void run_tune(const TuneArgs& args) {
   const std::string path = args.output.empty() ? mlp::tuning_file_path(device) : args.output;
   if (args.if_missing && std::filesystem::exists(path)) {
     std::cerr << "mipnerf-cl: tune: " << path << " exists; nothing to do (--if-missing)\n";
+    return;
+  }
+  // CLBlast's parameters only matter where CLBlast runs the products: with gemm_backend=auto a CPU device that
+  // shares host memory uses the host BLAS instead, so the quick start need not spend minutes tuning it.
+  if (args.if_missing && mlp::resolve_gemm_backend(mlp::GemmBackend::automatic, device, mlp::host_blas_available()) ==
+                             mlp::GemmBackend::host) {
+    std::cerr << "mipnerf-cl: tune: not needed: on " << device.name
+              << " the MLP's products run on the host BLAS (gemm_backend=auto); tuning matters with "
+                 "gemm_backend=clblast (run tune without --if-missing)\n";
     return;
   }
   mlp::GemmTuneSettings settings = args.settings;

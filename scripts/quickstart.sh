@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's main job: install dependencies, build, make the built-in procedural scene, tune the GEMMs for
-# this device (once, 2-4 minutes), train the `quick`
+# this device where CLBlast runs them (once, 2-4 minutes; skipped on CPU devices that use the host BLAS), train the `quick`
 # preset on it (ending with val PSNR, training time and render s/MP), then render an orbit around it.
 # Re-running continues where it stopped (train --resume) instead of starting over.
 set -euo pipefail
@@ -10,7 +10,8 @@ cd "$(dirname "$0")/.."
 build_dir="${BUILD_DIR:-build}"
 runs="${RUNS_DIR:-runs}"
 "$build_dir/mipnerf-cl" make-scene "$runs/scene"
-# CLBlast's default GEMM parameters are slow on CPUs: a short, time-boxed tune (once per device) is worth it.
+# Where CLBlast runs the MLP (GPUs, or gemm_backend=clblast) its default GEMM parameters are slow: a short,
+# time-boxed tune once per device is worth it. On a CPU device using the host BLAS (auto) it says so and skips.
 "$build_dir/mipnerf-cl" tune --minutes 4 --if-missing
 "$build_dir/mipnerf-cl" train --data "$runs/scene" --out "$runs/quick" --preset quick --resume
 "$build_dir/mipnerf-cl" render --checkpoint "$runs/quick" --path orbit --frames 24 --format both

@@ -200,3 +200,10 @@ mipnerf_add_cli_error_test("bench: malformed --set" PATTERN "--set 'batch_size':
 mipnerf_add_cli_error_test("bench: unknown --set name" PATTERN "unknown setting 'sampels'"
   ARGS bench --set sampels=3 ${MIPNERF_BENCH_TINY})
 
+
+# The quick start's `tune --if-missing` skips the search where CLBlast does not run the MLP (gemm_backend=auto picks
+# the host BLAS on a CPU device that shares host memory, as PoCL's does), even with no tuning file at hand.
+add_test(NAME "cli: tune --if-missing skips where the host BLAS runs the MLP" COMMAND ${CMAKE_COMMAND} -E env
+  "XDG_CACHE_HOME=${CMAKE_CURRENT_BINARY_DIR}/cli-tune-empty-cache" $<TARGET_FILE:mipnerf-cl> tune --if-missing --minutes 1)
+set_tests_properties("cli: tune --if-missing skips where the host BLAS runs the MLP" PROPERTIES
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "tune: not needed: on .* the MLP's products run on the host BLAS")
