@@ -13,8 +13,6 @@
 #include "eval/report.hpp"
 #include "io/atomic_file.hpp"
 #include "io/png.hpp"
-#include "mlp/gemm_backend.hpp"
-#include "mlp/gemm_tuning.hpp"
 #include "progress.hpp"
 #include "train/checkpoint.hpp"
 #include "train/model.hpp"
@@ -59,10 +57,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   const fs::path images = fs::path(out) / "images";
   const std::vector<std::string> stems = eval::split_image_stems(split);
 
-  mlp::load_gemm_tuning(*ctx);
-  // The backend for this device, not the checkpoint's gemm_backend: that setting chose for the training device,
-  // and a model trained on a CPU with the host BLAS must still render on a GPU.
-  mlp::use_gemm_backend(*ctx, mlp::GemmBackend::automatic);
+  prepare_gemm_for_rendering(*ctx);
   eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), split.cameras,
                                eval::RenderSettings{chunk, args.supersample, args.seed});
   const double warm_up = renderer.warm_up();

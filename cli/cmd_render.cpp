@@ -15,8 +15,6 @@
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "eval/view_cameras.hpp"
-#include "mlp/gemm_backend.hpp"
-#include "mlp/gemm_tuning.hpp"
 #include "progress.hpp"
 #include "train/checkpoint.hpp"
 
@@ -158,10 +156,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
       args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
   const std::string device = ctx->device_info().name;
 
-  mlp::load_gemm_tuning(*ctx);
-  // The backend for this device, not the checkpoint's gemm_backend: that setting chose for the training device,
-  // and a model trained on a CPU with the host BLAS must still render on a GPU.
-  mlp::use_gemm_backend(*ctx, mlp::GemmBackend::automatic);
+  prepare_gemm_for_rendering(*ctx);
   eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), frames.cameras,
                                eval::RenderSettings{chunk, args.supersample, args.seed});
   const double warm_up = renderer.warm_up();

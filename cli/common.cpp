@@ -5,6 +5,8 @@
 #include <iostream>
 
 #include "core/error.hpp"
+#include "mlp/gemm_backend.hpp"
+#include "mlp/gemm_tuning.hpp"
 
 namespace mipnerf::cli {
 
@@ -47,6 +49,11 @@ std::map<std::string, std::string> parse_set_assignments(const std::vector<std::
     out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
   }
   return out;
+}
+
+void prepare_gemm_for_rendering(ocl::Context& ctx) {
+  mlp::load_gemm_tuning(ctx);
+  mlp::use_gemm_backend(ctx, mlp::GemmBackend::automatic);
 }
 
 }  // namespace mipnerf::cli

@@ -128,19 +128,21 @@ ParameterSet GemmTuner::tune_helpers() {
 void GemmTuner::tune_gemm_kernels(const ParameterSet& helpers) {
   const double budget = settings_.minutes * 60.0;
   const size_t W = settings_.width, R = settings_.kernel_rows;
-  const double forward_share = std::min(seconds_left() - 120.0, 0.25 * budget);
-  if (auto found =
-          tune_kernel("Xgemm", R, W, W, fraction_for(forward_share, kXgemmConfigurations), forward_share * 1.5)) {
-    ParameterSet set = helpers;
-    set["Xgemm"] = *found;
-    evaluate("TuneXgemm (forward shape)", set);
-  }
-  const double weights_share = std::min(seconds_left() - 120.0, 0.15 * budget);
-  if (auto found =
-          tune_kernel("Xgemm", W, W, R, fraction_for(weights_share, kXgemmConfigurations), weights_share * 1.5)) {
-    ParameterSet set = helpers;
-    set["Xgemm"] = *found;
-    evaluate("TuneXgemm (weight-gradient shape)", set);
+  // The forward shape (R×W·W×W) and the weight-gradient shape (Wᵀ·R: k = R), each with its share of the budget.
+  struct XgemmShape {
+    const char* name;
+    size_t m, n, k;
+    double budget_share;
+  };
+  for (const XgemmShape& shape : {XgemmShape{"TuneXgemm (forward shape)", R, W, W, 0.25},
+                                  XgemmShape{"TuneXgemm (weight-gradient shape)", W, W, R, 0.15}}) {
+    const double share = std::min(seconds_left() - 120.0, shape.budget_share * budget);
+    if (auto found = tune_kernel("Xgemm", shape.m, shape.n, shape.k, fraction_for(share, kXgemmConfigurations),
+                                 share * 1.5)) {
+      ParameterSet set = helpers;
+      set["Xgemm"] = *found;
+      evaluate(shape.name, set);
+    }
   }
   const double direct_share = std::min(seconds_left() - 90.0, 0.08 * budget);
   if (auto found = tune_kernel("XgemmDirect", R, W, W, fraction_for(direct_share, kXgemmDirectConfigurations),
