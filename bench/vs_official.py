@@ -77,6 +77,15 @@ STUBS = [
 # Orchestrator side (standard library only)
 # ----------------------------------------------------------------------------------------------
 
+def our_gemm_label(config_result):
+    """What ran our training products, as the bench's training record says (host BLAS, tuned or default CLBlast);
+    results written before that record existed fall back to whether a CLBlast tuning file was loaded."""
+    used = {run.get("gemm_in_training", "") for run in config_result.get("our_runs", [])} - {""}
+    if used:
+        return ", ".join(sorted(used))
+    return "tuned" if config_result["gemm"].get("tuned") else "CLBlast defaults"
+
+
 def fail(message):
     sys.exit(f"vs_official.py: {message}")
 
@@ -267,7 +276,8 @@ def bench_config(args, worker, name, preset, batch):
         t, = rec["devices"][0]["training"]
         ours_times += t["warm_step_seconds"]
         our_runs.append({"command": rec["command_line"], "first_step_s": t["first_step_seconds"],
-                         "warm_step_seconds": t["warm_step_seconds"], "gemm": rec["devices"][0]["gemm"]})
+                         "warm_step_seconds": t["warm_step_seconds"], "gemm": rec["devices"][0]["gemm"],
+                         "gemm_in_training": t.get("gemm_parameters", "")})
     result = {"name": name, "batch_rays": batch, "our_config": train["config"],
               "official_model": model, "official_mlp": mlp, "official_config": config,
               "parameters": {"mipnerf-cl": train["parameters"], "official": setup["parameters"]},
@@ -386,7 +396,7 @@ def markdown(doc):
                      f"official {', '.join(f'{s:.3f}' for s in r['official']['step_seconds'])}; load averages "
                      f"(1/5/15 min) before and after each round {r['load_average_per_round']}; "
                      f"official XLA compile + 2 warm-up steps {r['official_compile_s']:.1f} s; "
-                     f"our GEMM: {'tuned' if r['gemm'].get('tuned') else 'CLBlast defaults'}")
+                     f"our GEMM in training: {our_gemm_label(r)}")
     lines += ["", "## Machine and versions", "",
               f"- CPU: {v['machine']['cpu']}, {v['machine']['hardware_threads']} hardware threads; "
               f"{v['machine']['platform']}",
