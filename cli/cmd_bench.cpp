@@ -46,6 +46,7 @@ struct BenchArgs {
   int64_t steps = 10;
   int64_t paper_steps = 2;
   double time_box = 120.0;
+  int64_t profile_steps = 2;  // per preset, after the timed steps (paper: at most 1)
   size_t gemm_rows = 65536;
   std::vector<size_t> gemm_widths = {64, 128, 256};
   size_t gemm_reps = 5;
@@ -92,6 +93,7 @@ void check_arguments(const BenchArgs& a) {
     }
   }
   if (a.steps < 1 || a.paper_steps < 1) throw Error("--steps and --paper-steps must be at least 1 (warm steps)");
+  if (a.profile_steps < 0) throw Error("--profile-steps must be >= 0 (0: no stage profile)");
   if (!(a.time_box >= 0)) throw Error("--time-box must be >= 0 seconds (0: no time box)");
   if (a.gemm_rows == 0 || a.gemm_widths.empty() || a.gemm_reps == 0 || a.gemm_rounds == 0) {
     throw Error("--gemm-rows, --gemm-reps and --gemm-rounds must be at least 1, and --gemm-widths non-empty");
@@ -157,9 +159,9 @@ std::string make_scene(const BenchArgs& a, const fs::path& folder) {
 
 // A fresh context per section, with CLBlast's compiled programs forgotten: each section's first calls are what a new
 // process pays. Info messages only with --verbose (the tuning file is loaded once per section).
-std::unique_ptr<ocl::Context> fresh_context(const ocl::DeviceInfo& device) {
+std::unique_ptr<ocl::Context> fresh_context(const ocl::DeviceInfo& device, bool profiling = false) {
   bench::clear_clblast_programs();
-  auto ctx = std::make_unique<ocl::Context>(device);
+  auto ctx = std::make_unique<ocl::Context>(device, profiling);
   ctx->set_log([](LogLevel level, const std::string& message) {
     if (level == LogLevel::info && !global_options().verbose) return;
     print_log(level, message);
@@ -211,7 +213,7 @@ std::map<std::string, std::string> explicit_settings(const BenchArgs& a) {
 
 void bench_preset(const BenchArgs& a, const std::string& preset, const std::string& scene, const fs::path& scratch,
                   const ocl::DeviceInfo& device, bench::DeviceBench& d) {
-  auto ctx = fresh_context(device);
+  auto ctx = fresh_context(device, a.profile_steps > 0);
   mlp::load_gemm_tuning(*ctx);  // as `train` does
   bench::PresetBenchOptions options;
   options.preset = preset;
@@ -220,6 +222,7 @@ void bench_preset(const BenchArgs& a, const std::string& preset, const std::stri
   options.work_dir = (scratch / ("run-" + std::to_string(device.index) + "-" + preset)).string();
   options.warm_steps = preset == "paper" ? a.paper_steps : a.steps;
   options.time_box_seconds = a.time_box;
+  options.profile_steps = preset == "paper" ? std::min<int64_t>(1, a.profile_steps) : a.profile_steps;
   const auto [width, height] = data::parse_size(a.render_size, "--render-size");
   options.render_width = width;
   options.render_height = height;
@@ -367,6 +370,9 @@ void register_bench(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--time-box", args->time_box,
                   "Per preset: no new warm step after this many seconds of them (at least one; 0: none)")
+      ->capture_default_str();
+  cmd->add_option("--profile-steps", args->profile_steps,
+                  "Per preset, steps profiled by stage after the timed ones (paper: at most 1; 0: none)")
       ->capture_default_str();
   cmd->add_option("--gemm-rows", args->gemm_rows, "Rows (samples) of the GEMM products")->capture_default_str();
   cmd->add_option("--gemm-widths", args->gemm_widths, "Layer widths of the GEMM products")

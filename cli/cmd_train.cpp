@@ -9,11 +9,13 @@
 #include <optional>
 #include <unistd.h>
 
+#include "bench/stage_report.hpp"
 #include "core/error.hpp"
 #include "common.hpp"
 #include "data/procedural.hpp"
 #include "eval/report.hpp"
 #include "eval/train_and_evaluate.hpp"
+#include "io/atomic_file.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "progress.hpp"
 
@@ -27,6 +29,7 @@ struct TrainArgs {
   std::string preset = "quick";
   std::string variant = "mipnerf";
   bool resume = false;
+  bool profile = false;                   // --profile: stage breakdown of steps 2…, in OUT/profile.md
   std::string config_file;                // --config FILE
   std::vector<std::string> sets;          // --set name=value
   std::map<std::string, std::string> flag_values;  // --<setting> value
@@ -115,12 +118,24 @@ void report_trained(const train::TrainResult& result, const std::string& device)
   }
 }
 
+// --profile: every step after the first (which builds the kernels) by stage, printed and written to OUT/profile.md.
+void write_profile(const ocl::StageProfile& profile, const train::TrainConfig& config, const std::string& device,
+                   const std::string& out_dir) {
+  if (profile.steps == 0) return;
+  const std::string table = bench::stage_profile_markdown(profile, static_cast<size_t>(config.batch_size));
+  const std::string path = (fs::path(out_dir) / "profile.md").string();
+  io::write_bytes_atomically(path, "# Training step by stage\n\nDevice: " + device + "; " +
+                                       std::to_string(config.batch_size) + " rays per step.\n\n" + table);
+  std::cerr << "mipnerf-cl: where a step's time goes (also in " << path << "):\n\n" << table << "\n";
+}
+
 void run_train(TrainArgs& args, CLI::App& cmd) {
   const auto settings = explicit_settings(args, cmd);
   const train::TrainConfig config = train::resolve_config(args.preset, args.variant, settings);
   const std::string data_path = args.data.empty() ? default_scene(args.out) : args.data;
-  auto ctx = open_context();
+  auto ctx = open_context(args.profile);
   const std::string device = ctx->device_info().name;
+  ocl::StageProfiler profiler;
 
   std::optional<Progress> train_progress, val_progress;
   void (*previous_handler)(int) = SIG_DFL;
@@ -136,11 +151,16 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
     train_progress.emplace("train", config.steps);
   };
   run.hooks.should_stop = [] { return g_stop_requested.load(); };
-  run.hooks.on_step = [&](const train::StepReport& r) { train_progress->update(r.step, step_detail(r)); };
+  run.hooks.on_step = [&](const train::StepReport& r) {
+    train_progress->update(r.step, step_detail(r));
+    if (args.profile && ctx->profiler() == nullptr) ctx->set_profiler(&profiler);  // from the second step on
+  };
   run.on_trained = [&](train::Trainer&, const train::TrainResult& result) {
     std::signal(SIGINT, previous_handler);
     train_progress->finish();
+    ctx->set_profiler(nullptr);
     report_trained(result, device);
+    if (args.profile) write_profile(profiler.profile(), config, device, args.out);
   };
   run.on_val_start = [&](size_t images) { val_progress.emplace("render val", static_cast<int64_t>(images)); };
   run.val_progress = [&](size_t done, size_t) { val_progress->update(static_cast<int64_t>(done)); };
@@ -175,6 +195,9 @@ void register_train(CLI::App& app) {
                       " (recorded in OUT/config.json as variant_bundle)")
       ->capture_default_str();
   cmd->add_flag("--resume", args->resume, "Continue from the newest checkpoint in OUT/checkpoints");
+  cmd->add_flag("--profile", args->profile,
+                "Time every step after the first by stage (OpenCL profiling events, host timers); print the table "
+                "and write OUT/profile.md. Profiled steps wait for the device at their end, so they run slower");
   cmd->add_option("--set", args->sets, "Any setting as name=value (repeatable)");
   cmd->add_option("--config", args->config_file,
                   "TOML/INI file of settings, e.g. `num_samples = 64` (top level or a [train] table); flags win")

@@ -16,7 +16,7 @@ namespace {
 train::TrainConfig bench_config(const PresetBenchOptions& options) {
   if (options.warm_steps < 1) throw Error("preset benchmark: at least one warm step is needed");
   auto settings = options.settings;
-  const int64_t steps = 1 + options.warm_steps;
+  const int64_t steps = 1 + options.warm_steps + std::max<int64_t>(0, options.profile_steps);
   settings["steps"] = std::to_string(steps);
   settings["log_every"] = std::to_string(steps);
   settings["checkpoint_every"] = std::to_string(steps);  // one checkpoint, after the last (untimed) step
@@ -24,25 +24,43 @@ train::TrainConfig bench_config(const PresetBenchOptions& options) {
   return train::resolve_config(options.preset, "mipnerf", settings);
 }
 
-// Hooks that fill `timing` step by step; `last` is the end of the previous step (set before step 1).
-train::TrainHooks timing_hooks(const PresetBenchOptions& options, int64_t total, TrainTiming& timing,
-                               Clock::time_point& last, Clock::time_point& warm_start, const ProgressFn& progress) {
+// The run's phases: the first step, timed warm steps, then (optionally) profiled steps.
+struct Phases {
+  Clock::time_point last;        // end of the previous step (set before step 1)
+  Clock::time_point warm_start;  // end of step 1
+  int64_t last_step = 0;
+  int64_t profiling_from = 0;    // > 0: the profiler was attached after this step
+  bool time_box_hit = false;
+};
+
+// Hooks that fill `timing` step by step and attach `profiler` once the timed steps are done.
+train::TrainHooks timing_hooks(ocl::Context& ctx, const PresetBenchOptions& options, int64_t total,
+                               TrainTiming& timing, Phases& phases, ocl::StageProfiler& profiler,
+                               const ProgressFn& progress) {
+  const bool profile = options.profile_steps > 0;
   train::TrainHooks hooks;
-  hooks.on_step = [&, total](const train::StepReport& report) {
+  hooks.on_step = [&, total, profile](const train::StepReport& report) {
     const auto now = Clock::now();
-    const double seconds = std::chrono::duration<double>(now - last).count();
-    last = now;
+    const double seconds = std::chrono::duration<double>(now - phases.last).count();
+    phases.last = now;
+    phases.last_step = report.step;
+    if (progress) progress("step " + std::to_string(report.step) + "/" + std::to_string(total), report.step, total);
+    if (phases.profiling_from > 0) return;
     if (report.step == 1) {
       timing.first_step_seconds = seconds;
-      warm_start = now;
-    } else {
-      timing.warm_steps.add(seconds);
+      phases.warm_start = now;
+      return;
     }
-    if (progress) progress("step " + std::to_string(report.step) + "/" + std::to_string(total), report.step, total);
+    timing.warm_steps.add(seconds);
+    phases.time_box_hit = options.time_box_seconds > 0 && seconds_since(phases.warm_start) >= options.time_box_seconds;
+    if (profile && (report.step == 1 + options.warm_steps || phases.time_box_hit)) {
+      ctx.set_profiler(&profiler);
+      phases.profiling_from = report.step;
+    }
   };
-  hooks.should_stop = [&] {
-    if (options.time_box_seconds <= 0 || timing.warm_steps.empty()) return false;
-    return seconds_since(warm_start) >= options.time_box_seconds;
+  hooks.should_stop = [&, profile] {
+    if (phases.profiling_from > 0) return phases.last_step >= phases.profiling_from + options.profile_steps;
+    return !profile && phases.time_box_hit;
   };
   return hooks;
 }
@@ -84,29 +102,40 @@ PresetBenchResult run_preset_bench(ocl::Context& ctx, const PresetBenchOptions& 
   result.config = bench_config(options);
   TrainTiming& t = result.train;
   const bool render = options.render_width > 0 && options.render_height > 0;
-  Clock::time_point last, warm_start;
+  Phases phases;
+  ocl::StageProfiler profiler;
+  if (options.profile_steps > 0 && !ctx.profiling_queue()) {
+    throw Error("preset benchmark: profiled steps need a context made with profiling on");
+  }
   // The shared train-then-evaluate run, without the val evaluation: the benchmark times a render of its own.
   eval::TrainAndEvaluateOptions run;
   run.data_path = options.data_path;
   run.out_dir = options.work_dir;
   run.evaluate_val = false;
-  run.hooks = timing_hooks(options, result.config.steps, t, last, warm_start, progress);
+  run.hooks = timing_hooks(ctx, options, result.config.steps, t, phases, profiler, progress);
   t.peak_rss_reset = reset_peak_rss();
   const auto setup_start = Clock::now();
   run.on_setup = [&](train::Trainer& trainer) {
     t.setup_seconds = seconds_since(setup_start);
     record_setup(trainer, ctx, t);
-    last = Clock::now();
+    phases.last = Clock::now();
   };
-  run.on_trained = [&](train::Trainer& trainer, const train::TrainResult& trained) {
-    t.time_boxed = trained.interrupted;
+  run.on_trained = [&](train::Trainer& trainer, const train::TrainResult&) {
+    ctx.set_profiler(nullptr);
+    t.time_boxed = phases.time_box_hit && static_cast<int64_t>(t.warm_steps.count()) < options.warm_steps;
+    if (phases.profiling_from > 0) t.profile = profiler.profile();
     t.peak_rss_bytes = peak_rss_bytes();
     if (!render) return;
     if (progress)
       progress("render", static_cast<size_t>(result.config.steps), static_cast<size_t>(result.config.steps));
     result.render = time_render(ctx, trainer, options);
   };
-  eval::train_and_evaluate(ctx, result.config, run);
+  try {
+    eval::train_and_evaluate(ctx, result.config, run);
+  } catch (...) {
+    ctx.set_profiler(nullptr);  // the profiler dies with this frame
+    throw;
+  }
   return result;
 }
 

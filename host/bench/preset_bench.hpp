@@ -2,12 +2,14 @@
 // CLBlast's programs), rays per second, the memory it plans on the device and the process's peak RSS, then the
 // render time per megapixel of its networks. Shared by `mipnerf-cl bench` and the tests.
 //
-// A preset is trained for 1 + warm_steps steps (fewer when the time box runs out, never fewer than one warm step)
+// A preset is trained for 1 + warm_steps (+ profile_steps) steps (fewer when the time box runs out, never fewer than one warm step)
 // through the real train::Trainer, on whatever scene data_path holds (the CLI generates the procedural scene). The
 // step time is the wall time between the trainer's step reports (batch sampling, every chunk's forward and
 // backward, Adam); checkpoints are written only after the last step, outside the timing. The render measurement
 // renders one camera of the training split, resized, through eval::ImageRenderer with the trained networks:
 // first its warm-up chunk (what the inference graph builds that training did not), then timed renders.
+// Profiled steps (StageProfiler, cl/profiler.hpp) follow the timed ones and are left out of their timing: profiling
+// waits for the queue at the end of each step and records an event per command.
 #pragma once
 
 #include <cstddef>
@@ -29,6 +31,8 @@ struct PresetBenchOptions {
   std::string work_dir;                          // the run's checkpoint and log (created; the caller removes it)
   int64_t warm_steps = 10;                       // timed steps after the first
   double time_box_seconds = 0.0;                 // > 0: no new warm step starts after this many seconds of them
+  int64_t profile_steps = 0;                     // > 0: this many more steps, profiled by stage (needs a context
+                                                 // made with profiling on); never counted in the timing
   uint32_t render_width = 64;                    // render measurement size; 0 skips it
   uint32_t render_height = 64;
   size_t render_reps = 1;                        // timed renders after the warm-up
@@ -50,6 +54,7 @@ struct TrainTiming {
   bool time_boxed = false;               // the time box ended the warm steps before warm_steps
   size_t peak_rss_bytes = 0;             // the process's peak RSS over setup and steps (see peak_rss_reset)
   bool peak_rss_reset = false;           // true: the peak was reset before setup (else: since the process began)
+  std::optional<ocl::StageProfile> profile;  // the profiled steps after the timed ones (profile_steps > 0)
   double rays_per_second() const {       // from the median warm step
     return warm_steps.median() > 0 ? static_cast<double>(batch_rays) / warm_steps.median() : 0.0;
   }

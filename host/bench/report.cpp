@@ -1,6 +1,8 @@
 // bench.json and bench.md of `mipnerf-cl bench` (see report.hpp).
 #include "bench/report.hpp"
 
+#include "bench/stage_report.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -148,6 +150,7 @@ Ordered training_json(const PresetBenchResult& p) {
           {"memory_budget_bytes", t.memory_budget_bytes},
           {"peak_rss_bytes", t.peak_rss_bytes},
           {"peak_rss_scope", t.peak_rss_reset ? "setup and steps of this preset" : "the whole process so far"},
+          {"stage_profile", t.profile ? stage_profile_json(*t.profile, t.batch_rays) : Ordered(nullptr)},
           {"config", nlohmann::ordered_json::parse(train::to_json(p.config))}};
 }
 
@@ -281,6 +284,20 @@ std::string training_markdown(const DeviceBench& d, const PresetBenchSettings& s
   return md.str();
 }
 
+std::string profile_markdown(const DeviceBench& d) {
+  std::ostringstream md;
+  for (const auto& p : d.presets) {
+    if (!p.train.profile) continue;
+    md << "#### Where a " << p.preset << " step's time goes\n\n"
+       << stage_profile_markdown(*p.train.profile, p.train.batch_rays) << "\n";
+  }
+  const std::string tables = md.str();
+  if (tables.empty()) return "";
+  return "### Training step by stage\n\nProfiled steps after the timed ones (each ends with a clFinish and records an "
+         "event per command, so they run a little slower than the timed steps). Stages: the graph's (host/graph) and "
+         "the trainer's; \"gemm <kind>\" are the MLP's products by kind.\n\n" + tables;
+}
+
 std::string render_markdown(const DeviceBench& d, const PresetBenchSettings& s) {
   std::ostringstream md;
   md << "### Rendering\n\nSettings: the first training camera resized, one ray per pixel, the trained networks of the "
@@ -309,7 +326,8 @@ std::string device_markdown(const DeviceBench& d, const BenchRun& run) {
   md << "| CLBlast | " << d.clblast_version << " |\n\n";
   md << gemm_markdown(d);
   if (d.kernels) md << kernels_markdown(*d.kernels);
-  if (!d.presets.empty()) md << training_markdown(d, run.presets) << render_markdown(d, run.presets);
+  if (!d.presets.empty())
+    md << training_markdown(d, run.presets) << profile_markdown(d) << render_markdown(d, run.presets);
   if (!d.errors.empty()) {
     md << "### Sections that failed\n\n";
     for (const auto& [section, message] : d.errors) md << "- " << section << ": " << message << "\n";

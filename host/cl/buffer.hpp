@@ -10,6 +10,9 @@
 
 namespace mipnerf::ocl {
 
+// An event for the stage profiler when it records (profiler.hpp), else nullptr.
+inline ::cl::Event* profiler_event(Context& ctx) { return ctx.profiler() ? ctx.profiler()->next_event() : nullptr; }
+
 // CL_MEM_READ_WRITE, plus CL_MEM_ALLOC_HOST_PTR on devices that share host memory: there the buffer is allocated
 // where the host can reach it, so clEnqueueMapBuffer returns a pointer to the buffer itself instead of a copy (the
 // host GEMM backend, mlp/host_gemm.cpp, runs the CPU BLAS on such pointers).
@@ -63,7 +66,8 @@ class DeviceArray {
   // Sets every element to `value` (asynchronous, in queue order).
   void fill(Context& ctx, T value) {
     if (count_ == 0) return;
-    check(ctx.queue().enqueueFillBuffer(buffer_, value, 0, bytes()), "clEnqueueFillBuffer(" + name_ + ")");
+    check(ctx.queue().enqueueFillBuffer(buffer_, value, 0, bytes(), nullptr, profiler_event(ctx)),
+          "clEnqueueFillBuffer(" + name_ + ")");
   }
 
   // Throws unless the array holds at least `count` elements; `where` names the caller.
@@ -96,7 +100,7 @@ void copy(Context& ctx, const DeviceArray<T>& src, size_t src_offset, DeviceArra
   src.require_size(src_offset + count, "copy from");
   dst.require_size(dst_offset + count, "copy to");
   check(ctx.queue().enqueueCopyBuffer(src.buffer(), dst.buffer(), src_offset * sizeof(T), dst_offset * sizeof(T),
-                                      count * sizeof(T)),
+                                      count * sizeof(T), nullptr, profiler_event(ctx)),
         "clEnqueueCopyBuffer(" + src.name() + " -> " + dst.name() + ")");
 }
 

@@ -2,6 +2,7 @@
 #include "cl/context.hpp"
 
 #include "cl/error.hpp"
+#include "core/error.hpp"
 
 namespace mipnerf::ocl {
 namespace {
@@ -27,7 +28,8 @@ Context::Context(const DeviceInfo& device, bool profiling)
       traits_(traits_for(device)),
       context_(make_context(device)),
       queue_(make_queue(context_, device, profiling)),
-      programs_(context_, device.device, device.name) {}
+      programs_(context_, device.device, device.name),
+      profiling_queue_(profiling) {}
 
 std::unique_ptr<Context> Context::create(const ContextOptions& options) {
   const auto devices = list_devices();
@@ -42,6 +44,14 @@ Program& Context::program_from_sources(const std::vector<SourceFile>& files, con
   BuildOptions all = traits_.base_options;
   all.merge(options);
   return programs_.get(files, all);
+}
+
+void Context::set_profiler(StageProfiler* profiler) {
+  if (profiler != nullptr && !profiling_queue_) {
+    throw Error("stage profiler on " + device_.name +
+                ": the context's queue was made without profiling; open it with ContextOptions::profiling");
+  }
+  profiler_ = profiler;
 }
 
 void Context::finish() { check(queue_.finish(), "clFinish"); }

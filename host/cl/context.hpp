@@ -9,6 +9,7 @@
 #include "cl/device_quirks.hpp"
 #include "core/log.hpp"
 #include "cl/opencl.hpp"
+#include "cl/profiler.hpp"
 #include "cl/program.hpp"
 
 namespace mipnerf::ocl {
@@ -47,6 +48,11 @@ class Context {
   bool gemm_on_host() const { return gemm_on_host_; }
   void set_gemm_on_host(bool on) { gemm_on_host_ = on; }
 
+  // The stage profiler recording this context's commands, or nullptr (the default). Not owned; see profiler.hpp.
+  StageProfiler* profiler() const { return profiler_; }
+  void set_profiler(StageProfiler* profiler);  // needs a queue made with profiling on
+  bool profiling_queue() const { return profiling_queue_; }
+
   void set_log(LogFn log) { log_ = std::move(log); }
   void log(LogLevel level, const std::string& message) const {
     if (log_) log_(level, message);
@@ -60,6 +66,8 @@ class Context {
   ProgramCache programs_;
   LogFn log_;
   bool gemm_on_host_ = false;
+  bool profiling_queue_ = false;
+  StageProfiler* profiler_ = nullptr;
 };
 
 }  // namespace mipnerf::ocl

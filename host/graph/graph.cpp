@@ -161,11 +161,13 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
     throw Error("graph: a chunk of " + std::to_string(chunk.count) + " rays (the graph holds up to " +
                 std::to_string(max_chunk_rays_) + ")");
   }
+  ocl::StageScope stage(*ctx_, "rays");
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
   const RngKey rng{key.seed, key.step, first_ray};
   rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count}, chunk_rays_, rng);
   if (spec_.rays.view_dependence) {
+    ocl::StageScope view_stage(*ctx_, "view encoding");
     encode_->pe(spec_.view_encoding, {chunk_rays_.viewdirs, chunk.count}, view_features_);
   }
 }
@@ -174,6 +176,7 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& out = levels_[l];
   const RngKey rng{key.seed, key.step, first_ray};
+  ocl::StageScope stage(*ctx_, level.sampling == Sampling::stratified ? "sampling" : "resampling");
   switch (level.sampling) {
     case Sampling::stratified:
       sample_->stratified({chunk_rays_, n_rays, out.intervals}, out.t_edges, rng);
@@ -202,6 +205,7 @@ void Graph::encode_level(size_t l, size_t n_rays) {
   const LevelBuffers& buffers = levels_[l];
   const ops::GaussianInputs intervals{chunk_rays_, buffers.t_edges, n_rays, buffers.intervals};
   const size_t rows = n_rays * buffers.intervals;
+  ocl::StageScope stage(*ctx_, "encoding");
   switch (level.encoding) {
     case Encoding::integrated:
       encode_->gaussian_ipe(spec_.position_encoding, intervals, features_);
@@ -227,8 +231,12 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws) {
   if (spec_.rays.view_dependence) in.view_encoding = mlp::view(view_features_, network.config().view_width);
   in.n_rays = n_rays;
   in.samples_per_ray = buffers.intervals;
-  network.forward(in, {mlp::view(raw_density_, 1), mlp::view(raw_rgb_, 3)}, ws);
+  {
+    ocl::StageScope mlp_stage(*ctx_, "mlp bias + ReLU");
+    network.forward(in, {mlp::view(raw_density_, 1), mlp::view(raw_rgb_, 3)}, ws);
+  }
   // The activations are fused into rendering: raw MLP outputs in, composited colour out.
+  ocl::StageScope stage(*ctx_, "render");
   render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                    {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights});
 }
@@ -237,10 +245,15 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& buffers = levels_[l];
   const ops::LossChunk loss_chunk{n_rays, chunk.first, step_groups_};
-  loss_->fwd_bwd(buffers.outputs.comp_rgb, targets.target_rgb, targets.lossmult,
-                 {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
+  {
+    ocl::StageScope stage(*ctx_, "loss");
+    loss_->fwd_bwd(buffers.outputs.comp_rgb, targets.target_rgb, targets.lossmult,
+                   {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
+  }
+  ocl::StageScope stage(*ctx_, "render backward");
   render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                    buffers.weights, {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_});
+  ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
   networks_[level.mlp_index]->backward(workspaces_[level.mlp_index],
                                        {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)});
 }
@@ -255,6 +268,7 @@ void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
   step_batch_rays_ = batch_rays;
   step_lossmult_sum_ = lossmult_sum;
   step_groups_ = 0;
+  ocl::StageScope stage(*ctx_, "adam");  // zeroing the gradients is part of the optimiser's work
   for (auto* network : networks_) network->zero_grad();
 }
 
@@ -273,6 +287,7 @@ void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTa
 
 std::vector<ops::LevelLoss> Graph::end_step() {
   std::vector<ops::LevelLoss> losses;
+  ocl::StageScope stage(*ctx_, "loss");
   for (auto& level : levels_) {
     std::vector<float> partials(2 * step_groups_);
     level.partials.download(*ctx_, partials.data(), partials.size());  // blocking: waits for the step

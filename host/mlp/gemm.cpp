@@ -3,6 +3,7 @@
 
 #include <clblast.h>
 
+#include "cl/error.hpp"
 #include "core/error.hpp"
 #include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
@@ -31,6 +32,9 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
   require_fits(a, s.transpose_a ? s.k : s.m, s.transpose_a ? s.m : s.k, "A", what);
   require_fits(b, s.transpose_b ? s.n : s.k, s.transpose_b ? s.k : s.n, "B", what);
   require_fits(c, s.m, s.n, "C", what);
+  // Profiled under "gemm <kind>", with its FLOPs, so the report can give GFLOP/s and the GEMM-bound limit.
+  ocl::StageScope stage(ctx, std::string("gemm ") + gemm_kind_name(gemm_kind(s)));
+  if (ctx.profiler()) ctx.profiler()->add_flops(2.0 * static_cast<double>(s.m) * s.n * s.k);
   // The context's backend (mlp/gemm_backend.hpp): the host BLAS on mapped buffers, or CLBlast on the queue.
   if (ctx.gemm_on_host()) {
     host_gemm(ctx, s, alpha, a, b, beta, c, what);
@@ -40,10 +44,18 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
   select_gemm_kind(ctx, gemm_kind(s));
   using clblast::Transpose;
   cl_command_queue queue = ctx.raw_queue();
+  // Profiling: CLBlast may enqueue several kernels (padding, transposes) and returns the last one's event, so the
+  // product is timed from a marker before it to that event's end (in-order queue).
+  const bool profile = ctx.profiler() && ctx.profiler()->recording();
+  cl_event before = nullptr, after = nullptr;
+  if (profile) {
+    ocl::check(clEnqueueMarkerWithWaitList(queue, 0, nullptr, &before), "clEnqueueMarkerWithWaitList (profiling)");
+  }
   const auto status = clblast::Gemm<float>(
       clblast::Layout::kRowMajor, s.transpose_a ? Transpose::kYes : Transpose::kNo,
       s.transpose_b ? Transpose::kYes : Transpose::kNo, s.m, s.n, s.k, alpha, a.array->raw(), a.offset, a.ld,
-      b.array->raw(), b.offset, b.ld, beta, c.array->raw(), c.offset, c.ld, &queue, nullptr);
+      b.array->raw(), b.offset, b.ld, beta, c.array->raw(), c.offset, c.ld, &queue, profile ? &after : nullptr);
+  if (profile) ctx.profiler()->add_event_span(::cl::Event(before), ::cl::Event(after));  // takes both references
   check_clblast(status, "clblast::Gemm(" + what + ", m=" + std::to_string(s.m) + " n=" + std::to_string(s.n) +
                             " k=" + std::to_string(s.k) + ")");
 }

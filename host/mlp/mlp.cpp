@@ -2,9 +2,11 @@
 #include "mlp/mlp.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <string>
 
 #include "core/error.hpp"
+#include "mlp/mapped_buffers.hpp"
 #include "ops/mlp.hpp"
 
 namespace mipnerf::mlp {
@@ -139,8 +141,12 @@ void Mlp::forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws) {
   check_inputs(in, ws, "forward");
   const bool save = ws.mode_ == WorkspaceMode::training;
   ws.has_forward_ = false;
-  trunk_forward(in, ws, save);
-  heads_forward(in, out, ws, save);
+  if (ctx_->gemm_on_host()) {
+    host_forward(in, out, ws, save);
+  } else {
+    trunk_forward(in, ws, save);
+    heads_forward(in, out, ws, save);
+  }
   if (save) {
     ws.inputs_ = in;
     ws.has_forward_ = true;
@@ -213,8 +219,133 @@ void Mlp::backward(Workspace& ws, const MlpOutputGradients& d_out) {
   }
   if (!ws.has_forward_) throw Error("MLP backward: no forward has been run through this workspace");
   check_inputs(ws.inputs_, ws, "backward");
+  if (ctx_->gemm_on_host()) {
+    host_backward(ws, d_out);
+    return;
+  }
   heads_backward(ws, d_out);
   trunk_backward(ws);
+}
+
+// ---- the host path (gemm_backend=host) ----
+
+namespace {
+
+HostMlpOptions default_host_options(const ocl::Context& ctx) {
+  HostMlpOptions o;
+  o.threads = std::max<size_t>(1, ctx.device_info().compute_units);
+  return o;
+}
+
+// A call's thread times as stage times: its wall time split in the proportions of its threads' time, each product
+// kind under "gemm <kind>" with its FLOPs, the rest under the caller's stage.
+void profile_host_call(ocl::Context& ctx, const HostMlpTimes& t, double wall_seconds) {
+  ocl::StageProfiler* profiler = ctx.profiler();
+  if (profiler == nullptr || !profiler->recording()) return;
+  const double scale = t.total() > 0 ? wall_seconds / t.total() : 0.0;
+  auto add = [&](const char* stage, double seconds, double flops) {
+    if (seconds <= 0 && flops <= 0) return;
+    ocl::StageScope scope(ctx, stage);
+    profiler->add_host_seconds(seconds * scale);
+    profiler->add_flops(flops);
+  };
+  add("gemm forward", t.gemm_forward, t.flops_forward);
+  add("gemm backward_data", t.gemm_backward_data, t.flops_backward_data);
+  add("gemm backward_weights", t.gemm_backward_weights, t.flops_backward_weights);
+  if (t.elementwise > 0) profiler->add_host_seconds(t.elementwise * scale);
+}
+
+bool profiling(const ocl::Context& ctx) { return ctx.profiler() != nullptr && ctx.profiler()->recording(); }
+
+}  // namespace
+
+void Mlp::set_host_options(const HostMlpOptions& options) { host_ = std::make_unique<HostMlp>(config_, options); }
+
+HostMlpOptions Mlp::host_options() const { return host_ ? host_->options() : default_host_options(*ctx_); }
+
+HostMlp& Mlp::host_mlp() {
+  if (!host_) host_ = std::make_unique<HostMlp>(config_, default_host_options(*ctx_));
+  return *host_;
+}
+
+// Maps what the forward reads and writes (blocking: the kernels that wrote the features have finished), runs it on
+// the host, and unmaps (the kernels enqueued next see the outputs). See mapped_buffers.hpp.
+void Mlp::host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) {
+  MappedBuffers mapped(*ctx_, "the host MLP's forward");
+  mapped.need(&params_, false);
+  mapped.need(in.features, false);
+  mapped.need(in.view_encoding, false);
+  mapped.need(out.raw_density, true);
+  mapped.need(out.raw_rgb, true);
+  if (save) {
+    for (const auto& a : ws.activations_) mapped.need(&a, true);
+    if (config_.view_dependence) {
+      mapped.need(&ws.bottleneck_, true);
+      mapped.need(&ws.view_hidden_, true);
+    }
+  }
+  mapped.map();
+  const auto start = std::chrono::steady_clock::now();
+  HostForwardBuffers b;
+  b.params = mapped.at(&params_);
+  b.features = mapped.at(in.features);
+  b.features_ld = in.features.ld;
+  b.view_encoding = config_.view_dependence ? mapped.at(in.view_encoding) : nullptr;
+  b.view_ld = in.view_encoding.ld;
+  b.density = mapped.at(out.raw_density);
+  b.density_ld = out.raw_density.ld;
+  b.rgb = mapped.at(out.raw_rgb);
+  b.rgb_ld = out.raw_rgb.ld;
+  if (save) {
+    for (const auto& a : ws.activations_) b.trunk.push_back(mapped.at(&a));
+    if (config_.view_dependence) {
+      b.bottleneck = mapped.at(&ws.bottleneck_);
+      b.view_hidden = mapped.at(&ws.view_hidden_);
+    }
+  }
+  b.n_rays = in.n_rays;
+  b.samples_per_ray = in.samples_per_ray;
+  const HostMlpTimes times = host_mlp().forward(b, profiling(*ctx_));
+  profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
+void Mlp::host_backward(Workspace& ws, const MlpOutputGradients& d_out) {
+  const MlpInputs& in = ws.inputs_;
+  MappedBuffers mapped(*ctx_, "the host MLP's backward");
+  mapped.need(&params_, false);
+  mapped.need(&grads_, true);
+  mapped.need(in.features, false);
+  mapped.need(in.view_encoding, false);
+  for (const auto& a : ws.activations_) mapped.need(&a, false);
+  if (config_.view_dependence) {
+    mapped.need(&ws.bottleneck_, false);
+    mapped.need(&ws.view_hidden_, false);
+  }
+  mapped.need(d_out.d_raw_density, false);
+  mapped.need(d_out.d_raw_rgb, false);
+  mapped.map();
+  const auto start = std::chrono::steady_clock::now();
+  HostBackwardBuffers b;
+  HostForwardBuffers& saved = b.saved;
+  saved.params = mapped.at(&params_);
+  saved.features = mapped.at(in.features);
+  saved.features_ld = in.features.ld;
+  saved.view_encoding = config_.view_dependence ? mapped.at(in.view_encoding) : nullptr;
+  saved.view_ld = in.view_encoding.ld;
+  for (const auto& a : ws.activations_) saved.trunk.push_back(mapped.at(&a));
+  if (config_.view_dependence) {
+    saved.bottleneck = mapped.at(&ws.bottleneck_);
+    saved.view_hidden = mapped.at(&ws.view_hidden_);
+  }
+  saved.n_rays = in.n_rays;
+  saved.samples_per_ray = in.samples_per_ray;
+  b.d_density = mapped.at(d_out.d_raw_density);
+  b.d_density_ld = d_out.d_raw_density.ld;
+  b.d_rgb = mapped.at(d_out.d_raw_rgb);
+  b.d_rgb_ld = d_out.d_raw_rgb.ld;
+  b.grads = mapped.at(&grads_);
+  const HostMlpTimes times = host_mlp().backward(b, profiling(*ctx_));
+  profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 // grads[bias] += Σ_rows dz (after masking dz by act > 0 when act is given).

@@ -18,6 +18,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "mlp/gemm.hpp"
+#include "mlp/host_mlp.hpp"
 #include "mlp/mlp_config.hpp"
 
 namespace mipnerf::ops {
@@ -123,12 +124,20 @@ class Mlp {
 
   void zero_grad();
 
+  // How the host path (gemm_backend=host: the whole MLP fused on the host, host_mlp.hpp) splits its work: rows per
+  // block and threads. Default: 256 rows, one thread per compute unit of the device.
+  void set_host_options(const HostMlpOptions& options);
+  HostMlpOptions host_options() const;
+
  private:
   void check_inputs(const MlpInputs& in, const Workspace& ws, const char* where) const;
   void trunk_forward(const MlpInputs& in, Workspace& ws, bool save);
   void heads_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save);
   void heads_backward(Workspace& ws, const MlpOutputGradients& d_out);
   void trunk_backward(Workspace& ws);
+  HostMlp& host_mlp();
+  void host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save);
+  void host_backward(Workspace& ws, const MlpOutputGradients& d_out);
   void bias_gradient(const MatrixView& dz, const MatrixView* act, size_t rows, size_t cols, size_t bias_offset,
                      Workspace& ws);
 
@@ -138,6 +147,7 @@ class Mlp {
   ocl::DeviceArray<float> params_;
   ocl::DeviceArray<float> grads_;
   std::unique_ptr<ops::MlpKernels> kernels_;
+  std::unique_ptr<HostMlp> host_;  // made on first use by the host path
 };
 
 }  // namespace mipnerf::mlp

@@ -145,11 +145,16 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
 
   while (step_ < config_.steps) {
     const int64_t step = step_ + 1;
-    ops::batch_sample(*ctx_, impl_->device_data, batch_options, static_cast<uint32_t>(step), batch);
+    ocl::StageProfiler* profiler = ctx_->profiler();
+    if (profiler) profiler->begin_step();
     double lossmult_sum = static_cast<double>(batch_rays);
-    if (spec_.loss.multiscale) {
-      lossmult_sum = 0.0;
-      for (float m : batch.lossmult.download(*ctx_)) lossmult_sum += m;
+    {
+      ocl::StageScope stage(*ctx_, "batch");
+      ops::batch_sample(*ctx_, impl_->device_data, batch_options, static_cast<uint32_t>(step), batch);
+      if (spec_.loss.multiscale) {
+        lossmult_sum = 0.0;
+        for (float m : batch.lossmult.download(*ctx_)) lossmult_sum += m;
+      }
     }
     impl_->graph.begin_step(batch_rays, lossmult_sum);
     for (size_t first = 0; first < batch_rays; first += chunk) {
@@ -161,6 +166,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
 
     bool finite = true;
     for (const auto& l : losses) finite = finite && l.finite();
+    ocl::StageScope adam_stage(*ctx_, "adam");
     std::vector<mlp::GradientStats> stats;
     for (size_t i = 0; i < networks_.size(); ++i) {
       stats.push_back(optimisers_[i]->gradient_stats(networks_[i]->grads()));
@@ -185,6 +191,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
                     "; try a lower lr_init or set grad_max_norm");
       }
     }
+    if (profiler) profiler->end_step(*ctx_);
     step_ = step;
     ++window_steps;
 

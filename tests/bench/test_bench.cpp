@@ -32,6 +32,7 @@
 #include "ops/stage_list.hpp"
 #include "support/temp_scene.hpp"
 #include "support/mlp_fixtures.hpp"
+#include "bench/stage_report.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -290,6 +291,68 @@ TEST_CASE("bench preset: the time box stops the warm steps after the first one, 
   CHECK(r.train.warm_steps.count() == 1);
   CHECK(r.train.time_boxed);
   CHECK_FALSE(r.render.has_value());
+}
+
+TEST_CASE("bench preset: profiled steps follow the timed ones, by stage, also after the time box") {
+  ocl::Context ctx(test::test_context().device_info(), true);
+  for (const double time_box : {0.0, 1e-9}) {
+    INFO("time box " << time_box);
+    auto options = tiny_preset_options("profile");
+    options.warm_steps = time_box > 0 ? 50 : 2;
+    options.time_box_seconds = time_box;
+    options.profile_steps = 2;
+    options.render_width = 0;
+    const auto r = bench::run_preset_bench(ctx, options);
+    fs::remove_all(options.work_dir);
+    CHECK(ctx.profiler() == nullptr);  // detached when done
+    CHECK(r.train.warm_steps.count() == (time_box > 0 ? 1u : 2u));  // the profiled steps are not timed
+    CHECK(r.train.time_boxed == (time_box > 0));
+    REQUIRE(r.train.profile.has_value());
+    const ocl::StageProfile& p = *r.train.profile;
+    CHECK(p.steps == 2);
+    for (const char* stage : {"batch", "rays", "sampling", "resampling", "encoding", "gemm forward",
+                              "gemm backward_data", "gemm backward_weights", "render", "render backward", "loss",
+                              "adam"}) {
+      CAPTURE(stage);
+      const ocl::StageTime* s = p.find(stage);
+      REQUIRE(s != nullptr);
+      CHECK(s->seconds > 0.0);
+    }
+    CHECK(p.stage_seconds() <= p.wall_seconds);
+    const bench::GemmLimit g = bench::gemm_limit(p, r.train.batch_rays);
+    CHECK(g.fraction() > 0.0);
+    CHECK(g.fraction() < 1.0);
+    CHECK(g.limit_rays_per_second > g.rays_per_second);
+  }
+  auto options = tiny_preset_options("profile-refused");
+  options.profile_steps = 1;
+  CHECK_THROWS_WITH_AS(bench::run_preset_bench(test::test_context(), options),
+                       doctest::Contains("context made with profiling on"), Error);
+}
+
+TEST_CASE("bench stage report: per-step figures, largest stage first, and the GEMM-bound limit") {
+  ocl::StageProfile p;
+  p.steps = 2;
+  p.wall_seconds = 2.0;  // 1 s per step
+  p.stages = {{"encoding", 0.2, 4, 0.0}, {"gemm forward", 0.6, 10, 60e9}, {"gemm backward_weights", 0.4, 10, 40e9},
+              {"adam", 0.1, 2, 0.0}};
+  const bench::GemmLimit g = bench::gemm_limit(p, 1000);
+  CHECK(g.step_seconds == doctest::Approx(1.0));
+  CHECK(g.gemm_seconds == doctest::Approx(0.5));
+  CHECK(g.gemm_gflops == doctest::Approx(100.0));  // 100e9 FLOPs in 1 s
+  CHECK(g.rays_per_second == doctest::Approx(1000.0));
+  CHECK(g.limit_rays_per_second == doctest::Approx(2000.0));
+  CHECK(g.fraction() == doctest::Approx(0.5));
+  const std::string md = bench::stage_profile_markdown(p, 1000);
+  CHECK(md.find("| gemm forward | 300.00 | 30.0 % | 5 | 100.0 |") != std::string::npos);
+  CHECK(md.find("gemm forward") < md.find("gemm backward_weights"));
+  CHECK(md.find("gemm backward_weights") < md.find("| encoding"));
+  CHECK(md.find("| (host time between commands: launches, waits) | 350.00 | 35.0 %") != std::string::npos);
+  CHECK(md.find("GEMM-bound limit: 2000 rays/s") != std::string::npos);
+  CHECK(md.find("= 50 % of it") != std::string::npos);
+  const auto j = bench::stage_profile_json(p, 1000);
+  CHECK(j["gemm_limit_fraction"].get<double>() == doctest::Approx(0.5));
+  CHECK(j["stages"].size() == 4);
 }
 
 TEST_CASE("bench preset: an unknown preset or zero warm steps are refused") {

@@ -103,6 +103,17 @@ add_test(NAME "cli: train --resume continues to more steps" COMMAND mipnerf-cl t
 set_tests_properties("cli: train --resume continues to more steps" PROPERTIES FIXTURES_REQUIRED cli_train
   ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "trained 6 steps")
 
+add_test(NAME "cli: train --profile: clear its folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-train-profile")
+set_tests_properties("cli: train --profile: clear its folder" PROPERTIES FIXTURES_SETUP cli_train_profile_clean)
+add_test(NAME "cli: train --profile prints where a step's time goes" COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
+  --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-profile" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml" --profile)
+set_tests_properties("cli: train --profile prints where a step's time goes" PROPERTIES
+  FIXTURES_REQUIRED "cli_scene;cli_train_profile_clean" FIXTURES_SETUP cli_train_profile ENVIRONMENT "${MIPNERF_TEST_ENV}"
+  PASS_REGULAR_EXPRESSION "\\| gemm forward \\| [0-9.]+ \\| [0-9.]+ %.*GEMM-bound limit: [0-9]+ rays/s.*over 3 profiled step")
+add_test(NAME "cli: train --profile writes profile.md" COMMAND ${CMAKE_COMMAND} -E cat "${CMAKE_CURRENT_BINARY_DIR}/cli-train-profile/profile.md")
+set_tests_properties("cli: train --profile writes profile.md" PROPERTIES FIXTURES_REQUIRED cli_train_profile
+  PASS_REGULAR_EXPRESSION "# Training step by stage.*\\| encoding \\|.*GEMM-bound limit")
+
 # Render and eval (cli/cmd_render.cpp, cli/cmd_eval.cpp, host/eval): tests/eval trains a tiny model in-process and
 # also runs the real executable for end-to-end checks of what it writes.
 if(TARGET test_eval)

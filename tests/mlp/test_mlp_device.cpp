@@ -87,13 +87,16 @@ mlp::MlpOutputGradients gradients_for(const DevicePass& d, const mlp::MlpConfig&
 
 // Two passes (think coarse and fine, different sample counts) through one MLP: forward A, forward B,
 // backward B, backward A, as the training graph orders them; gradients accumulate into one buffer.
+// host_options: how the host path splits the rows (blocks, threads); its defaults when null.
 void check_against_reference_on(mlp::GemmBackend backend, const mlp::MlpConfig& config, size_t n_rays,
-                                size_t samples_a, size_t samples_b, unsigned seed) {
+                                size_t samples_a, size_t samples_b, unsigned seed,
+                                const mlp::HostMlpOptions* host_options = nullptr) {
   auto& ctx = test::test_context();
   test::GemmBackendScope scope(ctx, backend);
   INFO("gemm_backend = " << enum_name(backend));
   std::mt19937 rng(seed);
   mlp::Mlp net(ctx, config);
+  if (host_options) net.set_host_options(*host_options);
   // Random biases (Glorot leaves them at zero) so every bias path carries a value.
   auto params = net.download_params();
   for (const auto* layer : net.layout().all()) {
@@ -194,6 +197,26 @@ TEST_CASE("mlp device: the paper's network through CLBlast's indirect GEMM path 
   mlp::MlpConfig config;
   config.seed = 5;
   check_against_reference_on(mlp::GemmBackend::clblast, config, 3, 16, 8, 104);
+}
+
+TEST_CASE("mlp device: the host path's blocks and threads do not change what it computes") {
+  // At test sizes every pass is one block on one thread; here blocks of one ray (and of several rays with a ragged
+  // last block) on more threads than blocks or cores, through both networks.
+  const auto backends = test::supported_gemm_backends(test::test_context());
+  if (backends.size() < 2) {
+    MESSAGE("the test device cannot run the host path; nothing to check");
+    return;
+  }
+  for (const auto& [rows, threads] : {std::pair<size_t, size_t>{1, 3}, {20, 2}, {40, 7}}) {
+    INFO("target_block_rows " << rows << ", threads " << threads);
+    const mlp::HostMlpOptions options{rows, threads};
+    check_against_reference_on(mlp::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 106, &options);
+    check_against_reference_on(mlp::GemmBackend::host, test::small_mlp_config(false), 4, 7, 3, 107, &options);
+  }
+  mlp::MlpConfig paper;
+  paper.seed = 8;
+  const mlp::HostMlpOptions one_ray_per_block{1, 2};
+  check_against_reference_on(mlp::GemmBackend::host, paper, 3, 16, 8, 108, &one_ray_per_block);
 }
 
 TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exactly twice") {
@@ -311,5 +334,71 @@ TEST_CASE("mlp device: the host BLAS and CLBlast backends agree on outputs and g
                       kBetweenBackends, kAbsolute, layer->name + " weight gradient host vs clblast");
     test::check_close(host.grads, as_ref(clblast.grads), layer->bias_offset, layer->out, kBetweenBackends, kAbsolute,
                       layer->name + " bias gradient host vs clblast");
+  }
+}
+
+namespace {
+
+// FLOPs of the products of one forward over `rows` samples of `rays` rays, counted from the architecture (mlp.hpp):
+// 2·m·n·k per product, the view encoding's product once per ray.
+double forward_flops(const mlp::MlpConfig& c, double rows, double rays) {
+  double per_row = c.input_width * c.width;
+  for (size_t i = 1; i < c.depth; ++i) per_row += (c.width + (mlp::skip_after(c, i - 1) ? c.input_width : 0)) * c.width;
+  per_row += c.width * c.density_outputs;
+  double per_ray = 0.0;
+  if (c.view_dependence) {
+    per_row += c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
+               c.view_branch_width * c.rgb_outputs;
+    per_ray += c.view_width * c.view_branch_width;
+  } else {
+    per_row += c.width * c.rgb_outputs;
+  }
+  return 2.0 * (rows * per_row + rays * per_ray);
+}
+
+// The backward's input-gradient products: every layer's but the first's and the inputs' (features, view encoding).
+double backward_data_flops(const mlp::MlpConfig& c, double rows) {
+  double per_row = (c.depth - 1) * c.width * c.width + c.width * c.density_outputs;
+  per_row += c.view_dependence ? c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
+                                     c.view_branch_width * c.rgb_outputs
+                               : c.width * c.rgb_outputs;
+  return 2.0 * rows * per_row;
+}
+
+}  // namespace
+
+TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same on each backend") {
+  ocl::Context ctx(test::test_context().device_info(), true);
+  for (const bool view : {true, false}) {
+    const mlp::MlpConfig config = test::small_mlp_config(view);
+    for (const mlp::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+      INFO("gemm_backend = " << enum_name(backend) << ", view dependence " << view);
+      mlp::use_gemm_backend(ctx, backend);
+      std::mt19937 rng(109);
+      mlp::Mlp net(ctx, config);
+      const Pass p = make_pass(config, 5, 6, rng);
+      DevicePass d(ctx, config, p);
+      auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+      ocl::StageProfiler profiler;
+      ctx.set_profiler(&profiler);
+      profiler.begin_step();
+      net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+      net.backward(ws, gradients_for(d, config));
+      profiler.end_step(ctx);
+      ctx.set_profiler(nullptr);
+      const ocl::StageProfile& profile = profiler.profile();
+      const auto* forward = profile.find("gemm forward");
+      const auto* data = profile.find("gemm backward_data");
+      const auto* weights = profile.find("gemm backward_weights");
+      REQUIRE(forward != nullptr);
+      REQUIRE(data != nullptr);
+      REQUIRE(weights != nullptr);
+      const double rows = static_cast<double>(p.rows()), rays = static_cast<double>(p.n_rays);
+      CHECK(forward->flops == forward_flops(config, rows, rays));
+      CHECK(weights->flops == forward_flops(config, rows, rays));  // one weight-gradient product per weight block
+      CHECK(data->flops == backward_data_flops(config, rows));
+      CHECK(forward->seconds > 0.0);
+      CHECK(profile.stage_seconds() <= profile.wall_seconds);
+    }
   }
 }

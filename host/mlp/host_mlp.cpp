@@ -1,0 +1,391 @@
+// The MLP fused on the host, block of rays by block of rays (see host_mlp.hpp).
+#include "mlp/host_mlp.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <thread>
+
+#include "core/error.hpp"
+
+#ifdef MIPNERF_HAVE_OPENBLAS
+#include <cblas.h>
+#endif
+
+namespace mipnerf::mlp {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+enum class ProductKind { forward, backward_data, backward_weights };
+
+// ReLU that keeps NaN (NaN < 0 is false), as kernels/mlp.cl: a non-finite value must reach the outputs.
+inline float relu_keep_nan(float v) { return v < 0.0f ? 0.0f : v; }
+
+}  // namespace
+
+struct HostMlp::Worker {
+  bool timed = false;
+  HostMlpTimes times;
+  std::vector<float> scratch[3];  // [block rows][widest layer] each
+  std::vector<float> ray_term;    // [rays per block][view_branch_width]
+  std::vector<float> grads;       // [parameters]: this thread's share of a backward
+
+  // C[m][n] = beta·C + op(A)·op(B), row-major, one BLAS thread (the caller's).
+  void product(ProductKind kind, bool trans_a, bool trans_b, size_t m, size_t n, size_t k, const float* a, size_t lda,
+               const float* b, size_t ldb, float beta, float* c, size_t ldc) {
+    if (m == 0 || n == 0) return;
+    const double flops = 2.0 * static_cast<double>(m) * n * k;
+    const auto start = timed ? Clock::now() : Clock::time_point{};
+#ifdef MIPNERF_HAVE_OPENBLAS
+    cblas_sgemm(CblasRowMajor, trans_a ? CblasTrans : CblasNoTrans, trans_b ? CblasTrans : CblasNoTrans,
+                static_cast<int>(m), static_cast<int>(n), static_cast<int>(k), 1.0f, a, static_cast<int>(lda), b,
+                static_cast<int>(ldb), beta, c, static_cast<int>(ldc));
+#else
+    (void)trans_a, (void)trans_b, (void)a, (void)lda, (void)b, (void)ldb, (void)beta, (void)c, (void)ldc;
+    throw Error("host MLP: this build has no host BLAS");
+#endif
+    const double seconds = timed ? std::chrono::duration<double>(Clock::now() - start).count() : 0.0;
+    switch (kind) {
+      case ProductKind::forward:
+        times.gemm_forward += seconds;
+        times.flops_forward += flops;
+        break;
+      case ProductKind::backward_data:
+        times.gemm_backward_data += seconds;
+        times.flops_backward_data += flops;
+        break;
+      case ProductKind::backward_weights:
+        times.gemm_backward_weights += seconds;
+        times.flops_backward_weights += flops;
+        break;
+    }
+  }
+};
+
+namespace {
+
+// z[r][c] = act(z[r][c] + bias[c]) over a block, act = ReLU when relu.
+void add_bias(float* z, size_t ld, size_t rows, size_t cols, const float* bias, bool relu) {
+  for (size_t r = 0; r < rows; ++r) {
+    float* row = z + r * ld;
+    if (relu) {
+      for (size_t c = 0; c < cols; ++c) row[c] = relu_keep_nan(row[c] + bias[c]);
+    } else {
+      for (size_t c = 0; c < cols; ++c) row[c] += bias[c];
+    }
+  }
+}
+
+// The view layer's epilogue: z[r][c] = ReLU(z[r][c] + ray_term[r / samples_per_ray][c] + bias[c]).
+void add_ray_term_relu(float* z, size_t ld, size_t rows, size_t cols, const float* ray_term, size_t samples_per_ray,
+                       const float* bias) {
+  for (size_t r = 0; r < rows; ++r) {
+    float* row = z + r * ld;
+    const float* term = ray_term + (r / samples_per_ray) * cols;
+    for (size_t c = 0; c < cols; ++c) row[c] = relu_keep_nan(row[c] + term[c] + bias[c]);
+  }
+}
+
+// The backward of a ReLU and of its bias, in place: dz[r][c] = act[r][c] > 0 ? dz[r][c] : 0 (act is the ReLU's
+// output, > 0 exactly where its input was), and bias_grad[c] += Σ_r dz[r][c].
+void relu_mask_and_sum(float* dz, size_t ld, const float* act, size_t act_ld, size_t rows, size_t cols,
+                       float* bias_grad) {
+  for (size_t r = 0; r < rows; ++r) {
+    float* row = dz + r * ld;
+    const float* a = act + r * act_ld;
+    for (size_t c = 0; c < cols; ++c) {
+      row[c] = a[c] > 0.0f ? row[c] : 0.0f;
+      bias_grad[c] += row[c];
+    }
+  }
+}
+
+// acc[c] += Σ_r d[r][c].
+void column_sums(const float* d, size_t ld, size_t rows, size_t cols, float* acc) {
+  for (size_t r = 0; r < rows; ++r) {
+    const float* row = d + r * ld;
+    for (size_t c = 0; c < cols; ++c) acc[c] += row[c];
+  }
+}
+
+size_t widest(const MlpConfig& c) {
+  size_t w = c.width;
+  if (c.view_dependence) w = std::max({w, c.bottleneck_width, c.view_branch_width});
+  return w;
+}
+
+}  // namespace
+
+HostMlp::HostMlp(const MlpConfig& config, HostMlpOptions options)
+    : config_(config), layout_(parameter_layout(config)), options_(options) {
+  config_.validate();
+  if (options_.threads == 0) options_.threads = 1;
+  if (options_.target_block_rows == 0) options_.target_block_rows = 1;
+  workers_.resize(options_.threads);
+}
+
+HostMlp::~HostMlp() = default;
+
+size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
+  return std::max<size_t>(1, options_.target_block_rows / std::max<size_t>(1, samples_per_ray));
+}
+
+namespace {
+
+// Runs work(worker, first_block, end_block) on `threads` threads over n_blocks blocks, contiguous ranges in thread
+// order (the calling thread takes the first). Rethrows the first exception after every thread has ended.
+template <typename Work>
+void run_blocks(size_t threads, size_t n_blocks, const Work& work) {
+  const size_t t_count = std::max<size_t>(1, std::min(threads, n_blocks));
+  std::vector<std::exception_ptr> errors(t_count);
+  auto range = [&](size_t t) {
+    try {
+      work(t, t * n_blocks / t_count, (t + 1) * n_blocks / t_count);
+    } catch (...) {
+      errors[t] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < t_count; ++t) pool.emplace_back(range, t);
+  range(0);
+  for (auto& thread : pool) thread.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+// Sets the host BLAS to one thread per call while it lives (our threads split the rows), then restores it.
+class SingleThreadedBlas {
+ public:
+#ifdef MIPNERF_HAVE_OPENBLAS
+  SingleThreadedBlas() : previous_(openblas_get_num_threads()) { openblas_set_num_threads(1); }
+  ~SingleThreadedBlas() { openblas_set_num_threads(previous_); }
+#endif
+ private:
+  int previous_ = 1;
+};
+
+HostMlpTimes sum_times(const std::vector<HostMlpTimes>& per_thread) {
+  HostMlpTimes t;
+  for (const auto& w : per_thread) {
+    t.gemm_forward += w.gemm_forward;
+    t.gemm_backward_data += w.gemm_backward_data;
+    t.gemm_backward_weights += w.gemm_backward_weights;
+    t.elementwise += w.elementwise;
+    t.flops_forward += w.flops_forward;
+    t.flops_backward_data += w.flops_backward_data;
+    t.flops_backward_weights += w.flops_backward_weights;
+  }
+  return t;
+}
+
+}  // namespace
+
+HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
+  const MlpConfig& c = config_;
+  const bool training = !b.trunk.empty();
+  if (training && b.trunk.size() != c.depth) throw Error("host MLP forward: expected one activation per trunk layer");
+  const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
+  const size_t rays_per = rays_per_block(spr);
+  const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
+  const float* P = b.params;
+  SingleThreadedBlas one_thread;
+
+  run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
+    Worker& w = workers_[t];
+    w.timed = timed;
+    w.times = HostMlpTimes{};
+    const auto busy_start = Clock::now();
+    const size_t block_rows = rays_per * spr;
+    for (auto& s : w.scratch) s.resize(std::max(s.size(), block_rows * cols));
+    if (c.view_dependence) w.ray_term.resize(std::max(w.ray_term.size(), rays_per * c.view_branch_width));
+    for (size_t block = first; block < end; ++block) {
+      const size_t ray0 = block * rays_per, rays = std::min(rays_per, b.n_rays - ray0);
+      const size_t row0 = ray0 * spr, rows = rays * spr;
+      const float* x = b.features + row0 * b.features_ld;
+      // Trunk: act_i = ReLU(in_i · W_i + b_i); a skip layer's input [act_{i−1} | features] as two products.
+      float* prev = nullptr;
+      for (size_t i = 0; i < c.depth; ++i) {
+        const DenseLayer& L = layout_.trunk[i];
+        float* out = training ? b.trunk[i] + row0 * W : w.scratch[i % 2].data();
+        if (i == 0) {
+          w.product(ProductKind::forward, false, false, rows, W, F, x, b.features_ld, P + L.weight_offset, W, 0.0f,
+                    out, W);
+        } else {
+          w.product(ProductKind::forward, false, false, rows, W, W, prev, W, P + L.weight_offset, W, 0.0f, out, W);
+          if (skip_after(c, i - 1)) {
+            w.product(ProductKind::forward, false, false, rows, W, F, x, b.features_ld, P + L.weight_offset + W * W,
+                      W, 1.0f, out, W);
+          }
+        }
+        add_bias(out, W, rows, W, P + L.bias_offset, true);
+        prev = out;
+      }
+      const float* h = prev;
+      const DenseLayer& D = layout_.density;
+      float* density = b.density + row0 * b.density_ld;
+      w.product(ProductKind::forward, false, false, rows, D.out, W, h, W, P + D.weight_offset, D.out, 0.0f, density,
+                b.density_ld);
+      add_bias(density, b.density_ld, rows, D.out, P + D.bias_offset, false);
+      const DenseLayer& R = layout_.rgb;
+      float* rgb = b.rgb + row0 * b.rgb_ld;
+      if (!c.view_dependence) {
+        w.product(ProductKind::forward, false, false, rows, R.out, W, h, W, P + R.weight_offset, R.out, 0.0f, rgb,
+                  b.rgb_ld);
+        add_bias(rgb, b.rgb_ld, rows, R.out, P + R.bias_offset, false);
+        continue;
+      }
+      // View branch: bottleneck (no activation); [bottleneck | view] · W_view with the view part once per ray.
+      const DenseLayer& B = layout_.bottleneck;
+      const DenseLayer& V = layout_.view;
+      const size_t Wb = B.out, Wv = V.out;
+      // Inference: the bottleneck into the scratch h is not in, the view layer back into h's (h is done with).
+      float* bneck = training ? b.bottleneck + row0 * Wb : w.scratch[c.depth % 2].data();
+      float* hidden = training ? b.view_hidden + row0 * Wv : w.scratch[(c.depth - 1) % 2].data();
+      w.product(ProductKind::forward, false, false, rows, Wb, W, h, W, P + B.weight_offset, Wb, 0.0f, bneck, Wb);
+      add_bias(bneck, Wb, rows, Wb, P + B.bias_offset, false);
+      w.product(ProductKind::forward, false, false, rays, Wv, c.view_width, b.view_encoding + ray0 * b.view_ld,
+                b.view_ld, P + V.weight_offset + Wb * Wv, Wv, 0.0f, w.ray_term.data(), Wv);
+      w.product(ProductKind::forward, false, false, rows, Wv, Wb, bneck, Wb, P + V.weight_offset, Wv, 0.0f, hidden,
+                Wv);
+      add_ray_term_relu(hidden, Wv, rows, Wv, w.ray_term.data(), spr, P + V.bias_offset);
+      w.product(ProductKind::forward, false, false, rows, R.out, Wv, hidden, Wv, P + R.weight_offset, R.out, 0.0f,
+                rgb, b.rgb_ld);
+      add_bias(rgb, b.rgb_ld, rows, R.out, P + R.bias_offset, false);
+    }
+    if (timed) {
+      const double busy = std::chrono::duration<double>(Clock::now() - busy_start).count();
+      w.times.elementwise = std::max(0.0, busy - w.times.total());
+    }
+  });
+  std::vector<HostMlpTimes> times;
+  for (size_t t = 0; t < std::min(workers_.size(), std::max<size_t>(1, n_blocks)); ++t) times.push_back(workers_[t].times);
+  return sum_times(times);
+}
+
+HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
+  const MlpConfig& c = config_;
+  const HostForwardBuffers& b = bb.saved;
+  if (b.trunk.size() != c.depth) throw Error("host MLP backward: the forward kept no activations (inference?)");
+  const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
+  const size_t rays_per = rays_per_block(spr);
+  const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
+  const size_t t_count = std::max<size_t>(1, std::min(options_.threads, n_blocks));
+  const float* P = b.params;
+  SingleThreadedBlas one_thread;
+
+  run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
+    Worker& w = workers_[t];
+    w.timed = timed;
+    w.times = HostMlpTimes{};
+    const auto busy_start = Clock::now();
+    const size_t block_rows = rays_per * spr;
+    for (auto& s : w.scratch) s.resize(std::max(s.size(), block_rows * cols));
+    if (c.view_dependence) w.ray_term.resize(std::max(w.ray_term.size(), rays_per * c.view_branch_width));
+    w.grads.assign(layout_.total, 0.0f);
+    float* G = w.grads.data();
+    for (size_t block = first; block < end; ++block) {
+      const size_t ray0 = block * rays_per, rays = std::min(rays_per, b.n_rays - ray0);
+      const size_t row0 = ray0 * spr, rows = rays * spr;
+      const float* x = b.features + row0 * b.features_ld;
+      const float* h = b.trunk[c.depth - 1] + row0 * W;
+      const float* d_density = bb.d_density + row0 * bb.d_density_ld;
+      const float* d_rgb = bb.d_rgb + row0 * bb.d_rgb_ld;
+      float* dh = w.scratch[0].data();  // ∂loss/∂h [rows][W]
+      const DenseLayer& D = layout_.density;
+      const DenseLayer& R = layout_.rgb;
+      column_sums(d_density, bb.d_density_ld, rows, D.out, G + D.bias_offset);
+      w.product(ProductKind::backward_weights, true, false, W, D.out, rows, h, W, d_density, bb.d_density_ld, 1.0f,
+                G + D.weight_offset, D.out);
+      column_sums(d_rgb, bb.d_rgb_ld, rows, R.out, G + R.bias_offset);
+      if (!c.view_dependence) {
+        w.product(ProductKind::backward_weights, true, false, W, R.out, rows, h, W, d_rgb, bb.d_rgb_ld, 1.0f,
+                  G + R.weight_offset, R.out);
+        w.product(ProductKind::backward_data, false, true, rows, W, R.out, d_rgb, bb.d_rgb_ld, P + R.weight_offset,
+                  R.out, 0.0f, dh, W);
+      } else {
+        const DenseLayer& B = layout_.bottleneck;
+        const DenseLayer& V = layout_.view;
+        const size_t Wb = B.out, Wv = V.out;
+        const float* hidden = b.view_hidden + row0 * Wv;
+        const float* bneck = b.bottleneck + row0 * Wb;
+        float* d_hidden = w.scratch[1].data();
+        float* d_bneck = w.scratch[2].data();
+        w.product(ProductKind::backward_weights, true, false, Wv, R.out, rows, hidden, Wv, d_rgb, bb.d_rgb_ld, 1.0f,
+                  G + R.weight_offset, R.out);
+        w.product(ProductKind::backward_data, false, true, rows, Wv, R.out, d_rgb, bb.d_rgb_ld, P + R.weight_offset,
+                  R.out, 0.0f, d_hidden, Wv);
+        // View layer: the ReLU's mask, then each ray's samples summed (its view-encoding row was shared by them).
+        float* d_ray = w.ray_term.data();
+        std::fill(d_ray, d_ray + rays * Wv, 0.0f);
+        for (size_t r = 0; r < rows; ++r) {
+          float* g = d_hidden + r * Wv;
+          const float* a = hidden + r * Wv;
+          float* sum = d_ray + (r / spr) * Wv;
+          for (size_t k = 0; k < Wv; ++k) {
+            g[k] = a[k] > 0.0f ? g[k] : 0.0f;
+            sum[k] += g[k];
+          }
+        }
+        column_sums(d_ray, Wv, rays, Wv, G + V.bias_offset);
+        w.product(ProductKind::backward_weights, true, false, c.view_width, Wv, rays, b.view_encoding + ray0 * b.view_ld,
+                  b.view_ld, d_ray, Wv, 1.0f, G + V.weight_offset + Wb * Wv, Wv);
+        w.product(ProductKind::backward_weights, true, false, Wb, Wv, rows, bneck, Wb, d_hidden, Wv, 1.0f,
+                  G + V.weight_offset, Wv);
+        w.product(ProductKind::backward_data, false, true, rows, Wb, Wv, d_hidden, Wv, P + V.weight_offset, Wv, 0.0f,
+                  d_bneck, Wb);
+        // Bottleneck (no activation).
+        column_sums(d_bneck, Wb, rows, Wb, G + B.bias_offset);
+        w.product(ProductKind::backward_weights, true, false, W, Wb, rows, h, W, d_bneck, Wb, 1.0f, G + B.weight_offset,
+                  Wb);
+        w.product(ProductKind::backward_data, false, true, rows, W, Wb, d_bneck, Wb, P + B.weight_offset, Wb, 0.0f, dh,
+                  W);
+      }
+      // h also feeds the density head: its share adds on.
+      w.product(ProductKind::backward_data, false, true, rows, W, D.out, d_density, bb.d_density_ld,
+                P + D.weight_offset, D.out, 1.0f, dh, W);
+      // Trunk, last layer first: dz_i = dact_i masked; W_i's gradient from its input; dact_{i−1} = dz_i · W_iᵀ.
+      float* current = dh;
+      float* other = w.scratch[1].data();
+      for (size_t i = c.depth; i-- > 0;) {
+        const DenseLayer& L = layout_.trunk[i];
+        relu_mask_and_sum(current, W, b.trunk[i] + row0 * W, W, rows, W, G + L.bias_offset);
+        if (i == 0) {
+          w.product(ProductKind::backward_weights, true, false, F, W, rows, x, b.features_ld, current, W, 1.0f,
+                    G + L.weight_offset, W);
+          break;
+        }
+        const float* prev = b.trunk[i - 1] + row0 * W;
+        w.product(ProductKind::backward_weights, true, false, W, W, rows, prev, W, current, W, 1.0f,
+                  G + L.weight_offset, W);
+        if (skip_after(c, i - 1)) {
+          w.product(ProductKind::backward_weights, true, false, F, W, rows, x, b.features_ld, current, W, 1.0f,
+                    G + L.weight_offset + W * W, W);
+        }
+        // Only the first W input rows of a skip layer come from act_{i−1}; the features need no gradient.
+        w.product(ProductKind::backward_data, false, true, rows, W, W, current, W, P + L.weight_offset, W, 0.0f, other,
+                  W);
+        std::swap(current, other);
+      }
+    }
+    if (timed) {
+      const double busy = std::chrono::duration<double>(Clock::now() - busy_start).count();
+      w.times.elementwise = std::max(0.0, busy - w.times.total());
+    }
+  });
+  // The threads' gradients into the network's, in thread order (a fixed order: the same sums every time).
+  const auto start = timed ? Clock::now() : Clock::time_point{};
+  for (size_t t = 0; t < t_count; ++t) {
+    const float* g = workers_[t].grads.data();
+    for (size_t k = 0; k < layout_.total; ++k) bb.grads[k] += g[k];
+  }
+  std::vector<HostMlpTimes> times;
+  for (size_t t = 0; t < t_count; ++t) times.push_back(workers_[t].times);
+  HostMlpTimes total = sum_times(times);
+  if (timed) total.elementwise += std::chrono::duration<double>(Clock::now() - start).count();
+  return total;
+}
+
+}  // namespace mipnerf::mlp

@@ -1,0 +1,90 @@
+// The MLP on the host CPU, for devices whose buffers live in host memory (gemm_backend=host): forward and backward
+// fused row block by row block, with the BLAS (OpenBLAS, one thread per call) for the products and the element-wise
+// work done while the block is still in cache.
+//
+// Why: on a CPU device the products already run on the host BLAS (host_gemm.hpp), and what was left around them were
+// whole passes over memory per layer: bias + ReLU after each product, the ReLU mask and the bias sums before each
+// backward product, one device kernel each, plus a queue drain per product. Here a block of rows (whole rays, about
+// target_block_rows samples) goes through every layer before the next block starts:
+//   forward:  act_i = ReLU(in_i · W_i + b_i) — the product into the block's rows, then bias + ReLU on them in cache;
+//             each activation is written once (training keeps it for the backward; inference keeps nothing but
+//             the outputs and uses per-thread scratch);
+//   backward: dz_i = (dact_i masked by act_i > 0) in per-thread scratch; bias sums and weight gradients
+//             (in_iᵀ · dz_i) accumulate in a per-thread gradient buffer; dact_{i−1} = dz_i · W_iᵀ goes to the next
+//             scratch. No gradient of an activation ever goes to device memory.
+// Threads take contiguous ranges of blocks (static, so a given thread count always gives the same result); their
+// gradient buffers are added to the network's in thread order at the end. The block decomposition depends on the
+// rows only, so training and inference forwards give bit-equal outputs.
+//
+// The same mathematics as the device path (mlp.hpp) and the reference (ref/mlp): products in float32 with the BLAS's
+// summation order, ReLU that keeps NaN.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "mlp/mlp_config.hpp"
+
+namespace mipnerf::mlp {
+
+struct HostMlpOptions {
+  size_t target_block_rows = 256;  // rows per block ≈ this, rounded to whole rays (at least one ray)
+  size_t threads = 1;              // worker threads (the device's compute units)
+};
+
+// Host addresses of one forward's buffers (mapped device buffers). Row-major, leading dimensions given.
+struct HostForwardBuffers {
+  const float* params = nullptr;
+  const float* features = nullptr;  // [rows][input_width], ld features_ld
+  size_t features_ld = 0;
+  const float* view_encoding = nullptr;  // [n_rays][view_width], ld view_ld (view dependence only)
+  size_t view_ld = 0;
+  float* density = nullptr;  // [rows][density_outputs], ld density_ld
+  size_t density_ld = 0;
+  float* rgb = nullptr;  // [rows][rgb_outputs], ld rgb_ld
+  size_t rgb_ld = 0;
+  std::vector<float*> trunk;  // training: depth × [rows][width] (ld width) kept for the backward; empty: inference
+  float* bottleneck = nullptr;   // training with view dependence: [rows][bottleneck_width]
+  float* view_hidden = nullptr;  // training with view dependence: [rows][view_branch_width]
+  size_t n_rays = 0, samples_per_ray = 0;
+};
+
+struct HostBackwardBuffers {
+  HostForwardBuffers saved;  // what the forward read and kept (its outputs are not read)
+  const float* d_density = nullptr;  // [rows][density_outputs], ld d_density_ld
+  size_t d_density_ld = 0;
+  const float* d_rgb = nullptr;  // [rows][rgb_outputs], ld d_rgb_ld
+  size_t d_rgb_ld = 0;
+  float* grads = nullptr;  // [parameters], accumulated into (+=)
+};
+
+// Where a call's time went, summed over its threads (seconds of thread time), for the stage profiler.
+struct HostMlpTimes {
+  double gemm_forward = 0.0, gemm_backward_data = 0.0, gemm_backward_weights = 0.0, elementwise = 0.0;
+  double flops_forward = 0.0, flops_backward_data = 0.0, flops_backward_weights = 0.0;
+  double total() const { return gemm_forward + gemm_backward_data + gemm_backward_weights + elementwise; }
+};
+
+class HostMlp {
+ public:
+  HostMlp(const MlpConfig& config, HostMlpOptions options);
+  ~HostMlp();
+  HostMlp(const HostMlp&) = delete;
+  HostMlp& operator=(const HostMlp&) = delete;
+
+  const HostMlpOptions& options() const { return options_; }
+  size_t rays_per_block(size_t samples_per_ray) const;
+
+  // Thread times are measured only when `timed` (a clock read around each product).
+  HostMlpTimes forward(const HostForwardBuffers& b, bool timed);
+  HostMlpTimes backward(const HostBackwardBuffers& b, bool timed);
+
+ private:
+  struct Worker;
+  MlpConfig config_;
+  ParameterLayout layout_;
+  HostMlpOptions options_;
+  std::vector<Worker> workers_;
+};
+
+}  // namespace mipnerf::mlp
