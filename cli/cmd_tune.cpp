@@ -22,6 +22,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/gemm_bench.hpp"
 #include "common.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -31,6 +32,8 @@
 #include "mlp/gemm_backend.hpp"
 #include "mlp/gemm_tune_steps.hpp"
 #include "mlp/gemm_tuner.hpp"
+#include "mlp/gemm_tuning.hpp"
+#include "mlp/mlp.hpp"
 #include "progress.hpp"
 
 namespace mipnerf::cli {
@@ -236,6 +239,51 @@ void check_args(const TuneArgs& args) {
   if (s.width % 128 != 0) throw Error("--width must be a multiple of 128 for CLBlast's Xgemm tuner");
 }
 
+// After the parameter search: the whole network (forward + backward of one chunk, the tuned size) on each backend the
+// device supports, CLBlast with the parameters just found; the faster becomes what gemm_backend=auto takes on this
+// device (GemmTuning::auto_backend in the same file). Per network rather than per product: the host path fuses the
+// products with their element-wise work (mlp/host_mlp.hpp), so a product alone is not what it runs.
+void measure_backends(const ocl::DeviceInfo& device, const std::string& path, const mlp::GemmTuneSettings& s) {
+  std::optional<mlp::GemmTuning> tuning = mlp::read_tuning(path);
+  if (!tuning) return;
+  ocl::Context ctx(device);
+  mlp::install_gemm_tuning(ctx, *tuning);
+  mlp::MlpConfig config;
+  config.width = s.width;
+  config.input_width = s.input_width;
+  config.view_branch_width = s.view_branch_width;
+  config.bottleneck_width = s.width;  // as the presets have it
+  config.view_dependence = s.view_dependence;
+  const size_t samples = 64, rays = std::max<size_t>(1, s.rows / samples);
+  io::Json seconds = io::Json::object();
+  std::optional<std::pair<mlp::GemmBackend, double>> best;
+  for (const mlp::GemmBackend backend : {mlp::GemmBackend::clblast, mlp::GemmBackend::host}) {
+    try {
+      mlp::use_gemm_backend(ctx, backend);
+    } catch (const Error&) {
+      continue;  // not possible on this device or in this build
+    }
+    mlp::Mlp net(ctx, config);
+    const bench::MlpChunkTimes t = bench::time_mlp_chunk(ctx, net, rays, samples, 2);
+    const double step = t.forward + t.backward;
+    seconds[enum_name(backend)] = step;
+    if (!best || step < best->second) best = {backend, step};
+  }
+  if (!best) return;
+  tuning->auto_backend = best->first;
+  tuning->backend_measurement_json =
+      io::Json{{"what", "training forward + backward of the whole network, best of 2 after a warm-up"},
+               {"network", mlp::describe(config)},
+               {"rows", rays * samples},
+               {"seconds", seconds}}
+          .dump();
+  mlp::save_tuning(path, *tuning);
+  std::printf("gemm_backend=auto on this device: %s (whole network, %zu rows, forward + backward:", enum_name(best->first),
+              rays * samples);
+  for (const auto& [name, value] : seconds.items()) std::printf(" %s %.3f s", name.c_str(), value.get<double>());
+  std::printf(")\n");
+}
+
 void run_tune(const TuneArgs& args) {
   check_args(args);
   const auto devices = ocl::list_devices();
@@ -272,6 +320,7 @@ void run_tune(const TuneArgs& args) {
   runner.finish_progress();
   print_summary(tuner, device, settings.rows);
   if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + path);
+  measure_backends(device, path, settings);
 }
 
 }  // namespace

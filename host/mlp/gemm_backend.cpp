@@ -5,6 +5,8 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "mlp/clblast_check.hpp"
+#include "mlp/gemm_tuning.hpp"
 #include "mlp/host_gemm.hpp"
 
 namespace mipnerf::mlp {
@@ -34,16 +36,38 @@ GemmBackend resolve_gemm_backend(GemmBackend wanted, const ocl::DeviceInfo& devi
       }
       return GemmBackend::host;
     case GemmBackend::automatic:
-      // A rule for now: on a CPU device the kernels and the BLAS share the same cores, and OpenBLAS beats CLBlast on
-      // PoCL at every MLP product measured (bench/results). Not yet chosen per device from a measurement.
+      // The rule when tune has not measured the device (measured_auto_backend): on a CPU device the kernels and the
+      // host MLP share the same cores, and the host path beats CLBlast on PoCL at every network measured
+      // (bench/results).
       return host_blas && device.host_unified_memory && (device.type & CL_DEVICE_TYPE_CPU) != 0 ? GemmBackend::host
                                                                                                 : GemmBackend::clblast;
   }
   throw Error("internal error: gemm backend " + std::to_string(static_cast<int>(wanted)) + " has no rule");
 }
 
+std::optional<GemmBackend> measured_auto_backend(const ocl::DeviceInfo& device, const LogFn& log) {
+  std::string path;
+  try {
+    path = tuning_file_path(device);
+    const std::optional<GemmTuning> tuning = read_tuning(path);
+    if (!tuning || !tuning->auto_backend) return std::nullopt;
+    if (tuning->device_name != device.name || tuning->driver_version != device.driver_version ||
+        tuning->clblast_version != clblast_version()) {
+      return std::nullopt;  // load_gemm_tuning says so when it reads the file
+    }
+    resolve_gemm_backend(*tuning->auto_backend, device, host_blas_available());  // still possible in this build?
+    return tuning->auto_backend;
+  } catch (const Error& e) {
+    if (log) log(LogLevel::warning, std::string(e.what()) + "; gemm_backend=auto follows its rule");
+    return std::nullopt;
+  }
+}
+
 GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
-  const GemmBackend backend = resolve_gemm_backend(wanted, ctx.device_info(), host_blas_available());
+  const LogFn log = [&ctx](LogLevel level, const std::string& message) { ctx.log(level, message); };
+  const std::optional<GemmBackend> measured =
+      wanted == GemmBackend::automatic ? measured_auto_backend(ctx.device_info(), log) : std::nullopt;
+  const GemmBackend backend = resolve_gemm_backend(measured.value_or(wanted), ctx.device_info(), host_blas_available());
   ctx.set_gemm_on_host(backend == GemmBackend::host);
   if (backend == GemmBackend::host) {
     // Threads: the device's kernels (PoCL's pthread pool, one worker per compute unit) and the BLAS never run at the
@@ -56,7 +80,8 @@ GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
     set_host_blas_threads(static_cast<int>(std::max<cl_uint>(1, ctx.device_info().compute_units)));
   }
   ctx.log(LogLevel::debug, std::string("GEMM backend: ") + enum_name(backend) + " on '" + ctx.device_info().name +
-                              "' (gemm_backend=" + enum_name(wanted) + ")");
+                              "' (gemm_backend=" + enum_name(wanted) +
+                              (measured ? ", measured by tune: " + tuning_file_path(ctx.device_info()) : "") + ")");
   return backend;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 
 #include "cl/context.hpp"
 #include "core/enum_names.hpp"
@@ -23,11 +24,17 @@ constexpr std::array<EnumName<GemmBackend>, 3> enum_names(GemmBackend) {
 bool host_blas_available();
 
 // What `wanted` means on `device` (never `automatic`). `automatic` is host on a CPU device with unified memory when
-// `host_blas` is true, else clblast; this is a rule, not yet a measurement per device. Throws mipnerf::Error when
+// `host_blas` is true, else clblast (the rule when tune has not measured the device). Throws mipnerf::Error when
 // host is wanted on a device without unified memory or without a host BLAS, saying why and what to do.
 GemmBackend resolve_gemm_backend(GemmBackend wanted, const ocl::DeviceInfo& device, bool host_blas);
 
-// Resolves `wanted` for ctx's device, makes mlp::gemm use it from the next product on, and for the host backend
+// What `mipnerf-cl tune` measured for gemm_backend=auto on `device` (GemmTuning::auto_backend in the device's tuning
+// file, when the file is for this device, driver and CLBlast and the backend is possible in this build); else
+// nothing, and `log` hears why when the file could not be read.
+std::optional<GemmBackend> measured_auto_backend(const ocl::DeviceInfo& device, const LogFn& log);
+
+// Resolves `wanted` for ctx's device (auto: tune's measurement when there is one, else the rule above), makes the
+// MLP use it from the next product on, and for the host backend
 // sets the host BLAS's thread count to the device's compute units (see gemm_backend.cpp for why). Logs the choice.
 // Returns the backend in use.
 GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted);

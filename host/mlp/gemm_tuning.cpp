@@ -223,6 +223,11 @@ std::string to_json(const GemmTuning& t) {
   for (const auto& [kind, set] : t.per_kind) per_kind[gemm_kind_name(kind)] = set_to_json(set);
   j["per_kind"] = per_kind;
   j["report"] = nlohmann::json::parse(t.report_json.empty() ? "{}" : t.report_json);
+  if (t.auto_backend) {
+    j["auto_backend"] = enum_name(*t.auto_backend);
+    j["backend_measurement"] =
+        nlohmann::json::parse(t.backend_measurement_json.empty() ? "{}" : t.backend_measurement_json);
+  }
   return j.dump(2) + "\n";
 }
 
@@ -254,6 +259,15 @@ GemmTuning tuning_from_json(const std::string& text, const std::string& where) {
     if (!known) throw Error(where + ": unknown product kind '" + name + "'");
   }
   t.report_json = j.value("report", nlohmann::json::object()).dump();
+  if (j.contains("auto_backend")) {
+    const auto& value = j["auto_backend"];
+    const std::string name = value.is_string() ? value.get<std::string>() : value.dump();
+    t.auto_backend = enum_from_name<GemmBackend>(name);
+    if (!t.auto_backend || *t.auto_backend == GemmBackend::automatic) {
+      throw Error(where + ": auto_backend '" + name + "' is not clblast or host; run `mipnerf-cl tune` again");
+    }
+    t.backend_measurement_json = j.value("backend_measurement", nlohmann::json::object()).dump();
+  }
   return t;
 }
 

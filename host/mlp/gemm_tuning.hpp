@@ -20,6 +20,7 @@
 
 #include "cl/context.hpp"
 #include "mlp/gemm.hpp"
+#include "mlp/gemm_backend.hpp"
 #include "mlp/mlp_config.hpp"
 
 namespace mipnerf::mlp {
@@ -54,6 +55,10 @@ struct GemmTuning {
   ParameterSet common;                        // applied for every product
   std::map<GemmKind, ParameterSet> per_kind;  // applied (over common) before products of that kind
   std::string report_json = "{}";             // what tune measured, for people (JSON object text)
+  // The backend gemm_backend=auto takes on this device: the faster of the backends it supports, timed by tune on the
+  // whole network (forward + backward of one chunk); none: resolve_gemm_backend's rule. With its measurement.
+  std::optional<GemmBackend> auto_backend;
+  std::string backend_measurement_json = "{}";
 };
 
 // $XDG_CACHE_HOME/mipnerf-cl, else $HOME/.cache/mipnerf-cl.

@@ -218,3 +218,11 @@ add_test(NAME "cli: tune --if-missing skips where the host BLAS runs the MLP" CO
   "XDG_CACHE_HOME=${CMAKE_CURRENT_BINARY_DIR}/cli-tune-empty-cache" $<TARGET_FILE:mipnerf-cl> tune --if-missing --minutes 1)
 set_tests_properties("cli: tune --if-missing skips where the host BLAS runs the MLP" PROPERTIES
   ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "tune: not needed: on .* the MLP's products run on the host BLAS")
+
+# tune ends by timing the whole network on each backend the device supports and records the faster for
+# gemm_backend=auto (a time box of seconds: the parameter search is cut short, the measurement still runs).
+add_test(NAME "cli: tune records which backend gemm_backend=auto takes" COMMAND ${CMAKE_COMMAND} -E env
+  "XDG_CACHE_HOME=${CMAKE_CURRENT_BINARY_DIR}/cli-tune-cache" $<TARGET_FILE:mipnerf-cl> tune --minutes 0.2 --rows 1024
+  --kernel-rows 128 --width 128 --input-width 72 --view-branch-width 64 --output "${CMAKE_CURRENT_BINARY_DIR}/cli-tune-cache/t.json")
+set_tests_properties("cli: tune records which backend gemm_backend=auto takes" PROPERTIES
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "gemm_backend=auto on this device: (host|clblast) \\(whole network, 1024 rows, forward \\+ backward: clblast [0-9.]+ s")

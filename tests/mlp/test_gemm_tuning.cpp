@@ -213,3 +213,40 @@ TEST_CASE("gemm tuning: the CLI's load step uses the device's file, and says onc
   CHECK(messages[0].second.find("another device, driver or CLBlast version") != std::string::npos);
   ctx.set_log(nullptr);
 }
+
+TEST_CASE("gemm tuning: auto_backend round-trips, and gemm_backend=auto follows tune's measurement for its device") {
+  ScratchCache cache;
+  auto& ctx = test::test_context();
+  const bool was_on_host = ctx.gemm_on_host();
+  auto tuning = tuning_for_this_device();
+  const std::string path = mlp::tuning_file_path(ctx.device_info());
+  CHECK_FALSE(mlp::measured_auto_backend(ctx.device_info(), {}).has_value());  // no file: the rule
+
+  tuning.auto_backend = mlp::GemmBackend::clblast;
+  tuning.backend_measurement_json = R"({"seconds": {"clblast": 1.0, "host": 2.0}})";
+  mlp::save_tuning(path, tuning);
+  const auto back = mlp::read_tuning(path);
+  REQUIRE(back.has_value());
+  CHECK(back->auto_backend == mlp::GemmBackend::clblast);
+  CHECK(back->backend_measurement_json.find("\"host\":2.0") != std::string::npos);
+  // On the CPU test device the rule would take host (when it can); the measurement wins.
+  CHECK(mlp::use_gemm_backend(ctx, mlp::GemmBackend::automatic) == mlp::GemmBackend::clblast);
+  CHECK_FALSE(ctx.gemm_on_host());
+  // An explicit choice is never overridden.
+  if (mlp::host_blas_available() && ctx.device_info().host_unified_memory) {
+    CHECK(mlp::use_gemm_backend(ctx, mlp::GemmBackend::host) == mlp::GemmBackend::host);
+  }
+  // A file of another driver version is not this device's measurement.
+  tuning.driver_version = "another";
+  mlp::save_tuning(path, tuning);
+  CHECK_FALSE(mlp::measured_auto_backend(ctx.device_info(), {}).has_value());
+  // A malformed choice is refused by the reader, and auto falls back to its rule with a warning.
+  std::ofstream(path) << R"({"format": "mipnerf-cl gemm tuning 1", "auto_backend": "fastest"})";
+  CHECK_THROWS_WITH_AS(mlp::read_tuning(path), doctest::Contains("auto_backend 'fastest' is not clblast or host"),
+                       Error);
+  std::string warning;
+  CHECK_FALSE(mlp::measured_auto_backend(ctx.device_info(), [&](LogLevel, const std::string& m) { warning = m; })
+                  .has_value());
+  CHECK(warning.find("follows its rule") != std::string::npos);
+  ctx.set_gemm_on_host(was_on_host);
+}
