@@ -52,10 +52,14 @@ Workspace::Workspace(ocl::Context& ctx, const MlpConfig& config, size_t max_rows
       view_hidden_ = ocl::DeviceArray<float>(ctx, max_rows * config.view_branch_width,
                                              "mlp view-branch activation [rows][view_branch_width]");
     }
-    grad_a_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer A [rows][width]");
-    grad_b_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer B [rows][width]");
-    partials_ = ocl::DeviceArray<float>(ctx, partial_rows(config, max_rows, max_rays) * partial_cols(config),
-                                        "mlp column-sum partials [blocks][width]");
+    // The device path's backward buffers; the host path keeps activation gradients in per-thread scratch instead.
+    device_backward_ = !ctx.gemm_on_host();
+    if (device_backward_) {
+      grad_a_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer A [rows][width]");
+      grad_b_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer B [rows][width]");
+      partials_ = ocl::DeviceArray<float>(ctx, partial_rows(config, max_rows, max_rays) * partial_cols(config),
+                                          "mlp column-sum partials [blocks][width]");
+    }
   } else {
     for (int i = 0; i < 2; ++i) {
       activations_.emplace_back(ctx, max_rows * max_cols_, "mlp inference buffer " + std::to_string(i) +
@@ -222,6 +226,10 @@ void Mlp::backward(Workspace& ws, const MlpOutputGradients& d_out) {
   if (ctx_->gemm_on_host()) {
     host_backward(ws, d_out);
     return;
+  }
+  if (!ws.device_backward_) {
+    throw Error("MLP backward: the workspace was made while gemm_backend=host was in use (it has no device backward "
+                "buffers); make workspaces after choosing the backend");
   }
   heads_backward(ws, d_out);
   trunk_backward(ws);

@@ -58,7 +58,8 @@ class Workspace {
  public:
   Workspace(ocl::Context& ctx, const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode);
 
-  // Bytes a workspace of this size takes, to choose a chunk size that fits the device.
+  // Bytes a workspace of this size takes, to choose a chunk size that fits the device (an upper bound: on the host
+  // path, gemm_backend=host, the device backward buffers are not allocated).
   static size_t bytes_for(const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode);
 
   // Movable, not copyable (a copy would share the device buffers).
@@ -81,7 +82,8 @@ class Workspace {
   ocl::DeviceArray<float> bottleneck_;                // [rows][bottleneck_width] (training, view dependence)
   ocl::DeviceArray<float> view_hidden_;               // [rows][view_branch_width] (training, view dependence)
   ocl::DeviceArray<float> ray_term_;                  // [rays][view_branch_width]: the per-ray view product
-  ocl::DeviceArray<float> grad_a_, grad_b_;           // [rows][max_cols]: backward ping-pong (training)
+  bool device_backward_ = false;                      // the device path's backward buffers below exist
+  ocl::DeviceArray<float> grad_a_, grad_b_;           // [rows][max_cols]: backward ping-pong (training, device path)
   ocl::DeviceArray<float> partials_;                  // [blocks or rays][max_cols]: column sums (training)
   // The forward waiting for its backward: its inputs (the caller keeps them alive and unchanged) and size.
   bool has_forward_ = false;

@@ -6,6 +6,7 @@
 
 #include <clblast.h>
 
+#include <optional>
 #include <random>
 #include <string>
 #include <unordered_map>
@@ -401,4 +402,26 @@ TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same 
       CHECK(profile.stage_seconds() <= profile.wall_seconds);
     }
   }
+}
+
+TEST_CASE("mlp device: a workspace made for the host path refuses the device backward, saying what to do") {
+  auto& ctx = test::test_context();
+  if (test::supported_gemm_backends(ctx).size() < 2) {
+    MESSAGE("the test device cannot run the host path; nothing to check");
+    return;
+  }
+  const mlp::MlpConfig config = test::small_mlp_config(true);
+  std::mt19937 rng(110);
+  mlp::Mlp net(ctx, config);
+  const Pass p = make_pass(config, 2, 4, rng);
+  DevicePass d(ctx, config, p);
+  std::optional<mlp::Workspace> ws;
+  {
+    test::GemmBackendScope host(ctx, mlp::GemmBackend::host);
+    ws.emplace(net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training));
+  }
+  test::GemmBackendScope clblast(ctx, mlp::GemmBackend::clblast);
+  net.forward(inputs_for(d, p, config), outputs_for(d, config), *ws);
+  CHECK_THROWS_WITH_AS(net.backward(*ws, gradients_for(d, config)),
+                       doctest::Contains("make workspaces after choosing the backend"), Error);
 }
