@@ -31,6 +31,20 @@ struct HostMlp::Worker {
   std::vector<float> scratch[3];  // [block rows][widest layer] each
   std::vector<float> ray_term;    // [rays per block][view_branch_width]
   std::vector<float> grads;       // [parameters]: this thread's share of a backward
+  Clock::time_point busy_start;
+
+  // Ready for a call: times reset, scratch for blocks of block_rows rows (cols wide) and of `rays` rays (ray_cols).
+  void begin_call(bool timed_call, size_t block_rows, size_t cols, size_t rays, size_t ray_cols) {
+    timed = timed_call;
+    times = HostMlpTimes{};
+    busy_start = Clock::now();
+    for (auto& s : scratch) s.resize(std::max(s.size(), block_rows * cols));
+    ray_term.resize(std::max(ray_term.size(), rays * ray_cols));
+  }
+  // The call's thread time outside the products: the element-wise work.
+  void end_call() {
+    if (timed) times.elementwise = std::max(0.0, std::chrono::duration<double>(Clock::now() - busy_start).count() - times.total());
+  }
 
   // C[m][n] = beta·C + op(A)·op(B), row-major, one BLAS thread (the caller's).
   void product(ProductKind kind, bool trans_a, bool trans_b, size_t m, size_t n, size_t k, const float* a, size_t lda,
@@ -195,12 +209,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
 
   run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
     Worker& w = workers_[t];
-    w.timed = timed;
-    w.times = HostMlpTimes{};
-    const auto busy_start = Clock::now();
-    const size_t block_rows = rays_per * spr;
-    for (auto& s : w.scratch) s.resize(std::max(s.size(), block_rows * cols));
-    if (c.view_dependence) w.ray_term.resize(std::max(w.ray_term.size(), rays_per * c.view_branch_width));
+    w.begin_call(timed, rays_per * spr, cols, rays_per, c.view_dependence ? c.view_branch_width : 0);
     for (size_t block = first; block < end; ++block) {
       const size_t ray0 = block * rays_per, rays = std::min(rays_per, b.n_rays - ray0);
       const size_t row0 = ray0 * spr, rows = rays * spr;
@@ -255,10 +264,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
                 rgb, b.rgb_ld);
       add_bias(rgb, b.rgb_ld, rows, R.out, P + R.bias_offset, false);
     }
-    if (timed) {
-      const double busy = std::chrono::duration<double>(Clock::now() - busy_start).count();
-      w.times.elementwise = std::max(0.0, busy - w.times.total());
-    }
+    w.end_call();
   });
   std::vector<HostMlpTimes> times;
   for (size_t t = 0; t < std::min(workers_.size(), std::max<size_t>(1, n_blocks)); ++t) times.push_back(workers_[t].times);
@@ -278,12 +284,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
 
   run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
     Worker& w = workers_[t];
-    w.timed = timed;
-    w.times = HostMlpTimes{};
-    const auto busy_start = Clock::now();
-    const size_t block_rows = rays_per * spr;
-    for (auto& s : w.scratch) s.resize(std::max(s.size(), block_rows * cols));
-    if (c.view_dependence) w.ray_term.resize(std::max(w.ray_term.size(), rays_per * c.view_branch_width));
+    w.begin_call(timed, rays_per * spr, cols, rays_per, c.view_dependence ? c.view_branch_width : 0);
     w.grads.assign(layout_.total, 0.0f);
     float* G = w.grads.data();
     for (size_t block = first; block < end; ++block) {
@@ -370,10 +371,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
         std::swap(current, other);
       }
     }
-    if (timed) {
-      const double busy = std::chrono::duration<double>(Clock::now() - busy_start).count();
-      w.times.elementwise = std::max(0.0, busy - w.times.total());
-    }
+    w.end_call();
   });
   // The threads' gradients into the network's, in thread order (a fixed order: the same sums every time).
   const auto start = timed ? Clock::now() : Clock::time_point{};

@@ -276,35 +276,30 @@ HostMlp& Mlp::host_mlp() {
   return *host_;
 }
 
-// Maps what the forward reads and writes (blocking: the kernels that wrote the features have finished), runs it on
-// the host, and unmaps (the kernels enqueued next see the outputs). See mapped_buffers.hpp.
-void Mlp::host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) {
-  MappedBuffers mapped(*ctx_, "the host MLP's forward");
+// What a host forward reads and keeps: the parameters, the inputs and (training) the saved activations. `write`:
+// the activations are written (forward) or only read (backward).
+void Mlp::need_host_buffers(MappedBuffers& mapped, const MlpInputs& in, const Workspace& ws, bool activations,
+                            bool write) const {
   mapped.need(&params_, false);
   mapped.need(in.features, false);
   mapped.need(in.view_encoding, false);
-  mapped.need(out.raw_density, true);
-  mapped.need(out.raw_rgb, true);
-  if (save) {
-    for (const auto& a : ws.activations_) mapped.need(&a, true);
-    if (config_.view_dependence) {
-      mapped.need(&ws.bottleneck_, true);
-      mapped.need(&ws.view_hidden_, true);
-    }
+  if (!activations) return;
+  for (const auto& a : ws.activations_) mapped.need(&a, write);
+  if (config_.view_dependence) {
+    mapped.need(&ws.bottleneck_, write);
+    mapped.need(&ws.view_hidden_, write);
   }
-  mapped.map();
-  const auto start = std::chrono::steady_clock::now();
+}
+
+HostForwardBuffers Mlp::host_buffers(const MappedBuffers& mapped, const MlpInputs& in, const Workspace& ws,
+                                     bool activations) const {
   HostForwardBuffers b;
   b.params = mapped.at(&params_);
   b.features = mapped.at(in.features);
   b.features_ld = in.features.ld;
   b.view_encoding = config_.view_dependence ? mapped.at(in.view_encoding) : nullptr;
   b.view_ld = in.view_encoding.ld;
-  b.density = mapped.at(out.raw_density);
-  b.density_ld = out.raw_density.ld;
-  b.rgb = mapped.at(out.raw_rgb);
-  b.rgb_ld = out.raw_rgb.ld;
-  if (save) {
+  if (activations) {
     for (const auto& a : ws.activations_) b.trunk.push_back(mapped.at(&a));
     if (config_.view_dependence) {
       b.bottleneck = mapped.at(&ws.bottleneck_);
@@ -313,40 +308,37 @@ void Mlp::host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws
   }
   b.n_rays = in.n_rays;
   b.samples_per_ray = in.samples_per_ray;
+  return b;
+}
+
+// Maps what the forward reads and writes (blocking: the kernels that wrote the features have finished), runs it on
+// the host, and unmaps (the kernels enqueued next see the outputs). See mapped_buffers.hpp.
+void Mlp::host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) {
+  MappedBuffers mapped(*ctx_, "the host MLP's forward");
+  need_host_buffers(mapped, in, ws, save, true);
+  mapped.need(out.raw_density, true);
+  mapped.need(out.raw_rgb, true);
+  mapped.map();
+  const auto start = std::chrono::steady_clock::now();
+  HostForwardBuffers b = host_buffers(mapped, in, ws, save);
+  b.density = mapped.at(out.raw_density);
+  b.density_ld = out.raw_density.ld;
+  b.rgb = mapped.at(out.raw_rgb);
+  b.rgb_ld = out.raw_rgb.ld;
   const HostMlpTimes times = host_mlp().forward(b, profiling(*ctx_));
   profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 void Mlp::host_backward(Workspace& ws, const MlpOutputGradients& d_out) {
-  const MlpInputs& in = ws.inputs_;
   MappedBuffers mapped(*ctx_, "the host MLP's backward");
-  mapped.need(&params_, false);
+  need_host_buffers(mapped, ws.inputs_, ws, true, false);
   mapped.need(&grads_, true);
-  mapped.need(in.features, false);
-  mapped.need(in.view_encoding, false);
-  for (const auto& a : ws.activations_) mapped.need(&a, false);
-  if (config_.view_dependence) {
-    mapped.need(&ws.bottleneck_, false);
-    mapped.need(&ws.view_hidden_, false);
-  }
   mapped.need(d_out.d_raw_density, false);
   mapped.need(d_out.d_raw_rgb, false);
   mapped.map();
   const auto start = std::chrono::steady_clock::now();
   HostBackwardBuffers b;
-  HostForwardBuffers& saved = b.saved;
-  saved.params = mapped.at(&params_);
-  saved.features = mapped.at(in.features);
-  saved.features_ld = in.features.ld;
-  saved.view_encoding = config_.view_dependence ? mapped.at(in.view_encoding) : nullptr;
-  saved.view_ld = in.view_encoding.ld;
-  for (const auto& a : ws.activations_) saved.trunk.push_back(mapped.at(&a));
-  if (config_.view_dependence) {
-    saved.bottleneck = mapped.at(&ws.bottleneck_);
-    saved.view_hidden = mapped.at(&ws.view_hidden_);
-  }
-  saved.n_rays = in.n_rays;
-  saved.samples_per_ray = in.samples_per_ray;
+  b.saved = host_buffers(mapped, ws.inputs_, ws, true);
   b.d_density = mapped.at(d_out.d_raw_density);
   b.d_density_ld = d_out.d_raw_density.ld;
   b.d_rgb = mapped.at(d_out.d_raw_rgb);

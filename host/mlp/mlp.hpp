@@ -27,6 +27,8 @@ class MlpKernels;
 
 namespace mipnerf::mlp {
 
+class MappedBuffers;
+
 // One chunk of samples: n_rays rays × samples_per_ray samples = rows, ray-major (row = ray·N + sample).
 struct MlpInputs {
   MatrixView features;       // [rows][input_width] (ld ≥ input_width), e.g. ipe_features
@@ -138,6 +140,10 @@ class Mlp {
   void heads_backward(Workspace& ws, const MlpOutputGradients& d_out);
   void trunk_backward(Workspace& ws);
   HostMlp& host_mlp();
+  void need_host_buffers(MappedBuffers& mapped, const MlpInputs& in, const Workspace& ws, bool activations,
+                         bool write) const;
+  HostForwardBuffers host_buffers(const MappedBuffers& mapped, const MlpInputs& in, const Workspace& ws,
+                                  bool activations) const;
   void host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save);
   void host_backward(Workspace& ws, const MlpOutputGradients& d_out);
   void bias_gradient(const MatrixView& dz, const MatrixView* act, size_t rows, size_t cols, size_t bias_offset,
