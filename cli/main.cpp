@@ -27,7 +27,10 @@ int main(int argc, char** argv) {
   CLI::App app{"mipnerf-cl: anti-aliased neural radiance fields (mip-NeRF) on any OpenCL device"};
   app.set_version_flag("--version", std::string("mipnerf-cl ") + MIPNERF_VERSION);
   auto& global = cli::global_options();
-  app.add_option("--device", global.device, "OpenCL device: index or part of a name (default: first GPU, else CPU)");
+  app.add_option("--device", global.device,
+                 "OpenCL device: index or part of its or its platform's name (default: $MIPNERF_DEVICE, else the "
+                 "first GPU, else the first CPU)")
+      ->envname("MIPNERF_DEVICE");
   app.add_flag("-v,--verbose", global.verbose, "Print debug messages and full kernel build logs");
   app.require_subcommand(1);
   // Global options may follow the subcommand: `mipnerf-cl devices --device 1`.

@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config python3
+  build-essential cmake pkg-config python3 python3-venv
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev zlib1g-dev

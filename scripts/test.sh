@@ -1,8 +1,23 @@
 #!/usr/bin/env bash
-# The test command of the README and of CI: install dependencies, build, run the whole suite.
+# The test command of the README and of CI: install dependencies, build, run the whole suite on every OpenCL
+# implementation we test on (PoCL, then Intel's CPU runtime when it can be installed); fails if any run fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 ./scripts/build.sh
 build_dir="${BUILD_DIR:-build}"
-ctest --test-dir "$build_dir" --output-on-failure -j "${JOBS:-$(nproc)}"
+jobs="${JOBS:-$(nproc)}"
+
+# 1. PoCL's CPU device (the tests' default: the first CPU device). Day to day, this line alone is the quick run.
+echo "test: the whole suite on PoCL's CPU device"
+ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
+
+# 2. Intel's CPU OpenCL runtime, a second, independent implementation (installed into a cache folder from PyPI).
+#    MIPNERF_TEST_DEVICE picks the tests' device, MIPNERF_DEVICE the executable's (the CLI tests).
+if environment="$(./scripts/install-intel-opencl.sh)"; then
+  eval "$environment"
+  echo "test: the whole suite on Intel's CPU OpenCL runtime ($OCL_ICD_VENDORS)"
+  MIPNERF_TEST_DEVICE=Intel MIPNERF_DEVICE=Intel ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
+else
+  echo "test: Intel's CPU OpenCL runtime could not be installed (above); the PoCL run decides"
+fi

@@ -116,7 +116,13 @@ DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::stri
     const long index = std::stol(selector);
     if (index >= 0 && index < static_cast<long>(devices.size())) return devices[static_cast<size_t>(index)];
   } else {
+    // A device's whole name wins over parts of others' (Intel's CPU runtime calls its device "AMD EPYC", which is
+    // also part of PoCL's "pthread-haswell-AMD EPYC"); else the first device whose or whose platform's name
+    // contains the selector.
     const std::string needle = lower(selector);
+    for (const auto& d : devices) {
+      if (lower(d.name) == needle) return d;
+    }
     for (const auto& d : devices) {
       if (lower(d.name).find(needle) != std::string::npos || lower(d.platform_name).find(needle) != std::string::npos) {
         return d;

@@ -35,11 +35,38 @@ TEST_CASE("devices: choice by default, index and name substring") {
 
   const auto last = devices.back();
   CHECK(ocl::choose_device(devices, std::to_string(last.index)).index == last.index);
-  // Case-insensitive substring of the device name.
-  std::string upper_part = last.name.substr(0, std::min<size_t>(6, last.name.size()));
-  for (auto& c : upper_part) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  CHECK(ocl::choose_device(devices, upper_part).name.substr(0, upper_part.size()) ==
-        last.name.substr(0, upper_part.size()));
+  auto upper = [](std::string s) {
+    for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return s;
+  };
+  // A device's whole name, in any case, picks it, even where it is part of an earlier device's name (Intel's CPU
+  // runtime names its device "AMD EPYC", part of PoCL's "pthread-haswell-AMD EPYC").
+  for (const auto& d : devices) {
+    CAPTURE(d.name);
+    CHECK(ocl::choose_device(devices, upper(d.name)).name == d.name);
+  }
+  // A part of a name picks the first device whose name contains it.
+  const std::string part = upper(last.name.substr(0, std::min<size_t>(6, last.name.size())));
+  for (const auto& d : devices) {
+    if (upper(d.name).find(part) == std::string::npos) continue;
+    CHECK(ocl::choose_device(devices, part).index == d.index);
+    break;
+  }
+}
+
+TEST_CASE("devices: a whole name wins over the same text inside an earlier device's name") {
+  ocl::DeviceInfo pocl, intel;
+  pocl.index = 0;
+  pocl.name = "pthread-haswell-AMD EPYC";
+  pocl.platform_name = "Portable Computing Language";
+  intel.index = 1;
+  intel.name = "AMD EPYC";
+  intel.platform_name = "Intel(R) OpenCL";
+  const std::vector<ocl::DeviceInfo> devices{pocl, intel};
+  CHECK(ocl::choose_device(devices, "amd epyc").index == 1);
+  CHECK(ocl::choose_device(devices, "EPYC").index == 0);   // a part: the first that contains it
+  CHECK(ocl::choose_device(devices, "intel").index == 1);  // the platform's name
+  CHECK(ocl::choose_device(devices, "haswell").index == 0);
 }
 
 TEST_CASE("devices: no match lists every device") {

@@ -6,7 +6,13 @@
 namespace mipnerf::test {
 
 // One context per test process, created on first use. MIPNERF_TEST_DEVICE takes the same
-// selector as --device; by default the first CPU device (PoCL's) is used.
+// selector as --device; by default the first CPU device (PoCL's) is used. Throws mipnerf::Error naming the devices
+// found when there is no such device.
 ocl::Context& test_context();
+
+// Releases the context (its programs, queue and buffers) if it was made. test_main calls it after the tests, before
+// the process's static destructors run: an OpenCL implementation's own statics may be gone by then (oclgrind's are:
+// releasing a program during exit corrupted its heap).
+void release_test_context();
 
 }  // namespace mipnerf::test

@@ -1,3 +1,12 @@
-// doctest's main for every test executable.
-#define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
+// doctest's main for every test executable: run the tests, then release the shared test context before exit.
+#define DOCTEST_CONFIG_IMPLEMENT
 #include <doctest/doctest.h>
+
+#include "support/test_context.hpp"
+
+int main(int argc, char** argv) {
+  doctest::Context context(argc, argv);
+  const int result = context.run();
+  mipnerf::test::release_test_context();  // before static destructors (see test_context.hpp)
+  return result;
+}
