@@ -8,8 +8,9 @@ cd "$(dirname "$0")/.."
 build_dir="${BUILD_DIR:-build}"
 jobs="${JOBS:-$(nproc)}"
 
-# 1. PoCL's CPU device (the tests' default: the first CPU device). Day to day, this line alone is the quick run.
-echo "test: the whole suite on PoCL's CPU device"
+# 1. PoCL's CPU device (the tests' default: the first CPU device), and the kernel tests under oclgrind (label
+#    `oclgrind`). Day to day, `ctest --test-dir build -j2 -LE oclgrind` is the quick run on PoCL alone.
+echo "test: the whole suite on PoCL's CPU device, and the kernel tests under oclgrind"
 ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
 
 # 2. Intel's CPU OpenCL runtime, a second, independent implementation (installed into a cache folder from PyPI).
@@ -17,7 +18,7 @@ ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
 if environment="$(./scripts/install-intel-opencl.sh)"; then
   eval "$environment"
   echo "test: the whole suite on Intel's CPU OpenCL runtime ($OCL_ICD_VENDORS)"
-  MIPNERF_TEST_DEVICE=Intel MIPNERF_DEVICE=Intel ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
+  MIPNERF_TEST_DEVICE=Intel MIPNERF_DEVICE=Intel ctest --test-dir "$build_dir" --output-on-failure -j "$jobs" -LE oclgrind
 else
   echo "test: Intel's CPU OpenCL runtime could not be installed (above); the PoCL run decides"
 fi

@@ -1,7 +1,9 @@
 // Building OpenCL programs as specialisations, with readable build errors and an in-process cache.
 #include "cl/program.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <regex>
 #include <sstream>
 
 #include "cl/error.hpp"
@@ -96,12 +98,34 @@ std::string label_of(const std::vector<SourceFile>& files, const BuildOptions& o
   return label + " [" + options.str() + "]";
 }
 
-// The first line of a build log that reports an error, e.g. "render.cl:12:5: error: ...".
-std::string first_error_line(const std::string& log) {
+// "file.cl:k" for line `line` (1-based) of assemble_source's text, or "" when it is the header or a #line directive.
+std::string source_location(const std::vector<SourceFile>& files, size_t line) {
+  size_t start = 2;  // line 1 is the header comment; each file starts with its #line directive
+  for (const auto& file : files) {
+    const size_t count = static_cast<size_t>(std::count(file.text.begin(), file.text.end(), '\n')) +
+                         (file.text.empty() || file.text.back() != '\n' ? 1 : 0);
+    if (line > start && line <= start + count) return file.name + ":" + std::to_string(line - start);
+    start += count + 1;
+  }
+  return "";
+}
+
+// The first line of a build log that reports an error, e.g. "render.cl:12:5: error: ...". A compiler that ignores
+// the #line directives (oclgrind's) names the assembled source instead ("input.cl:7:10: error: ..."): such a
+// location is translated back to the file and line it came from.
+std::string first_error_line(const std::string& log, const std::vector<SourceFile>& files) {
   std::istringstream lines(log);
   std::string line;
   while (std::getline(lines, line)) {
-    if (line.find("error") != std::string::npos) return line;
+    if (line.find("error") == std::string::npos) continue;
+    static const std::regex location(R"(^([^:\s]+):([0-9]+):)");
+    std::smatch m;
+    if (std::regex_search(line, m, location)) {
+      const bool ours = std::any_of(files.begin(), files.end(), [&](const SourceFile& f) { return f.name == m[1].str(); });
+      const std::string mapped = ours ? "" : source_location(files, std::stoul(m[2].str()));
+      if (!mapped.empty()) return mapped + line.substr(m[0].length() - 1) + " (" + m[1].str() + ":" + m[2].str() + ")";
+    }
+    return line;
   }
   return log.empty() ? "the build log is empty" : log.substr(0, log.find('\n'));
 }
@@ -126,7 +150,7 @@ Program& ProgramCache::get(const std::vector<SourceFile>& files, const BuildOpti
     cl_int log_status = CL_SUCCESS;
     const std::string log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device_, &log_status);
     if (build_status == CL_BUILD_PROGRAM_FAILURE || build_status == CL_INVALID_BUILD_OPTIONS) {
-      throw Error("kernel build failed for " + label + " on '" + device_name_ + "': " + first_error_line(log) +
+      throw Error("kernel build failed for " + label + " on '" + device_name_ + "': " + first_error_line(log, files) +
                       " (full log with --verbose)",
                   log, build_status);
     }

@@ -1,0 +1,53 @@
+# Every kernel test again under oclgrind (Debian package `oclgrind`), the OpenCL simulator that checks what a real
+# device does not: out-of-bounds accesses, data races, uninitialised reads, API misuse (run_under_oclgrind.cmake).
+# `ctest -L oclgrind` runs them alone, `ctest -LE oclgrind` leaves them out (the quick PoCL run).
+# Included by tests/CMakeLists.txt; without oclgrind installed there are no such tests and a configure message.
+find_program(MIPNERF_OCLGRIND oclgrind)
+if(NOT MIPNERF_OCLGRIND)
+  message(STATUS "oclgrind not found: the kernel tests under oclgrind are left out (Debian package 'oclgrind')")
+  return()
+endif()
+
+# mipnerf_add_oclgrind_test(name executable filter label uninitialized [canary]); MIPNERF_OCLGRIND_EXCLUDE, when set,
+# is a filter of test cases to leave out.
+function(mipnerf_add_oclgrind_test name exe filter label uninitialized)
+  add_test(NAME "${label}: ${name}" COMMAND ${CMAKE_COMMAND} "-DOCLGRIND=${MIPNERF_OCLGRIND}"
+    "-DEXE=$<TARGET_FILE:${exe}>" "-DFILTER=${filter}" "-DUNINITIALIZED=${uninitialized}"
+    "-DEXCLUDE=${MIPNERF_OCLGRIND_EXCLUDE}"
+    -P "${CMAKE_CURRENT_SOURCE_DIR}/oclgrind/run_under_oclgrind.cmake")
+  set_tests_properties("${label}: ${name}" PROPERTIES LABELS ${label} TIMEOUT 1800
+    ENVIRONMENT "MIPNERF_TEST_DEVICE=Oclgrind;MIPNERF_OCLGRIND_CANARY=${ARGN}")
+endfunction()
+
+# Every kernel test (tests/ops: the ray-math stages; tests/mlp: the MLP's element-wise kernels and Adam, whose
+# products are CLBlast's; tests/cl: buffers, program building, the profiler's events), one entry per stage so they
+# spread over the cores. Label `oclgrind` (in the README's test command, a few minutes on 2 cores): API misuse,
+# races, out-of-bounds accesses, and uninitialised reads for the stages whose tests are small enough under that
+# plugin. With -DMIPNERF_OCLGRIND_UNINITIALIZED_ALL=ON, entries labelled `uninitialized_all` check the other stages
+# for uninitialised reads too (about 25 minutes more; not in CI).
+option(MIPNERF_OCLGRIND_UNINITIALIZED_ALL "Also run the slow stages' kernel tests under oclgrind's uninitialised-value check" OFF)
+set(fast_stages activations gaussian rays specialisations "stage list")
+set(slow_stages encode "loss stage" render resample sample)
+foreach(stage IN LISTS fast_stages)
+  mipnerf_add_oclgrind_test("${stage} kernels" test_ops "${stage}:*" oclgrind ON)
+endforeach()
+foreach(stage IN LISTS slow_stages)
+  mipnerf_add_oclgrind_test("${stage} kernels" test_ops "${stage}:*" oclgrind OFF)
+  if(MIPNERF_OCLGRIND_UNINITIALIZED_ALL)
+    mipnerf_add_oclgrind_test("${stage} kernels" test_ops "${stage}:*" uninitialized_all ON)
+  endif()
+endforeach()
+# Without the uninitialised-read check: these tests read buffers set by clEnqueueFillBuffer (Adam's zeroed
+# moments, filled inputs), and oclgrind 21.10's plugin does not count a fill as a write (a kernel reading a filled
+# buffer is reported, the same kernel reading an uploaded one is not: checked by hand), so it reports every read.
+mipnerf_add_oclgrind_test("mlp and adam kernels" test_mlp "mlp kernels:*,adam:*" oclgrind OFF)
+# The two program tests that make the OpenCL API fail on purpose (a build error, an unknown kernel) are left out:
+# --check-api reports exactly those failures.
+set(MIPNERF_OCLGRIND_EXCLUDE "program: a compile error*,program: an unknown kernel*")
+mipnerf_add_oclgrind_test("runtime" test_cl "buffers:*,program:*,profiler:*" oclgrind OFF)
+set(MIPNERF_OCLGRIND_EXCLUDE "")
+
+# The check must be able to fail: a kernel that writes one element past its buffer (tests/cl/test_oclgrind_canary,
+# which does nothing unless MIPNERF_OCLGRIND_CANARY=1) is reported, so this entry passes only when it fails.
+mipnerf_add_oclgrind_test("an out-of-bounds write is reported" test_cl "oclgrind canary:*" oclgrind OFF 1)
+set_tests_properties("oclgrind: an out-of-bounds write is reported" PROPERTIES WILL_FAIL TRUE)
