@@ -1,5 +1,6 @@
 // `mipnerf-cl devices`: every OpenCL device, and which one --device picks.
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "cl/device.hpp"
@@ -14,8 +15,25 @@ std::string gib(cl_ulong bytes) {
   return text;
 }
 
-void print_device(const ocl::DeviceInfo& d, bool chosen) {
-  std::cout << "[" << d.index << "] " << d.name << (chosen ? "   <- selected" : "") << "\n"
+// Why the selection is what it is, in the order choose_device applies its rules.
+std::string choice_reason(const std::vector<ocl::DeviceInfo>& devices, const std::string& selector) {
+  if (!selector.empty()) {
+    const char* env = std::getenv("MIPNERF_DEVICE");
+    const bool from_env = env != nullptr && selector == env;
+    return (from_env ? "MIPNERF_DEVICE='" : "--device '") + selector + "'";
+  }
+  for (const auto& d : devices) {
+    if (d.type & CL_DEVICE_TYPE_GPU) return "the first GPU";
+  }
+  for (const auto& d : devices) {
+    if (d.type & CL_DEVICE_TYPE_CPU) return "the first CPU device; no GPU";
+  }
+  return "the first device; no GPU or CPU device";
+}
+
+void print_device(const ocl::DeviceInfo& d, const std::string& chosen_because) {
+  std::cout << "[" << d.index << "] " << d.name
+            << (chosen_because.empty() ? "" : "   <- selected (" + chosen_because + ")") << "\n"
             << "    platform         " << d.platform_name << "\n"
             << "    type             " << d.type_name() << "\n"
             << "    compute units    " << d.compute_units << "\n"
@@ -31,7 +49,8 @@ void run_devices() {
   const auto devices = ocl::list_devices();
   // Resolving the selection first makes `devices --device nosuch` fail like every other command.
   const auto chosen = ocl::choose_device(devices, global_options().device);
-  for (const auto& d : devices) print_device(d, d.index == chosen.index);
+  const std::string reason = choice_reason(devices, global_options().device);
+  for (const auto& d : devices) print_device(d, d.index == chosen.index ? reason : "");
 }
 
 }  // namespace

@@ -16,6 +16,9 @@ endfunction()
 add_test(NAME "cli: devices lists a device" COMMAND mipnerf-cl devices)
 set_tests_properties("cli: devices lists a device" PROPERTIES
   ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "\\[0\\] .*compute units")
+add_test(NAME "cli: devices says why it selects a device" COMMAND mipnerf-cl devices --device 0)
+set_tests_properties("cli: devices says why it selects a device" PROPERTIES
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "\\[0\\] [^\n]*<- selected \\(--device '0'\\)")
 mipnerf_add_cli_error_test("unknown device" PATTERN "--device 'nosuch' matches no OpenCL device.*\\[0\\]"
   ARGS devices --device nosuch)
 mipnerf_add_cli_error_test("unknown subcommand" PATTERN "nosuch" ARGS nosuch)
