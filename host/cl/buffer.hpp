@@ -11,7 +11,9 @@
 namespace mipnerf::ocl {
 
 // An event for the stage profiler when it records (profiler.hpp), else nullptr.
-inline ::cl::Event* profiler_event(Context& ctx) { return ctx.profiler() ? ctx.profiler()->next_event() : nullptr; }
+inline ::cl::Event* profiler_event(Context& ctx) {
+  return ctx.recording_profiler() ? ctx.recording_profiler()->next_event() : nullptr;
+}
 
 // CL_MEM_READ_WRITE, plus CL_MEM_ALLOC_HOST_PTR on devices that share host memory: there the buffer is allocated
 // where the host can reach it, so clEnqueueMapBuffer returns a pointer to the buffer itself instead of a copy (the

@@ -50,6 +50,9 @@ class Context {
 
   // The stage profiler recording this context's commands, or nullptr (the default). Not owned; see profiler.hpp.
   StageProfiler* profiler() const { return profiler_; }
+  // The profiler while it records a step (between begin_step and end_step), else nullptr: what code that adds to a
+  // profile asks for.
+  StageProfiler* recording_profiler() const { return profiler_ && profiler_->recording() ? profiler_ : nullptr; }
   void set_profiler(StageProfiler* profiler);  // needs a queue made with profiling on
   bool profiling_queue() const { return profiling_queue_; }
 

@@ -5,10 +5,7 @@ namespace mipnerf::ocl {
 namespace {
 
 // The caller's event, else the profiler's (when it records), else none.
-::cl::Event* event_for(Context& ctx, ::cl::Event* event) {
-  if (event != nullptr || ctx.profiler() == nullptr) return event;
-  return ctx.profiler()->next_event();
-}
+::cl::Event* event_for(Context& ctx, ::cl::Event* event) { return event != nullptr ? event : profiler_event(ctx); }
 
 }  // namespace
 

@@ -114,7 +114,7 @@ StageScope::~StageScope() {
 }
 
 HostTimer::HostTimer(Context& ctx)
-    : profiler_(ctx.profiler() && ctx.profiler()->recording() ? ctx.profiler() : nullptr),
+    : profiler_(ctx.recording_profiler()),
       start_(std::chrono::steady_clock::now()) {}
 
 HostTimer::~HostTimer() {

@@ -34,7 +34,8 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
   require_fits(c, s.m, s.n, "C", what);
   // Profiled under "gemm <kind>", with its FLOPs, so the report can give GFLOP/s and the GEMM-bound limit.
   ocl::StageScope stage(ctx, std::string("gemm ") + gemm_kind_name(gemm_kind(s)));
-  if (ctx.profiler()) ctx.profiler()->add_flops(2.0 * static_cast<double>(s.m) * s.n * s.k);
+  ocl::StageProfiler* profiler = ctx.recording_profiler();
+  if (profiler) profiler->add_flops(2.0 * static_cast<double>(s.m) * s.n * s.k);
   // The context's backend (mlp/gemm_backend.hpp): the host BLAS on mapped buffers, or CLBlast on the queue.
   if (ctx.gemm_on_host()) {
     host_gemm(ctx, s, alpha, a, b, beta, c, what);
@@ -46,7 +47,7 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
   cl_command_queue queue = ctx.raw_queue();
   // Profiling: CLBlast may enqueue several kernels (padding, transposes) and returns the last one's event, so the
   // product is timed from a marker before it to that event's end (in-order queue).
-  const bool profile = ctx.profiler() && ctx.profiler()->recording();
+  const bool profile = profiler != nullptr;
   cl_event before = nullptr, after = nullptr;
   if (profile) {
     ocl::check(clEnqueueMarkerWithWaitList(queue, 0, nullptr, &before), "clEnqueueMarkerWithWaitList (profiling)");
@@ -55,7 +56,7 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
       clblast::Layout::kRowMajor, s.transpose_a ? Transpose::kYes : Transpose::kNo,
       s.transpose_b ? Transpose::kYes : Transpose::kNo, s.m, s.n, s.k, alpha, a.array->raw(), a.offset, a.ld,
       b.array->raw(), b.offset, b.ld, beta, c.array->raw(), c.offset, c.ld, &queue, profile ? &after : nullptr);
-  if (profile) ctx.profiler()->add_event_span(::cl::Event(before), ::cl::Event(after));  // takes both references
+  if (profile) profiler->add_event_span(::cl::Event(before), ::cl::Event(after));  // takes both references
   check_clblast(status, "clblast::Gemm(" + what + ", m=" + std::to_string(s.m) + " n=" + std::to_string(s.n) +
                             " k=" + std::to_string(s.k) + ")");
 }

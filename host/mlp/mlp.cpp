@@ -248,8 +248,8 @@ HostMlpOptions default_host_options(const ocl::Context& ctx) {
 // A call's thread times as stage times: its wall time split in the proportions of its threads' time, each product
 // kind under "gemm <kind>" with its FLOPs, the rest under the caller's stage.
 void profile_host_call(ocl::Context& ctx, const HostMlpTimes& t, double wall_seconds) {
-  ocl::StageProfiler* profiler = ctx.profiler();
-  if (profiler == nullptr || !profiler->recording()) return;
+  ocl::StageProfiler* profiler = ctx.recording_profiler();
+  if (profiler == nullptr) return;
   const double scale = t.total() > 0 ? wall_seconds / t.total() : 0.0;
   auto add = [&](const char* stage, double seconds, double flops) {
     if (seconds <= 0 && flops <= 0) return;
@@ -262,8 +262,6 @@ void profile_host_call(ocl::Context& ctx, const HostMlpTimes& t, double wall_sec
   add("gemm backward_weights", t.gemm_backward_weights, t.flops_backward_weights);
   if (t.elementwise > 0) profiler->add_host_seconds(t.elementwise * scale);
 }
-
-bool profiling(const ocl::Context& ctx) { return ctx.profiler() != nullptr && ctx.profiler()->recording(); }
 
 }  // namespace
 
@@ -325,7 +323,7 @@ void Mlp::host_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws
   b.density_ld = out.raw_density.ld;
   b.rgb = mapped.at(out.raw_rgb);
   b.rgb_ld = out.raw_rgb.ld;
-  const HostMlpTimes times = host_mlp().forward(b, profiling(*ctx_));
+  const HostMlpTimes times = host_mlp().forward(b, ctx_->recording_profiler() != nullptr);
   profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
@@ -344,7 +342,7 @@ void Mlp::host_backward(Workspace& ws, const MlpOutputGradients& d_out) {
   b.d_rgb = mapped.at(d_out.d_raw_rgb);
   b.d_rgb_ld = d_out.d_raw_rgb.ld;
   b.grads = mapped.at(&grads_);
-  const HostMlpTimes times = host_mlp().backward(b, profiling(*ctx_));
+  const HostMlpTimes times = host_mlp().backward(b, ctx_->recording_profiler() != nullptr);
   profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
