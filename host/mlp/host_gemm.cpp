@@ -28,6 +28,8 @@ void host_gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixV
 
 void set_host_blas_threads(int threads) { openblas_set_num_threads(threads); }
 
+int host_blas_threads() { return openblas_get_num_threads(); }
+
 #else
 
 void host_gemm(ocl::Context&, const GemmShape&, float, const MatrixView&, const MatrixView&, float, const MatrixView&,
@@ -38,6 +40,8 @@ void host_gemm(ocl::Context&, const GemmShape&, float, const MatrixView&, const 
 }
 
 void set_host_blas_threads(int) {}
+
+int host_blas_threads() { return 1; }
 
 #endif
 

@@ -24,7 +24,8 @@ namespace mipnerf::mlp {
 void host_gemm(ocl::Context& ctx, const GemmShape& shape, float alpha, const MatrixView& a, const MatrixView& b,
                float beta, const MatrixView& c, const std::string& what);
 
-// Sets the host BLAS's thread count (no-op without a host BLAS).
+// Sets the host BLAS's thread count (no-op without a host BLAS), and reads it (1 without one).
 void set_host_blas_threads(int threads);
+int host_blas_threads();
 
 }  // namespace mipnerf::mlp

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "mlp/host_gemm.hpp"
 
 #ifdef MIPNERF_HAVE_OPENBLAS
 #include <cblas.h>
@@ -149,9 +150,10 @@ size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
 namespace {
 
 // Runs work(worker, first_block, end_block) on `threads` threads over n_blocks blocks, contiguous ranges in thread
-// order (the calling thread takes the first). Rethrows the first exception after every thread has ended.
+// order (the calling thread takes the first). Rethrows the first exception after every thread has ended. Returns how
+// many threads ran (at least one, at most one per block).
 template <typename Work>
-void run_blocks(size_t threads, size_t n_blocks, const Work& work) {
+size_t run_blocks(size_t threads, size_t n_blocks, const Work& work) {
   const size_t t_count = std::max<size_t>(1, std::min(threads, n_blocks));
   std::vector<std::exception_ptr> errors(t_count);
   auto range = [&](size_t t) {
@@ -168,22 +170,28 @@ void run_blocks(size_t threads, size_t n_blocks, const Work& work) {
   for (const auto& e : errors) {
     if (e) std::rethrow_exception(e);
   }
+  return t_count;
 }
 
 // Sets the host BLAS to one thread per call while it lives (our threads split the rows), then restores it.
 class SingleThreadedBlas {
  public:
-#ifdef MIPNERF_HAVE_OPENBLAS
-  SingleThreadedBlas() : previous_(openblas_get_num_threads()) { openblas_set_num_threads(1); }
-  ~SingleThreadedBlas() { openblas_set_num_threads(previous_); }
-#endif
+  SingleThreadedBlas() : previous_(host_blas_threads()) { set_host_blas_threads(1); }
+  ~SingleThreadedBlas() { set_host_blas_threads(previous_); }
+  SingleThreadedBlas(const SingleThreadedBlas&) = delete;
+  SingleThreadedBlas& operator=(const SingleThreadedBlas&) = delete;
+
  private:
-  int previous_ = 1;
+  int previous_;
 };
 
-HostMlpTimes sum_times(const std::vector<HostMlpTimes>& per_thread) {
+}  // namespace
+
+// The first `threads` workers' times of the last call, summed.
+HostMlpTimes HostMlp::summed_times(size_t threads) const {
   HostMlpTimes t;
-  for (const auto& w : per_thread) {
+  for (size_t i = 0; i < threads; ++i) {
+    const HostMlpTimes& w = workers_[i].times;
     t.gemm_forward += w.gemm_forward;
     t.gemm_backward_data += w.gemm_backward_data;
     t.gemm_backward_weights += w.gemm_backward_weights;
@@ -195,8 +203,6 @@ HostMlpTimes sum_times(const std::vector<HostMlpTimes>& per_thread) {
   return t;
 }
 
-}  // namespace
-
 HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
   const MlpConfig& c = config_;
   const bool training = !b.trunk.empty();
@@ -207,7 +213,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
   const float* P = b.params;
   SingleThreadedBlas one_thread;
 
-  run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
+  const size_t threads = run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
     Worker& w = workers_[t];
     w.begin_call(timed, rays_per * spr, cols, rays_per, c.view_dependence ? c.view_branch_width : 0);
     for (size_t block = first; block < end; ++block) {
@@ -266,9 +272,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
     }
     w.end_call();
   });
-  std::vector<HostMlpTimes> times;
-  for (size_t t = 0; t < std::min(workers_.size(), std::max<size_t>(1, n_blocks)); ++t) times.push_back(workers_[t].times);
-  return sum_times(times);
+  return summed_times(threads);
 }
 
 HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
@@ -278,11 +282,10 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
   const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
   const size_t rays_per = rays_per_block(spr);
   const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
-  const size_t t_count = std::max<size_t>(1, std::min(options_.threads, n_blocks));
   const float* P = b.params;
   SingleThreadedBlas one_thread;
 
-  run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
+  const size_t t_count = run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
     Worker& w = workers_[t];
     w.begin_call(timed, rays_per * spr, cols, rays_per, c.view_dependence ? c.view_branch_width : 0);
     w.grads.assign(layout_.total, 0.0f);
@@ -379,9 +382,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
     const float* g = workers_[t].grads.data();
     for (size_t k = 0; k < layout_.total; ++k) bb.grads[k] += g[k];
   }
-  std::vector<HostMlpTimes> times;
-  for (size_t t = 0; t < t_count; ++t) times.push_back(workers_[t].times);
-  HostMlpTimes total = sum_times(times);
+  HostMlpTimes total = summed_times(t_count);
   if (timed) total.elementwise += std::chrono::duration<double>(Clock::now() - start).count();
   return total;
 }

@@ -81,6 +81,7 @@ class HostMlp {
 
  private:
   struct Worker;
+  HostMlpTimes summed_times(size_t threads) const;
   MlpConfig config_;
   ParameterLayout layout_;
   HostMlpOptions options_;
