@@ -5,7 +5,6 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "mlp/host_gemm.hpp"
 
@@ -46,15 +45,10 @@ GemmBackend resolve_gemm_backend(GemmBackend wanted, const ocl::DeviceInfo& devi
 }
 
 std::optional<GemmBackend> measured_auto_backend(const ocl::DeviceInfo& device, const LogFn& log) {
-  std::string path;
   try {
-    path = tuning_file_path(device);
-    const std::optional<GemmTuning> tuning = read_tuning(path);
+    const std::optional<GemmTuning> tuning = read_tuning(tuning_file_path(device));
     if (!tuning || !tuning->auto_backend) return std::nullopt;
-    if (tuning->device_name != device.name || tuning->driver_version != device.driver_version ||
-        tuning->clblast_version != clblast_version()) {
-      return std::nullopt;  // load_gemm_tuning says so when it reads the file
-    }
+    if (!tuning_matches(*tuning, device)) return std::nullopt;  // load_gemm_tuning says so when it reads the file
     resolve_gemm_backend(*tuning->auto_backend, device, host_blas_available());  // still possible in this build?
     return tuning->auto_backend;
   } catch (const Error& e) {

@@ -338,6 +338,11 @@ void select_gemm_kind(ocl::Context& ctx, GemmKind kind) {
   }
 }
 
+bool tuning_matches(const GemmTuning& tuning, const ocl::DeviceInfo& device) {
+  return tuning.device_name == device.name && tuning.driver_version == device.driver_version &&
+         tuning.clblast_version == clblast_version();
+}
+
 bool load_gemm_tuning(ocl::Context& ctx) {
   const ocl::DeviceInfo& device = ctx.device_info();
   const std::string path = tuning_file_path(device);
@@ -348,8 +353,7 @@ bool load_gemm_tuning(ocl::Context& ctx) {
     ctx.log(LogLevel::warning, std::string(e.what()) + "; using CLBlast's default GEMM parameters");
     return false;
   }
-  if (tuning && (tuning->device_name != device.name || tuning->driver_version != device.driver_version ||
-                 tuning->clblast_version != clblast_version())) {
+  if (tuning && !tuning_matches(*tuning, device)) {
     ctx.log(LogLevel::warning, path + " was written for another device, driver or CLBlast version; ignoring it "
                                "(run `mipnerf-cl tune` again)");
     tuning.reset();

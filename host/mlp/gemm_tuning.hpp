@@ -71,6 +71,8 @@ std::string to_json(const GemmTuning& tuning);
 GemmTuning tuning_from_json(const std::string& text, const std::string& where);
 // Writes atomically (temporary beside it, then rename), creating the folder.
 void save_tuning(const std::string& path, const GemmTuning& tuning);
+// Whether `tuning` was measured for `device` with its driver version and this process's CLBlast version.
+bool tuning_matches(const GemmTuning& tuning, const ocl::DeviceInfo& device);
 // std::nullopt when the file does not exist; throws for an unreadable or malformed one.
 std::optional<GemmTuning> read_tuning(const std::string& path);
 
