@@ -15,20 +15,11 @@ std::string gib(cl_ulong bytes) {
   return text;
 }
 
-// Why the selection is what it is, in the order choose_device applies its rules.
-std::string choice_reason(const std::vector<ocl::DeviceInfo>& devices, const std::string& selector) {
-  if (!selector.empty()) {
-    const char* env = std::getenv("MIPNERF_DEVICE");
-    const bool from_env = env != nullptr && selector == env;
-    return (from_env ? "MIPNERF_DEVICE='" : "--device '") + selector + "'";
-  }
-  for (const auto& d : devices) {
-    if (d.type & CL_DEVICE_TYPE_GPU) return "the first GPU";
-  }
-  for (const auto& d : devices) {
-    if (d.type & CL_DEVICE_TYPE_CPU) return "the first CPU device; no GPU";
-  }
-  return "the first device; no GPU or CPU device";
+// Where a selector came from: --device, or its default MIPNERF_DEVICE.
+std::string selector_source(const std::string& selector) {
+  const char* env = std::getenv("MIPNERF_DEVICE");
+  const bool from_env = env != nullptr && selector == env;
+  return (from_env ? "MIPNERF_DEVICE='" : "--device '") + selector + "'";
 }
 
 void print_device(const ocl::DeviceInfo& d, const std::string& chosen_because) {
@@ -48,8 +39,10 @@ void print_device(const ocl::DeviceInfo& d, const std::string& chosen_because) {
 void run_devices() {
   const auto devices = ocl::list_devices();
   // Resolving the selection first makes `devices --device nosuch` fail like every other command.
-  const auto chosen = ocl::choose_device(devices, global_options().device);
-  const std::string reason = choice_reason(devices, global_options().device);
+  const std::string& selector = global_options().device;
+  std::string default_rule;
+  const auto chosen = ocl::choose_device(devices, selector, &default_rule);
+  const std::string reason = selector.empty() ? default_rule : selector_source(selector);
   for (const auto& d : devices) print_device(d, d.index == chosen.index ? reason : "");
 }
 

@@ -101,14 +101,22 @@ std::vector<DeviceInfo> list_devices() {
   return devices;
 }
 
-DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector) {
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector,
+                         std::string* default_rule) {
   if (devices.empty()) throw Error("no OpenCL device to choose from");
+  std::string unused;
+  std::string& rule = default_rule ? *default_rule : unused;
+  rule.clear();
   if (selector.empty()) {
     for (cl_device_type wanted : {cl_device_type(CL_DEVICE_TYPE_GPU), cl_device_type(CL_DEVICE_TYPE_CPU)}) {
       for (const auto& d : devices) {
-        if (d.type & wanted) return d;
+        if (d.type & wanted) {
+          rule = wanted == CL_DEVICE_TYPE_GPU ? "the first GPU" : "the first CPU device; no GPU";
+          return d;
+        }
       }
     }
+    rule = "the first device; no GPU or CPU device";
     return devices.front();
   }
   const bool is_index = std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });

@@ -35,9 +35,11 @@ struct DeviceInfo {
 std::vector<DeviceInfo> list_devices();
 
 // The --device rule: empty selector → the first GPU, else the first CPU, else the first device;
-// all digits → that index; otherwise the first device whose name or platform name contains the
-// selector (case-insensitive). No match → an error that lists every device.
-DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector);
+// all digits → that index; otherwise the device with that whole name, else the first device whose name or
+// platform name contains the selector (case-insensitive). No match → an error that lists every device.
+// `default_rule`, when given, receives which default applied ("the first GPU", ...), or "" when the selector chose.
+DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector,
+                         std::string* default_rule = nullptr);
 
 // One line per device, as the errors and `mipnerf-cl devices` show them.
 std::string describe_devices(const std::vector<DeviceInfo>& devices);

@@ -69,6 +69,25 @@ TEST_CASE("devices: a whole name wins over the same text inside an earlier devic
   CHECK(ocl::choose_device(devices, "haswell").index == 0);
 }
 
+TEST_CASE("devices: the default choice says which rule applied") {
+  ocl::DeviceInfo cpu, gpu, other;
+  cpu.index = 0;
+  cpu.type = CL_DEVICE_TYPE_CPU;
+  gpu.index = 1;
+  gpu.type = CL_DEVICE_TYPE_GPU;
+  other.index = 0;
+  other.type = CL_DEVICE_TYPE_ACCELERATOR;
+  std::string rule = "stale";
+  CHECK(ocl::choose_device({cpu, gpu}, "", &rule).index == 1);
+  CHECK(rule == "the first GPU");
+  CHECK(ocl::choose_device({cpu}, "", &rule).index == 0);
+  CHECK(rule == "the first CPU device; no GPU");
+  CHECK(ocl::choose_device({other}, "", &rule).index == 0);
+  CHECK(rule == "the first device; no GPU or CPU device");
+  CHECK(ocl::choose_device({cpu, gpu}, "0", &rule).index == 0);
+  CHECK(rule.empty());  // the selector chose
+}
+
 TEST_CASE("devices: no match lists every device") {
   const auto devices = ocl::list_devices();
   for (const std::string selector : {"nosuch-device", "999"}) {
