@@ -103,8 +103,10 @@ set_tests_properties("cli: train: refuses to overwrite a run" PROPERTIES FIXTURE
 add_test(NAME "cli: train --resume continues to more steps" COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
   --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml"
   --resume --steps 6)
+# The resume moves the run on to step 6, so it waits for the tests that read the step-4 run (DEPENDS orders them
+# under ctest -j; without it the refusal could see step 6).
 set_tests_properties("cli: train --resume continues to more steps" PROPERTIES FIXTURES_REQUIRED cli_train
-  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "trained 6 steps")
+  DEPENDS "cli: train: refuses to overwrite a run;cli: train records the variant in config.json" ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "trained 6 steps")
 
 add_test(NAME "cli: train --profile: clear its folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-train-profile")
 set_tests_properties("cli: train --profile: clear its folder" PROPERTIES FIXTURES_SETUP cli_train_profile_clean)
