@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -29,6 +30,27 @@ mlp::LrSchedule schedule_of(const TrainConfig& c) {
   s.warmup_steps = c.lr_warmup_steps;
   s.warmup_mult = c.lr_warmup_mult;
   return s;
+}
+
+// On resume, the log keeps the rows of the steps the checkpoint holds: rows after it (logged before an interrupt,
+// about to be trained again) and a row cut short by a kill are dropped, so each step appears once. Atomic.
+constexpr const char* kTrainingLogHeader = "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
+
+void trim_training_log(const std::string& csv_path, int64_t step) {
+  std::ifstream in(csv_path);
+  std::string kept, line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (in.eof()) break;  // the last line has no newline: cut short
+    if (!header) {
+      char* end = nullptr;
+      const long long row_step = std::strtoll(line.c_str(), &end, 10);
+      if (end == line.c_str() || *end != ',' || row_step > step) continue;
+    }
+    header = false;
+    kept += line + "\n";
+  }
+  io::write_bytes_atomically(csv_path, kept.empty() ? std::string(kTrainingLogHeader) : kept);
 }
 
 }  // namespace
@@ -74,8 +96,16 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   fs::create_directories(out_dir_);
   const std::string checkpoints = checkpoint_folder();
   const auto existing = list_checkpoints(checkpoints);
+  io::remove_stale_temporaries(checkpoints, log);
+  io::remove_stale_temporaries(out_dir_, log);
   if (resume && !existing.empty()) {
-    restore(existing.back().second);
+    const VerifiedCheckpoint newest = newest_verified_checkpoint(checkpoints);
+    for (const auto& skipped : newest.skipped) ctx.log(LogLevel::warning, "--resume: skipped " + skipped);
+    if (newest.path.empty()) {
+      throw Error("--resume: none of the " + std::to_string(existing.size()) + " checkpoints in " + checkpoints +
+                  " verifies (above); start a new --out, or train from scratch here after removing them");
+    }
+    restore(newest.path);
   } else if (resume) {
     ctx.log(LogLevel::info, "--resume: no checkpoint yet in " + checkpoints + "; starting at step 0");
   } else if (!existing.empty()) {
@@ -86,9 +116,10 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
 
   const std::string csv_path = (fs::path(out_dir_) / "train_log.csv").string();
   const bool append = step_ > 0 && fs::exists(csv_path);
+  if (append) trim_training_log(csv_path, step_);
   impl_->csv.open(csv_path, append ? std::ios::app : std::ios::trunc);
   if (!impl_->csv) throw Error(csv_path + ": cannot write the training log");
-  if (!append) impl_->csv << "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
+  if (!append) impl_->csv << kTrainingLogHeader;
 }
 
 Trainer::~Trainer() = default;
