@@ -131,7 +131,8 @@ void write_bytes_atomically(const std::string& path, std::string_view bytes) {
     const int write_error = errno;
     const bool closed = std::fclose(out) == 0;
     if (!written || !closed) {
-      throw Error(path + ": write failed (" + errno_text(written ? errno : write_error) + "); is the disk full?");
+      const int error = written ? errno : write_error;
+      throw Error(path + ": write failed (" + errno_text(error) + (error == ENOSPC ? ": the disk is full" : "") + ")");
     }
   });
 }

@@ -143,7 +143,17 @@ std::string Trainer::save_checkpoint() {
   // Where the training data was (absolute), so render and eval find the scene without being told.
   record.data_path = fs::absolute(dataset_.path).lexically_normal().string();
   const std::string path = checkpoint_path(checkpoint_folder(), step_);
-  save_training_checkpoint(path, config_, record, networks_, optimisers_);
+  try {
+    save_training_checkpoint(path, config_, record, networks_, optimisers_);
+  } catch (const Error& e) {
+    // A full disk (or a file-size limit) stops the run here; the atomic write left the older checkpoints as
+    // they were, so the message says which one a --resume continues from.
+    const auto saved = list_checkpoints(checkpoint_folder());
+    throw Error(std::string(e.what()) + "; " +
+                (saved.empty() ? std::string("no checkpoint of this run was written yet")
+                               : "the previous checkpoint " + saved.back().second + " is intact") +
+                ": free some space (or raise the file size limit), then continue with --resume");
+  }
   prune_checkpoints(checkpoint_folder(), config_.keep_checkpoints);
   return path;
 }

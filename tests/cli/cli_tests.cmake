@@ -126,6 +126,12 @@ if(TARGET test_eval)
   target_compile_definitions(test_eval PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
 endif()
 
+# Crash consistency (tests/reliability) kills and limits the real executable.
+if(TARGET test_reliability)
+  add_dependencies(test_reliability mipnerf-cl)
+  target_compile_definitions(test_reliability PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
+endif()
+
 # mipnerf-cl render / eval through the executable: a model trained a few steps on the CLI scene, an orbit and an
 # evaluation of the multiscale data from it, and every kind of bad input as one line and a non-zero exit.
 set(MIPNERF_RENDER_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-render-run")
