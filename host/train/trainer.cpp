@@ -81,6 +81,10 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   const data::Split& train = dataset_.split("train");
   const bool multiscale_data = train.num_scales() > 1;
   spec_ = make_graph_spec(config_, multiscale_data);
+  // The plan comes before the first allocation on the device: what does not fit stops here, naming the setting.
+  const size_t batch_rays = static_cast<size_t>(config_.batch_size);
+  memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, training_fixed_bytes(train, spec_, batch_rays),
+                        static_cast<size_t>(config_.chunk_rays), true);
   networks_ = make_networks(ctx, spec_);
   for (const auto& network : networks_) {
     mlp::AdamHyper hyper;
@@ -88,9 +92,6 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
     optimisers_.push_back(std::make_unique<mlp::Adam>(ctx, network->parameter_count(), hyper));
   }
 
-  const size_t batch_rays = static_cast<size_t>(config_.batch_size);
-  const size_t fixed = training_fixed_bytes(train, spec_, batch_rays);
-  memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, fixed, static_cast<size_t>(config_.chunk_rays), true);
   impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, network_pointers(), memory_.chunk_rays);
 
   fs::create_directories(out_dir_);

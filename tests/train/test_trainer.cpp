@@ -300,20 +300,40 @@ TEST_CASE("train: memory planning picks a chunk that fits, and says what to lowe
   auto& ctx = test::test_context();
   const auto paper = train::resolve_config("paper", "mipnerf", {});
   const auto spec = train::make_graph_spec(paper, false);
-  const auto plan = train::plan_memory(spec, ctx.device_info(), 4096, 0, 0, true);
+  const auto plan = train::plan_memory(spec, ctx.device_info(), 4096, {}, 0, true);
   MESSAGE("paper preset on " << ctx.device_info().name << ": " << plan.describe());
   CHECK(plan.chunk_rays >= 1);
   CHECK(plan.total() <= plan.budget_bytes);
   CHECK(plan.largest_buffer <= ctx.device_info().max_alloc_bytes);
-  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, 0, 1u << 20, true),
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, {}, 1u << 20, true),
                        doctest::Contains("lower chunk_rays"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, {}, 1u << 20, false),
+                       doctest::Contains("lower --chunk (render_chunk_rays)"), Error);
   auto small_device = ctx.device_info();
   small_device.global_mem_bytes = 1ull << 20;  // one ray of 2 × 128 samples through 8×256 needs more
   small_device.max_alloc_bytes = 256ull << 10;
-  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 0, 0, true), doctest::Contains("num_samples"),
-                       Error);
-  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 1ull << 30, 0, true),
-                       doctest::Contains("fewer or smaller images"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, {}, 0, true),
+                       doctest::Contains("lower batch_size, num_samples"), Error);
+  // The fixed part names its largest owner's setting: the images, the batch arrays, the networks.
+  const auto fixed = [](size_t data, size_t batch, size_t networks) {
+    train::FixedBytes f;
+    f.data = data;
+    f.batch = batch;
+    f.networks = networks;
+    f.largest_buffer = std::max({data, batch, networks});
+    return f;
+  };
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, fixed(1ull << 30, 1, 1), 0, true),
+                       doctest::Contains("train at a lower resolution (factor"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, fixed(1, 1ull << 30, 1), 0, true),
+                       doctest::Contains("lower batch_size"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, fixed(1, 1, 1ull << 30), 0, true),
+                       doctest::Contains("lower mlp_width"), Error);
+  // Within the budget, but one buffer (the split's pixels) beyond the allocation limit.
+  auto big_budget = small_device;
+  big_budget.global_mem_bytes = 1ull << 40;
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, big_budget, 4096, fixed(1ull << 20, 1, 1), 0, true),
+                       doctest::Contains("a single buffer of 1 MiB"), Error);
 }
 
 TEST_CASE("train: rays through random points of their pixels are reproducible and differ from centred rays") {
