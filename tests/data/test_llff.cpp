@@ -83,7 +83,7 @@ TEST_CASE("npy: float64 arrays round-trip, and malformed files are one line nami
       {with_header("{'descr': '<i4', 'fortran_order': False, 'shape': (2,), }", 8), "dtype '<i4'"},
       {with_header("{'descr': '>f8', 'fortran_order': False, 'shape': (2,), }", 16), "dtype '>f8'"},
       {with_header("{'descr': '<f8', 'fortran_order': True, 'shape': (2, 2), }", 32), "Fortran-order"},
-      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (3, 17), }", 8 * 50), "bytes of data where"},
+      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (3, 17), }", 8 * 60), "480 bytes of data where its shape needs 408"},
       {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999, 99999999999), }", 8),
        "needs more data"},
       {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (2,), 'extra': 1}", 16), "unknown key 'extra'"},
