@@ -39,6 +39,9 @@ mipnerf_require(ZLIB_FOUND "zlib" "zlib1g-dev")
 find_package(PNG QUIET)
 mipnerf_require(PNG_FOUND "libpng" "libpng-dev")
 
+find_package(JPEG QUIET)
+mipnerf_require(JPEG_FOUND "libjpeg" "libjpeg-dev")
+
 if(MIPNERF_BUILD_TESTS)
   find_package(doctest CONFIG QUIET)
   mipnerf_require(doctest_FOUND "doctest" "doctest-dev")

@@ -9,7 +9,7 @@ packages=(
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
-  nlohmann-json3-dev libpng-dev zlib1g-dev
+  nlohmann-json3-dev libpng-dev libjpeg-dev zlib1g-dev
   libopenblas-dev   # the GEMM benchmark's CPU BLAS only
   "$@"
 )

@@ -66,17 +66,18 @@ std::string resolve_image_path(const std::string& base_dir, const std::string& f
   const fs::path given = fs::path(base_dir) / file_path;
   const fs::path with_png = fs::path(given.string() + ".png");
   const std::string extension = lower(given.extension().string());
-  static const char* const kOtherImageTypes[] = {".jpg", ".jpeg", ".exr", ".tif", ".tiff", ".bmp", ".webp", ".gif"};
+  static const char* const kOtherImageTypes[] = {".exr", ".tif", ".tiff", ".bmp", ".webp", ".gif"};
   for (const char* other : kOtherImageTypes) {
     if (extension == other && !is_file(with_png)) {
-      throw Error(given.lexically_normal().string() + ": only PNG images are supported (" + where +
+      throw Error(given.lexically_normal().string() + ": only PNG and JPEG images are supported (" + where +
                   "); convert the images to PNG and update file_path");
     }
   }
-  if (is_file(given) && extension == ".png") return given.lexically_normal().string();
+  const bool png_or_jpeg = extension == ".png" || extension == ".jpg" || extension == ".jpeg";
+  if (is_file(given) && png_or_jpeg) return given.lexically_normal().string();
   if (is_file(with_png)) return with_png.lexically_normal().string();
   if (is_file(given)) return given.lexically_normal().string();  // a PNG without extension: decoding will tell
-  const fs::path expected = extension == ".png" ? given : with_png;
+  const fs::path expected = png_or_jpeg ? given : with_png;
   throw Error(expected.lexically_normal().string() + ": no such file (listed by " + where + ")");
 }
 

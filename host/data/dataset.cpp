@@ -147,7 +147,7 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
   split.source = spec.source;
   detail::SizeCheck sizes;
   for (const auto& frame : spec.frames) {
-    RgbaImage image = load_rgba_png(frame.image_path);
+    RgbaImage image = load_rgba_image(frame.image_path);
     if (spec.uniform_size) sizes.check(image.width, image.height, frame.image_path);
     Camera camera;
     camera.camera_to_world = frame.camera_to_world;

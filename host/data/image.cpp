@@ -1,13 +1,29 @@
 // Host images: loading, the ×2 box filter and compositing.
 #include "data/image.hpp"
 
+#include <cctype>
+#include <filesystem>
+
 #include "core/error.hpp"
+#include "io/file.hpp"
+#include "io/jpeg.hpp"
 #include "io/png.hpp"
 
 namespace mipnerf::data {
 
-RgbaImage load_rgba_png(const std::string& path) {
-  io::PngImage png = io::read_png(path);
+RgbaImage load_rgba_image(const std::string& path) {
+  const std::vector<unsigned char> bytes = io::read_file_bytes(path);
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (io::looks_like_jpeg(bytes.data(), bytes.size()) || extension == ".jpg" || extension == ".jpeg") {
+    const io::JpegImage jpeg = io::decode_jpeg(bytes.data(), bytes.size(), path);
+    RgbaImage image{jpeg.width, jpeg.height, std::vector<float>(static_cast<size_t>(jpeg.width) * jpeg.height * 4, 1.0f)};
+    for (size_t p = 0; p < jpeg.rgb.size() / 3; ++p) {
+      for (int c = 0; c < 3; ++c) image.rgba[4 * p + c] = jpeg.rgb[3 * p + c];
+    }
+    return image;
+  }
+  io::PngImage png = io::decode_png(bytes.data(), bytes.size(), path);
   return RgbaImage{png.width, png.height, std::move(png.rgba)};
 }
 

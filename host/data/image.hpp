@@ -19,8 +19,9 @@ struct RgbaImage {
   std::vector<float> rgba;
 };
 
-// Reads a PNG as RGBA (RGB files get alpha 1). Errors name the file.
-RgbaImage load_rgba_png(const std::string& path);
+// Reads a PNG or a JPEG (told apart by their first bytes) as RGBA (RGB files and JPEGs get alpha 1). Errors name
+// the file.
+RgbaImage load_rgba_image(const std::string& path);
 
 // One ×2 step of the multiscale pyramid, as the official mip-NeRF script (scripts/convert_blender_data.py,
 // `down2`) builds it: every output pixel is the plain mean of a 2×2 block of the straight RGBA values,

@@ -86,24 +86,18 @@ void spherify(std::vector<Matrix34>& poses, std::vector<std::array<double, 2>>& 
   for (auto& b : bounds) b = {b[0] * s, b[1] * s};
 }
 
-bool is_image_file(const fs::path& path, bool& is_jpeg) {
+bool is_image_file(const fs::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  is_jpeg = ext == ".jpg" || ext == ".jpeg";
-  return ext == ".png" || is_jpeg;
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
 }
 
+// The official loader's list: the folder's images sorted by name.
 std::vector<std::string> list_images(const std::string& folder) {
   std::vector<std::string> files;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    bool is_jpeg = false;
-    if (!entry.is_regular_file() || !is_image_file(entry.path(), is_jpeg)) continue;
-    if (is_jpeg) {
-      throw Error(entry.path().string() + ": JPEG images are not read (PNG only); convert the folder to PNG (e.g. "
-                  "`mogrify -format png *.JPG`) and remove the JPEGs, or use images_<factor>/ if it holds PNGs");
-    }
-    files.push_back(entry.path().string());
+    if (entry.is_regular_file() && is_image_file(entry.path())) files.push_back(entry.path().string());
   }
   std::sort(files.begin(), files.end());
   return files;

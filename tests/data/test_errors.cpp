@@ -139,7 +139,11 @@ TEST_CASE("errors: unreadable PNGs and other image types") {
   json["frames"][1]["file_path"] = "./train/photo.jpg";
   { std::ofstream(set.dir / "train/photo.jpg") << "jpeg"; }
   set.write(json);
-  CHECK(set.load_error() == set.dir / "train/photo.jpg: only PNG images are supported (" + set.json_path() +
+  CHECK(set.load_error() == set.dir / "train/photo.jpg: not a JPEG file (no FF D8 FF start marker)");
+  json["frames"][1]["file_path"] = "./train/photo.webp";
+  { std::ofstream(set.dir / "train/photo.webp") << "webp"; }
+  set.write(json);
+  CHECK(set.load_error() == set.dir / "train/photo.webp: only PNG and JPEG images are supported (" + set.json_path() +
                                       ": frames[1]); convert the images to PNG and update file_path");
 }
 

@@ -1,0 +1,26 @@
+// JPEG reading through libjpeg(-turbo) (Debian's libjpeg-dev): photos, as captures and COLMAP projects hold them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mipnerf::io {
+
+struct JpegImage {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<float> rgb;  // [height][width][3], the stored (sRGB-encoded) values / 255
+};
+
+// Decodes a baseline or progressive JPEG of any colour space libjpeg converts to RGB (greyscale, YCbCr; CMYK is
+// refused). Throws mipnerf::Error "<name>: unreadable JPEG (<libjpeg's reason>)" for corrupt or truncated data,
+// and for images over 2^28 pixels.
+JpegImage decode_jpeg(const unsigned char* bytes, size_t size, const std::string& name);
+JpegImage read_jpeg(const std::string& path);
+
+// The first bytes of a JPEG file (SOI marker FF D8 FF).
+bool looks_like_jpeg(const unsigned char* bytes, size_t size);
+
+}  // namespace mipnerf::io
