@@ -120,9 +120,9 @@ void run_import_colmap(const ImportColmapArgs& args) {
             << (imported.cameras == 1 ? " camera: " : " cameras: ") << models << ") and " << imported.points
             << " points from " << args.sparse_dir << " (" << (imported.binary ? "binary" : "text") << ") into "
             << imported.transforms_path << "\n";
-  const char* rule = imported.centre_rule == "look-at" ? "the point closest to every optical axis"
-                     : imported.centre_rule == "points"  ? "the median of the sparse points"
-                                                         : "the mean camera centre";
+  const char* rule = imported.centre_rule == "look-at"  ? "the point closest to every optical axis"
+                     : imported.centre_rule == "points" ? "the median of the sparse points"
+                                                        : "the mean camera centre";
   std::cout << "world: COLMAP's " << vec(imported.centre) << " (" << rule << ") is the origin, scaled by "
             << num(imported.scale, 4) << " (the median camera " << num(data::kImportedCameraDistance) << " from it)\n";
   std::cout << "near " << num(imported.near, 4) << ", far " << num(imported.far, 4)
@@ -157,8 +157,10 @@ void register_dataset(CLI::App& app) {
       "into OUT/transforms.json, which train, render and eval read: poses to OpenGL axes, the world recentred and "
       "scaled (the median camera 4 units from the scene centre), near/far from the sparse points");
   import->add_option("SPARSE_DIR", import_args->sparse_dir, "The model's folder (e.g. undistorted/sparse)")->required();
-  import->add_option("IMAGES_DIR", import_args->images_dir,
-                     "Its images, as PNG (e.g. undistorted/images); referenced, not copied")->required();
+  import
+      ->add_option("IMAGES_DIR", import_args->images_dir,
+                   "Its images, as PNG (e.g. undistorted/images); referenced, not copied")
+      ->required();
   import->add_option("OUT", import_args->out, "Output folder for transforms.json (created)")->required();
   import->add_option("--near", import_args->near, "Override near (scene units, after scaling)")
       ->check(CLI::PositiveNumber);

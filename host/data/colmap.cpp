@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <type_traits>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -21,15 +22,24 @@ namespace {
 // The models COLMAP defines (src/colmap/sensor/models.h): id, name, parameter count. Only the first two are a
 // pinhole camera without distortion; the rest distort (radial, tangential, fisheye, …) or are not perspective.
 constexpr ColmapCameraModel kModels[] = {
-    {0, "SIMPLE_PINHOLE", 3, true},          {1, "PINHOLE", 4, true},
-    {2, "SIMPLE_RADIAL", 4, false},          {3, "RADIAL", 5, false},
-    {4, "OPENCV", 8, false},                 {5, "OPENCV_FISHEYE", 8, false},
-    {6, "FULL_OPENCV", 12, false},           {7, "FOV", 5, false},
-    {8, "SIMPLE_RADIAL_FISHEYE", 4, false},  {9, "RADIAL_FISHEYE", 5, false},
-    {10, "THIN_PRISM_FISHEYE", 12, false},   {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16, false},
-    {12, "SIMPLE_DIVISION", 4, false},       {13, "DIVISION", 5, false},
-    {14, "SIMPLE_FISHEYE", 3, false},        {15, "FISHEYE", 4, false},
-    {16, "EUCM", 6, false},                  {17, "EQUIRECTANGULAR", 2, false},
+    {0, "SIMPLE_PINHOLE", 3, true},
+    {1, "PINHOLE", 4, true},
+    {2, "SIMPLE_RADIAL", 4, false},
+    {3, "RADIAL", 5, false},
+    {4, "OPENCV", 8, false},
+    {5, "OPENCV_FISHEYE", 8, false},
+    {6, "FULL_OPENCV", 12, false},
+    {7, "FOV", 5, false},
+    {8, "SIMPLE_RADIAL_FISHEYE", 4, false},
+    {9, "RADIAL_FISHEYE", 5, false},
+    {10, "THIN_PRISM_FISHEYE", 12, false},
+    {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16, false},
+    {12, "SIMPLE_DIVISION", 4, false},
+    {13, "DIVISION", 5, false},
+    {14, "SIMPLE_FISHEYE", 3, false},
+    {15, "FISHEYE", 4, false},
+    {16, "EUCM", 6, false},
+    {17, "EQUIRECTANGULAR", 2, false},
 };
 constexpr int kFewestParams = 2;
 
@@ -164,7 +174,9 @@ T parse_integer(std::string_view token, const char* what, const std::string& at)
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
   if (ec == std::errc::result_out_of_range) throw Error(at + ": " + what + " " + quoted(token) + " is out of range");
   if (ec != std::errc() || end != token.data() + token.size()) {
-    throw Error(at + ": " + what + " must be an integer, got " + quoted(token));
+    throw Error(at + ": " + what +
+                (std::is_unsigned_v<T> ? " must be a non-negative integer, got " : " must be an integer, got ") +
+                quoted(token));
   }
   return value;
 }
@@ -293,8 +305,10 @@ std::vector<ColmapCamera> parse_colmap_cameras_text(std::string_view text, const
     if (skipped(line.text)) continue;
     const std::string at = line_at(where, line.number);
     const auto f = fields(line.text);
-    if (f.size() < 4) throw Error(at + ": expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got " +
-                                  std::to_string(f.size()) + " fields");
+    if (f.size() < 4) {
+      throw Error(at + ": expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got " + std::to_string(f.size()) +
+                  " fields");
+    }
     ColmapCamera camera;
     camera.line = line.number;
     camera.id = parse_integer<uint32_t>(f[0], "CAMERA_ID", at);

@@ -69,8 +69,8 @@ Intrinsics pinhole_intrinsics(const ColmapModel& model, const ColmapCamera& came
   }
   const auto& p = camera.params;
   const bool simple = camera.model->num_params == 3;  // SIMPLE_PINHOLE: f, cx, cy; PINHOLE: fx, fy, cx, cy
-  const Intrinsics in{p[0], simple ? p[0] : p[1], simple ? p[1] : p[2], simple ? p[2] : p[3], camera.width,
-                      camera.height};
+  const Intrinsics in{p[0],         simple ? p[0] : p[1], simple ? p[1] : p[2], simple ? p[2] : p[3],
+                      camera.width, camera.height};
   if (!(in.fx > 0.0) || !(in.fy > 0.0)) throw Error(at + ": the focal length must be positive");
   return in;
 }
@@ -223,7 +223,8 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
   }
   const std::optional<DepthRange> range = near_far_from_depths(depths);
   if (!range && !(options.near && options.far)) {
-    throw Error(model.file("points3D") + ": no point lies in front of an image that sees it, so near/far cannot be "
+    throw Error(model.file("points3D") +
+                ": no point lies in front of an image that sees it, so near/far cannot be "
                 "chosen from the points: give both (--near, --far)");
   }
 
@@ -290,27 +291,29 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
   }
   root["frames"] = std::move(frames);
   io::Json near_far = {
-      {"rule", "per image, the 1st and 99th percentiles of the depths of the sparse points it sees (in front of it); "
-               "near = 0.9 x the smallest, far = 1.1 x the largest"},
+      {"rule",
+       "per image, the 1st and 99th percentiles of the depths of the sparse points it sees (in front of it); "
+       "near = 0.9 x the smallest, far = 1.1 x the largest"},
       {"from_points", result.near_far_from_points},
       {"percentiles", {100 * kDepthPercentileLow, 100 * kDepthPercentileHigh}},
       {"margins", {kNearMargin, kFarMargin}},
       {"images_with_points", range ? range->images : 0}};
   if (range) near_far["from_points_scene_units"] = {range->near * result.scale, range->far * result.scale};
-  root["colmap"] = {
-      {"sparse_dir", relative_path(model.dir, out)},
-      {"format", model.binary ? "binary" : "text"},
-      {"images_dir", relative_path(images_dir, out)},
-      {"points", model.points.size()},
-      {"world", {{"transform", "x_scene = scale * (x_colmap - centre); rotations unchanged; camera axes OpenCV -> "
-                               "OpenGL (y and z negated)"},
-                 {"centre", {result.centre[0], result.centre[1], result.centre[2]}},
-                 {"centre_rule", result.centre_rule == "look-at" ? "the point closest to every optical axis"
-                                 : result.centre_rule == "points" ? "the per-axis median of the sparse points"
-                                                                  : "the mean camera centre"},
-                 {"scale", result.scale},
-                 {"median_camera_distance", kImportedCameraDistance}}},
-      {"near_far", near_far}};
+  root["colmap"] = {{"sparse_dir", relative_path(model.dir, out)},
+                    {"format", model.binary ? "binary" : "text"},
+                    {"images_dir", relative_path(images_dir, out)},
+                    {"points", model.points.size()},
+                    {"world",
+                     {{"transform",
+                       "x_scene = scale * (x_colmap - centre); rotations unchanged; camera axes OpenCV -> "
+                       "OpenGL (y and z negated)"},
+                      {"centre", {result.centre[0], result.centre[1], result.centre[2]}},
+                      {"centre_rule", result.centre_rule == "look-at"  ? "the point closest to every optical axis"
+                                      : result.centre_rule == "points" ? "the per-axis median of the sparse points"
+                                                                       : "the mean camera centre"},
+                      {"scale", result.scale},
+                      {"median_camera_distance", kImportedCameraDistance}}},
+                    {"near_far", near_far}};
   result.transforms_path = (out / "transforms.json").string();
   try {
     io::write_json(result.transforms_path, root);

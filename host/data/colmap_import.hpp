@@ -48,15 +48,15 @@ struct ColmapImportOptions {
 
 // What import_colmap wrote.
 struct ColmapImport {
-  std::string transforms_path;  // OUT/transforms.json
-  bool binary = true;           // the model's format
+  std::string transforms_path;                 // OUT/transforms.json
+  bool binary = true;                          // the model's format
   size_t images = 0, cameras = 0, points = 0;  // cameras: the intrinsics the images use
   std::vector<std::string> camera_models;      // their models, e.g. "PINHOLE"
   double near = 0, far = 0;                    // written, scene units
   bool near_far_from_points = true;            // false: both given in the options
-  Vec3 centre{};              // the COLMAP world point that became the origin
-  std::string centre_rule;    // "look-at", "points" or "cameras" (see import_colmap)
-  double scale = 1.0;         // scene units per COLMAP unit
+  Vec3 centre{};                               // the COLMAP world point that became the origin
+  std::string centre_rule;                     // "look-at", "points" or "cameras" (see import_colmap)
+  double scale = 1.0;                          // scene units per COLMAP unit
 };
 
 // Reads the model in sparse_dir, resolves every image in images_dir (its name, or the name with the extension

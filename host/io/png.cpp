@@ -194,7 +194,8 @@ PngSize read_png_size(const std::string& path) {
   unsigned char head[24] = {0};
   std::ifstream in(path, std::ios::binary);
   in.read(reinterpret_cast<char*>(head), sizeof(head));
-  if (in.gcount() < 8 || png_sig_cmp(head, 0, 8) != 0) throw unreadable(path, "not a PNG file: the signature is missing");
+  if (in.gcount() < 8 || png_sig_cmp(head, 0, 8) != 0)
+    throw unreadable(path, "not a PNG file: the signature is missing");
   // After the signature: the IHDR chunk's length (13) and type, then width and height, big-endian.
   if (in.gcount() < 24 || std::memcmp(head + 12, "IHDR", 4) != 0) throw unreadable(path, "no IHDR chunk first");
   auto big_endian = [&head](int at) {

@@ -149,8 +149,9 @@ inline std::string colmap_cameras_text(const ColmapTestModel& model) {
 
 inline std::string colmap_images_text(const ColmapTestModel& model) {
   using colmap_detail::number;
-  std::string out = "# Image list with two lines of data per image:\n"
-                    "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n#   POINTS2D[] as (X, Y, POINT3D_ID)\n";
+  std::string out =
+      "# Image list with two lines of data per image:\n"
+      "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n#   POINTS2D[] as (X, Y, POINT3D_ID)\n";
   out += "# Number of images: " + std::to_string(model.images.size()) + "\n";
   for (const auto& image : model.images) {
     out += std::to_string(image.id);
@@ -169,8 +170,9 @@ inline std::string colmap_images_text(const ColmapTestModel& model) {
 inline std::string colmap_points_text(const ColmapTestModel& model) {
   using colmap_detail::number;
   const auto index = colmap_detail::keypoint_indices(model);
-  std::string out = "# 3D point list with one line of data per point:\n"
-                    "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n";
+  std::string out =
+      "# 3D point list with one line of data per point:\n"
+      "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n";
   for (const auto& p : model.points) {
     out += std::to_string(p.id) + " " + number(p.xyz[0]) + " " + number(p.xyz[1]) + " " + number(p.xyz[2]) +
            " 200 100 50 0.5";

@@ -56,7 +56,11 @@ TEST_CASE("train: a COLMAP model of the procedural scene in a moved, turned, sca
   // each observed by the views that have it in front and inside the image (sparse models do not test occlusion
   // either way: a track lists where the point was matched).
   test::ColmapTestModel model;
-  model.cameras = {{1, "PINHOLE", 1, first.width_px, first.height_px,
+  model.cameras = {{1,
+                    "PINHOLE",
+                    1,
+                    first.width_px,
+                    first.height_px,
                     {first.focal_x_px, first.focal_y_px, first.center_x_px, first.center_y_px}}};
   for (size_t k = 0; k < blender.num_images(); ++k) {
     model.images.push_back(test::colmap_image(static_cast<uint32_t>(k + 1), 1, fs::path(blender.files[k]).filename(),
@@ -113,12 +117,14 @@ TEST_CASE("train: a COLMAP model of the procedural scene in a moved, turned, sca
     CAPTURE(split.files[i]);
     const auto& m = split.cameras[i].camera_to_world;
     for (int col = 0; col < 4; ++col) {
-      const data::Vec3 column = turn({expected.camera_to_world[col], expected.camera_to_world[4 + col],
-                                      expected.camera_to_world[8 + col]});
-      for (int row = 0; row < 3; ++row) CHECK(m[row * 4 + col] == doctest::Approx(column[row]).scale(1.0).epsilon(1e-9));
+      const data::Vec3 column =
+          turn({expected.camera_to_world[col], expected.camera_to_world[4 + col], expected.camera_to_world[8 + col]});
+      for (int row = 0; row < 3; ++row)
+        CHECK(m[row * 4 + col] == doctest::Approx(column[row]).scale(1.0).epsilon(1e-9));
     }
     CHECK(split.cameras[i].focal_x_px == expected.focal_x_px);
-    for (size_t p = 0; p < 3 * 32 * 32; p += 97) REQUIRE(split.image_rgb(i)[p] == blender.image_rgb(original - blender.files.begin())[p]);
+    for (size_t p = 0; p < 3 * 32 * 32; p += 97)
+      REQUIRE(split.image_rgb(i)[p] == blender.image_rgb(original - blender.files.begin())[p]);
   }
 
   // What `mipnerf-cl train --data OUT/transforms.json --preset tiny --steps 20` runs.
