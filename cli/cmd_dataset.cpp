@@ -1,5 +1,6 @@
 // `mipnerf-cl dataset inspect DIR`: loads a dataset and prints what it holds, per split and scale, with the
 // camera geometry (centre bounds, look-at point) that makes a convention mistake visible at once.
+// `mipnerf-cl dataset import-colmap SPARSE_DIR IMAGES_DIR OUT`: a COLMAP sparse model → OUT/transforms.json.
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -9,6 +10,7 @@
 #include "common.hpp"
 #include "core/error.hpp"
 #include "core/stage_options.hpp"
+#include "data/colmap_import.hpp"
 #include "data/dataset.hpp"
 #include "data/inspect.hpp"
 #include "train/config.hpp"
@@ -107,10 +109,36 @@ void run_inspect(const InspectArgs& args) {
   }
 }
 
+struct ImportColmapArgs {
+  std::string sparse_dir, images_dir, out;
+  double near = 0.0, far = 0.0;
+};
+
+void run_import_colmap(const ImportColmapArgs& args) {
+  data::ColmapImportOptions options;
+  if (args.near > 0.0) options.near = args.near;
+  if (args.far > 0.0) options.far = args.far;
+  const data::ColmapImport imported = data::import_colmap(args.sparse_dir, args.images_dir, args.out, options);
+  std::string models;
+  for (const auto& name : imported.camera_models) models += (models.empty() ? "" : ", ") + name;
+  std::cout << "imported " << imported.images << " images (" << imported.cameras
+            << (imported.cameras == 1 ? " camera: " : " cameras: ") << models << ") and " << imported.points
+            << " points from " << args.sparse_dir << " (" << (imported.binary ? "binary" : "text") << ") into "
+            << imported.transforms_path << "\n";
+  const char* rule = imported.centre_rule == "look-at"  ? "the point closest to every optical axis"
+                     : imported.centre_rule == "points" ? "the median of the sparse points"
+                                                        : "the mean camera centre";
+  std::cout << "world: COLMAP's " << vec(imported.centre) << " (" << rule << ") is the origin, scaled by "
+            << num(imported.scale, 4) << " (the median camera " << num(data::kImportedCameraDistance) << " from it)\n";
+  std::cout << "near " << num(imported.near, 4) << ", far " << num(imported.far, 4)
+            << (imported.near_far_from_points ? " (from the points' depths)" : " (as given)") << "\n";
+  std::cout << "train on it: mipnerf-cl train --data " << imported.transforms_path << " --out runs/NAME\n";
+}
+
 }  // namespace
 
 void register_dataset(CLI::App& app) {
-  auto* cmd = app.add_subcommand("dataset", "Datasets: inspect what a dataset folder holds");
+  auto* cmd = app.add_subcommand("dataset", "Datasets: inspect what a dataset folder holds, import a COLMAP model");
   cmd->require_subcommand(1);
   auto args = std::make_shared<InspectArgs>();
   auto* inspect = cmd->add_subcommand(
@@ -126,6 +154,23 @@ void register_dataset(CLI::App& app) {
   inspect->add_option("--far", args->far, "Override far")->check(CLI::PositiveNumber);
   inspect->add_option("--split", args->splits, "Only these splits (train, val, test); default: all present");
   inspect->callback([args] { run_inspect(*args); });
+
+  auto import_args = std::make_shared<ImportColmapArgs>();
+  auto* import = cmd->add_subcommand(
+      "import-colmap",
+      "Convert a COLMAP sparse model (cameras, images, points3D; .bin or .txt) of PINHOLE or SIMPLE_PINHOLE cameras "
+      "into OUT/transforms.json, which train, render and eval read: poses to OpenGL axes, the world recentred and "
+      "scaled (the median camera 4 units from the scene centre), near/far from the sparse points");
+  import->add_option("SPARSE_DIR", import_args->sparse_dir, "The model's folder (e.g. undistorted/sparse)")->required();
+  import
+      ->add_option("IMAGES_DIR", import_args->images_dir,
+                   "Its images, as PNG (e.g. undistorted/images); referenced, not copied")
+      ->required();
+  import->add_option("OUT", import_args->out, "Output folder for transforms.json (created)")->required();
+  import->add_option("--near", import_args->near, "Override near (scene units, after scaling)")
+      ->check(CLI::PositiveNumber);
+  import->add_option("--far", import_args->far, "Override far (scene units)")->check(CLI::PositiveNumber);
+  import->callback([import_args] { run_import_colmap(*import_args); });
 }
 
 }  // namespace mipnerf::cli

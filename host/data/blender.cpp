@@ -123,9 +123,10 @@ std::vector<SplitSpec> parse_blender(const std::string& dir, const LoadOptions& 
 
 std::vector<SplitSpec> parse_transforms_json(const std::string& file, const LoadOptions& options) {
   for (const auto& name : options.splits) {
-    if (name != "train" && name != "test") {
+    if (name != "train" && name != "test" && name != "val") {
       throw Error(file + ": a single transforms.json has only the splits train and test (every " +
-                  std::to_string(options.holdout_every) + "th frame held out), not '" + name + "'");
+                  std::to_string(options.holdout_every) + "th frame held out; val is the same views), not '" + name +
+                  "'");
     }
   }
   if (options.holdout_every < 0) throw Error("holdout_every must be >= 0");
@@ -144,8 +145,11 @@ std::vector<SplitSpec> parse_transforms_json(const std::string& file, const Load
     const bool held_out = options.holdout_every > 0 && i % options.holdout_every == 0 && frames.size() > 1;
     (held_out ? test : train).frames.push_back(std::move(frames[i]));
   }
+  // The held-out views are also the val split that `train` scores at its end (as for LLFF captures).
+  SplitSpec val = test;
+  val.name = "val";
   std::vector<SplitSpec> splits;
-  for (auto* split : {&train, &test}) {
+  for (auto* split : {&train, &val, &test}) {
     const bool wanted = options.splits.empty() ||
                         std::find(options.splits.begin(), options.splits.end(), split->name) != options.splits.end();
     if (wanted && !split->frames.empty()) splits.push_back(std::move(*split));

@@ -32,7 +32,7 @@ struct SplitSpec {
 
 // Blender: DIR/transforms_<split>.json for each requested (or present) split.
 std::vector<SplitSpec> parse_blender(const std::string& dir, const LoadOptions& options);
-// Single-file transforms.json, split into train/test by options.holdout_every.
+// Single-file transforms.json, split into train/test by options.holdout_every; "val" holds the test views too.
 std::vector<SplitSpec> parse_transforms_json(const std::string& file, const LoadOptions& options);
 // Official multiscale metadata.json.
 std::vector<SplitSpec> parse_multiscale_metadata(const std::string& file, const LoadOptions& options);

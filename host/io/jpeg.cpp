@@ -31,7 +31,7 @@ extern "C" void on_jpeg_warning(j_common_ptr, int) {}  // corrupt-data warnings:
 // Decodes into `image`; false with manager.message set when libjpeg failed. Only trivially destructible locals
 // live between setjmp and a longjmp back to it; `image` and its vector belong to the caller.
 bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std::vector<unsigned char>& row,
-                 ErrorManager& manager, bool& too_large, bool& cmyk) {
+                 ErrorManager& manager, bool& too_large, bool& cmyk, bool header_only) {
   jpeg_decompress_struct info;
   info.err = jpeg_std_error(&manager.base);
   manager.base.error_exit = on_jpeg_error;
@@ -43,6 +43,12 @@ bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std:
   jpeg_create_decompress(&info);
   jpeg_mem_src(&info, bytes, static_cast<unsigned long>(size));
   jpeg_read_header(&info, TRUE);
+  if (header_only) {
+    image.width = info.image_width;
+    image.height = info.image_height;
+    jpeg_destroy_decompress(&info);
+    return true;
+  }
   if (info.jpeg_color_space == JCS_CMYK || info.jpeg_color_space == JCS_YCCK) {
     cmyk = true;
     jpeg_destroy_decompress(&info);
@@ -77,18 +83,32 @@ bool looks_like_jpeg(const unsigned char* bytes, size_t size) {
   return size >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF;
 }
 
-JpegImage decode_jpeg(const unsigned char* bytes, size_t size, const std::string& name) {
+namespace {
+
+JpegImage decode(const unsigned char* bytes, size_t size, const std::string& name, bool header_only) {
   if (!looks_like_jpeg(bytes, size)) throw Error(name + ": not a JPEG file (no FF D8 FF start marker)");
   JpegImage image;
   std::vector<unsigned char> row;
   ErrorManager manager{};
   bool too_large = false, cmyk = false;
-  if (!decode_into(bytes, size, image, row, manager, too_large, cmyk)) {
+  if (!decode_into(bytes, size, image, row, manager, too_large, cmyk, header_only)) {
     throw Error(name + ": unreadable JPEG (" + manager.message + ")");
   }
   if (cmyk) throw Error(name + ": a CMYK JPEG; save it as RGB");
   if (too_large) throw Error(name + ": a JPEG of more than 2^28 pixels; downsample it first");
   return image;
+}
+
+}  // namespace
+
+JpegImage decode_jpeg(const unsigned char* bytes, size_t size, const std::string& name) {
+  return decode(bytes, size, name, false);
+}
+
+JpegSize read_jpeg_size(const std::string& path) {
+  const std::vector<unsigned char> bytes = read_file_bytes(path);
+  const JpegImage header = decode(bytes.data(), bytes.size(), path, true);
+  return {header.width, header.height};
 }
 
 JpegImage read_jpeg(const std::string& path) {

@@ -19,6 +19,11 @@ struct JpegImage {
 // and for images over 2^28 pixels.
 JpegImage decode_jpeg(const unsigned char* bytes, size_t size, const std::string& name);
 JpegImage read_jpeg(const std::string& path);
+// The size from the file's header, without decoding it.
+struct JpegSize {
+  uint32_t width = 0, height = 0;
+};
+JpegSize read_jpeg_size(const std::string& path);
 
 // The first bytes of a JPEG file (SOI marker FF D8 FF).
 bool looks_like_jpeg(const unsigned char* bytes, size_t size);

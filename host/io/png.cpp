@@ -12,6 +12,8 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -184,6 +186,22 @@ PngImage decode_png(const unsigned char* bytes, size_t size, const std::string& 
     for (size_t i = 0; i < samples; ++i) image.rgba[i] = static_cast<float>(raw[i]) / 255.0f;
   }
   return image;
+}
+
+PngSize read_png_size(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file");
+  unsigned char head[24] = {0};
+  std::ifstream in(path, std::ios::binary);
+  in.read(reinterpret_cast<char*>(head), sizeof(head));
+  if (in.gcount() < 8 || png_sig_cmp(head, 0, 8) != 0)
+    throw unreadable(path, "not a PNG file: the signature is missing");
+  // After the signature: the IHDR chunk's length (13) and type, then width and height, big-endian.
+  if (in.gcount() < 24 || std::memcmp(head + 12, "IHDR", 4) != 0) throw unreadable(path, "no IHDR chunk first");
+  auto big_endian = [&head](int at) {
+    return (uint32_t{head[at]} << 24) | (uint32_t{head[at + 1]} << 16) | (uint32_t{head[at + 2]} << 8) | head[at + 3];
+  };
+  return {big_endian(16), big_endian(20)};
 }
 
 PngImage read_png(const std::string& path) {

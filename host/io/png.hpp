@@ -24,6 +24,13 @@ PngImage read_png(const std::string& path);
 // Same, from bytes in memory; `name` is used in error messages.
 PngImage decode_png(const unsigned char* bytes, size_t size, const std::string& name);
 
+// The width and height a PNG's header declares, read from its first 24 bytes (signature and IHDR) without
+// decoding the image. Throws like read_png for a missing file or one that does not start as a PNG does.
+struct PngSize {
+  uint32_t width = 0, height = 0;
+};
+PngSize read_png_size(const std::string& path);
+
 // Writes samples [height][width][channels] (channels 3 = RGB or 4 = RGBA) atomically (io/atomic_file.hpp).
 void write_png8(const std::string& path, uint32_t width, uint32_t height, int channels, const uint8_t* samples);
 void write_png16(const std::string& path, uint32_t width, uint32_t height, int channels, const uint16_t* samples);

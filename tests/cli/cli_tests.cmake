@@ -91,6 +91,43 @@ mipnerf_add_cli_error_test("make-scene: a Blender option with --forward-facing" 
 mipnerf_add_cli_error_test("make-scene: bad --grid" PATTERN "--grid '5by4': expected COLUMNSxROWS"
   ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --forward-facing --grid 5by4)
 
+# COLMAP import (host/data/colmap*, cli/cmd_dataset.cpp): the fixtures in tests/data/fixtures/colmap (written by its
+# make_fixture.py): a text and a binary model of 3 PINHOLE views, and broken variants. One import is inspected and
+# trained on through the real executable.
+set(MIPNERF_COLMAP_FIXTURES "${MIPNERF_DATA_FIXTURES}/colmap")
+set(MIPNERF_COLMAP_OUT "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap")
+add_test(NAME "cli: dataset import-colmap: clear its folders" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_COLMAP_OUT}"
+  "${MIPNERF_COLMAP_OUT}-bin" "${MIPNERF_COLMAP_OUT}-run")
+set_tests_properties("cli: dataset import-colmap: clear its folders" PROPERTIES FIXTURES_SETUP cli_colmap_clean)
+add_test(NAME "cli: dataset import-colmap imports a text model" COMMAND mipnerf-cl dataset import-colmap
+  "${MIPNERF_COLMAP_FIXTURES}/sparse" "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_COLMAP_OUT}")
+set_tests_properties("cli: dataset import-colmap imports a text model" PROPERTIES FIXTURES_REQUIRED cli_colmap_clean
+  FIXTURES_SETUP cli_colmap PASS_REGULAR_EXPRESSION
+  "imported 3 images \\(1 camera: PINHOLE\\) and 27 points from [^\n]*sparse \\(text\\) into [^\n]*cli-colmap/transforms.json\n.*is the origin, scaled by [0-9.]+ \\(the median camera 4 from it\\)\nnear [0-9.]+, far [0-9.]+ \\(from the points' depths\\)\ntrain on it: mipnerf-cl train --data [^\n]*cli-colmap/transforms.json")
+add_test(NAME "cli: dataset import-colmap imports a binary model" COMMAND mipnerf-cl dataset import-colmap
+  "${MIPNERF_COLMAP_FIXTURES}/sparse_bin" "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_COLMAP_OUT}-bin" --near 1 --far 7)
+set_tests_properties("cli: dataset import-colmap imports a binary model" PROPERTIES FIXTURES_REQUIRED cli_colmap_clean
+  PASS_REGULAR_EXPRESSION "imported 3 images .* \\(binary\\) into .*near 1, far 7 \\(as given\\)")
+add_test(NAME "cli: dataset inspect shows an imported COLMAP model looking at the origin" COMMAND mipnerf-cl dataset
+  inspect "${MIPNERF_COLMAP_OUT}/transforms.json")
+set_tests_properties("cli: dataset inspect shows an imported COLMAP model looking at the origin" PROPERTIES
+  FIXTURES_REQUIRED cli_colmap PASS_REGULAR_EXPRESSION
+  "split train: 2 images.*scale 0 \\(/1\\): 2 images 8x6, focal x 9 px, focal y 9 px.*distance from the origin 4\n.*look-at centre \\(closest to all optical axes\\): \\(0.000, 0.000, 0.000\\), in front of 2/2 cameras")
+add_test(NAME "cli: train on an imported COLMAP model" COMMAND mipnerf-cl train --data "${MIPNERF_COLMAP_OUT}/transforms.json"
+  --out "${MIPNERF_COLMAP_OUT}-run" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
+set_tests_properties("cli: train on an imported COLMAP model" PROPERTIES FIXTURES_REQUIRED cli_colmap
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "trained 4 steps")
+mipnerf_add_cli_error_test("dataset import-colmap: a distortion model" PATTERN "distorted/cameras.txt:4: camera 1 is SIMPLE_RADIAL, not a pinhole camera .*run COLMAP's image_undistorter first"
+  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/distorted" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
+mipnerf_add_cli_error_test("dataset import-colmap: a missing image" PATTERN "colmap/images: 1 of the 4 images of .*missing/images.txt are missing: view_3.png$"
+  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/missing" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
+mipnerf_add_cli_error_test("dataset import-colmap: a malformed camera line" PATTERN "malformed/cameras.txt:4: camera 1: PINHOLE takes 4 parameters, the line has 3$"
+  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/malformed" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
+mipnerf_add_cli_error_test("dataset import-colmap: a folder without a model" PATTERN "colmap/images: no COLMAP sparse model: expected cameras, images and points3D \\(.bin or .txt\\), found none of them$"
+  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
+mipnerf_add_cli_error_test("dataset import-colmap: a missing argument" PATTERN "OUT is required"
+  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/sparse" "${MIPNERF_COLMAP_FIXTURES}/images")
+
 # Training (host/train, cli/cmd_train.cpp): bad settings are one line; a short run on the fixture scene trains,
 # writes its outputs, refuses to overwrite, and resumes.
 mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosuch'; the presets are: paper, quick, small, tiny"

@@ -134,10 +134,11 @@ TEST_CASE("transforms.json: global and per-frame intrinsics, holdout, and agreem
   data::LoadOptions options;
   const auto from_single = data::load_dataset(dir / "transforms.json", options);
   CHECK(from_single.format == data::DatasetFormat::transforms_json);
-  // Every 8th frame (0 and 8) is held out as "test".
-  REQUIRE(from_single.split_names() == "train, test");
+  // Every 8th frame (0 and 8) is held out as "test", and is the "val" split `train` scores too.
+  REQUIRE(from_single.split_names() == "train, val, test");
   CHECK(from_single.split("train").num_images() == 7);
   CHECK(from_single.split("test").num_images() == 2);
+  CHECK(from_single.split("val").files == from_single.split("test").files);
   options.splits = {"train"};
   const auto from_blender = data::load_dataset(dir.path(), options);  // the folder: transforms_train.json wins
   CHECK(from_blender.format == data::DatasetFormat::blender);

@@ -1,0 +1,350 @@
+// COLMAP import: a sparse model and its images → OUT/transforms.json.
+#include "data/colmap_import.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <unordered_map>
+
+#include "core/error.hpp"
+#include "io/file.hpp"
+#include "io/json.hpp"
+#include "io/jpeg.hpp"
+#include "io/png.hpp"
+
+namespace mipnerf::data {
+namespace fs = std::filesystem;
+
+namespace {
+
+using Matrix33 = std::array<double, 9>;  // row-major
+
+// R(q) for a unit quaternion (qw, qx, qy, qz), Hamilton convention (COLMAP's, Eigen's).
+Matrix33 rotation_from_quaternion(const std::array<double, 4>& q) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  return {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
+          2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+          2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+}
+
+std::string num(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.4g", v);
+  return text;
+}
+
+std::string lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  return text;
+}
+
+// q-quantile of sorted values, interpolating linearly between neighbours (numpy's default).
+double quantile(const std::vector<double>& sorted, double q) {
+  const double position = q * static_cast<double>(sorted.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(position));
+  if (below + 1 >= sorted.size()) return sorted.back();
+  const double fraction = position - static_cast<double>(below);
+  return sorted[below] + fraction * (sorted[below + 1] - sorted[below]);
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return quantile(values, 0.5);
+}
+
+struct Intrinsics {
+  double fx, fy, cx, cy;
+  uint64_t width, height;
+};
+
+// The pinhole intrinsics of a camera the images use; anything else is refused with what to run.
+Intrinsics pinhole_intrinsics(const ColmapModel& model, const ColmapCamera& camera) {
+  const std::string at = model.where("cameras", camera.line, "camera", camera.id);
+  if (!camera.model->pinhole) {
+    throw Error(at + " is " + camera.model->name +
+                ", not a pinhole camera (mipnerf-cl models undistorted pinhole cameras only): run COLMAP's "
+                "image_undistorter first and import the sparse model and images it writes (PINHOLE cameras)");
+  }
+  const auto& p = camera.params;
+  const bool simple = camera.model->num_params == 3;  // SIMPLE_PINHOLE: f, cx, cy; PINHOLE: fx, fy, cx, cy
+  const Intrinsics in{p[0],         simple ? p[0] : p[1], simple ? p[1] : p[2], simple ? p[2] : p[3],
+                      camera.width, camera.height};
+  if (!(in.fx > 0.0) || !(in.fy > 0.0)) throw Error(at + ": the focal length must be positive");
+  return in;
+}
+
+// The image file a name stands for: the name itself when it is a PNG or JPEG, else the same name with a .png
+// extension (an undistorted project converted to PNG).
+enum class ImageFile { found, other_type, missing };
+ImageFile find_image(const fs::path& given, fs::path& image) {
+  std::error_code ec;
+  const std::string extension = lower(given.extension().string());
+  if (extension == ".png" || extension == ".jpg" || extension == ".jpeg") {
+    image = given;
+    if (fs::is_regular_file(given, ec)) return ImageFile::found;
+  }
+  image = fs::path(given).replace_extension(".png");
+  if (fs::is_regular_file(image, ec)) return ImageFile::found;
+  return fs::is_regular_file(given, ec) ? ImageFile::other_type : ImageFile::missing;
+}
+
+// Width and height from the file's header (PNG or JPEG, told apart by the extension).
+std::pair<uint32_t, uint32_t> image_size(const fs::path& path) {
+  if (lower(path.extension().string()) == ".png") {
+    const io::PngSize size = io::read_png_size(path.string());
+    return {size.width, size.height};
+  }
+  const io::JpegSize size = io::read_jpeg_size(path.string());
+  return {size.width, size.height};
+}
+
+// "a.png, b.png, c.png and 4 more".
+std::string name_list(const std::vector<std::string>& names) {
+  std::string text;
+  const size_t shown = std::min<size_t>(names.size(), 5);
+  for (size_t i = 0; i < shown; ++i) text += (i ? ", " : "") + names[i];
+  if (names.size() > shown) text += " and " + std::to_string(names.size() - shown) + " more";
+  return text;
+}
+
+// Relative from `from_dir` (existing) to `path` when there is such a path, else `path` made absolute.
+std::string relative_path(const fs::path& path, const fs::path& from_dir) {
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(path, ec).lexically_normal();
+  const fs::path relative = fs::relative(absolute, from_dir, ec);
+  if (ec || relative.empty()) return absolute.generic_string();
+  return relative.generic_string();
+}
+
+io::Json intrinsics_json(const Intrinsics& in) {
+  return {{"fl_x", in.fx}, {"fl_y", in.fy}, {"cx", in.cx}, {"cy", in.cy}, {"w", in.width}, {"h", in.height}};
+}
+
+}  // namespace
+
+Matrix34 colmap_camera_to_world(const std::array<double, 4>& qvec, const std::array<double, 3>& tvec) {
+  const Matrix33 r = rotation_from_quaternion(qvec);
+  Matrix34 m{};
+  for (int row = 0; row < 3; ++row) {
+    // Row `row` of Rᵀ is column `row` of R. OpenCV → OpenGL camera axes: y and z flip (y down → up, z forward →
+    // backward), i.e. the second and third columns of the camera-to-world rotation change sign.
+    m[row * 4 + 0] = r[0 * 3 + row];
+    m[row * 4 + 1] = -r[1 * 3 + row];
+    m[row * 4 + 2] = -r[2 * 3 + row];
+    m[row * 4 + 3] = -(r[0 * 3 + row] * tvec[0] + r[1 * 3 + row] * tvec[1] + r[2 * 3 + row] * tvec[2]);
+  }
+  return m;
+}
+
+double colmap_depth(const ColmapImage& image, const Vec3& p) {
+  const Matrix33 r = rotation_from_quaternion(image.qvec);
+  return r[6] * p[0] + r[7] * p[1] + r[8] * p[2] + image.tvec[2];
+}
+
+std::optional<DepthRange> near_far_from_depths(std::vector<std::vector<double>>& depths_per_image) {
+  // Why percentiles: sparse models keep some badly triangulated points (wrong matches that passed the
+  // reprojection test, points near the epipole) whose depth is far off; the smallest and largest depth would
+  // follow them. Per image, because images see different depth ranges (a close-up among distant views) and a
+  // pooled percentile would cut off the close-up's near surface. The margin keeps surfaces at the extremes inside
+  // the sampled interval, where the stratified samples still reach them.
+  std::optional<DepthRange> range;
+  for (auto& depths : depths_per_image) {
+    if (depths.empty()) continue;
+    std::sort(depths.begin(), depths.end());
+    const double low = quantile(depths, kDepthPercentileLow), high = quantile(depths, kDepthPercentileHigh);
+    if (!range) {
+      range = DepthRange{low, high, 0};
+    } else {
+      range->near = std::min(range->near, low);
+      range->far = std::max(range->far, high);
+    }
+    ++range->images;
+  }
+  if (range) {
+    range->near *= kNearMargin;
+    range->far *= kFarMargin;
+  }
+  return range;
+}
+
+ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
+                           const ColmapImportOptions& options) {
+  const ColmapModel model = read_colmap_model(sparse_dir);
+  std::unordered_map<uint32_t, const ColmapCamera*> cameras;
+  for (const auto& camera : model.cameras) cameras[camera.id] = &camera;
+  std::vector<const ColmapImage*> images;
+  for (const auto& image : model.images) images.push_back(&image);
+  std::sort(images.begin(), images.end(), [](const auto* a, const auto* b) { return a->name < b->name; });
+
+  // Intrinsics of the cameras the images use (in camera-id order); distortion is refused here.
+  std::map<uint32_t, Intrinsics> intrinsics;
+  for (const auto* image : images) {
+    if (!intrinsics.count(image->camera_id)) {
+      intrinsics.emplace(image->camera_id, pinhole_intrinsics(model, *cameras.at(image->camera_id)));
+    }
+  }
+
+  // Every image, PNG or JPEG, of its camera's size, before anything is written.
+  std::error_code ec;
+  if (!fs::is_directory(images_dir, ec)) throw Error(images_dir + ": no such folder (expected the model's images)");
+  std::vector<std::string> missing, other_type;
+  std::vector<fs::path> image_paths(images.size());
+  for (size_t i = 0; i < images.size(); ++i) {
+    const ImageFile found = find_image(fs::path(images_dir) / images[i]->name, image_paths[i]);
+    if (found == ImageFile::missing) missing.push_back(images[i]->name);
+    if (found == ImageFile::other_type) other_type.push_back(images[i]->name);
+  }
+  if (!missing.empty()) {
+    throw Error(images_dir + ": " + std::to_string(missing.size()) + " of the " + std::to_string(images.size()) +
+                " images of " + model.file("images") + " are missing: " + name_list(missing));
+  }
+  if (!other_type.empty()) {
+    throw Error(images_dir + ": " + name_list(other_type) +
+                " are neither PNG nor JPEG and have no .png beside them: convert them (e.g. `mogrify -format png` in "
+                "that folder) and import again");
+  }
+  for (size_t i = 0; i < images.size(); ++i) {
+    const auto [width, height] = image_size(image_paths[i]);
+    const Intrinsics& in = intrinsics.at(images[i]->camera_id);
+    if (width != in.width || height != in.height) {
+      throw Error(image_paths[i].string() + ": the image is " + std::to_string(width) + "x" +
+                  std::to_string(height) + " but its camera " + std::to_string(images[i]->camera_id) + " in " +
+                  model.file("cameras") + " is " + std::to_string(in.width) + "x" + std::to_string(in.height) +
+                  ": give the images the model was made from (after image_undistorter: its images folder)");
+    }
+  }
+
+  // Depths of the points in the images that see them, in COLMAP units.
+  std::unordered_map<uint32_t, size_t> index_of;
+  for (size_t i = 0; i < images.size(); ++i) index_of[images[i]->id] = i;
+  std::vector<Matrix34> camera_to_world(images.size());
+  std::vector<Camera> axes(images.size());  // for closest_point_to_axes
+  for (size_t i = 0; i < images.size(); ++i) {
+    camera_to_world[i] = colmap_camera_to_world(images[i]->qvec, images[i]->tvec);
+    axes[i].camera_to_world = camera_to_world[i];
+  }
+  std::vector<std::vector<double>> depths(images.size());
+  for (const auto& point : model.points) {
+    for (uint32_t image_id : point.image_ids) {
+      const size_t i = index_of.at(image_id);
+      const double depth = colmap_depth(*images[i], point.xyz);
+      if (depth > 0.0) depths[i].push_back(depth);
+    }
+  }
+  const std::optional<DepthRange> range = near_far_from_depths(depths);
+  if (!range && !(options.near && options.far)) {
+    throw Error(model.file("points3D") +
+                ": no point lies in front of an image that sees it, so near/far cannot be "
+                "chosen from the points: give both (--near, --far)");
+  }
+
+  // The scene centre and scale (see the header for why).
+  ColmapImport result;
+  const std::optional<Vec3> look_at = closest_point_to_axes(axes);
+  bool look_at_inside = look_at.has_value();
+  for (size_t i = 0; look_at && i < images.size(); ++i) {
+    const Vec3 o = camera_center(axes[i]), d = optical_axis(axes[i]);
+    const double depth = ((*look_at)[0] - o[0]) * d[0] + ((*look_at)[1] - o[1]) * d[1] + ((*look_at)[2] - o[2]) * d[2];
+    const bool in_range = range ? depth >= range->near && depth <= range->far : depth > 0.0;
+    look_at_inside = look_at_inside && in_range;
+  }
+  if (look_at_inside) {
+    result.centre = *look_at;
+    result.centre_rule = "look-at";
+  } else if (!model.points.empty()) {
+    std::vector<double> coordinate(model.points.size());
+    for (int k = 0; k < 3; ++k) {
+      for (size_t p = 0; p < model.points.size(); ++p) coordinate[p] = model.points[p].xyz[k];
+      result.centre[k] = median(coordinate);
+    }
+    result.centre_rule = "points";
+  } else {
+    for (const auto& camera : axes) {
+      for (int k = 0; k < 3; ++k) result.centre[k] += camera_center(camera)[k] / static_cast<double>(axes.size());
+    }
+    result.centre_rule = "cameras";
+  }
+  std::vector<double> distances;
+  for (const auto& camera : axes) {
+    const Vec3 o = camera_center(camera);
+    distances.push_back(std::hypot(o[0] - result.centre[0], o[1] - result.centre[1], o[2] - result.centre[2]));
+  }
+  const double median_distance = median(distances);
+  result.scale = median_distance > 0.0 ? kImportedCameraDistance / median_distance : 1.0;
+
+  result.near_far_from_points = !(options.near && options.far);
+  result.near = options.near ? *options.near : range->near * result.scale;
+  result.far = options.far ? *options.far : range->far * result.scale;
+  if (!(result.near >= 0.0) || !(result.far > result.near)) {
+    throw Error("near " + num(result.near) + ", far " + num(result.far) + " (scene units, the points give " +
+                (range ? num(range->near * result.scale) + " .. " + num(range->far * result.scale) : "none") +
+                "): need 0 <= near < far");
+  }
+
+  // transforms.json.
+  io::make_directories(out_dir);
+  const fs::path out = fs::absolute(fs::path(out_dir), ec).lexically_normal();
+  io::Json root = io::Json::object();
+  if (intrinsics.size() == 1) root.update(intrinsics_json(intrinsics.begin()->second));
+  root["near"] = result.near;
+  root["far"] = result.far;
+  io::Json frames = io::Json::array();
+  for (size_t i = 0; i < images.size(); ++i) {
+    Matrix34 pose = camera_to_world[i];
+    for (int row = 0; row < 3; ++row) pose[row * 4 + 3] = result.scale * (pose[row * 4 + 3] - result.centre[row]);
+    io::Json frame = {{"file_path", relative_path(image_paths[i], out)},
+                      {"transform_matrix", pose_to_json(pose)},
+                      {"colmap_image_id", images[i]->id},
+                      {"colmap_camera_id", images[i]->camera_id}};
+    if (intrinsics.size() > 1) frame.update(intrinsics_json(intrinsics.at(images[i]->camera_id)));
+    frames.push_back(std::move(frame));
+  }
+  root["frames"] = std::move(frames);
+  io::Json near_far = {
+      {"rule",
+       "per image, the 1st and 99th percentiles of the depths of the sparse points it sees (in front of it); "
+       "near = 0.9 x the smallest, far = 1.1 x the largest"},
+      {"from_points", result.near_far_from_points},
+      {"percentiles", {100 * kDepthPercentileLow, 100 * kDepthPercentileHigh}},
+      {"margins", {kNearMargin, kFarMargin}},
+      {"images_with_points", range ? range->images : 0}};
+  if (range) near_far["from_points_scene_units"] = {range->near * result.scale, range->far * result.scale};
+  root["colmap"] = {{"sparse_dir", relative_path(model.dir, out)},
+                    {"format", model.binary ? "binary" : "text"},
+                    {"images_dir", relative_path(images_dir, out)},
+                    {"points", model.points.size()},
+                    {"world",
+                     {{"transform",
+                       "x_scene = scale * (x_colmap - centre); rotations unchanged; camera axes OpenCV -> "
+                       "OpenGL (y and z negated)"},
+                      {"centre", {result.centre[0], result.centre[1], result.centre[2]}},
+                      {"centre_rule", result.centre_rule == "look-at"  ? "the point closest to every optical axis"
+                                      : result.centre_rule == "points" ? "the per-axis median of the sparse points"
+                                                                       : "the mean camera centre"},
+                      {"scale", result.scale},
+                      {"median_camera_distance", kImportedCameraDistance}}},
+                    {"near_far", near_far}};
+  result.transforms_path = (out / "transforms.json").string();
+  try {
+    io::write_json(result.transforms_path, root);
+  } catch (const io::Json::exception& e) {  // a folder name that is not UTF-8
+    throw Error(result.transforms_path + ": cannot write it: " + e.what());
+  }
+
+  result.binary = model.binary;
+  result.images = images.size();
+  result.cameras = intrinsics.size();
+  result.points = model.points.size();
+  for (const auto& [id, in] : intrinsics) {
+    const std::string name = cameras.at(id)->model->name;
+    if (std::find(result.camera_models.begin(), result.camera_models.end(), name) == result.camera_models.end()) {
+      result.camera_models.push_back(name);
+    }
+  }
+  return result;
+}
+
+}  // namespace mipnerf::data

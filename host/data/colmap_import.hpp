@@ -1,0 +1,80 @@
+// COLMAP sparse model → transforms.json (the single-file format load_dataset reads): poses converted from COLMAP's
+// world-to-camera (OpenCV axes) to camera-to-world in OpenGL/Blender axes, the world recentred and rescaled, pinhole
+// intrinsics per camera, near/far from the sparse points' depths, image paths relative to the output folder.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "data/colmap.hpp"
+#include "data/pose.hpp"
+
+namespace mipnerf::data {
+
+// The near/far rule (see near_far_from_depths): percentiles of each image's point depths, then a margin.
+constexpr double kDepthPercentileLow = 0.01;
+constexpr double kDepthPercentileHigh = 0.99;
+constexpr double kNearMargin = 0.9;
+constexpr double kFarMargin = 1.1;
+// The imported world is scaled so that the median camera sits this far from the scene centre: the distance of
+// the Blender scenes' and the procedural scene's cameras, for which the defaults (near 2, far 6, the positional
+// encoding's frequencies) were chosen.
+constexpr double kImportedCameraDistance = 4.0;
+
+// COLMAP's pose (x_camera = R(q) x_world + t, camera axes x right, y down, z forward) as a camera-to-world matrix in
+// OpenGL/Blender camera axes (x right, y up, looking down −z): rotation Rᵀ with its y and z columns negated, centre
+// −Rᵀt. q = (qw, qx, qy, qz), unit length.
+Matrix34 colmap_camera_to_world(const std::array<double, 4>& qvec, const std::array<double, 3>& tvec);
+
+// Depth (z in COLMAP's camera frame, i.e. distance along the optical axis) of a world point in an image.
+double colmap_depth(const ColmapImage& image, const Vec3& point_world);
+
+// Near/far from the depths of the sparse points each image sees (only points in front of it, depth > 0):
+// per image the kDepthPercentileLow and kDepthPercentileHigh percentiles (linear interpolation between sorted
+// depths), then near = kNearMargin × the smallest, far = kFarMargin × the largest over the images. Empty when no
+// image has a depth. The vectors are sorted in place.
+struct DepthRange {
+  double near = 0, far = 0;
+  size_t images = 0;  // images that had depths
+};
+std::optional<DepthRange> near_far_from_depths(std::vector<std::vector<double>>& depths_per_image);
+
+struct ColmapImportOptions {
+  // Override the near/far chosen from the points, in the imported scene's units (after recentring and scaling).
+  std::optional<double> near, far;
+};
+
+// What import_colmap wrote.
+struct ColmapImport {
+  std::string transforms_path;                 // OUT/transforms.json
+  bool binary = true;                          // the model's format
+  size_t images = 0, cameras = 0, points = 0;  // cameras: the intrinsics the images use
+  std::vector<std::string> camera_models;      // their models, e.g. "PINHOLE"
+  double near = 0, far = 0;                    // written, scene units
+  bool near_far_from_points = true;            // false: both given in the options
+  Vec3 centre{};                               // the COLMAP world point that became the origin
+  std::string centre_rule;                     // "look-at", "points" or "cameras" (see import_colmap)
+  double scale = 1.0;                          // scene units per COLMAP unit
+};
+
+// Reads the model in sparse_dir, resolves every image in images_dir (its name, or the name with the extension
+// replaced by .png: the loader reads PNG only) and checks its size against its camera, then writes
+// out_dir/transforms.json. Frames are in image-name order (the loader holds out every 8th as test).
+//
+// World: x_scene = scale · (x_colmap − centre), rotation unchanged. COLMAP's world has an arbitrary origin and
+// unit, but the positional encoding sees world positions: far from the origin, float32 loses its low bits and
+// the encoding's frequencies no longer match the scene's size. So the centre is the look-at point (closest to
+// every optical axis, as `dataset inspect` prints it) when it lies in front of every camera within near..far (a
+// capture around an object), else the per-axis median of the sparse points (forward-facing captures, whose axes
+// meet far away or not at all), else (no points) the mean camera centre; the scale puts the median camera at
+// kImportedCameraDistance from it.
+//
+// Throws mipnerf::Error with one line for: a malformed model (see colmap.hpp), a camera that is not
+// SIMPLE_PINHOLE or PINHOLE (saying to run COLMAP's image_undistorter), images missing from images_dir (named),
+// images that are not PNG, an image whose size differs from its camera's, no points to choose near/far from.
+ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
+                           const ColmapImportOptions& options = {});
+
+}  // namespace mipnerf::data
