@@ -14,6 +14,7 @@
 #include "data/scene_traits.hpp"
 #include "io/npy.hpp"
 #include "support/jpeg_writer.hpp"
+#include "train/scene_effects.hpp"
 #include "support/temp_scene.hpp"
 
 using namespace mipnerf;
@@ -222,6 +223,47 @@ TEST_CASE("llff: a capture of JPEG photos loads like one of PNGs") {
   // a third; on average a few levels.
   CHECK(sum / static_cast<double>(a.size()) < 0.03);
   CHECK(photos.split("train").cameras[0].focal_x_px == pngs.split("train").cameras[0].focal_x_px);
+}
+
+TEST_CASE("llff: a capture looking inward from all around is 360 degrees, spherified to unit mean distance") {
+  const auto dir = copy_of_capture("llff-360");
+  // The 20 images re-posed on a circle of radius 3 at height 1, each looking at the origin, in LLFF's columns.
+  std::vector<double> rows;
+  for (int k = 0; k < 20; ++k) {
+    const double a = 2.0 * M_PI * k / 20.0;
+    const data::Matrix34 m = data::look_at_pose({3 * std::cos(a), 3 * std::sin(a), 1.0}, {0, 0, 0}, {0, 0, 1});
+    const double hwf[3] = {48, 64, 60};
+    for (int r = 0; r < 3; ++r) {
+      for (double value : {-m[4 * r + 1], m[4 * r + 0], m[4 * r + 2], m[4 * r + 3], hwf[r]}) rows.push_back(value);
+    }
+    rows.push_back(2.0);
+    rows.push_back(4.5);
+  }
+  io::write_npy((dir / "poses_bounds.npy").string(), rows, {20, 17});
+  const auto traits = data::scene_traits(dir.string(), data::LoadOptions{});
+  CHECK(traits.llff_360);
+  const train::SceneEffects effects = train::scene_effects(dir.string(), 1);  // what train then chooses
+  CHECK(effects.summary == "360° LLFF capture → spherified poses, world rays, cones, black background");
+  CHECK(effects.settings.at("spherify") == "true");
+  CHECK(effects.settings.at("ray_shape") == "cone");
+  data::LoadOptions options;
+  options.spherify = true;
+  const data::LlffCapture capture = data::read_llff(dir.string(), options);
+  double mean_square = 0;
+  for (const auto& pose : capture.camera_to_world) {
+    mean_square += (pose[3] * pose[3] + pose[7] * pose[7] + pose[11] * pose[11]) / 20.0;
+  }
+  CHECK(mean_square == doctest::Approx(1.0));
+  // World rays between the rescaled bounds, not NDC.
+  const data::Dataset dataset = data::load_dataset(dir.string(), options);
+  CHECK(dataset.split("train").cameras[0].near > 0.0);
+  CHECK(dataset.split("train").cameras[0].far != 1.0);
+  const auto circle = data::llff_render_path(capture, options, 8);
+  REQUIRE(circle.size() == 8);
+  for (const Camera& camera : circle) {
+    const double radius = std::hypot(camera.camera_to_world[3], camera.camera_to_world[7], camera.camera_to_world[11]);
+    CHECK(radius == doctest::Approx(1.0).epsilon(0.05));
+  }
 }
 
 TEST_CASE("llff: malformed captures give one line naming the file") {
