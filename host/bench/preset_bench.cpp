@@ -85,8 +85,8 @@ RenderTiming time_render(ocl::Context& ctx, train::Trainer& trainer, const Prese
   size.height = options.render_height;
   const Camera camera = data::resize_camera(trainer.dataset().split("train").cameras.at(0), size);
   timing.chunk_rays =
-      eval::render_chunk_rays(trainer.spec(), trainer.parameter_count(),
-                              static_cast<size_t>(trainer.config().render_chunk_rays), ctx.device_info(), 0);
+      eval::render_chunk_rays(trainer.spec(), static_cast<size_t>(trainer.config().render_chunk_rays),
+                              ctx.device_info(), 0);
   eval::ImageRenderer renderer(ctx, trainer.spec(), trainer.network_pointers(), {camera},
                                eval::RenderSettings{timing.chunk_rays, 1, 0});
   timing.warm_up_seconds = renderer.warm_up();

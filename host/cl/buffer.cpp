@@ -12,7 +12,7 @@ void check_allocation(const Context& ctx, size_t bytes, const std::string& name)
   if (device.max_alloc_bytes != 0 && bytes > device.max_alloc_bytes) {
     throw Error("buffer '" + name + "' needs " + std::to_string(bytes >> 20) + " MiB but '" + device.name +
                 "' allows at most " + std::to_string(device.max_alloc_bytes >> 20) +
-                " MiB per allocation: lower the batch size (--batch-size) or the chunk size (--chunk)");
+                " MiB per allocation: lower batch_size or chunk_rays (training), --chunk or render_chunk_rays (rendering)");
   }
 }
 

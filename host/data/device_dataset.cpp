@@ -1,6 +1,8 @@
 // Uploading a split to the device.
 #include "data/device_dataset.hpp"
 
+#include <algorithm>
+
 #include "core/error.hpp"
 
 namespace mipnerf::data {
@@ -25,6 +27,11 @@ DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
 size_t DeviceDataset::bytes_for(const Split& split) {
   return split.cameras.size() * camera_layout::stride * sizeof(float) + split.rgb.size() * sizeof(float) +
          split.pixel_offsets.size() * sizeof(uint32_t);
+}
+
+size_t DeviceDataset::largest_buffer_for(const Split& split) {
+  return std::max({split.cameras.size() * camera_layout::stride * sizeof(float), split.rgb.size() * sizeof(float),
+                   split.pixel_offsets.size() * sizeof(uint32_t)});
 }
 
 }  // namespace mipnerf::data

@@ -19,6 +19,8 @@ class DeviceDataset {
 
   // Bytes the device arrays of `split` take (cameras [C][camera_layout::stride], pixels, offsets), for memory plans.
   static size_t bytes_for(const Split& split);
+  // The biggest of those arrays (the pixels, but for a split of a handful of pixels), for the allocation limit.
+  static size_t largest_buffer_for(const Split& split);
 
   uint32_t num_cameras() const { return static_cast<uint32_t>(host_cameras_.size()); }
   uint64_t num_pixels() const { return num_pixels_; }

@@ -23,15 +23,13 @@ std::string resolve_data_path(const std::string& requested, const train::Trained
 }
 
 size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested) {
-  return render_chunk_rays(model.spec, parameter_count(model), static_cast<size_t>(model.config.render_chunk_rays),
-                           device, requested);
+  return render_chunk_rays(model.spec, static_cast<size_t>(model.config.render_chunk_rays), device, requested);
 }
 
-size_t render_chunk_rays(const graph::GraphSpec& spec, size_t parameters, size_t configured_chunk,
-                         const ocl::DeviceInfo& device, size_t requested) {
-  const size_t network_bytes = parameters * sizeof(float);  // the parameters only, as render plans always counted
+size_t render_chunk_rays(const graph::GraphSpec& spec, size_t configured_chunk, const ocl::DeviceInfo& device,
+                         size_t requested) {
   const size_t upper = requested > 0 ? requested : configured_chunk;
-  return train::plan_memory(spec, device, upper, network_bytes, requested, false).chunk_rays;
+  return train::plan_memory(spec, device, upper, train::rendering_fixed_bytes(spec), requested, false).chunk_rays;
 }
 
 std::string run_folder_of(const std::string& checkpoint) {

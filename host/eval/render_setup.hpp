@@ -21,9 +21,9 @@ std::string resolve_data_path(const std::string& requested, const train::Trained
 // Rays per render chunk: `requested` when > 0 (checked against the device's memory), else the largest power of
 // two up to the model's render_chunk_rays that fits. Throws naming what to lower when nothing fits.
 size_t render_chunk_rays(const train::TrainedModel& model, const ocl::DeviceInfo& device, size_t requested);
-// The same for any networks of `spec` with `parameters` in all, up to `configured_chunk` (render_chunk_rays).
-size_t render_chunk_rays(const graph::GraphSpec& spec, size_t parameters, size_t configured_chunk,
-                         const ocl::DeviceInfo& device, size_t requested);
+// The same for the networks of `spec`, up to `configured_chunk` (render_chunk_rays).
+size_t render_chunk_rays(const graph::GraphSpec& spec, size_t configured_chunk, const ocl::DeviceInfo& device,
+                         size_t requested);
 
 // The run folder a checkpoint belongs to: RUN for RUN/checkpoints/ckpt_N.mnck, else the file's folder (relative
 // paths stay relative; "." for a file in the working folder).

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "eval/image_renderer.hpp"
+#include "eval/render_setup.hpp"
 #include "io/png.hpp"
 #include "train/model.hpp"
 
@@ -27,7 +28,7 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
       data::load_dataset(options.data_path, train::load_options(c, options.data_path, {"val"}));
   const data::Split& val = val_data.split("val");
   ImageRenderer renderer(ctx, trainer.spec(), trainer.network_pointers(), val.cameras,
-                         static_cast<size_t>(c.render_chunk_rays));
+                         render_chunk_rays(trainer.spec(), static_cast<size_t>(c.render_chunk_rays), ctx.device_info(), 0));
   EvaluateOptions evaluate;
   evaluate.max_views = static_cast<size_t>(c.val_views);
   evaluate.progress = options.val_progress;

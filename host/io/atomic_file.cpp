@@ -2,14 +2,19 @@
 #include "io/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
+#include <thread>
 
 #include "core/error.hpp"
 
@@ -33,6 +38,33 @@ std::string unique_temporary(const fs::path& target) {
   const std::string name = "." + target.filename().string() + "." + std::to_string(::getpid()) + "." +
                            std::to_string(counter++) + ".tmp";
   return (target.parent_path() / name).string();
+}
+
+// MIPNERF_TEST_PAUSE_IN_WRITE_MS: for tests only (tests/reliability), a pause halfway through every
+// write_bytes_atomically, so that a test can kill the process inside a checkpoint write. Read once.
+long pause_in_write_ms() {
+  static const long ms = [] {
+    const char* text = std::getenv("MIPNERF_TEST_PAUSE_IN_WRITE_MS");
+    return text ? std::max(0L, std::strtol(text, nullptr, 10)) : 0L;
+  }();
+  return ms;
+}
+
+// The process id in an AtomicFile temporary's name ".<name>.<pid>.<n>.tmp"; 0 when `name` is not one.
+pid_t temporary_owner(const std::string& name) {
+  const std::string suffix = ".tmp";
+  if (name.size() < 8 || name[0] != '.' || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) return 0;
+  const std::string stem = name.substr(0, name.size() - suffix.size());
+  const size_t counter_dot = stem.rfind('.');
+  if (counter_dot == std::string::npos || counter_dot == 0) return 0;
+  const size_t pid_dot = stem.rfind('.', counter_dot - 1);
+  if (pid_dot == std::string::npos || pid_dot == 0) return 0;
+  const std::string counter = stem.substr(counter_dot + 1), pid = stem.substr(pid_dot + 1, counter_dot - pid_dot - 1);
+  const auto all_digits = [](const std::string& t) {
+    return !t.empty() && t.size() < 10 && t.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (!all_digits(counter) || !all_digits(pid)) return 0;
+  return static_cast<pid_t>(std::stol(pid));
 }
 
 }  // namespace
@@ -88,13 +120,35 @@ void write_bytes_atomically(const std::string& path, std::string_view bytes) {
   write_atomically(path, [&](const std::string& temporary) {
     std::FILE* out = std::fopen(temporary.c_str(), "wb");
     if (!out) throw Error(path + ": cannot write (" + errno_text(errno) + ")");
-    const bool written = bytes.empty() || std::fwrite(bytes.data(), 1, bytes.size(), out) == bytes.size();
+    // Written in two halves with the test-only pause between them (none unless the variable is set).
+    const size_t half = bytes.size() / 2;
+    bool written = std::fwrite(bytes.data(), 1, half, out) == half;
+    if (written && pause_in_write_ms() > 0) {
+      std::fflush(out);
+      std::this_thread::sleep_for(std::chrono::milliseconds(pause_in_write_ms()));
+    }
+    written = written && std::fwrite(bytes.data() + half, 1, bytes.size() - half, out) == bytes.size() - half;
     const int write_error = errno;
     const bool closed = std::fclose(out) == 0;
     if (!written || !closed) {
-      throw Error(path + ": write failed (" + errno_text(written ? errno : write_error) + "); is the disk full?");
+      const int error = written ? errno : write_error;
+      throw Error(path + ": write failed (" + errno_text(error) + (error == ENOSPC ? ": the disk is full" : "") + ")");
     }
   });
+}
+
+void remove_stale_temporaries(const std::string& folder, const LogFn& log) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const pid_t owner = temporary_owner(entry.path().filename().string());
+    // kill(pid, 0) asks whether the process exists without signalling it; ESRCH: it is gone.
+    if (owner <= 0 || owner == ::getpid() || ::kill(owner, 0) == 0 || errno != ESRCH) continue;
+    std::error_code removed;
+    if (fs::remove(entry.path(), removed) && log) {
+      log(LogLevel::info, "removed " + entry.path().string() + ", left by an interrupted write of process " +
+                              std::to_string(owner));
+    }
+  }
 }
 
 }  // namespace mipnerf::io

@@ -7,6 +7,8 @@
 #include <string>
 #include <string_view>
 
+#include "core/log.hpp"
+
 namespace mipnerf::io {
 
 // The temporary beside `path` that becomes `path` on commit(). Destroyed uncommitted (an exception in
@@ -43,5 +45,9 @@ void write_atomically(const std::string& path, const std::function<void(const st
 
 // Writes `bytes` to `path` atomically.
 void write_bytes_atomically(const std::string& path, std::string_view bytes);
+
+// Removes the temporaries in `folder` (not below it) that processes killed mid-write left behind: hidden files named
+// as AtomicFile names them whose process no longer runs. Each removal is logged (info) through `log` when set.
+void remove_stale_temporaries(const std::string& folder, const LogFn& log);
 
 }  // namespace mipnerf::io

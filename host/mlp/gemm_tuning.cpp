@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "io/atomic_file.hpp"
 #include "mlp/clblast_check.hpp"
 
 namespace mipnerf::mlp {
@@ -95,21 +96,6 @@ std::string sanitize(const std::string& text) {
     collapsed += c;
   }
   return collapsed;
-}
-
-void make_folders(const std::string& folder) {
-  std::string partial;
-  std::stringstream parts(folder);
-  std::string part;
-  if (!folder.empty() && folder[0] == '/') partial = "/";
-  while (std::getline(parts, part, '/')) {
-    if (part.empty()) continue;
-    partial += part + "/";
-    if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST) {
-      throw Error("cannot create the folder " + partial + " for the GEMM tuning file; set XDG_CACHE_HOME to a "
-                  "writable folder");
-    }
-  }
 }
 
 void add_problem(std::vector<GemmProblem>& problems, size_t m, size_t n, size_t k, bool ta, bool tb, size_t count) {
@@ -272,18 +258,10 @@ GemmTuning tuning_from_json(const std::string& text, const std::string& where) {
 }
 
 void save_tuning(const std::string& path, const GemmTuning& tuning) {
-  const auto slash = path.find_last_of('/');
-  if (slash != std::string::npos) make_folders(path.substr(0, slash));
-  const std::string temporary = path + "." + std::to_string(::getpid()) + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << to_json(tuning);
-    out.flush();
-    if (!out) throw Error("cannot write the GEMM tuning file " + temporary);
-  }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    std::remove(temporary.c_str());
-    throw Error("cannot rename " + temporary + " to " + path);
+  try {
+    io::write_bytes_atomically(path, to_json(tuning));  // creates the folder; fsync, rename
+  } catch (const Error& e) {
+    throw Error(std::string(e.what()) + " (the GEMM tuning file; set XDG_CACHE_HOME to a writable folder)");
   }
 }
 

@@ -1,65 +1,17 @@
 // Training checkpoints: the file format, the trainer's keys, save, restore (resume) and load-for-render.
 #include "train/checkpoint.hpp"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 
 #include "core/error.hpp"
-#include "io/atomic_file.hpp"
 #include "train/model.hpp"
 
 namespace mipnerf::train {
 namespace fs = std::filesystem;
 namespace {
-
-// ---- The file format ----
-
-constexpr char kMagic[8] = {'M', 'N', 'C', 'K', 'P', 'T', '0', '1'};
-constexpr size_t kPreambleBytes = 16;  // the magic and the header length
-
-uint32_t crc_of(const std::vector<float>& values) {
-  // Checkpoints are written and read on little-endian hosts (x86-64, AArch64); the CRC covers the bytes.
-  return static_cast<uint32_t>(
-      crc32(0L, reinterpret_cast<const Bytef*>(values.data()), static_cast<uInt>(values.size() * sizeof(float))));
-}
-
-void append_u64(std::string& out, uint64_t v) {
-  for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
-}
-
-uint64_t read_u64(const std::string& bytes, size_t at) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v |= static_cast<uint64_t>(static_cast<unsigned char>(bytes[at + i])) << (8 * i);
-  return v;
-}
-
-std::string read_whole_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open the checkpoint (does the file exist?)");
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-// The tensors the header lists, read from `bytes` at `at` (advanced past them) and checked against their CRCs.
-void read_tensors(const std::string& path, const std::string& bytes, size_t& at, CheckpointFile& checkpoint) {
-  for (const auto& entry : checkpoint.header.at("tensors")) {
-    const std::string name = entry.at("name").get<std::string>();
-    const uint64_t count = entry.at("count").get<uint64_t>();
-    if (count > (bytes.size() - at) / sizeof(float)) throw Error(path + ": truncated checkpoint (tensor " + name + ")");
-    std::vector<float> values(count);
-    std::memcpy(values.data(), bytes.data() + at, count * sizeof(float));
-    at += count * sizeof(float);
-    if (crc_of(values) != entry.at("crc32").get<uint32_t>()) {
-      throw Error(path + ": corrupted checkpoint: tensor '" + name + "' fails its CRC-32 check");
-    }
-    checkpoint.add(name, std::move(values));
-  }
-}
 
 // ---- The trainer's keys ----
 
@@ -81,13 +33,13 @@ constexpr const char* adam_steps = "adam_steps";  // one per network, in order
 std::string tensor_name(size_t network, const char* what) { return "network" + std::to_string(network) + "." + what; }
 
 // Reads `path` and checks that the trainer wrote it.
-CheckpointFile read_training_checkpoint(const std::string& path) {
-  CheckpointFile c = read_checkpoint_file(path);
+io::CheckpointFile read_training_checkpoint(const std::string& path) {
+  io::CheckpointFile c = io::read_checkpoint_file(path);
   if (c.header.value(key::format, "") != kFormat) throw Error(path + ": not a training checkpoint");
   return c;
 }
 
-CheckpointRecord record_of(const CheckpointFile& c) {
+CheckpointRecord record_of(const io::CheckpointFile& c) {
   CheckpointRecord r;
   r.step = c.header.at(key::step).get<int64_t>();
   r.train_seconds = c.header.value(key::train_seconds, 0.0);
@@ -128,51 +80,6 @@ void check_resumable(const TrainConfig& saved, const TrainConfig& config, const 
 }
 
 }  // namespace
-
-// ---- The file ----
-
-const std::vector<float>& CheckpointFile::tensor(const std::string& name, const std::string& where) const {
-  for (const auto& [n, values] : tensors) {
-    if (n == name) return values;
-  }
-  throw Error(where + ": checkpoint has no tensor '" + name + "' (was it written by another model configuration?)");
-}
-
-void write_checkpoint_file(const std::string& path, const CheckpointFile& checkpoint) {
-  nlohmann::json header = checkpoint.header;
-  header["tensors"] = nlohmann::json::array();
-  for (const auto& [name, values] : checkpoint.tensors) {
-    header["tensors"].push_back({{"name", name}, {"count", values.size()}, {"crc32", crc_of(values)}});
-  }
-  const std::string header_text = header.dump();
-  std::string bytes(kMagic, sizeof(kMagic));
-  append_u64(bytes, header_text.size());
-  bytes += header_text;
-  for (const auto& [name, values] : checkpoint.tensors) {
-    bytes.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
-  }
-  io::write_bytes_atomically(path, bytes);
-}
-
-CheckpointFile read_checkpoint_file(const std::string& path) {
-  const std::string bytes = read_whole_file(path);
-  if (bytes.size() < kPreambleBytes || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
-    throw Error(path + ": not a mipnerf-cl checkpoint (bad magic)");
-  }
-  const uint64_t header_length = read_u64(bytes, sizeof(kMagic));
-  if (header_length > bytes.size() - kPreambleBytes) throw Error(path + ": truncated checkpoint (header)");
-  CheckpointFile checkpoint;
-  try {
-    checkpoint.header = nlohmann::json::parse(bytes.substr(kPreambleBytes, header_length));
-  } catch (const nlohmann::json::exception& e) {
-    throw Error(path + ": corrupted checkpoint header: " + e.what());
-  }
-  size_t at = kPreambleBytes + header_length;
-  read_tensors(path, bytes, at, checkpoint);
-  if (at != bytes.size()) throw Error(path + ": checkpoint has " + std::to_string(bytes.size() - at) + " extra bytes");
-  checkpoint.header.erase("tensors");
-  return checkpoint;
-}
 
 // ---- Where a run's checkpoints are ----
 
@@ -215,12 +122,31 @@ std::string find_checkpoint(const std::string& path) {
   throw Error(path + ": no checkpoint found (expected a .mnck file, or a training --out folder holding checkpoints/)");
 }
 
+VerifiedCheckpoint newest_verified_checkpoint(const std::string& folder) {
+  VerifiedCheckpoint result;
+  const auto all = list_checkpoints(folder);
+  for (auto it = all.rbegin(); it != all.rend(); ++it) {
+    try {
+      io::read_checkpoint_file(it->second);
+      result.path = it->second;
+      result.step = it->first;
+      return result;
+    } catch (const Error& e) {
+      std::error_code ec;
+      fs::rename(it->second, it->second + ".corrupt", ec);
+      result.skipped.push_back(std::string(e.what()) +
+                               (ec ? "" : " (renamed to " + fs::path(it->second).filename().string() + ".corrupt)"));
+    }
+  }
+  return result;
+}
+
 // ---- A training run's state ----
 
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
                               const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
                               const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
-  CheckpointFile c;
+  io::CheckpointFile c;
   c.header[key::format] = kFormat;
   c.header[key::version] = kVersion;
   c.header[key::step] = record.step;
@@ -238,13 +164,13 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
     c.add(tensor_name(i, "adam_v"), std::move(state.v));
   }
   c.header[key::adam_steps] = adam_steps;
-  write_checkpoint_file(path, c);
+  io::write_checkpoint_file(path, c);
 }
 
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
                                              std::vector<std::unique_ptr<mlp::Mlp>>& networks,
                                              std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log) {
-  const CheckpointFile c = read_training_checkpoint(path);
+  const io::CheckpointFile c = read_training_checkpoint(path);
   check_resumable(config_from_json(c.header.at(key::config), path), config, log);
   const auto& adam_steps = c.header.at(key::adam_steps);
   for (size_t i = 0; i < networks.size(); ++i) {
@@ -263,7 +189,7 @@ CheckpointRecord restore_training_checkpoint(const std::string& path, const Trai
 std::vector<mlp::Mlp*> TrainedModel::network_pointers() const { return train::network_pointers(networks); }
 
 TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path) {
-  const CheckpointFile c = read_training_checkpoint(checkpoint_path);
+  const io::CheckpointFile c = read_training_checkpoint(checkpoint_path);
   const CheckpointRecord record = record_of(c);
   TrainedModel model;
   model.config = config_from_json(c.header.at(key::config), checkpoint_path);

@@ -1,5 +1,5 @@
-// Training checkpoints, all in one place: the file format (magic, JSON header, float32 tensors, CRC-32), the
-// keys the trainer records, saving and restoring a run (resume), and loading trained networks for rendering.
+// Training checkpoints: the keys the trainer records in a checkpoint file (the format: io/checkpoint_file.hpp),
+// where a run keeps them, saving and restoring a run (resume), and loading trained networks for rendering.
 #pragma once
 
 #include <cstdint>
@@ -12,28 +12,12 @@
 #include "cl/context.hpp"
 #include "core/log.hpp"
 #include "graph/graph_spec.hpp"
+#include "io/checkpoint_file.hpp"
 #include "mlp/adam.hpp"
 #include "mlp/mlp.hpp"
 #include "train/config.hpp"
 
 namespace mipnerf::train {
-
-// ---- The file: a JSON header and named float32 tensors ----
-
-struct CheckpointFile {
-  nlohmann::json header = nlohmann::json::object();  // what the trainer records: step, configuration, ...
-  std::vector<std::pair<std::string, std::vector<float>>> tensors;
-
-  void add(const std::string& name, std::vector<float> values) { tensors.emplace_back(name, std::move(values)); }
-  // The tensor called `name`; throws mipnerf::Error naming `where` (the file) when it is absent.
-  const std::vector<float>& tensor(const std::string& name, const std::string& where) const;
-};
-
-// Layout: "MNCKPT01" (8 bytes), header length (uint64 LE), the header JSON (which also lists every
-// tensor's name, element count and CRC-32), then each tensor's float32 values (LE) in order. Atomic.
-void write_checkpoint_file(const std::string& path, const CheckpointFile& checkpoint);
-// Throws mipnerf::Error naming the file and what is wrong: not a checkpoint, truncated, corrupted.
-CheckpointFile read_checkpoint_file(const std::string& path);
 
 // ---- Where a run's checkpoints are ----
 
@@ -45,6 +29,16 @@ std::vector<std::pair<int64_t, std::string>> list_checkpoints(const std::string&
 void prune_checkpoints(const std::string& folder, int keep);
 // The checkpoint a path names: a .mnck file, or the newest in DIR/checkpoints or DIR.
 std::string find_checkpoint(const std::string& path);
+
+// The newest checkpoint in `folder` whose every byte verifies (io::read_checkpoint_file), for --resume. Each newer
+// one that fails is renamed to "<name>.corrupt" (out of the listing, so pruning never keeps it over a good one, and
+// kept for a look) and reported in `skipped` as "<path>: <reason>", newest first. `path` is empty when none verifies.
+struct VerifiedCheckpoint {
+  std::string path;
+  int64_t step = 0;
+  std::vector<std::string> skipped;
+};
+VerifiedCheckpoint newest_verified_checkpoint(const std::string& folder);
 
 // ---- A training run's state ----
 

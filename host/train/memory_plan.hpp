@@ -11,6 +11,16 @@
 
 namespace mipnerf::train {
 
+// What a run keeps on the device whatever the chunk size, by owner, so that a plan that does not fit can name the
+// setting to lower.
+struct FixedBytes {
+  size_t data = 0;            // the training split (data::DeviceDataset): lower `factor`, or use fewer images
+  size_t batch = 0;           // the batch arrays (ops::BatchArrays): lower `batch_size`
+  size_t networks = 0;        // parameters, gradients, optimiser state (mlp::Mlp, mlp::Adam): lower `mlp_width`
+  size_t largest_buffer = 0;  // the biggest single one of them (the split's pixels, usually)
+  size_t total() const { return data + batch + networks; }
+};
+
 struct MemoryPlan {
   size_t chunk_rays = 0;        // rays per chunk
   size_t graph_bytes = 0;       // the graph's buffers and MLP workspaces at that chunk size
@@ -25,14 +35,18 @@ struct MemoryPlan {
 constexpr double kMemoryBudgetFraction = 0.75;
 
 // The largest chunk (a power of two, at most batch_rays) that fits, or `requested_chunk` when > 0 (checked).
-// Throws mipnerf::Error saying which setting to lower when nothing fits.
+// Called before anything of the run is allocated on the device. Throws mipnerf::Error saying which setting to
+// lower when nothing fits: `training` names the training settings (chunk_rays, batch_size), else the render's
+// (--chunk, render_chunk_rays).
 MemoryPlan plan_memory(const graph::GraphSpec& spec, const ocl::DeviceInfo& device, size_t batch_rays,
-                       size_t fixed_bytes, size_t requested_chunk, bool training);
+                       const FixedBytes& fixed, size_t requested_chunk, bool training);
 
-// What a training run keeps on the device whatever the chunk size, summed from each owner's bytes_for: the
-// training split (data::DeviceDataset), every network's parameters and gradients (mlp::Mlp), their optimisers
-// (mlp::Adam) and the batch arrays (ops::BatchArrays). The `fixed_bytes` of a training plan.
-size_t training_fixed_bytes(const data::Split& train_split, const graph::GraphSpec& spec, size_t batch_rays);
+// What a training run keeps on the device whatever the chunk size, from each owner's bytes_for: the training
+// split (data::DeviceDataset), every network's parameters and gradients (mlp::Mlp), their optimisers (mlp::Adam)
+// and the batch arrays (ops::BatchArrays). The `fixed` of a training plan.
+FixedBytes training_fixed_bytes(const data::Split& train_split, const graph::GraphSpec& spec, size_t batch_rays);
+// What rendering keeps: the networks (mlp::Mlp::bytes_for).
+FixedBytes rendering_fixed_bytes(const graph::GraphSpec& spec);
 
 // The largest single buffer the graph allocates for a chunk of `chunk_rays` (features or an MLP layer).
 size_t largest_graph_buffer(const graph::GraphSpec& spec, size_t chunk_rays);

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -29,6 +30,27 @@ mlp::LrSchedule schedule_of(const TrainConfig& c) {
   s.warmup_steps = c.lr_warmup_steps;
   s.warmup_mult = c.lr_warmup_mult;
   return s;
+}
+
+// On resume, the log keeps the rows of the steps the checkpoint holds: rows after it (logged before an interrupt,
+// about to be trained again) and a row cut short by a kill are dropped, so each step appears once. Atomic.
+constexpr const char* kTrainingLogHeader = "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
+
+void trim_training_log(const std::string& csv_path, int64_t step) {
+  std::ifstream in(csv_path);
+  std::string kept, line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (in.eof()) break;  // the last line has no newline: cut short
+    if (!header) {
+      char* end = nullptr;
+      const long long row_step = std::strtoll(line.c_str(), &end, 10);
+      if (end == line.c_str() || *end != ',' || row_step > step) continue;
+    }
+    header = false;
+    kept += line + "\n";
+  }
+  io::write_bytes_atomically(csv_path, kept.empty() ? std::string(kTrainingLogHeader) : kept);
 }
 
 }  // namespace
@@ -59,6 +81,10 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   const data::Split& train = dataset_.split("train");
   const bool multiscale_data = train.num_scales() > 1;
   spec_ = make_graph_spec(config_, multiscale_data);
+  // The plan comes before the first allocation on the device: what does not fit stops here, naming the setting.
+  const size_t batch_rays = static_cast<size_t>(config_.batch_size);
+  memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, training_fixed_bytes(train, spec_, batch_rays),
+                        static_cast<size_t>(config_.chunk_rays), true);
   networks_ = make_networks(ctx, spec_);
   for (const auto& network : networks_) {
     mlp::AdamHyper hyper;
@@ -66,16 +92,21 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
     optimisers_.push_back(std::make_unique<mlp::Adam>(ctx, network->parameter_count(), hyper));
   }
 
-  const size_t batch_rays = static_cast<size_t>(config_.batch_size);
-  const size_t fixed = training_fixed_bytes(train, spec_, batch_rays);
-  memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, fixed, static_cast<size_t>(config_.chunk_rays), true);
   impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, network_pointers(), memory_.chunk_rays);
 
   fs::create_directories(out_dir_);
   const std::string checkpoints = checkpoint_folder();
   const auto existing = list_checkpoints(checkpoints);
+  io::remove_stale_temporaries(checkpoints, log);
+  io::remove_stale_temporaries(out_dir_, log);
   if (resume && !existing.empty()) {
-    restore(existing.back().second);
+    const VerifiedCheckpoint newest = newest_verified_checkpoint(checkpoints);
+    for (const auto& skipped : newest.skipped) ctx.log(LogLevel::warning, "--resume: skipped " + skipped);
+    if (newest.path.empty()) {
+      throw Error("--resume: none of the " + std::to_string(existing.size()) + " checkpoints in " + checkpoints +
+                  " verifies (above); start a new --out, or train from scratch here after removing them");
+    }
+    restore(newest.path);
   } else if (resume) {
     ctx.log(LogLevel::info, "--resume: no checkpoint yet in " + checkpoints + "; starting at step 0");
   } else if (!existing.empty()) {
@@ -86,9 +117,10 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
 
   const std::string csv_path = (fs::path(out_dir_) / "train_log.csv").string();
   const bool append = step_ > 0 && fs::exists(csv_path);
+  if (append) trim_training_log(csv_path, step_);
   impl_->csv.open(csv_path, append ? std::ios::app : std::ios::trunc);
   if (!impl_->csv) throw Error(csv_path + ": cannot write the training log");
-  if (!append) impl_->csv << "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
+  if (!append) impl_->csv << kTrainingLogHeader;
 }
 
 Trainer::~Trainer() = default;
@@ -112,7 +144,17 @@ std::string Trainer::save_checkpoint() {
   // Where the training data was (absolute), so render and eval find the scene without being told.
   record.data_path = fs::absolute(dataset_.path).lexically_normal().string();
   const std::string path = checkpoint_path(checkpoint_folder(), step_);
-  save_training_checkpoint(path, config_, record, networks_, optimisers_);
+  try {
+    save_training_checkpoint(path, config_, record, networks_, optimisers_);
+  } catch (const Error& e) {
+    // A full disk (or a file-size limit) stops the run here; the atomic write left the older checkpoints as
+    // they were, so the message says which one a --resume continues from.
+    const auto saved = list_checkpoints(checkpoint_folder());
+    throw Error(std::string(e.what()) + "; " +
+                (saved.empty() ? std::string("no checkpoint of this run was written yet")
+                               : "the previous checkpoint " + saved.back().second + " is intact") +
+                ": free some space (or raise the file size limit), then continue with --resume");
+  }
   prune_checkpoints(checkpoint_folder(), config_.keep_checkpoints);
   return path;
 }

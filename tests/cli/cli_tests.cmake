@@ -126,6 +126,12 @@ if(TARGET test_eval)
   target_compile_definitions(test_eval PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
 endif()
 
+# Crash consistency (tests/reliability) kills and limits the real executable.
+if(TARGET test_reliability)
+  add_dependencies(test_reliability mipnerf-cl)
+  target_compile_definitions(test_reliability PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
+endif()
+
 # mipnerf-cl render / eval through the executable: a model trained a few steps on the CLI scene, an orbit and an
 # evaluation of the multiscale data from it, and every kind of bad input as one line and a non-zero exit.
 set(MIPNERF_RENDER_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-render-run")
@@ -188,7 +194,14 @@ mipnerf_add_cli_error_test("eval: missing data" PATTERN "nowhere: no such file o
   ARGS eval --checkpoint "${MIPNERF_RENDER_RUN}" --data "${MIPNERF_DATA_FIXTURES}/nowhere")
 mipnerf_add_cli_error_test("eval: zero views" PATTERN "--views must be at least 1"
   ARGS eval --checkpoint "${MIPNERF_RENDER_RUN}" --views 0)
-foreach(name "render: malformed camera path file" "render: camera path frame without a pose"
+# Memory: what cannot fit any device stops before the first allocation, naming the setting to lower.
+mipnerf_add_cli_error_test("render: a chunk beyond the device's memory" PATTERN "--chunk \\(render_chunk_rays\\) = 1000000000 needs .*: lower --chunk"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --frames 1 --size 8x8 --chunk 1000000000)
+mipnerf_add_cli_error_test("train: a batch beyond the device's memory" PATTERN "the batch arrays take [0-9]+ MiB: lower batch_size"
+  ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad" --preset tiny
+       --batch_size 2147483647)
+set_tests_properties("cli: train: a batch beyond the device's memory" PROPERTIES FIXTURES_REQUIRED cli_scene)
+foreach(name "render: a chunk beyond the device's memory" "render: malformed camera path file" "render: camera path frame without a pose"
              "render: camera path without a size" "render: too many pixels" "render: elevation out of range"
              "render: unknown split" "eval: missing data")
   set_tests_properties("cli: ${name}" PROPERTIES FIXTURES_REQUIRED cli_render_model)

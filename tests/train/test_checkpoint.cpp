@@ -1,5 +1,6 @@
-// Checkpoints (train/checkpoint.hpp): the file's exact round trip and clear errors for truncated or corrupted files;
-// the trainer's keys, save, restore and load-for-render, against a version-1 file written byte by byte.
+// Checkpoints (io/checkpoint_file.hpp, train/checkpoint.hpp): the file's exact round trip, every changed byte and
+// every cut found; the trainer's keys, save, restore and load-for-render, against a format-1 file written byte by
+// byte (the format before the whole-file checksum, still read).
 #include <doctest/doctest.h>
 #include <zlib.h>
 
@@ -32,14 +33,14 @@ fs::path fresh_dir(const std::string& name) {
 
 TEST_CASE("checkpoint: header and tensors round-trip bit for bit") {
   const auto dir = fresh_dir("ckpt");
-  train::CheckpointFile c;
+  io::CheckpointFile c;
   c.header["step"] = 1234;
   c.header["config"] = {{"batch_size", 4096}};
   c.add("params", {1.0f, -0.0f, std::numeric_limits<float>::denorm_min(), 3.4e38f, 1e-30f});
   c.add("empty", {});
   const auto path = train::checkpoint_path(dir.string(), 1234);
-  train::write_checkpoint_file(path, c);
-  const auto back = train::read_checkpoint_file(path);
+  io::write_checkpoint_file(path, c);
+  const auto back = io::read_checkpoint_file(path);
   CHECK(back.header["step"] == 1234);
   CHECK(back.header["config"]["batch_size"] == 4096);
   CHECK(!back.header.contains("tensors"));
@@ -54,9 +55,9 @@ TEST_CASE("checkpoint: header and tensors round-trip bit for bit") {
 
 TEST_CASE("checkpoint: listing, pruning, and errors for damaged files") {
   const auto dir = fresh_dir("ckpt-list");
-  train::CheckpointFile c;
+  io::CheckpointFile c;
   c.add("params", std::vector<float>(100, 0.5f));
-  for (int64_t step : {10, 200, 30, 4000}) train::write_checkpoint_file(train::checkpoint_path(dir.string(), step), c);
+  for (int64_t step : {10, 200, 30, 4000}) io::write_checkpoint_file(train::checkpoint_path(dir.string(), step), c);
   std::ofstream(dir / "ckpt_notanumber.mnck") << "x";
   auto listed = train::list_checkpoints(dir.string());
   REQUIRE(listed.size() == 4);
@@ -75,16 +76,58 @@ TEST_CASE("checkpoint: listing, pruning, and errors for damaged files") {
   }
   auto write = [&](const std::string& b) { std::ofstream(path, std::ios::binary | std::ios::trunc) << b; };
   write(bytes.substr(0, bytes.size() - 4));
-  CHECK_THROWS_WITH_AS(train::read_checkpoint_file(path), doctest::Contains("truncated"), Error);
+  CHECK_THROWS_WITH_AS(io::read_checkpoint_file(path), doctest::Contains("truncated"), Error);
   std::string flipped = bytes;
-  flipped[flipped.size() - 3] ^= 0x40;
+  flipped[flipped.size() - 7] ^= 0x40;
   write(flipped);
-  CHECK_THROWS_WITH_AS(train::read_checkpoint_file(path), doctest::Contains("CRC-32"), Error);
+  CHECK_THROWS_WITH_AS(io::read_checkpoint_file(path), doctest::Contains("corrupt checkpoint: its CRC-32"), Error);
   write("not a checkpoint at all");
-  CHECK_THROWS_WITH_AS(train::read_checkpoint_file(path), doctest::Contains("bad magic"), Error);
-  CHECK_THROWS_WITH_AS(train::read_checkpoint_file((dir / "missing.mnck").string()), doctest::Contains("missing.mnck"),
+  CHECK_THROWS_WITH_AS(io::read_checkpoint_file(path), doctest::Contains("not a mipnerf-cl checkpoint"), Error);
+  CHECK_THROWS_WITH_AS(io::read_checkpoint_file((dir / "missing.mnck").string()), doctest::Contains("missing.mnck"),
                        Error);
   fs::remove_all(dir);
+}
+
+TEST_CASE("checkpoint: one changed byte anywhere in the file, or a cut anywhere, is refused as corrupt by name") {
+  io::CheckpointFile c;
+  c.header["step"] = 42;
+  c.header["config"] = {{"mlp_width", 8}};
+  c.add("params", {1.0f, 2.0f, -3.0f});
+  c.add("adam_m", {0.5f});
+  const std::string bytes = io::checkpoint_bytes(c);
+  REQUIRE(io::parse_checkpoint(bytes, "good.mnck").tensor("params", "good.mnck").size() == 3);
+  // Every byte: the magic, both lengths, the header's JSON text (names, counts, step), the floats, the CRC itself;
+  // each flipped bit by bit and set to zero.
+  int refused = 0, tried = 0;
+  for (size_t at = 0; at < bytes.size(); ++at) {
+    for (int change = 0; change < 9; ++change) {
+      std::string damaged = bytes;
+      damaged[at] = change < 8 ? static_cast<char>(damaged[at] ^ (1 << change)) : '\0';
+      if (damaged == bytes) continue;
+      ++tried;
+      try {
+        io::parse_checkpoint(damaged, "damaged.mnck");
+        FAIL_CHECK("byte " << at << " change " << change << " was not noticed");
+      } catch (const Error& e) {
+        const std::string message = e.what();
+        if (message.rfind("damaged.mnck: ", 0) == 0 && message.find("corrupt") != std::string::npos) ++refused;
+        else FAIL_CHECK("byte " << at << ": " << message);
+      }
+    }
+  }
+  CHECK(refused == tried);
+  CHECK(tried > 8 * static_cast<int>(bytes.size()));
+  for (size_t length = 0; length < bytes.size(); ++length) {
+    CHECK_THROWS_AS(io::parse_checkpoint(bytes.substr(0, length), "cut.mnck"), Error);
+  }
+  CHECK_THROWS_WITH_AS(io::parse_checkpoint(bytes + "x", "long.mnck"), doctest::Contains("corrupt"), Error);
+  // A preamble claiming a header of 2^64 - 1 bytes (with a matching CRC: a writer's bug, not damage) is refused
+  // without allocating.
+  std::string huge = bytes.substr(0, bytes.size() - 4);
+  for (int i = 16; i < 24; ++i) huge[i] = static_cast<char>(0xff);
+  const uint32_t crc = static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(huge.data()), huge.size()));
+  for (int i = 0; i < 4; ++i) huge.push_back(static_cast<char>((crc >> (8 * i)) & 0xff));
+  CHECK_THROWS_WITH_AS(io::parse_checkpoint(huge, "huge.mnck"), doctest::Contains("header runs past the end"), Error);
 }
 
 // ---- The trainer's checkpoints: keys, save, restore, load for rendering ----
@@ -114,7 +157,7 @@ uint32_t crc_of(const std::vector<float>& values) {
                                      static_cast<uInt>(values.size() * sizeof(float))));
 }
 
-// A version-1 training checkpoint built byte by byte, as the trainer has written them from the start (the
+// A format-1 training checkpoint built byte by byte, as the trainer wrote them before format 2 (the
 // configuration parsed from its JSON text), so a change of the on-disk format fails here.
 void write_version1_checkpoint(const std::string& path, const train::TrainConfig& config,
                                const std::vector<std::pair<std::string, std::vector<float>>>& tensors) {
@@ -207,7 +250,7 @@ TEST_CASE("checkpoint: save records the configuration as a JSON object beside th
   const std::string path = train::checkpoint_path(dir.string(), 12);
   train::save_training_checkpoint(path, config, record, networks, optimisers);
 
-  const auto file = train::read_checkpoint_file(path);
+  const auto file = io::read_checkpoint_file(path);
   std::vector<std::string> keys;
   for (const auto& item : file.header.items()) keys.push_back(item.key());
   CHECK(keys == std::vector<std::string>{"adam_steps", "config", "data", "device", "format", "multiscale_data", "step",
@@ -229,10 +272,10 @@ TEST_CASE("checkpoint: save records the configuration as a JSON object beside th
   REQUIRE(config.area_loss);
   CHECK(model.spec.loss.multiscale);  // multiscale_data came back: the area loss is compiled in
   // A checkpoint file that the trainer did not write is refused by name.
-  train::CheckpointFile other;
+  io::CheckpointFile other;
   other.add("params", {1.0f});
   const std::string other_path = (dir / "other.mnck").string();
-  train::write_checkpoint_file(other_path, other);
+  io::write_checkpoint_file(other_path, other);
   CHECK_THROWS_WITH_AS(train::load_trained_model(ctx, other_path), doctest::Contains("not a training checkpoint"),
                        Error);
   CHECK_THROWS_WITH_AS(train::find_checkpoint((dir / "empty").string()), doctest::Contains("no checkpoint found"),

@@ -42,6 +42,10 @@ TEST_CASE("memory plan: each owner's bytes_for is what it allocates, and the fix
     networks += mlp::Mlp::bytes_for(network_config) + mlp::Adam::bytes_for(n);
   }
   CHECK(mlp::Adam::bytes_for(10) == 2 * 10 * sizeof(float) + 10 * (sizeof(float) + sizeof(cl_uint)));
-  CHECK(train::training_fixed_bytes(split, spec, batch_rays) ==
-        data::DeviceDataset::bytes_for(split) + ops::BatchArrays::bytes_for(batch_rays) + networks);
+  const train::FixedBytes fixed = train::training_fixed_bytes(split, spec, batch_rays);
+  CHECK(fixed.data == data::DeviceDataset::bytes_for(split));
+  CHECK(fixed.batch == ops::BatchArrays::bytes_for(batch_rays));
+  CHECK(fixed.networks == networks);
+  CHECK(fixed.largest_buffer == device_data.pixels_rgb().bytes());  // the split's pixels: its biggest buffer
+  CHECK(data::DeviceDataset::largest_buffer_for(split) == device_data.pixels_rgb().bytes());
 }

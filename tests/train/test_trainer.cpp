@@ -7,6 +7,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -124,9 +125,9 @@ TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for b
   CHECK(bitwise_equal(second.networks()[0]->download_params(), straight_params));
   // Both runs' final checkpoints hold the same Adam moments too.
   const auto a =
-      train::read_checkpoint_file(train::checkpoint_path((fs::path(straight_dir) / "checkpoints").string(), 8));
+      io::read_checkpoint_file(train::checkpoint_path((fs::path(straight_dir) / "checkpoints").string(), 8));
   const auto b =
-      train::read_checkpoint_file(train::checkpoint_path((fs::path(resumed_dir) / "checkpoints").string(), 8));
+      io::read_checkpoint_file(train::checkpoint_path((fs::path(resumed_dir) / "checkpoints").string(), 8));
   CHECK(bitwise_equal(a.tensor("network0.adam_m", "a"), b.tensor("network0.adam_m", "b")));
   CHECK(bitwise_equal(a.tensor("network0.adam_v", "a"), b.tensor("network0.adam_v", "b")));
   CHECK(a.header["adam_steps"] == b.header["adam_steps"]);
@@ -136,6 +137,60 @@ TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for b
                        doctest::Contains("batch_size: 96 -> 64"), Error);
   fs::remove_all(straight_dir);
   fs::remove_all(resumed_dir);
+}
+
+TEST_CASE("train: --resume skips checkpoints that fail to verify, removes dead writers' temporaries, trims the log") {
+  auto& ctx = test::test_context();
+  const auto config = tiny({{"steps", "6"}, {"batch_size", "64"}, {"checkpoint_every", "2"}, {"keep_checkpoints", "3"}});
+  const std::string out = test::fresh_run_dir("resume-verify");
+  const std::string folder = (fs::path(out) / "checkpoints").string();
+  std::vector<float> params_at_4;
+  {
+    train::Trainer trainer(ctx, config, test::small_scene(), out, false);
+    trainer.run();
+    params_at_4 = io::read_checkpoint_file(train::checkpoint_path(folder, 4)).tensor("network0.params", "4");
+  }
+  // The newest checkpoint loses one byte of its header's JSON (the kind of damage format 1 missed); a process that
+  // no longer exists left a temporary; the log has a row cut short by the kill.
+  const std::string newest = train::checkpoint_path(folder, 6);
+  std::string bytes;
+  {
+    std::ifstream in(newest, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  bytes[30] = bytes[30] == 'x' ? 'y' : 'x';
+  std::ofstream(newest, std::ios::binary | std::ios::trunc) << bytes;
+  const fs::path stale = fs::path(folder) / ".ckpt_000000008.mnck.999999999.0.tmp";  // pid 999999999: none
+  std::ofstream(stale) << "half a checkpoint";
+  const fs::path live = fs::path(folder) / (".ckpt_000000008.mnck." + std::to_string(::getppid()) + ".0.tmp");
+  std::ofstream(live) << "a live writer's";
+  const fs::path csv = fs::path(out) / "train_log.csv";
+  std::ofstream(csv, std::ios::app) << "7,0.1,0.5";
+
+  train::Trainer resumed(ctx, config, test::small_scene(), out, true);
+  CHECK(resumed.step() == 4);
+  CHECK(bitwise_equal(resumed.networks()[0]->download_params(), params_at_4));
+  CHECK(fs::exists(newest + ".corrupt"));
+  CHECK(!fs::exists(newest));
+  CHECK(!fs::exists(stale));
+  CHECK(fs::exists(live));  // its process runs: never touched
+  std::ifstream log(csv);
+  std::string line, last;
+  int rows = 0;
+  while (std::getline(log, line)) {
+    ++rows;
+    last = line;
+  }
+  CHECK(rows == 1 + 4);  // the header, steps 1…4 (5 and 6 are trained again, the cut row is gone)
+  CHECK(last.rfind("4,", 0) == 0);
+
+  // When nothing verifies, --resume stops with one line and starts nothing.
+  for (const auto& [step, path] : train::list_checkpoints(folder)) {
+    std::ofstream(path, std::ios::binary | std::ios::in | std::ios::out) << "MNCKPT99";
+  }
+  CHECK_THROWS_WITH_AS(train::Trainer(ctx, config, test::small_scene(), out, true),
+                       doctest::Contains("none of the 2 checkpoints in"), Error);
+  fs::remove_all(out);
 }
 
 TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoint from before that loads and resumes") {
@@ -151,7 +206,7 @@ TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoi
   CHECK(written.at("variant_bundle") == "mipnerf-two-mlps");
   CHECK(written.at("variant") == "mipnerf");
   const std::string path = train::find_checkpoint(out);
-  train::CheckpointFile checkpoint = train::read_checkpoint_file(path);
+  io::CheckpointFile checkpoint = io::read_checkpoint_file(path);
   CHECK(checkpoint.header.at("config").at("variant_bundle") == "mipnerf-two-mlps");
   const auto model = train::load_trained_model(ctx, path);
   REQUIRE(model.config.variant_bundle.has_value());
@@ -159,7 +214,7 @@ TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoi
 
   // The same checkpoint as written before the variant was recorded: its configuration has no such key.
   checkpoint.header["config"].erase("variant_bundle");
-  train::write_checkpoint_file(path, checkpoint);
+  io::write_checkpoint_file(path, checkpoint);
   const auto old = train::load_trained_model(ctx, path);
   CHECK(!old.config.variant_bundle.has_value());
   CHECK(old.networks.size() == 2);
@@ -211,7 +266,7 @@ TEST_CASE("train: repeated non-finite steps stop the run and keep the last good 
   const auto saved = train::list_checkpoints((fs::path(out) / "checkpoints").string());
   REQUIRE(!saved.empty());
   CHECK(saved.back().first == 4);
-  const auto checkpoint = train::read_checkpoint_file(saved.back().second);
+  const auto checkpoint = io::read_checkpoint_file(saved.back().second);
   for (float p : checkpoint.tensor("network0.params", "ckpt")) REQUIRE(std::isfinite(p));
   fs::remove_all(out);
 }
@@ -246,20 +301,40 @@ TEST_CASE("train: memory planning picks a chunk that fits, and says what to lowe
   auto& ctx = test::test_context();
   const auto paper = train::resolve_config("paper", "mipnerf", {});
   const auto spec = train::make_graph_spec(paper, false);
-  const auto plan = train::plan_memory(spec, ctx.device_info(), 4096, 0, 0, true);
+  const auto plan = train::plan_memory(spec, ctx.device_info(), 4096, {}, 0, true);
   MESSAGE("paper preset on " << ctx.device_info().name << ": " << plan.describe());
   CHECK(plan.chunk_rays >= 1);
   CHECK(plan.total() <= plan.budget_bytes);
   CHECK(plan.largest_buffer <= ctx.device_info().max_alloc_bytes);
-  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, 0, 1u << 20, true),
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, {}, 1u << 20, true),
                        doctest::Contains("lower chunk_rays"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, ctx.device_info(), 4096, {}, 1u << 20, false),
+                       doctest::Contains("lower --chunk (render_chunk_rays)"), Error);
   auto small_device = ctx.device_info();
   small_device.global_mem_bytes = 1ull << 20;  // one ray of 2 × 128 samples through 8×256 needs more
   small_device.max_alloc_bytes = 256ull << 10;
-  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 0, 0, true), doctest::Contains("num_samples"),
-                       Error);
-  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, 1ull << 30, 0, true),
-                       doctest::Contains("fewer or smaller images"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, {}, 0, true),
+                       doctest::Contains("lower batch_size, num_samples"), Error);
+  // The fixed part names its largest owner's setting: the images, the batch arrays, the networks.
+  const auto fixed = [](size_t data, size_t batch, size_t networks) {
+    train::FixedBytes f;
+    f.data = data;
+    f.batch = batch;
+    f.networks = networks;
+    f.largest_buffer = std::max({data, batch, networks});
+    return f;
+  };
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, fixed(1ull << 30, 1, 1), 0, true),
+                       doctest::Contains("train at a lower resolution (factor"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, fixed(1, 1ull << 30, 1), 0, true),
+                       doctest::Contains("lower batch_size"), Error);
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, small_device, 4096, fixed(1, 1, 1ull << 30), 0, true),
+                       doctest::Contains("lower mlp_width"), Error);
+  // Within the budget, but one buffer (the split's pixels) beyond the allocation limit.
+  auto big_budget = small_device;
+  big_budget.global_mem_bytes = 1ull << 40;
+  CHECK_THROWS_WITH_AS(train::plan_memory(spec, big_budget, 4096, fixed(1ull << 20, 1, 1), 0, true),
+                       doctest::Contains("a single buffer of 1 MiB"), Error);
 }
 
 TEST_CASE("train: rays through random points of their pixels are reproducible and differ from centred rays") {

@@ -1,0 +1,197 @@
+// Crash consistency of `mipnerf-cl train`, through the real executable: SIGKILL at random moments and inside
+// checkpoint writes, resume after each, and the final model is bit-equal to an uninterrupted run's; a file-size
+// limit hit while checkpointing stops the run with one line and leaves the previous checkpoint intact.
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "core/error.hpp"
+#include "io/checkpoint_file.hpp"
+#include "support/child_process.hpp"
+#include "support/train_fixtures.hpp"
+#include "train/checkpoint.hpp"
+
+using namespace mipnerf;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+constexpr int kSteps = 40;
+// The pause halfway through every atomic write (MIPNERF_TEST_PAUSE_IN_WRITE_MS): the window a kill aims at.
+constexpr int kPauseMs = 150;
+
+// `mipnerf-cl train` on the training tests' scene: small, a checkpoint every 4 steps, every step logged.
+std::vector<std::string> train_command(const std::string& out, bool resume, int steps = kSteps,
+                                       const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> argv = {MIPNERF_CLI_PATH,   "train",        "--data", test::small_scene(), "--out", out,
+                                   "--preset",         "tiny",         "--steps", std::to_string(steps),
+                                   "--batch_size",     "64",           "--checkpoint_every", "4",
+                                   "--keep_checkpoints", "3",          "--log_every", "1", "--val_views", "1"};
+  if (const char* device = std::getenv("MIPNERF_TEST_DEVICE")) {
+    argv.push_back("--device");
+    argv.push_back(device);
+  }
+  if (resume) argv.push_back("--resume");
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
+}
+
+test::ChildOptions with_pause(const std::string& output_file) {
+  test::ChildOptions options;
+  options.environment = {"MIPNERF_TEST_PAUSE_IN_WRITE_MS=" + std::to_string(kPauseMs)};
+  options.output_file = output_file;
+  return options;
+}
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// A checkpoint temporary (".ckpt_….mnck.<pid>.<n>.tmp") in `folder`, or "".
+std::string checkpoint_temporary(const fs::path& folder) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(".ckpt_", 0) == 0 && name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0) return name;
+  }
+  return "";
+}
+
+// Every file the listing takes for a checkpoint reads and verifies: a kill never left a partial one under a
+// checkpoint's name.
+void check_every_checkpoint_verifies(const fs::path& folder, const std::string& when) {
+  for (const auto& [step, path] : train::list_checkpoints(folder.string())) {
+    try {
+      io::read_checkpoint_file(path);
+    } catch (const Error& e) {
+      FAIL_CHECK(when << ": " << e.what());
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("reliability: SIGKILL at random moments and inside checkpoint writes, resumed each time, ends bit-equal") {
+  const fs::path root = test::fresh_run_dir("kill");
+  const fs::path reference = root / "reference", killed = root / "killed";
+  const fs::path checkpoints = killed / "checkpoints";
+
+  // The uninterrupted run, with the same pauses, also gives the run's length that random moments are drawn in.
+  const auto start = Clock::now();
+  test::ChildProcess straight(train_command(reference.string(), false), with_pause((root / "reference.log").string()));
+  straight.wait();
+  const double run_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  REQUIRE_MESSAGE(straight.exit_code() == 0, slurp(root / "reference.log"));
+
+  const unsigned seed = std::random_device{}();
+  MESSAGE("kill moments from seed " << seed << " within a run of " << run_seconds << " s");
+  std::mt19937 random(seed);
+  int kills = 0, kills_in_checkpoint_writes = 0;
+  for (int attempt = 0; kills < 6 && attempt < 20; ++attempt) {
+    const std::string log = (root / ("attempt" + std::to_string(attempt) + ".log")).string();
+    test::ChildProcess run(train_command(killed.string(), true), with_pause(log));
+    bool in_write = false;
+    if (attempt % 2 == 0) {
+      // A random moment of the run: start-up, a step, a log line, a checkpoint or config write, the val render.
+      std::uniform_real_distribution<double> moment(0.05, 0.9 * run_seconds);
+      std::this_thread::sleep_for(std::chrono::duration<double>(moment(random)));
+    } else {
+      // Inside a checkpoint write: as soon as a checkpoint temporary appears, a random moment into its pause.
+      const auto give_up = Clock::now() + std::chrono::duration<double>(2 * run_seconds + 10);
+      while (checkpoint_temporary(checkpoints).empty() && !run.finished() && Clock::now() < give_up) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
+      std::uniform_int_distribution<int> into(0, kPauseMs / 2);
+      std::this_thread::sleep_for(std::chrono::milliseconds(into(random)));
+      in_write = !checkpoint_temporary(checkpoints).empty();
+    }
+    const bool was_killed = run.kill_now();
+    const std::string output = slurp(log);
+    INFO("attempt " << attempt << " output:\n" << output);
+    if (!was_killed) {
+      // It finished first: a complete run proves nothing about kills, so start the killed run over.
+      REQUIRE(run.exit_code() == 0);
+      fs::remove_all(killed);
+      continue;
+    }
+    ++kills;
+    kills_in_checkpoint_writes += in_write ? 1 : 0;
+    CHECK(output.find("skipped") == std::string::npos);  // no checkpoint ever failed to verify
+    check_every_checkpoint_verifies(checkpoints, "after kill " + std::to_string(kills));
+  }
+  REQUIRE(kills >= 6);
+  CHECK(kills_in_checkpoint_writes >= 2);
+
+  test::ChildProcess last(train_command(killed.string(), true), with_pause((root / "last.log").string()));
+  last.wait();
+  const std::string last_output = slurp(root / "last.log");
+  INFO("the last run's output:\n" << last_output);
+  REQUIRE(last.exit_code() == 0);
+
+  // The final models: parameters, Adam moments and step counts bit for bit.
+  const auto a = io::read_checkpoint_file(train::checkpoint_path((reference / "checkpoints").string(), kSteps));
+  const auto b = io::read_checkpoint_file(train::checkpoint_path(checkpoints.string(), kSteps));
+  for (const char* tensor : {"network0.params", "network0.adam_m", "network0.adam_v"}) {
+    CHECK_MESSAGE(same_bits(a.tensor(tensor, "reference"), b.tensor(tensor, "killed")), tensor);
+  }
+  CHECK(a.header.at("adam_steps") == b.header.at("adam_steps"));
+  // Nothing half-written is left, and the log has every step once, in order.
+  CHECK(checkpoint_temporary(checkpoints).empty());
+  for (const auto& entry : fs::directory_iterator(checkpoints)) CHECK(entry.path().extension() != ".corrupt");
+  std::ifstream csv(killed / "train_log.csv");
+  std::string line;
+  std::getline(csv, line);
+  int expected_step = 1;
+  while (std::getline(csv, line)) CHECK(std::stoi(line.substr(0, line.find(','))) == expected_step++);
+  CHECK(expected_step == kSteps + 1);
+  CHECK(nlohmann::json::parse(slurp(killed / "summary.json")).is_object());
+  fs::remove_all(root);
+}
+
+TEST_CASE("reliability: a file-size limit hit while checkpointing stops the run with one line, and the last checkpoint stays") {
+  const fs::path root = test::fresh_run_dir("full-disk"), out = root / "run";
+  // A 256-wide network, so that a checkpoint (3.6 MB) outgrows every other file the run writes, PoCL's included:
+  // each program build writes its preprocessed source (1–2 MB) to the kernel cache, even when cached.
+  const std::vector<std::string> wide = {"--mlp_width", "256"};
+  {
+    test::ChildProcess first(train_command(out.string(), false, 8, wide),
+                             {{}, (root / "first.log").string(), -1});
+    REQUIRE(first.wait() == 0);
+  }
+  const std::string kept = train::checkpoint_path((out / "checkpoints").string(), 8);
+  const auto before = io::read_checkpoint_file(kept);
+  const auto checkpoint_bytes = static_cast<long long>(fs::file_size(kept));
+  REQUIRE(checkpoint_bytes > 3'000'000);
+
+  // A limit just below one checkpoint's size: the run trains on to step 12, then its checkpoint write fails (EFBIG,
+  // what a full disk gives as ENOSPC).
+  const std::string log = (root / "limited.log").string();
+  test::ChildOptions limited{{}, log, checkpoint_bytes - 256 * 1024};
+  test::ChildProcess second(train_command(out.string(), true, 16, wide), limited);
+  const int status = second.wait();
+  const std::string output = slurp(log);
+  INFO(output);
+  REQUIRE(WIFEXITED(status));  // not killed by a signal (SIGXFSZ ignored, the error handled)
+  CHECK(WEXITSTATUS(status) != 0);
+  CHECK(output.find("ckpt_000000012.mnck: write failed (File too large)") != std::string::npos);
+  CHECK(output.find(kept + " is intact") != std::string::npos);
+  CHECK(!fs::exists(train::checkpoint_path((out / "checkpoints").string(), 12)));
+  CHECK(checkpoint_temporary(out / "checkpoints").empty());
+  const auto after = io::read_checkpoint_file(kept);
+  CHECK(same_bits(after.tensor("network0.params", "after"), before.tensor("network0.params", "before")));
+  fs::remove_all(root);
+}
