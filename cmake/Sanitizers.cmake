@@ -3,8 +3,8 @@
 # MIPNERF_SANITIZE: every host target (library, CLI, tests, benchmarks) with AddressSanitizer and
 #   UndefinedBehaviorSanitizer; a UBSan finding stops the program (no recovery), so it fails its test.
 # MIPNERF_FUZZ: the libFuzzer targets of tests/fuzz (clang only), each also a short CTest entry (label `fuzz`). The
-#   files that read outside data (host/io, host/data, host/core and the training settings) get libFuzzer's coverage
-#   instrumentation; the rest of the library does not, so the suite's other tests pay nothing for it.
+#   files that read outside data (host/io, host/data, host/core, the training settings and checkpoints) get
+#   libFuzzer's coverage instrumentation; the rest of the library does not, so the other tests pay nothing for it.
 option(MIPNERF_SANITIZE "Build all host code with AddressSanitizer + UndefinedBehaviorSanitizer" OFF)
 option(MIPNERF_FUZZ "Build the libFuzzer targets of tests/fuzz (needs clang; use with MIPNERF_SANITIZE)" OFF)
 

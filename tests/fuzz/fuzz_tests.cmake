@@ -4,7 +4,7 @@
 # for MIPNERF_FUZZ_SECONDS; any crash, sanitizer report, hang or huge allocation fails the entry. The long runs:
 # scripts/fuzz.sh (bench/results/fuzz.md). Included by tests/CMakeLists.txt, whose folder the paths are relative to.
 set(MIPNERF_FUZZ_SECONDS 20 CACHE STRING "How long each fuzz target's CTest entry fuzzes, in seconds")
-set(MIPNERF_FUZZ_TARGETS blender transforms_json multiscale png camera_path config)
+set(MIPNERF_FUZZ_TARGETS blender transforms_json multiscale png camera_path config checkpoint)
 
 add_library(mipnerf_fuzz_support STATIC fuzz/fuzz_support.cpp)
 target_link_libraries(mipnerf_fuzz_support PUBLIC mipnerf)
@@ -19,7 +19,7 @@ foreach(target IN LISTS MIPNERF_FUZZ_TARGETS)
   set(dictionary "")
   if(EXISTS "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/dictionaries/${target}.dict")
     set(dictionary "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/dictionaries/${target}.dict")
-  elseif(NOT target MATCHES "^(png|config)$")
+  elseif(NOT target MATCHES "^(png|config|checkpoint)$")
     set(dictionary "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/dictionaries/json.dict")
   endif()
   add_test(NAME "fuzz: ${target}" COMMAND ${CMAKE_COMMAND} "-DEXE=$<TARGET_FILE:fuzz_${target}>"
@@ -28,3 +28,7 @@ foreach(target IN LISTS MIPNERF_FUZZ_TARGETS)
     -P "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/run_fuzz_test.cmake")
   set_tests_properties("fuzz: ${target}" PROPERTIES LABELS fuzz TIMEOUT 300 ENVIRONMENT "${MIPNERF_TEST_ENV}")
 endforeach()
+
+# The tool that wrote the checkpoint target's seeds (tests/fuzz/checkpoint_seeds.cpp): not a test, kept to remake them.
+add_executable(fuzz_checkpoint_seeds fuzz/checkpoint_seeds.cpp)
+target_link_libraries(fuzz_checkpoint_seeds PRIVATE mipnerf)
