@@ -45,7 +45,7 @@ std::string vec(const data::Vec3& v) {
   return text;
 }
 
-void print_split(const data::SplitSummary& s) {
+void print_split(const data::SplitSummary& s, bool ndc) {
   const std::string pixels = s.pixels < 1000000 ? std::to_string(s.pixels) : num(s.pixels / 1e6) + " M";
   std::cout << "split " << s.name << ": " << s.images << " images, " << pixels << " pixels  ("
             << s.source << ")\n";
@@ -59,7 +59,8 @@ void print_split(const data::SplitSummary& s) {
               << range(level.focal_y_min, level.focal_y_max, 6) << " px, lossmult "
               << range(level.lossmult_min, level.lossmult_max) << "\n";
   }
-  std::cout << "  near " << range(s.near_min, s.near_max) << ", far " << range(s.far_min, s.far_max) << "\n";
+  std::cout << "  near " << range(s.near_min, s.near_max) << ", far " << range(s.far_min, s.far_max)
+            << (ndc ? " (NDC: the near plane to infinity)" : "") << "\n";
   std::cout << "  camera centres: x " << range(s.center_min[0], s.center_max[0]) << ", y "
             << range(s.center_min[1], s.center_max[1]) << ", z " << range(s.center_min[2], s.center_max[2])
             << "; distance from the origin " << range(s.radius_min, s.radius_max) << "\n";
@@ -74,7 +75,7 @@ void print_split(const data::SplitSummary& s) {
       std::cout << "  WARNING: " << s.images - s.cameras_facing
                 << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
                    "axes (x right, y up, looking down -z)?\n";
-    } else if (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max) {
+    } else if (!ndc && (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max)) {
       std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
     }
   }
@@ -99,7 +100,11 @@ void run_inspect(const InspectArgs& args) {
   std::cout << "dataset " << dataset.path << "\n"
             << "format " << data::format_name(dataset.format) << ", background " << args.background
             << (args.scales > 1 ? ", " + std::to_string(args.scales) + " scales built on the fly" : "") << "\n";
-  for (const auto& split : dataset.splits) print_split(data::summarize(split));
+  for (const auto& split : dataset.splits) {
+    const data::SplitSummary summary = data::summarize(split);
+    // An LLFF capture's near 0, far 1 are NDC bounds, not depths the look-at centre could be compared with.
+    print_split(summary, dataset.format == data::DatasetFormat::llff && summary.near_max == 0 && summary.far_min == 1);
+  }
 }
 
 }  // namespace

@@ -1,10 +1,13 @@
-// `mipnerf-cl make-scene OUT`: writes the built-in procedural scene (Blender format, plus OUT/multiscale).
+// `mipnerf-cl make-scene OUT`: writes the built-in procedural scene (Blender format, plus OUT/multiscale), or with
+// --forward-facing its forward-facing capture in the LLFF layout.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 
 #include "common.hpp"
+#include "core/error.hpp"
+#include "data/forward_facing.hpp"
 #include "data/procedural.hpp"
 
 namespace mipnerf::cli {
@@ -27,7 +30,35 @@ void register_make_scene(CLI::App& app) {
   cmd->add_option("--samples", options->samples_per_axis, "Jittered rays per pixel per axis (8: 64 rays per pixel)")
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Render threads (0: all hardware threads)")->capture_default_str();
-  cmd->callback([out, options] {
+  auto forward = std::make_shared<data::ForwardFacingOptions>();
+  auto forward_facing = std::make_shared<bool>(false);
+  auto grid = std::make_shared<std::string>("5x4");
+  cmd->add_flag("--forward-facing", *forward_facing,
+                "Instead: a forward-facing capture of the scene before a backdrop, from a grid of cameras, in the LLFF "
+                "layout (poses_bounds.npy, images/, images_<factor>/); --size is then the image width (4:3), "
+                "default 256");
+  cmd->add_option("--grid", *grid, "--forward-facing: cameras across x down (e.g. 5x4)")->capture_default_str();
+  cmd->add_option("--factor", forward->factor, "--forward-facing: also write images_<factor>/")->capture_default_str();
+  cmd->callback([out, options, forward, forward_facing, grid, cmd] {
+    if (*forward_facing) {
+      for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales"}) {
+        if (cmd->count(blender_only) > 0) throw Error(std::string(blender_only) + " applies to the Blender scene, not --forward-facing");
+      }
+      unsigned x = 0, y = 0;
+      char rest = 0;
+      if (std::sscanf(grid->c_str(), "%ux%u%c", &x, &y, &rest) != 2) throw Error("--grid '" + *grid + "': expected COLUMNSxROWS, e.g. 5x4");
+      forward->views_x = x;
+      forward->views_y = y;
+      if (cmd->count("--size") > 0) forward->width_px = options->size_px;
+      forward->seed = options->seed;
+      if (cmd->count("--samples") > 0) forward->samples_per_axis = options->samples_per_axis;
+      forward->threads = options->threads;
+      data::write_forward_facing_scene(*out, *forward, print_log);
+      std::cout << "wrote " << *out << ": an LLFF capture of " << x * y << " views at " << forward->width_px << "x"
+                << forward->width_px * 3 / 4 << " (images/" << (forward->factor > 1 ? ", images_" + std::to_string(forward->factor) + "/" : "")
+                << ", poses_bounds.npy)\n";
+      return;
+    }
     data::write_procedural_scene(*out, *options, print_log);
     std::cout << "wrote " << *out << ": " << options->train_views << " train, " << options->val_views << " val, "
               << options->test_views << " test views at " << options->size_px << "x" << options->size_px;

@@ -85,10 +85,11 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
   if (given(cmd, "--path") && given(cmd, "--split")) {
     throw Error("give --split (a dataset's cameras) or --path (orbit or a camera path file), not both");
   }
-  const bool orbit = args.path == "orbit";
-  for (const char* flag : {"--radius", "--elevation", "--azimuth", "--frames", "--fov", "--focal"}) {
+  const bool orbit = args.path == "orbit", spiral = args.path == "spiral";
+  for (const char* flag : {"--radius", "--elevation", "--azimuth", "--fov", "--focal"}) {
     if (given(cmd, flag) && !orbit) throw Error(std::string(flag) + " applies to --path orbit only");
   }
+  if (given(cmd, "--frames") && !orbit && !spiral) throw Error("--frames applies to --path orbit or spiral only");
   if (given(cmd, "--fov") && given(cmd, "--focal")) throw Error("give --fov or --focal, not both");
   if (given(cmd, "--fov") && !(args.fov > 0.0 && args.fov < 180.0)) {
     throw Error("--fov " + std::to_string(args.fov) + ": the horizontal field of view must lie in (0, 180) degrees");
@@ -107,7 +108,7 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
     if (given(cmd, flag) && given(cmd, "--path")) throw Error(std::string(flag) + " applies to --split only");
   }
   check_view_options(cmd, args.views, args.scales, args.supersample);
-  if (!args.path.empty() && !orbit) {
+  if (!args.path.empty() && !orbit && !spiral) {
     std::error_code ec;
     if (!fs::is_regular_file(args.path, ec)) {
       throw Error(args.path + ": no such camera path file (give --path orbit, or a transforms-style JSON file)");
@@ -131,6 +132,7 @@ eval::ViewFrames frames_of(const RenderArgs& args, const CLI::App& cmd, const tr
     orbit.focal_px = if_given(cmd, "--focal", args.focal);
     return eval::orbit_views(model, orbit, resolution);
   }
+  if (args.path == "spiral") return eval::spiral_views(model, checkpoint, args.data, args.frames, resolution);
   if (!args.path.empty()) return eval::path_views(model, args.path, resolution);
   eval::SplitViewRequest split;
   split.data = args.data;
@@ -224,7 +226,7 @@ void register_render(CLI::App& app) {
   cmd->add_option("--views", args->views, "Only the first N views of the split (all their scales)");
   cmd->add_option("--scales", args->scales, "Build the multiscale pyramid with N scales (default: as trained)");
   cmd->add_option("--path", args->path,
-                  "'orbit', or a transforms-style JSON of frames (transform_matrix; fl_x/fl_y/cx/cy/w/h or "
+                  "'orbit', 'spiral' (an LLFF capture's official spiral), or a transforms-style JSON of frames (transform_matrix; fl_x/fl_y/cx/cy/w/h or "
                   "camera_angle_x)");
   cmd->add_option("--radius", args->radius, "Orbit: distance from the target (default: the training cameras' mean)");
   cmd->add_option("--elevation", args->elevation, "Orbit: degrees above the horizontal plane")->capture_default_str();

@@ -18,6 +18,7 @@
 #include "io/atomic_file.hpp"
 #include "mlp/gemm_tuning.hpp"
 #include "train/config_file.hpp"
+#include "train/scene_effects.hpp"
 #include "progress.hpp"
 
 namespace mipnerf::cli {
@@ -68,6 +69,7 @@ std::string default_scene(const std::string& out_dir) {
 void on_setup(train::Trainer& trainer, ocl::Context& ctx, const std::string& preset) {
   mlp::load_gemm_tuning(ctx);  // after the inputs are checked, before the first product
   const auto& config = trainer.config();
+  if (!config.scene_effects.empty()) std::cerr << "mipnerf-cl: " << config.scene_effects << "\n";
   std::cerr << "mipnerf-cl: training " << enum_name(config.variant) << " (preset " << preset << ") on " << ctx.device_info().name
             << ": " << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()
             << " parameters, " << trainer.spec().describe() << "\n"
@@ -104,8 +106,13 @@ void write_profile(const ocl::StageProfile& profile, const train::TrainConfig& c
 
 void run_train(TrainArgs& args, CLI::App& cmd) {
   const auto settings = explicit_settings(args, cmd);
-  const train::TrainConfig config = train::resolve_config(args.preset, args.variant, settings);
+  const train::TrainConfig unscened = train::resolve_config(args.preset, args.variant, settings);
   const std::string data_path = args.data.empty() ? default_scene(args.out) : args.data;
+  // The effects the data calls for, where no setting was given (train/scene_effects.hpp).
+  std::string scene_line;
+  const auto with_scene = train::with_scene_effects(train::scene_effects(data_path, unscened.factor), settings, scene_line);
+  train::TrainConfig config = train::resolve_config(args.preset, args.variant, with_scene);
+  config.scene_effects = scene_line;
   auto ctx = open_context(args.profile);
   const std::string device = ctx->device_info().name;
   ocl::StageProfiler profiler;

@@ -18,6 +18,8 @@ const char* format_name(DatasetFormat format) {
       return "Blender (transforms_<split>.json)";
     case DatasetFormat::multiscale_blender:
       return "multiscale Blender (metadata.json)";
+    case DatasetFormat::llff:
+      return "LLFF (poses_bounds.npy)";
     default:
       return "transforms.json";
   }
@@ -67,8 +69,10 @@ DatasetFormat detect_format(const std::string& path) {
     return DatasetFormat::blender;
   }
   if (has("transforms.json")) return DatasetFormat::transforms_json;
+  if (has("poses_bounds.npy")) return DatasetFormat::llff;
   throw Error(path + ": no dataset here: expected transforms_train.json (Blender), metadata.json (multiscale "
-                     "Blender) or transforms.json; `mipnerf-cl make-scene DIR` writes a procedural scene");
+                     "Blender), transforms.json or poses_bounds.npy (LLFF); `mipnerf-cl make-scene DIR` writes a "
+                     "procedural scene");
 }
 
 Camera scale_camera(const Camera& camera, uint32_t factor) {
@@ -148,13 +152,14 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
     Camera camera;
     camera.camera_to_world = frame.camera_to_world;
     resolve_intrinsics(frame.intrinsics, image.width, image.height, camera, frame.where);
-    if (options.factor > 1) {
-      if (image.width % options.factor != 0 || image.height % options.factor != 0) {
+    const uint32_t factor = std::max<uint32_t>(1, options.factor / frame.stored_factor);
+    if (factor > 1) {
+      if (image.width % factor != 0 || image.height % factor != 0) {
         throw Error(frame.image_path + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                    " is not divisible by factor " + std::to_string(options.factor) + "; use a factor that divides it");
+                    " is not divisible by factor " + std::to_string(factor) + "; use a factor that divides it");
       }
-      for (uint32_t f = 1; f < options.factor; f *= 2) image = downsample2(image);
-      camera = scale_camera(camera, options.factor);
+      for (uint32_t f = 1; f < factor; f *= 2) image = downsample2(image);
+      camera = scale_camera(camera, factor);
     }
     camera.near = frame.near;
     camera.far = frame.far;
@@ -197,6 +202,9 @@ Dataset load_dataset(const std::string& path, const LoadOptions& options) {
       specs = detail::parse_multiscale_metadata(is_file ? path : detail::join_path(path, "metadata.json"), options);
       break;
     }
+    case DatasetFormat::llff:
+      specs = detail::parse_llff(path, options);
+      break;
     case DatasetFormat::transforms_json: {
       const bool is_file = fs::is_regular_file(path);
       specs = detail::parse_transforms_json(is_file ? path : detail::join_path(path, "transforms.json"), options);

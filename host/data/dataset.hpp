@@ -17,7 +17,8 @@ namespace mipnerf::data {
 enum class DatasetFormat {
   blender,             // DIR/transforms_<split>.json, frames with file_path + transform_matrix, camera_angle_x
   multiscale_blender,  // DIR/metadata.json as written by mip-NeRF's convert_blender_data.py (or make-multiscale)
-  transforms_json      // one transforms.json with every frame; intrinsics fl_x, fl_y, cx, cy, w, h
+  transforms_json,     // one transforms.json with every frame; intrinsics fl_x, fl_y, cx, cy, w, h
+  llff                 // DIR/poses_bounds.npy + DIR/images[_<factor>]/ (forward-facing captures; data/llff.hpp)
 };
 const char* format_name(DatasetFormat format);
 
@@ -34,6 +35,8 @@ struct LoadOptions {
   std::optional<double> near, far;  // override the files' values (default: the file's, else 2 and 6)
   std::vector<std::string> splits;  // splits to load ("train", "val", "test"); empty = every split present
   int holdout_every = 8;  // transforms.json: every n-th frame (0, n, 2n …) becomes "test", the rest "train"; 0 = none
+  bool spherify = false;  // LLFF: re-pose a 360° capture around its centre (world rays, cones)
+  bool llff_ndc = true;   // LLFF, not spherified: near 0, far 1 in NDC (cylinder rays); false: world depths from bounds
   LogFn log;              // notes and warnings (defaults taken, splits skipped)
 };
 

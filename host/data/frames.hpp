@@ -20,6 +20,7 @@ struct FrameSpec {
   double near = 2.0, far = 6.0;
   double lossmult = 1.0;
   uint32_t scale_level = 0;
+  uint32_t stored_factor = 1;  // the image is already downsampled by this (LLFF images_<factor>/); the load applies the rest
 };
 
 struct SplitSpec {
@@ -35,6 +36,8 @@ std::vector<SplitSpec> parse_blender(const std::string& dir, const LoadOptions& 
 std::vector<SplitSpec> parse_transforms_json(const std::string& file, const LoadOptions& options);
 // Official multiscale metadata.json.
 std::vector<SplitSpec> parse_multiscale_metadata(const std::string& file, const LoadOptions& options);
+// LLFF: DIR/poses_bounds.npy and its images (data/llff.hpp); "val" holds the held-out views, as "test".
+std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& options);
 
 // The PNG a frame's file_path names, relative to `base_dir`: as given, or with ".png" appended (Blender
 // writes file_path without extension). Throws naming the frame when it is missing or not a PNG.

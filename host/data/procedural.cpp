@@ -234,6 +234,11 @@ SceneHit trace_procedural(const Ray& ray) {
 }
 
 RgbaImage render_procedural(const Camera& camera, const SceneOptions& options, uint32_t view_key) {
+  return render_traced(camera, options, view_key, trace_procedural);
+}
+
+RgbaImage render_traced(const Camera& camera, const SceneOptions& options, uint32_t view_key,
+                        SceneHit (*trace)(const Ray&)) {
   RgbaImage image{camera.width_px, camera.height_px, {}};
   image.rgba.assign(static_cast<size_t>(image.width) * image.height * 4, 0.0f);
   const uint32_t s = options.samples_per_axis;
@@ -250,7 +255,7 @@ RgbaImage render_procedural(const Camera& camera, const SceneOptions& options, u
           const uint32_t stratum = k + m;
           const double sx = x + ((stratum % s) + u[2 * m]) * inv_s;
           const double sy = y + ((stratum / s) + u[2 * m + 1]) * inv_s;
-          const SceneHit hit = trace_procedural(camera_ray(camera, sx, sy));
+          const SceneHit hit = trace(camera_ray(camera, sx, sy));
           if (hit.hit) {
             sum = add(sum, hit.rgb);
             ++hits;

@@ -48,6 +48,9 @@ SceneHit trace_procedural(const Ray& ray);
 // alpha = the fraction that hit, rgb = the mean colour of those that hit (0 where none did). `view_key`
 // makes the jitter of each view distinct.
 RgbaImage render_procedural(const Camera& camera, const SceneOptions& options, uint32_t view_key);
+// The same renderer over any scene `trace` describes (the forward-facing scene adds a backdrop).
+RgbaImage render_traced(const Camera& camera, const SceneOptions& options, uint32_t view_key,
+                        SceneHit (*trace)(const Ray&));
 
 // Writes the whole scene to `out_dir` (created if needed); logs progress through `log`.
 void write_procedural_scene(const std::string& out_dir, const SceneOptions& options, const LogFn& log = {});

@@ -50,6 +50,12 @@ struct OrbitRequest {
 ViewFrames orbit_views(const train::TrainedModel& model, const OrbitRequest& request,
                        const data::ResolutionRequest& resolution);
 
+// The official render path of an LLFF capture (data::llff_render_path: the spiral, or the circle of a spherified
+// one), `frames` views at the trained image size (resized as requested); frames named frame_0000, ... `checkpoint`
+// names the file in errors about its data; the data must be an LLFF folder.
+ViewFrames spiral_views(const train::TrainedModel& model, const std::string& checkpoint, const std::string& data,
+                        uint32_t frames, const data::ResolutionRequest& resolution);
+
 // The cameras of a transforms-style camera path file (data::read_camera_path), near/far defaulting to the model's.
 ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
                       const data::ResolutionRequest& resolution);

@@ -29,6 +29,7 @@ struct Entry {
 };
 
 constexpr const char* kVariantBundleKey = "variant_bundle";  // the record's JSON key (TrainConfig::variant_bundle)
+constexpr const char* kSceneEffectsKey = "scene_effects";  // the record's JSON key (TrainConfig::scene_effects)
 
 const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
@@ -43,6 +44,8 @@ const std::vector<Entry>& table() {
       {{"far", "far bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::far},
       {{"ray_shape", "conical frustums, or cylinders in NDC space (forward-facing scenes)", "scene"},
        &TrainConfig::ray_shape},
+      {{"spherify", "LLFF: re-pose a 360-degree capture around its centre (official spherify)", "scene"},
+       &TrainConfig::spherify},
       {{"lindisp", "sample linearly in disparity instead of depth", "scene"}, &TrainConfig::lindisp},
       {{"batching", "a step's rays come from every image, or from one image", "scene"}, &TrainConfig::batching},
       {{"pixel_center", "offset of a pixel's ray inside the pixel (0.5 = centre)", "scene"},
@@ -378,6 +381,7 @@ nlohmann::ordered_json config_json(const TrainConfig& config) {
       j[kVariantBundleKey] = enum_name(*config.variant_bundle);
     }
   }
+  if (!config.scene_effects.empty()) j[kSceneEffectsKey] = config.scene_effects;
   return j;
 }
 
@@ -399,6 +403,11 @@ TrainConfig config_from_json(const nlohmann::json& j, const std::string& where) 
   for (const auto& [name, value] : j.items()) {
     if (name == kVariantBundleKey) {
       config.variant_bundle = variant_bundle_from_json(value, where);
+      continue;
+    }
+    if (name == kSceneEffectsKey) {
+      if (!value.is_string()) throw Error(where + ": \"" + kSceneEffectsKey + "\" must be a string");
+      config.scene_effects = value.get<std::string>();
       continue;
     }
     try {

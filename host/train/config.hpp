@@ -49,6 +49,7 @@ struct TrainConfig {
   double near = 0.0;                 // sampling range in t; 0 takes the dataset's value (Blender: 2)
   double far = 0.0;                  // 0 takes the dataset's value (Blender: 6)
   RayShape ray_shape = RayShape::cone;  // cylinder: forward-facing scenes in NDC
+  bool spherify = false;             // LLFF: re-pose a 360° capture around its centre (world rays, cones)
   bool lindisp = false;              // sample linearly in disparity instead of depth
   ops::Batching batching = ops::Batching::all_images;  // where a batch's rays come from
   double pixel_center = 0.5;         // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
@@ -103,6 +104,9 @@ struct TrainConfig {
   // "unknown") and for configs not made by resolve_config. No flag, file or --set can change it, and
   // differences() leaves it out: runs with the same settings are the same run however they were spelled.
   std::optional<Variant> variant_bundle;
+  // The scene effects `train` chose from the data (train/scene_effects.hpp), as the line it printed; recorded in
+  // config.json and checkpoints as "scene_effects". A record, not a setting: empty when none was applied.
+  std::string scene_effects;
 };
 
 // One named setting: how to read it from text and write it back, with its help line.

@@ -100,5 +100,6 @@ TEST_CASE("buffers: sizes are checked and copies round-trip") {
   CHECK_THROWS_WITH_AS(a.upload(ctx, eleven), doctest::Contains("a [10]"), Error);
   CHECK_THROWS_AS(a.require_size(11, "test"), Error);
   const size_t too_big = static_cast<size_t>(ctx.device_info().max_alloc_bytes / sizeof(float)) + 1;
-  CHECK_THROWS_WITH_AS(ocl::DeviceArray<float>(ctx, too_big, "huge"), doctest::Contains("--batch-size"), Error);
+  CHECK_THROWS_WITH_AS(ocl::DeviceArray<float>(ctx, too_big, "huge"),
+                       doctest::Contains("lower batch_size or chunk_rays"), Error);
 }

@@ -68,6 +68,29 @@ add_test(NAME "cli: dataset inspect shows scales and the look-at centre" COMMAND
 set_tests_properties("cli: dataset inspect shows scales and the look-at centre" PROPERTIES FIXTURES_REQUIRED cli_scene
   PASS_REGULAR_EXPRESSION "scale 1 \\(/2\\): 3 images 8x8, focal x [0-9.]+ px, focal y [0-9.]+ px, lossmult 4.*look-at centre \\(closest to all optical axes\\): \\(0.000, 0.000, 0.000\\), in front of 6/6 cameras")
 
+# The forward-facing scene in the LLFF layout, trained as its data calls for (NDC, cylinders, black background), and
+# its spiral rendered.
+add_test(NAME "cli: make-scene --forward-facing writes an LLFF capture" COMMAND mipnerf-cl make-scene
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-llff" --forward-facing --size 64 --samples 1)
+set_tests_properties("cli: make-scene --forward-facing writes an LLFF capture" PROPERTIES FIXTURES_SETUP cli_llff
+  PASS_REGULAR_EXPRESSION "an LLFF capture of 20 views at 64x48 \\(images/, images_4/, poses_bounds.npy\\)")
+add_test(NAME "cli: train on an LLFF capture: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run")
+set_tests_properties("cli: train on an LLFF capture: clear the run folder" PROPERTIES FIXTURES_SETUP cli_llff_clean)
+add_test(NAME "cli: train on an LLFF capture chooses NDC, cylinders, black" COMMAND mipnerf-cl train
+  --data "${CMAKE_CURRENT_BINARY_DIR}/cli-llff" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run" --preset tiny --factor 4
+  --steps 4 --val_views 1)
+set_tests_properties("cli: train on an LLFF capture chooses NDC, cylinders, black" PROPERTIES
+  FIXTURES_REQUIRED "cli_llff;cli_llff_clean" FIXTURES_SETUP cli_llff_run ENVIRONMENT "${MIPNERF_TEST_ENV}"
+  PASS_REGULAR_EXPRESSION "scene: forward-facing LLFF → NDC rays, cylinders, black background.*trained 4 steps")
+add_test(NAME "cli: render --path spiral of an LLFF run" COMMAND mipnerf-cl render
+  --checkpoint "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run" --path spiral --frames 3)
+set_tests_properties("cli: render --path spiral of an LLFF run" PROPERTIES FIXTURES_REQUIRED cli_llff_run
+  ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "rendered 3 frames of the spiral of .*cli-llff \\(16x12\\)")
+mipnerf_add_cli_error_test("make-scene: a Blender option with --forward-facing" PATTERN "--views applies to the Blender scene, not --forward-facing"
+  ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --forward-facing --views 3)
+mipnerf_add_cli_error_test("make-scene: bad --grid" PATTERN "--grid '5by4': expected COLUMNSxROWS"
+  ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --forward-facing --grid 5by4)
+
 # Training (host/train, cli/cmd_train.cpp): bad settings are one line; a short run on the fixture scene trains,
 # writes its outputs, refuses to overwrite, and resumes.
 mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosuch'; the presets are: paper, quick, small, tiny"
@@ -201,7 +224,9 @@ mipnerf_add_cli_error_test("train: a batch beyond the device's memory" PATTERN "
   ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad" --preset tiny
        --batch_size 2147483647)
 set_tests_properties("cli: train: a batch beyond the device's memory" PROPERTIES FIXTURES_REQUIRED cli_scene)
-foreach(name "render: a chunk beyond the device's memory" "render: malformed camera path file" "render: camera path frame without a pose"
+mipnerf_add_cli_error_test("render: spiral of a Blender scene" PATTERN "--path spiral follows an LLFF capture's cameras"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path spiral)
+foreach(name "render: spiral of a Blender scene" "render: a chunk beyond the device's memory" "render: malformed camera path file" "render: camera path frame without a pose"
              "render: camera path without a size" "render: too many pixels" "render: elevation out of range"
              "render: unknown split" "eval: missing data")
   set_tests_properties("cli: ${name}" PROPERTIES FIXTURES_REQUIRED cli_render_model)

@@ -250,6 +250,10 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("gemm_backend") == "auto");
   CHECK(old.gemm_backend == mlp::GemmBackend::automatic);
   written.erase("gemm_backend");
+  // spherify (a scene setting for LLFF captures) too; without it a configuration loads with its default, false.
+  CHECK(written.at("spherify") == false);
+  CHECK(!old.spherify);
+  written.erase("spherify");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));

@@ -16,7 +16,9 @@
 #include "eval/metrics.hpp"
 #include "support/test_context.hpp"
 #include "train/checkpoint.hpp"
+#include "data/forward_facing.hpp"
 #include "train/model.hpp"
+#include "train/scene_effects.hpp"
 #include "train/trainer.hpp"
 #include "support/train_fixtures.hpp"
 
@@ -32,8 +34,8 @@ train::TrainConfig tiny(std::map<std::string, std::string> extra = {}, const std
 
 // Mean PSNR over the val split of the best constant image: every pixel the mean colour of the training
 // pixels. A model that learnt nothing about the scene's geometry can do no better than this.
-double constant_colour_val_psnr(const std::string& scene) {
-  const auto dataset = data::load_dataset(scene, {});
+double constant_colour_val_psnr(const std::string& scene, const data::LoadOptions& options = {}) {
+  const auto dataset = data::load_dataset(scene, options);
   const auto& train = dataset.split("train");
   double mean[3] = {0, 0, 0};
   for (uint64_t p = 0; p < train.num_pixels(); ++p) {
@@ -50,8 +52,9 @@ double constant_colour_val_psnr(const std::string& scene) {
   return sum / static_cast<double>(val.num_images());
 }
 
-eval::SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const std::string& scene) {
-  const auto dataset = data::load_dataset(scene, {});
+eval::SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const std::string& scene,
+                               const data::LoadOptions& options = {}) {
+  const auto dataset = data::load_dataset(scene, options);
   const auto& val = dataset.split("val");
   std::vector<mlp::Mlp*> networks;
   for (auto& n : trainer.networks()) networks.push_back(n.get());
@@ -295,6 +298,43 @@ TEST_CASE("train: every variant trains a few steps on multiscale data and render
     for (float d : image.depth) REQUIRE(std::isfinite(d));
     fs::remove_all(out);
   }
+}
+
+TEST_CASE("train: a forward-facing LLFF capture trains in NDC with cylinders and a black background, as its data calls for") {
+  auto& ctx = test::test_context();
+  const auto scene = test::fresh_temp_dir("llff-train");
+  data::ForwardFacingOptions capture;
+  capture.width_px = 128;  // images_4/: 32x24
+  capture.samples_per_axis = 2;
+  capture.threads = 2;
+  data::write_forward_facing_scene(scene.string(), capture);
+
+  const train::SceneEffects effects = train::scene_effects(scene.string(), 4);
+  std::string line;
+  auto settings = train::with_scene_effects(effects, {{"factor", "4"}, {"steps", "200"}, {"log_every", "50"}}, line);
+  CHECK(line == "scene: forward-facing LLFF → NDC rays, cylinders, black background");
+  auto config = train::resolve_config("tiny", "mipnerf", settings);
+  CHECK(config.ray_shape == RayShape::cylinder);
+  CHECK(config.background == Background::black);
+  // An explicit setting wins, and the line says so.
+  train::with_scene_effects(effects, {{"background", "white"}}, line);
+  CHECK(line.find("(given explicitly, kept: background = white)") != std::string::npos);
+
+  const std::string out = test::fresh_run_dir("llff");
+  train::Trainer trainer(ctx, config, scene.string(), out, false);
+  CHECK(trainer.spec().rays.ray_shape == RayShape::cylinder);  // compiled in: NDC rays, cylinders
+  const auto& camera = trainer.dataset().split("train").cameras[0];
+  CHECK(camera.near == 0.0);
+  CHECK(camera.far == 1.0);
+  trainer.run();
+  const auto val_options = train::load_options(config, scene.string(), {"val"});  // images_4/, NDC
+  const double learnt = evaluate_val(ctx, trainer, scene.string(), val_options).mean_psnr;
+  const double constant = constant_colour_val_psnr(scene.string(), train::load_options(config, scene.string(), {}));
+  MESSAGE("forward-facing capture, 200 tiny steps in NDC: val PSNR " << learnt << " dB; best constant colour "
+                                                                      << constant << " dB");
+  CHECK(learnt > constant + 2.0);  // learnt the geometry, not only the mean colour
+  fs::remove_all(out);
+  fs::remove_all(scene);
 }
 
 TEST_CASE("train: memory planning picks a chunk that fits, and says what to lower when nothing does") {

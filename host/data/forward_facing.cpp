@@ -1,0 +1,162 @@
+// The forward-facing scene: backdrop, camera grid, LLFF writer.
+#include "data/forward_facing.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "core/error.hpp"
+#include "data/image.hpp"
+#include "data/pose.hpp"
+#include "data/procedural.hpp"
+#include "io/file.hpp"
+#include "io/npy.hpp"
+#include "io/png.hpp"
+
+namespace mipnerf::data {
+namespace {
+
+constexpr double kWallY = 2.5;     // a wall behind the scene (the cameras look along +y)
+constexpr double kFloorZ = -0.7;   // a floor just under the procedural scene's slab
+constexpr double kCameraY = -4.0;  // the camera plane
+
+// The procedural scene, else the nearer of the wall (vertical stripes) and the floor (a coarse checker).
+SceneHit trace_with_backdrop(const Ray& ray) {
+  SceneHit hit = trace_procedural(ray);
+  if (hit.hit) return hit;
+  const auto& o = ray.origin_world;
+  const auto& d = ray.direction_world;
+  double best = 1e300;
+  auto consider = [&](double t, bool wall) {
+    if (!(t > 1e-9 && t < best)) return;
+    best = t;
+    const double x = o[0] + t * d[0], y = o[1] + t * d[1];
+    const bool odd = wall ? (static_cast<int>(std::floor(x / 0.35)) & 1) != 0
+                          : ((static_cast<int>(std::floor(x / 0.5)) ^ static_cast<int>(std::floor(y / 0.5))) & 1) != 0;
+    const double light = wall ? 0.8 : 0.65;
+    hit.hit = true;
+    hit.t = t;
+    hit.rgb = wall ? std::array<double, 3>{odd ? 0.55 * light : 0.85 * light, 0.5 * light, odd ? 0.35 * light : 0.6 * light}
+                   : std::array<double, 3>{odd ? 0.3 : 0.55, odd ? 0.28 : 0.5, odd ? 0.25 : 0.45};
+  };
+  if (d[1] > 0) consider((kWallY - o[1]) / d[1], true);
+  if (d[2] < 0) consider((kFloorZ - o[2]) / d[2], false);
+  return hit;
+}
+
+std::string image_name(size_t k) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "image%03zu.png", k);
+  return name;
+}
+
+void write_rgb_png(const std::string& path, const RgbaImage& image) {
+  std::vector<float> rgb(static_cast<size_t>(image.width) * image.height * 3);
+  for (size_t p = 0; p < rgb.size() / 3; ++p) {
+    for (int c = 0; c < 3; ++c) rgb[3 * p + c] = image.rgba[4 * p + c];
+  }
+  io::write_png(path, image.width, image.height, 3, rgb.data(), 8);
+}
+
+// Nearest and farthest depth the camera sees, over a 32 × 24 grid of rays (depth = t: the camera-frame direction
+// has z = −1), widened by 10 % as a capture's bounds from its sparse points would be.
+std::array<double, 2> depth_bounds(const Camera& camera) {
+  double nearest = 1e300, farthest = 0;
+  for (int j = 0; j < 24; ++j) {
+    for (int i = 0; i < 32; ++i) {
+      const SceneHit hit = trace_with_backdrop(
+          camera_ray(camera, (i + 0.5) * camera.width_px / 32.0, (j + 0.5) * camera.height_px / 24.0));
+      if (!hit.hit) continue;
+      nearest = std::min(nearest, hit.t);
+      farthest = std::max(farthest, hit.t);
+    }
+  }
+  return {0.9 * nearest, 1.1 * farthest};
+}
+
+}  // namespace
+
+void validate(const ForwardFacingOptions& o) {
+  const uint32_t divisor = 4 * std::max<uint32_t>(o.factor, 1);  // 4:3 images, then the factor
+  if (o.width_px < 8 || o.width_px > 4096 || o.width_px % divisor != 0) {
+    throw Error("make-scene --forward-facing: --size must be 8 to 4096 and divisible by " + std::to_string(divisor) +
+                " (4:3 images, downsampled by " + std::to_string(o.factor) + "), got " + std::to_string(o.width_px));
+  }
+  if (o.factor < 1 || o.factor > 16 || (o.factor & (o.factor - 1)) != 0) {
+    throw Error("make-scene --forward-facing: --factor must be a power of two from 1 to 16");
+  }
+  if (o.views_x < 2 || o.views_y < 2 || o.views_x * o.views_y > 400) {
+    throw Error("make-scene --forward-facing: the camera grid must be at least 2 x 2 and at most 400 views");
+  }
+  if (o.samples_per_axis < 1 || o.samples_per_axis > 64) throw Error("make-scene: --samples must be 1 to 64");
+}
+
+std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) {
+  validate(options);
+  std::vector<Camera> cameras;
+  const uint32_t height = options.width_px * 3 / 4;
+  for (uint32_t row = 0; row < options.views_y; ++row) {
+    for (uint32_t col = 0; col < options.views_x; ++col) {
+      // A hand-held grid: 1.2 wide, 0.6 high, axes converging gently on the wall.
+      const double x = -0.6 + 1.2 * col / (options.views_x - 1);
+      const double z = 1.1 - 0.6 * row / (options.views_y - 1);
+      Camera camera;
+      camera.camera_to_world = look_at_pose({x, kCameraY, z}, {0.5 * x, kWallY, 0.0}, {0, 0, 1});
+      camera.width_px = options.width_px;
+      camera.height_px = height;
+      camera.focal_x_px = camera.focal_y_px = 0.5 * options.width_px / std::tan(0.5 * options.camera_angle_x);
+      camera.center_x_px = 0.5 * options.width_px;
+      camera.center_y_px = 0.5 * height;
+      const auto bounds = depth_bounds(camera);
+      camera.near = bounds[0];
+      camera.far = bounds[1];
+      cameras.push_back(camera);
+    }
+  }
+  return cameras;
+}
+
+void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log) {
+  const auto cameras = forward_facing_cameras(options);
+  const std::string full = out_dir + "/images", reduced = out_dir + "/images_" + std::to_string(options.factor);
+  io::make_directories(full);
+  if (options.factor > 1) io::make_directories(reduced);
+  SceneOptions render;
+  render.seed = options.seed;
+  render.samples_per_axis = options.samples_per_axis;
+  const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t k = next++; k < cameras.size(); k = next++) {
+      RgbaImage image = render_traced(cameras[k], render, 0x46460000u + static_cast<uint32_t>(k), trace_with_backdrop);
+      write_rgb_png(full + "/" + image_name(k), image);
+      for (uint32_t f = 1; f < options.factor; f *= 2) image = downsample2(image);
+      if (options.factor > 1) write_rgb_png(reduced + "/" + image_name(k), image);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& thread : pool) thread.join();
+
+  // poses_bounds.npy: per view the 3×5 [down, right, backwards, position, (h, w, focal)] of LLFF, then near, far.
+  std::vector<double> rows;
+  for (const auto& camera : cameras) {
+    const auto& m = camera.camera_to_world;
+    const double hwf[3] = {static_cast<double>(camera.height_px), static_cast<double>(camera.width_px), camera.focal_x_px};
+    for (int r = 0; r < 3; ++r) {
+      for (double value : {-m[4 * r + 1], m[4 * r + 0], m[4 * r + 2], m[4 * r + 3], hwf[r]}) rows.push_back(value);
+    }
+    rows.push_back(camera.near);
+    rows.push_back(camera.far);
+  }
+  io::write_npy(out_dir + "/poses_bounds.npy", rows, {cameras.size(), 17});
+  if (log) {
+    log(LogLevel::info, "forward-facing scene: " + std::to_string(cameras.size()) + " views at " +
+                            std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +
+                            (options.factor > 1 ? " (and images_" + std::to_string(options.factor) + "/)" : ""));
+  }
+}
+
+}  // namespace mipnerf::data

@@ -1,0 +1,347 @@
+// LLFF captures: poses_bounds.npy, the official transformations, splits and the render path.
+#include "data/llff.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "core/error.hpp"
+#include "data/frames.hpp"
+#include "io/npy.hpp"
+
+namespace mipnerf::data {
+namespace fs = std::filesystem;
+namespace {
+
+// ---- Small rigid-transform algebra (3×4 row-major, as Camera) ----
+
+Vec3 add(Vec3 a, Vec3 b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+Vec3 sub(Vec3 a, Vec3 b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec3 scale(Vec3 a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
+double dot(Vec3 a, Vec3 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(Vec3 a, Vec3 b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
+Vec3 normalize(Vec3 a) { return scale(a, 1.0 / std::sqrt(dot(a, a))); }
+
+Vec3 column(const Matrix34& m, int c) { return {m[c], m[4 + c], m[8 + c]}; }
+Matrix34 from_columns(Vec3 c0, Vec3 c1, Vec3 c2, Vec3 position) {
+  return {c0[0], c1[0], c2[0], position[0], c0[1], c1[1], c2[1], position[1], c0[2], c1[2], c2[2], position[2]};
+}
+
+// The official viewmatrix: a frame whose z is `z`, x ⟂ (up, z), at `position`.
+Matrix34 view_matrix(Vec3 z, Vec3 up, Vec3 position) {
+  const Vec3 z_axis = normalize(z);
+  const Vec3 x_axis = normalize(cross(up, z_axis));
+  const Vec3 y_axis = normalize(cross(z_axis, x_axis));
+  return from_columns(x_axis, y_axis, z_axis, position);
+}
+
+// inverse(a) · b for a rigid `a` (orthonormal rotation): [Rᵀ | −Rᵀt] · b.
+Matrix34 inverse_times(const Matrix34& a, const Matrix34& b) {
+  Matrix34 out{};
+  const Vec3 t = column(a, 3);
+  for (int r = 0; r < 3; ++r) {
+    const Vec3 row = column(a, r);  // row r of Rᵀ is column r of R
+    for (int c = 0; c < 4; ++c) {
+      const Vec3 bc = column(b, c);
+      out[4 * r + c] = dot(row, c == 3 ? sub(bc, t) : bc);
+    }
+  }
+  return out;
+}
+
+// The official poses_avg: centre = mean position, z = normalised sum of z axes, up = sum of y axes.
+Matrix34 average_pose(const std::vector<Matrix34>& poses) {
+  Vec3 center{0, 0, 0}, z{0, 0, 0}, up{0, 0, 0};
+  for (const auto& p : poses) {
+    center = add(center, column(p, 3));
+    z = add(z, column(p, 2));
+    up = add(up, column(p, 1));
+  }
+  return view_matrix(z, up, scale(center, 1.0 / static_cast<double>(poses.size())));
+}
+
+// The official _generate_spherical_poses, the re-posing part: centre on the point nearest every optical axis, z
+// up along the mean offset of the cameras from it, unit mean distance. Bounds scale with the poses.
+void spherify(std::vector<Matrix34>& poses, std::vector<std::array<double, 2>>& bounds, const std::string& where) {
+  std::vector<Camera> cameras(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) cameras[i].camera_to_world = poses[i];
+  // The official solves with the cameras' +z axes (pointing backwards); the lines are the same.
+  const auto center = closest_point_to_axes(cameras);
+  if (!center) throw Error(where + ": spherify: the cameras' optical axes are parallel; a 360° capture looks inward");
+  Vec3 up{0, 0, 0};
+  for (const auto& p : poses) up = add(up, sub(column(p, 3), *center));
+  const Vec3 v0 = normalize(up);
+  const Vec3 v1 = normalize(cross({0.1, 0.2, 0.3}, v0));
+  const Vec3 v2 = normalize(cross(v0, v1));
+  const Matrix34 frame = from_columns(v1, v2, v0, *center);
+  double mean_square = 0;
+  for (auto& p : poses) {
+    p = inverse_times(frame, p);
+    mean_square += dot(column(p, 3), column(p, 3)) / static_cast<double>(poses.size());
+  }
+  const double s = 1.0 / std::sqrt(mean_square);
+  for (auto& p : poses) {
+    for (int r = 0; r < 3; ++r) p[4 * r + 3] *= s;
+  }
+  for (auto& b : bounds) b = {b[0] * s, b[1] * s};
+}
+
+bool is_image_file(const fs::path& path, bool& is_jpeg) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  is_jpeg = ext == ".jpg" || ext == ".jpeg";
+  return ext == ".png" || is_jpeg;
+}
+
+std::vector<std::string> list_images(const std::string& folder) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    bool is_jpeg = false;
+    if (!entry.is_regular_file() || !is_image_file(entry.path(), is_jpeg)) continue;
+    if (is_jpeg) {
+      throw Error(entry.path().string() + ": JPEG images are not read (PNG only); convert the folder to PNG (e.g. "
+                  "`mogrify -format png *.JPG`) and remove the JPEGs, or use images_<factor>/ if it holds PNGs");
+    }
+    files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// poses_bounds.npy: [N][17] = a 3×5 matrix per view (rotation columns down, right, backwards; position; h, w,
+// focal), then its near and far depth bounds.
+void read_poses_bounds(const std::string& file, LlffCapture& capture) {
+  const io::NpyArray array = io::read_npy(file);
+  if (array.shape.size() != 2 || array.shape[1] != 17 || array.shape[0] == 0) {
+    std::string shape;
+    for (size_t d : array.shape) shape += (shape.empty() ? "" : "x") + std::to_string(d);
+    throw Error(file + ": shape " + (shape.empty() ? "()" : shape) + "; expected N x 17 (a 3x5 pose and 2 bounds a view)");
+  }
+  for (size_t i = 0; i < array.shape[0]; ++i) {
+    const double* row = array.values.data() + 17 * i;
+    const std::string where = file + ": view " + std::to_string(i);
+    for (int k = 0; k < 17; ++k) {
+      if (!std::isfinite(row[k])) throw Error(where + ": value " + std::to_string(k) + " is not finite");
+    }
+    if (!(row[15] > 0) || !(row[16] > row[15])) {
+      throw Error(where + ": bounds near " + std::to_string(row[15]) + ", far " + std::to_string(row[16]) +
+                  ": need 0 < near < far");
+    }
+    if (!(row[4] >= 1) || !(row[9] >= 1) || !(row[14] > 0)) {
+      throw Error(where + ": h, w, focal = " + std::to_string(row[4]) + ", " + std::to_string(row[9]) + ", " +
+                  std::to_string(row[14]) + ": need a positive size and focal length");
+    }
+    // Columns: down, right, backwards → OpenGL's right (= old column 1), up (= −old column 0), backwards.
+    auto at = [row](int r, int c) { return row[5 * r + c]; };
+    Matrix34 pose;
+    for (int r = 0; r < 3; ++r) {
+      pose[4 * r + 0] = at(r, 1);
+      pose[4 * r + 1] = -at(r, 0);
+      pose[4 * r + 2] = at(r, 2);
+      pose[4 * r + 3] = at(r, 3);
+    }
+    check_rigid_pose(pose, where);
+    capture.camera_to_world.push_back(pose);
+    capture.bounds.push_back({row[15], row[16]});
+    if (i == 0) {
+      capture.height_px = static_cast<uint32_t>(std::lround(row[4]));
+      capture.width_px = static_cast<uint32_t>(std::lround(row[9]));
+      capture.focal_px = row[14];
+    }
+  }
+}
+
+}  // namespace
+
+bool is_llff_folder(const std::string& dir) {
+  std::error_code ec;
+  return fs::is_regular_file(fs::path(dir) / "poses_bounds.npy", ec);
+}
+
+LlffCapture read_llff(const std::string& dir, const LoadOptions& options) {
+  LlffCapture capture;
+  capture.dir = dir;
+  const std::string file = (fs::path(dir) / "poses_bounds.npy").string();
+  read_poses_bounds(file, capture);
+
+  // The official loader reads images_<factor>/ with focal / factor; without that folder we downsample images/.
+  const fs::path at_factor = fs::path(dir) / ("images_" + std::to_string(options.factor));
+  std::error_code ec;
+  if (options.factor > 1 && fs::is_directory(at_factor, ec)) {
+    capture.image_dir = at_factor.string();
+    capture.stored_factor = options.factor;
+    capture.focal_px /= options.factor;
+  } else {
+    capture.image_dir = (fs::path(dir) / "images").string();
+  }
+  if (!fs::is_directory(capture.image_dir, ec)) {
+    throw Error(dir + ": an LLFF capture without its images: expected " + capture.image_dir + "/");
+  }
+  capture.image_files = list_images(capture.image_dir);
+  if (capture.image_files.size() != capture.camera_to_world.size()) {
+    throw Error(capture.image_dir + ": " + std::to_string(capture.image_files.size()) + " images, but " + file +
+                " has " + std::to_string(capture.camera_to_world.size()) + " poses");
+  }
+
+  // bd_factor 0.75: the nearest bound becomes 1/0.75, so NDC's near plane at depth 1 lies in front of the scene.
+  double nearest = capture.bounds[0][0];
+  for (const auto& b : capture.bounds) nearest = std::min(nearest, b[0]);
+  const double s = 1.0 / (nearest * 0.75);
+  for (auto& pose : capture.camera_to_world) {
+    for (int r = 0; r < 3; ++r) pose[4 * r + 3] *= s;
+  }
+  for (auto& b : capture.bounds) b = {b[0] * s, b[1] * s};
+
+  const Matrix34 average = average_pose(capture.camera_to_world);
+  for (auto& pose : capture.camera_to_world) pose = inverse_times(average, pose);
+  capture.spherify = options.spherify;
+  if (capture.spherify) spherify(capture.camera_to_world, capture.bounds, file);
+  return capture;
+}
+
+bool looks_360(const LlffCapture& capture) {
+  Vec3 mean{0, 0, 0};
+  for (const auto& p : capture.camera_to_world) mean = add(mean, column(p, 2));
+  if (dot(mean, mean) < 1e-12) return true;
+  const Vec3 axis = normalize(mean);
+  for (const auto& p : capture.camera_to_world) {
+    if (dot(column(p, 2), axis) < std::cos(M_PI / 4)) return true;  // more than 45° off the mean: > 90° spread
+  }
+  return false;
+}
+
+namespace detail {
+
+std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& options) {
+  if (options.holdout_every < 0) throw Error("holdout_every must be >= 0");
+  const LlffCapture capture = read_llff(dir, options);
+  const std::string source = (fs::path(dir) / "poses_bounds.npy").string();
+  double near = 0.0, far = 1.0;  // NDC: the near plane to infinity
+  if (capture.spherify || !options.llff_ndc) {
+    // World rays between the scene's bounds (the original NeRF's choice for LLFF without NDC).
+    near = capture.bounds[0][0];
+    far = capture.bounds[0][1];
+    for (const auto& b : capture.bounds) {
+      near = std::min(near, b[0]);
+      far = std::max(far, b[1]);
+    }
+    near *= 0.9;
+  }
+  near = options.near.value_or(near);
+  far = options.far.value_or(far);
+  if (!(near >= 0.0) || !(far > near)) {
+    throw Error(source + ": near = " + std::to_string(near) + ", far = " + std::to_string(far) + ": need 0 <= near < far");
+  }
+  SplitSpec train{"train", source, true, {}}, test{"test", source, true, {}};
+  for (size_t i = 0; i < capture.image_files.size(); ++i) {
+    FrameSpec frame;
+    frame.image_path = capture.image_files[i];
+    frame.where = source + ": view " + std::to_string(i) + " (" + fs::path(frame.image_path).filename().string() + ")";
+    frame.camera_to_world = capture.camera_to_world[i];
+    frame.intrinsics.focal_x_px = capture.focal_px;
+    frame.intrinsics.focal_y_px = capture.focal_px;
+    frame.near = near;
+    frame.far = far;
+    frame.stored_factor = capture.stored_factor;
+    const bool held_out = options.holdout_every > 0 && i % static_cast<size_t>(options.holdout_every) == 0;
+    (held_out ? test : train).frames.push_back(frame);
+  }
+  // The official evaluates on the held-out views; they are also the val split `train` scores at its end.
+  SplitSpec val = test;
+  val.name = "val";
+  std::vector<SplitSpec> specs;
+  for (auto* spec : {&train, &val, &test}) {
+    const bool wanted = options.splits.empty() ||
+                        std::find(options.splits.begin(), options.splits.end(), spec->name) != options.splits.end();
+    if (wanted && !spec->frames.empty()) specs.push_back(std::move(*spec));
+  }
+  return specs;
+}
+
+}  // namespace detail
+
+std::vector<Camera> llff_render_path(const LlffCapture& capture, const LoadOptions& options, int frames) {
+  if (frames < 1) throw Error("the render path needs at least one frame");
+  std::vector<Matrix34> path;
+  if (!capture.spherify) {
+    // The official _generate_spiral_poses.
+    const Matrix34 average = average_pose(capture.camera_to_world);
+    Vec3 up{0, 0, 0};
+    double close = capture.bounds[0][0], far_depth = capture.bounds[0][1];
+    for (size_t i = 0; i < capture.camera_to_world.size(); ++i) {
+      up = add(up, column(capture.camera_to_world[i], 1));
+      close = std::min(close, capture.bounds[i][0]);
+      far_depth = std::max(far_depth, capture.bounds[i][1]);
+    }
+    up = normalize(up);
+    close *= 0.9;
+    far_depth *= 5.0;
+    const double dt = 0.75;
+    const double focus = 1.0 / ((1.0 - dt) / close + dt / far_depth);
+    // Radii: the 90th percentile of |position| per axis.
+    Vec3 radii{};
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> values;
+      for (const auto& p : capture.camera_to_world) values.push_back(std::abs(p[4 * axis + 3]));
+      std::sort(values.begin(), values.end());
+      const double rank = 0.9 * static_cast<double>(values.size() - 1);  // numpy's linear percentile
+      const size_t lo = static_cast<size_t>(std::floor(rank));
+      const size_t hi = std::min(lo + 1, values.size() - 1);
+      radii[axis] = values[lo] + (rank - static_cast<double>(lo)) * (values[hi] - values[lo]);
+    }
+    const double turns = 2.0, z_rate = 0.5;
+    auto transform = [&average](Vec3 p) {
+      return Vec3{dot({average[0], average[1], average[2]}, p) + average[3],
+                  dot({average[4], average[5], average[6]}, p) + average[7],
+                  dot({average[8], average[9], average[10]}, p) + average[11]};
+    };
+    for (int k = 0; k < frames; ++k) {
+      const double theta = 2.0 * M_PI * turns * k / frames;
+      const Vec3 c = transform({std::cos(theta) * radii[0], -std::sin(theta) * radii[1],
+                                -std::sin(theta * z_rate) * radii[2]});
+      const Vec3 z = normalize(sub(c, transform({0, 0, -focus})));
+      path.push_back(view_matrix(z, up, c));
+    }
+  } else {
+    // The official spherical path: a circle at the cameras' mean height, looking at the centre.
+    Vec3 centroid{0, 0, 0};
+    double mean_square = 0;
+    for (const auto& p : capture.camera_to_world) {
+      centroid = add(centroid, scale(column(p, 3), 1.0 / static_cast<double>(capture.camera_to_world.size())));
+      mean_square += dot(column(p, 3), column(p, 3)) / static_cast<double>(capture.camera_to_world.size());
+    }
+    const double height = centroid[2];
+    const double radius = std::sqrt(std::max(mean_square - height * height, 0.0));
+    for (int k = 0; k < frames; ++k) {
+      const double theta = 2.0 * M_PI * k / frames;
+      const Vec3 origin{radius * std::cos(theta), radius * std::sin(theta), height};
+      const Vec3 z = normalize(origin);
+      const Vec3 x = normalize(cross(z, {0, 0, -1}));
+      path.push_back(from_columns(x, normalize(cross(z, x)), z, origin));
+    }
+  }
+  // Cameras as the loader makes them: the stored images' size and focal length, its near/far.
+  LoadOptions one = options;
+  one.splits = {"train"};
+  one.holdout_every = 0;
+  const auto specs = detail::parse_llff(capture.dir, one);
+  std::vector<Camera> cameras;
+  const detail::FrameSpec& frame = specs.at(0).frames.at(0);
+  const uint32_t factor = std::max<uint32_t>(1, options.factor / capture.stored_factor);
+  for (const auto& pose : path) {
+    Camera camera;
+    camera.camera_to_world = pose;
+    camera.width_px = capture.width_px / capture.stored_factor / factor;
+    camera.height_px = capture.height_px / capture.stored_factor / factor;
+    camera.focal_x_px = camera.focal_y_px = capture.focal_px / factor;
+    camera.center_x_px = camera.width_px / 2.0;
+    camera.center_y_px = camera.height_px / 2.0;
+    camera.near = frame.near;
+    camera.far = frame.far;
+    cameras.push_back(camera);
+  }
+  return cameras;
+}
+
+}  // namespace mipnerf::data

@@ -1,0 +1,29 @@
+// The effects a scene calls for, from its data rather than from the user: a forward-facing LLFF capture gets NDC
+// rays cast as cylinders and a black background, a 360° capture spherified poses and cones, rendered objects with
+// alpha a white background, photos a black one, multiscale data the area-weighted loss. Settings given explicitly
+// (config file, flags, --set) still win. Each effect is a compile-time option of the kernels, so a scene pays only
+// for what it uses.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "train/config.hpp"
+
+namespace mipnerf::train {
+
+struct SceneEffects {
+  std::map<std::string, std::string> settings;  // setting name → value the data calls for
+  std::string summary;                          // "forward-facing LLFF → NDC rays, cylinders, black background"
+};
+
+// What the dataset at `data_path` calls for (`factor` picks an LLFF capture's images_<factor>/).
+SceneEffects scene_effects(const std::string& data_path, int factor);
+
+// `explicit_settings` with the effects added where the user gave no value; `line` becomes the one line `train`
+// prints and config.json records ("scene: …", with any effect an explicit setting overrode).
+std::map<std::string, std::string> with_scene_effects(const SceneEffects& effects,
+                                                      std::map<std::string, std::string> explicit_settings,
+                                                      std::string& line);
+
+}  // namespace mipnerf::train

@@ -1,0 +1,256 @@
+// LLFF captures (data/llff.hpp, io/npy.hpp) on the forward-facing built-in scene (data/forward_facing.hpp): the
+// official transformations against the cameras that rendered it, splits, factors, NDC or world bounds, the render
+// path, the .npy reader's errors, and malformed captures as one line each.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "data/dataset.hpp"
+#include "data/forward_facing.hpp"
+#include "data/llff.hpp"
+#include "data/scene_traits.hpp"
+#include "io/npy.hpp"
+#include "support/temp_scene.hpp"
+
+using namespace mipnerf;
+namespace fs = std::filesystem;
+
+namespace {
+
+data::ForwardFacingOptions small_capture() {
+  data::ForwardFacingOptions options;
+  options.width_px = 64;  // images/ 64x48, images_4/ 16x12
+  options.samples_per_axis = 1;
+  options.threads = 2;
+  return options;
+}
+
+// The capture written once per test process.
+const std::string& capture_dir() {
+  static const std::string dir = [] {
+    const auto path = test::fresh_temp_dir("llff");
+    data::write_forward_facing_scene(path.string(), small_capture());
+    return path.string();
+  }();
+  return dir;
+}
+
+// A copy of the capture to damage.
+fs::path copy_of_capture(const std::string& name) {
+  const auto dir = test::fresh_temp_dir(name);
+  fs::copy(capture_dir(), dir, fs::copy_options::recursive);
+  return dir;
+}
+
+using data::Matrix34;
+// (R_aᵀ R_b)[r][c]: b's rotation seen from camera a, which a rigid motion of the world leaves unchanged.
+double rotation_product(const Matrix34& a, const Matrix34& b, int r, int c) {
+  return a[r] * b[c] + a[4 + r] * b[4 + c] + a[8 + r] * b[8 + c];
+}
+double distance(const Matrix34& a, const Matrix34& b) {
+  return std::hypot(a[3] - b[3], a[7] - b[7], a[11] - b[11]);
+}
+
+}  // namespace
+
+TEST_CASE("npy: float64 arrays round-trip, and malformed files are one line naming them") {
+  const std::vector<double> values = {1.5, -2.0, 3.25, 1e300, -0.0, 7.0};
+  const std::string bytes = io::npy_bytes(values, {2, 3});
+  CHECK((bytes.size() - values.size() * 8) % 64 == 0);  // the data starts on a 64-byte boundary, as numpy's
+  const io::NpyArray back = io::parse_npy(bytes, "a.npy");
+  CHECK(back.shape == std::vector<size_t>{2, 3});
+  CHECK(back.values == values);
+  // float32 and a version-2 header (4-byte length), written by hand.
+  std::string header = "{'shape': (2,), 'fortran_order': False, 'descr': '<f4'}";
+  std::string v2 = std::string("\x93NUMPY\x02\x00", 8);
+  for (int i = 0; i < 4; ++i) v2 += static_cast<char>((header.size() >> (8 * i)) & 0xff);
+  v2 += header;
+  const float f[2] = {0.5f, -4.0f};
+  v2.append(reinterpret_cast<const char*>(f), sizeof(f));
+  CHECK(io::parse_npy(v2, "b.npy").values == std::vector<double>{0.5, -4.0});
+
+  auto with_header = [](const std::string& dict, size_t data_bytes) {
+    std::string b = std::string("\x93NUMPY\x01\x00", 8);
+    b += static_cast<char>(dict.size() & 0xff);
+    b += static_cast<char>(dict.size() >> 8);
+    return b + dict + std::string(data_bytes, '\0');
+  };
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"PK\x03\x04 a zip file", "not a .npy file"},
+      {with_header("{'descr': '<i4', 'fortran_order': False, 'shape': (2,), }", 8), "dtype '<i4'"},
+      {with_header("{'descr': '>f8', 'fortran_order': False, 'shape': (2,), }", 16), "dtype '>f8'"},
+      {with_header("{'descr': '<f8', 'fortran_order': True, 'shape': (2, 2), }", 32), "Fortran-order"},
+      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (3, 17), }", 8 * 60), "480 bytes of data where its shape needs 408"},
+      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999, 99999999999), }", 8),
+       "needs more data"},
+      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (2,), 'extra': 1}", 16), "unknown key 'extra'"},
+      {with_header("{'descr': '<f8', 'shape': (2,)}", 16), "needs the keys"},
+      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (2,", 16), "malformed .npy header"},
+      {with_header("{'descr': '<f8', 'fortran_order': Maybe, 'shape': (2,)}", 16), "expected True or False"},
+      {bytes.substr(0, 9), "truncated"},
+      {std::string("\x93NUMPY\x07\x00", 8) + "xx", "version 7"},
+  };
+  for (const auto& [file, message] : bad) {
+    CHECK_THROWS_WITH_AS(io::parse_npy(file, "bad.npy"), doctest::Contains(message.c_str()), Error);
+  }
+}
+
+TEST_CASE("llff: the official transformations keep the capture's geometry, scaled so the nearest bound is 1/0.75") {
+  const auto known = data::forward_facing_cameras(small_capture());
+  data::LoadOptions options;
+  options.factor = 4;
+  const data::LlffCapture capture = data::read_llff(capture_dir(), options);
+  REQUIRE(capture.camera_to_world.size() == known.size());
+  CHECK(capture.stored_factor == 4);
+  CHECK(capture.image_dir == (fs::path(capture_dir()) / "images_4").string());
+  CHECK(capture.focal_px == doctest::Approx(known[0].focal_x_px / 4).epsilon(1e-12));
+  double nearest = 1e300, known_nearest = 1e300;
+  for (size_t i = 0; i < known.size(); ++i) {
+    nearest = std::min(nearest, capture.bounds[i][0]);
+    known_nearest = std::min(known_nearest, known[i].near);
+  }
+  CHECK(nearest == doctest::Approx(1.0 / 0.75).epsilon(1e-12));
+  const double scale = 1.0 / (known_nearest * 0.75);
+  // Recentred: the mean position is the origin, the summed viewing axes point along z.
+  double mean[3] = {0, 0, 0}, axis[3] = {0, 0, 0};
+  for (const auto& pose : capture.camera_to_world) {
+    for (int r = 0; r < 3; ++r) {
+      mean[r] += pose[4 * r + 3] / static_cast<double>(known.size());
+      axis[r] += pose[4 * r + 2];
+    }
+  }
+  for (double m : mean) CHECK(m == doctest::Approx(0.0).scale(1.0));
+  CHECK(axis[0] == doctest::Approx(0.0).scale(1.0));
+  CHECK(axis[1] == doctest::Approx(0.0).scale(1.0));
+  CHECK(axis[2] > 0.99 * static_cast<double>(known.size()));
+  // One rigid motion and one scale map the rendering cameras onto the loaded ones: relative rotations are equal,
+  // distances between camera centres scale by 1 / (0.75 · nearest bound).
+  for (size_t i = 0; i < known.size(); ++i) {
+    for (size_t j = 0; j < known.size(); j += 7) {
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          CHECK(rotation_product(capture.camera_to_world[i], capture.camera_to_world[j], r, c) ==
+                doctest::Approx(rotation_product(known[i].camera_to_world, known[j].camera_to_world, r, c)).scale(1.0));
+        }
+      }
+      CHECK(distance(capture.camera_to_world[i], capture.camera_to_world[j]) ==
+            doctest::Approx(scale * distance(known[i].camera_to_world, known[j].camera_to_world)).scale(1.0));
+    }
+  }
+  CHECK(!data::looks_360(capture));
+}
+
+TEST_CASE("llff: every 8th view is held out as test (and val), NDC bounds, factors from images_<factor> or downsampled") {
+  data::LoadOptions options;
+  options.factor = 4;
+  const data::Dataset dataset = data::load_dataset(capture_dir(), options);
+  CHECK(dataset.format == data::DatasetFormat::llff);
+  REQUIRE(dataset.has_split("train"));
+  CHECK(dataset.split("train").num_images() == 17);
+  CHECK(dataset.split("test").num_images() == 3);  // views 0, 8, 16
+  CHECK(dataset.split("val").num_images() == 3);
+  CHECK(dataset.split("test").files[1].find("image008.png") != std::string::npos);
+  const Camera& camera = dataset.split("train").cameras[0];
+  CHECK(camera.width_px == 16);
+  CHECK(camera.height_px == 12);
+  CHECK(camera.center_x_px == 8.0);
+  CHECK(camera.near == 0.0);
+  CHECK(camera.far == 1.0);
+
+  // Factor 2 has no images_2/: images/ downsampled on load, with the focal length halved.
+  options.factor = 2;
+  const data::Dataset halved = data::load_dataset(capture_dir(), options);
+  const data::LlffCapture full = data::read_llff(capture_dir(), data::LoadOptions{});
+  CHECK(halved.split("train").cameras[0].width_px == 32);
+  CHECK(halved.split("train").cameras[0].focal_x_px == doctest::Approx(full.focal_px / 2).epsilon(1e-12));
+
+  // World rays (cones) instead of NDC: the rescaled bounds.
+  options.llff_ndc = false;
+  const data::Dataset world = data::load_dataset(capture_dir(), options);
+  CHECK(world.split("train").cameras[0].near > 1.0);
+  CHECK(world.split("train").cameras[0].far > world.split("train").cameras[0].near);
+  options.holdout_every = 0;
+  CHECK(!data::load_dataset(capture_dir(), options).has_split("test"));
+
+  const auto traits = data::scene_traits(capture_dir(), data::LoadOptions{});
+  CHECK(traits.format == data::DatasetFormat::llff);
+  CHECK(!traits.llff_360);
+  CHECK(!traits.has_alpha);
+}
+
+TEST_CASE("llff: the spiral render path circles the capture's average view, looking forward") {
+  data::LoadOptions options;
+  options.factor = 4;
+  const data::LlffCapture capture = data::read_llff(capture_dir(), options);
+  const auto path = data::llff_render_path(capture, options, 12);
+  REQUIRE(path.size() == 12);
+  double largest = 0;
+  for (const auto& pose : capture.camera_to_world) largest = std::max({largest, std::abs(pose[3]), std::abs(pose[7])});
+  for (const Camera& camera : path) {
+    CHECK(camera.width_px == 16);
+    CHECK(camera.near == 0.0);
+    CHECK(camera.camera_to_world[10] > 0.95);  // its z axis (backwards) close to the average's
+    CHECK(std::abs(camera.camera_to_world[3]) <= largest * 1.01);
+  }
+  CHECK(path[0].camera_to_world[3] != doctest::Approx(path[3].camera_to_world[3]));
+  CHECK_THROWS_WITH_AS(data::llff_render_path(capture, options, 0), doctest::Contains("at least one frame"), Error);
+}
+
+TEST_CASE("llff: malformed captures give one line naming the file") {
+  auto expect = [](const fs::path& dir, const std::string& message) {
+    data::LoadOptions options;
+    options.factor = 4;
+    CHECK_THROWS_WITH_AS(data::load_dataset(dir.string(), options), doctest::Contains(message.c_str()), Error);
+  };
+  const io::NpyArray good = io::read_npy(capture_dir() + "/poses_bounds.npy");
+  {
+    const auto dir = copy_of_capture("llff-shape");
+    io::write_npy((dir / "poses_bounds.npy").string(), std::vector<double>(20 * 16, 1.0), {20, 16});
+    expect(dir, "poses_bounds.npy: shape 20x16; expected N x 17");
+  }
+  {
+    const auto dir = copy_of_capture("llff-nan");
+    auto values = good.values;
+    values[17 * 3 + 5] = std::nan("");
+    io::write_npy((dir / "poses_bounds.npy").string(), values, good.shape);
+    expect(dir, "poses_bounds.npy: view 3: value 5 is not finite");
+  }
+  {
+    const auto dir = copy_of_capture("llff-bounds");
+    auto values = good.values;
+    values[17 * 2 + 15] = -1.0;
+    io::write_npy((dir / "poses_bounds.npy").string(), values, good.shape);
+    expect(dir, "view 2: bounds near -1");
+  }
+  {
+    const auto dir = copy_of_capture("llff-scaled");
+    auto values = good.values;
+    for (int k : {0, 1, 2}) values[k] *= 2.0;  // a non-rigid rotation
+    io::write_npy((dir / "poses_bounds.npy").string(), values, good.shape);
+    expect(dir, "view 0");
+  }
+  {
+    const auto dir = copy_of_capture("llff-count");
+    fs::remove(dir / "images_4" / "image019.png");
+    expect(dir, "19 images, but");
+  }
+  {
+    const auto dir = copy_of_capture("llff-jpeg");
+    std::ofstream(dir / "images_4" / "image020.JPG") << "jpeg";
+    expect(dir, "image020.JPG: JPEG images are not read");
+  }
+  {
+    const auto dir = copy_of_capture("llff-noimages");
+    fs::remove_all(dir / "images_4");
+    fs::remove_all(dir / "images");
+    expect(dir, "an LLFF capture without its images");
+  }
+  {
+    const auto dir = copy_of_capture("llff-notnpy");
+    std::ofstream(dir / "poses_bounds.npy", std::ios::trunc) << "not numpy";
+    expect(dir, "poses_bounds.npy: not a .npy file");
+  }
+}
