@@ -17,6 +17,7 @@
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"
 #include "mlp/gemm_tuning.hpp"
+#include "train/config_file.hpp"
 #include "train/scene_effects.hpp"
 #include "progress.hpp"
 
@@ -42,38 +43,10 @@ extern "C" void on_interrupt(int) {
   if (g_stop_requested.exchange(true)) _exit(130);  // a second Ctrl-C stops at once
 }
 
-// Settings from a TOML/INI file (CLI11's parser): `name = value` at the top level or in a [train] table.
-std::map<std::string, std::string> config_file_settings(const std::string& path) {
-  std::vector<CLI::ConfigItem> items;
-  try {
-    items = CLI::ConfigTOML().from_file(path);
-  } catch (const CLI::Error& e) {
-    throw Error("--config " + path + ": " + e.what());
-  }
-  std::map<std::string, std::string> out;
-  for (const auto& item : items) {
-    if (item.name == "++" || item.name == "--") continue;  // CLI11's section markers
-    const bool in_train = item.parents.size() == 1 && item.parents[0] == "train";
-    if (!item.parents.empty() && !in_train) {
-      throw Error("--config " + path + ": '" + item.fullname() + "' is outside a [train] table");
-    }
-    std::string value;
-    for (const auto& input : item.inputs) value += (value.empty() ? "" : ",") + input;
-    try {
-      train::TrainConfig probe;
-      train::set_value(probe, item.name, value);  // unknown names and bad values are refused here, by file
-    } catch (const Error& e) {
-      throw Error("--config " + path + ": " + e.what());
-    }
-    out[item.name] = value;
-  }
-  return out;
-}
-
 // The settings given explicitly: the config file, then flags, then --set (later ones win).
 std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI::App& cmd) {
   std::map<std::string, std::string> out;
-  if (!args.config_file.empty()) out = config_file_settings(args.config_file);
+  if (!args.config_file.empty()) out = train::read_config_file(args.config_file, "--config " + args.config_file);
   for (const auto& s : train::settings()) {
     auto* option = cmd.get_option_no_throw("--" + s.name);
     if (option != nullptr && option->count() > 0) out[s.name] = option->as<std::string>();

@@ -11,6 +11,7 @@ packages=(
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev libjpeg-dev zlib1g-dev
   libopenblas-dev   # the GEMM benchmark's CPU BLAS only
+  clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
   "$@"
 )
 

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The test command of the README and of CI: install dependencies, build, run the whole suite on every OpenCL
-# implementation we test on (PoCL, then Intel's CPU runtime when it can be installed); fails if any run fails.
+# implementation we test on (PoCL, then Intel's CPU runtime when it can be installed) and once more built with
+# AddressSanitizer + UBSan together with the fuzz targets; fails if any run fails. SANITIZE=0 leaves out the
+# sanitizer build (the plain runs alone).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
@@ -13,7 +15,13 @@ jobs="${JOBS:-$(nproc)}"
 echo "test: the whole suite on PoCL's CPU device, and the kernel tests under oclgrind"
 ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
 
-# 2. Intel's CPU OpenCL runtime, a second, independent implementation (installed into a cache folder from PyPI).
+# 2. The sanitizer build (its own build folder, clang++): the suite under AddressSanitizer + UBSan on PoCL, but the
+#    oclgrind tests (run above), and each fuzz target for 20 s (label `fuzz`). scripts/test-sanitize.sh.
+if [ "${SANITIZE:-1}" != 0 ]; then
+  ./scripts/test-sanitize.sh
+fi
+
+# 3. Intel's CPU OpenCL runtime, a second, independent implementation (installed into a cache folder from PyPI).
 #    MIPNERF_TEST_DEVICE picks the tests' device, MIPNERF_DEVICE the executable's (the CLI tests).
 if environment="$(./scripts/install-intel-opencl.sh)"; then
   eval "$environment"

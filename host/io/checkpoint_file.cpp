@@ -77,7 +77,7 @@ void read_tensors(std::string_view bytes, size_t& at, size_t end, bool check_crc
       throw Error(where + ": truncated or corrupt checkpoint: tensor '" + name->get<std::string>() + "' runs past the end");
     }
     std::vector<float> values(n);
-    std::memcpy(values.data(), bytes.data() + at, n * sizeof(float));
+    if (n > 0) std::memcpy(values.data(), bytes.data() + at, n * sizeof(float));  // an empty vector's data() may be null
     at += n * sizeof(float);
     if (check_crc) {
       const auto crc = entry.find("crc32");

@@ -82,15 +82,31 @@ struct Header {
   int bit_depth = 0;
   bool has_alpha = false;
   size_t row_bytes = 0;
+  uint64_t stored_bytes = 0;  // the pixels as the file stores them, before expansion (without filter bytes)
 };
+
+// The ancillary chunks we never use (colour management, text, metadata; the pixels are taken as stored). libpng
+// would read each into a buffer of the length its chunk header declares, up to 2 GiB from 12 bytes of input,
+// before checking anything: they are skipped unread instead. Entries of 5 bytes: 4 letters and a NUL.
+constexpr png_byte kSkippedChunks[] =
+    "bKGD\0cHRM\0eXIf\0gAMA\0hIST\0iCCP\0iTXt\0oFFs\0pCAL\0pHYs\0sBIT\0sCAL\0sPLT\0sRGB\0sTER\0tEXt\0tIME\0zTXt";
+constexpr int kSkippedChunkCount = sizeof(kSkippedChunks) / 5;
+// What a chunk we do read (PLTE, tRNS) may allocate: both hold at most 256 entries.
+constexpr png_alloc_size_t kChunkMallocMax = 1 << 16;
 
 // Reads the header and sets the transformations that give 8- or 16-bit RGBA. False on a libpng error.
 bool decode_header(png_structp png, png_infop info, Header* header) {
   if (setjmp(png_jmpbuf(png))) return false;
   // Large but sane limits: a corrupt header must not make us allocate gigabytes.
   png_set_user_limits(png, 1u << 15, 1u << 15);
+  png_set_chunk_malloc_max(png, kChunkMallocMax);
+  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, nullptr, 0);  // unknown chunks: skipped
+  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, kSkippedChunks, kSkippedChunkCount);
   png_read_info(png, info);
   const int color_type = png_get_color_type(png, info);
+  const uint64_t bits_per_row = static_cast<uint64_t>(png_get_image_width(png, info)) *
+                                png_get_channels(png, info) * png_get_bit_depth(png, info);
+  header->stored_bytes = png_get_image_height(png, info) * ((bits_per_row + 7) / 8);
   header->bit_depth = png_get_bit_depth(png, info) == 16 ? 16 : 8;
   header->has_alpha = (color_type & PNG_COLOR_MASK_ALPHA) != 0 || png_get_valid(png, info, PNG_INFO_tRNS) != 0;
   png_set_expand(png);  // palette → RGB, grey < 8 bit → 8 bit, tRNS → alpha
@@ -162,6 +178,13 @@ PngImage decode_png(const unsigned char* bytes, size_t size, const std::string& 
 
   Header header;
   if (!decode_header(guard.png, guard.info, &header)) throw unreadable(name, io.message);
+  // Deflate expands at most 1032:1 (zlib's FAQ), so a header whose pixels could not fit in the whole file compressed
+  // belongs to a truncated or corrupt file: refused before allocating for them (up to 8 GiB at 32768x32768).
+  if (header.stored_bytes > 1032 * static_cast<uint64_t>(size) + 1024) {
+    throw unreadable(name, "the header's " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                               " pixels cannot be stored in " + std::to_string(size) +
+                               " bytes: the file is truncated or corrupt");
+  }
   const size_t bytes_per_sample = header.bit_depth / 8;
   if (header.row_bytes != static_cast<size_t>(header.width) * 4 * bytes_per_sample) {
     throw unreadable(name, "unexpected row size after expansion to RGBA");

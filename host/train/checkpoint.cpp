@@ -2,11 +2,14 @@
 #include "train/checkpoint.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 
 #include "core/error.hpp"
+#include "io/json.hpp"
 #include "train/model.hpp"
 
 namespace mipnerf::train {
@@ -32,22 +35,60 @@ constexpr const char* adam_steps = "adam_steps";  // one per network, in order
 
 std::string tensor_name(size_t network, const char* what) { return "network" + std::to_string(network) + "." + what; }
 
-// Reads `path` and checks that the trainer wrote it.
-io::CheckpointFile read_training_checkpoint(const std::string& path) {
-  io::CheckpointFile c = io::read_checkpoint_file(path);
-  if (c.header.value(key::format, "") != kFormat) throw Error(path + ": not a training checkpoint");
-  return c;
-}
+// Typed reading of a header's keys: a missing key takes the default where there is one; a value of the wrong type
+// (or a negative count) names the file and the key, instead of escaping as a JSON library exception.
+class HeaderReader {
+ public:
+  HeaderReader(const nlohmann::json& header, const std::string& where) : header_(header), where_(where) {}
 
-CheckpointRecord record_of(const io::CheckpointFile& c) {
-  CheckpointRecord r;
-  r.step = c.header.at(key::step).get<int64_t>();
-  r.train_seconds = c.header.value(key::train_seconds, 0.0);
-  r.multiscale_data = c.header.value(key::multiscale_data, false);
-  r.device = c.header.value(key::device, "");
-  r.data_path = c.header.value(key::data, "");
-  return r;
-}
+  const nlohmann::json* find(const char* key) const {
+    if (!header_.is_object()) return nullptr;
+    const auto it = header_.find(key);
+    return it == header_.end() || it->is_null() ? nullptr : &*it;
+  }
+  const nlohmann::json& required(const char* key) const {
+    const nlohmann::json* value = find(key);
+    if (value == nullptr) throw Error(where_ + ": corrupt training checkpoint: its header has no '" + key + "'");
+    return *value;
+  }
+  // A count (step, Adam steps): an integer from 0 to 2^63 - 1.
+  int64_t count(const nlohmann::json& value, const std::string& what) const {
+    if (value.is_number_unsigned() && value.get<uint64_t>() <= static_cast<uint64_t>(INT64_MAX)) {
+      return static_cast<int64_t>(value.get<uint64_t>());
+    }
+    if (value.is_number_integer() && value.get<int64_t>() >= 0) return value.get<int64_t>();
+    throw Error(where_ + ": corrupt training checkpoint: '" + what + "' must be a count (an integer >= 0), got " +
+                value.dump());
+  }
+  double seconds(const char* key) const {
+    const nlohmann::json* value = find(key);
+    if (value == nullptr) return 0.0;
+    if (!value->is_number() || !(value->get<double>() >= 0.0) || !std::isfinite(value->get<double>())) {
+      throw Error(where_ + ": corrupt training checkpoint: '" + key + "' must be a number of seconds >= 0");
+    }
+    return value->get<double>();
+  }
+  bool flag(const char* key) const {
+    const nlohmann::json* value = find(key);
+    if (value != nullptr && !value->is_boolean()) {
+      throw Error(where_ + ": corrupt training checkpoint: '" + key + "' must be true or false, got " +
+                  io::json_type_name(*value));
+    }
+    return value != nullptr && value->get<bool>();
+  }
+  std::string text(const char* key) const {
+    const nlohmann::json* value = find(key);
+    if (value != nullptr && !value->is_string()) {
+      throw Error(where_ + ": corrupt training checkpoint: '" + key + "' must be a string, got " +
+                  io::json_type_name(*value));
+    }
+    return value != nullptr ? value->get<std::string>() : std::string();
+  }
+
+ private:
+  const nlohmann::json& header_;
+  const std::string& where_;
+};
 
 // Settings that may change between a run and its resume without changing what is learnt.
 bool is_execution_setting(const std::string& difference) {
@@ -143,6 +184,27 @@ VerifiedCheckpoint newest_verified_checkpoint(const std::string& folder) {
 
 // ---- A training run's state ----
 
+CheckpointHeader read_checkpoint_header(const io::CheckpointFile& c, const std::string& where) {
+  const HeaderReader read(c.header, where);
+  const nlohmann::json* format = read.find(key::format);
+  if (format == nullptr || !format->is_string() || format->get<std::string>() != kFormat) {
+    throw Error(where + ": not a training checkpoint (its header's '" + key::format + "' is not '" + kFormat + "')");
+  }
+  CheckpointHeader h;
+  h.record.step = read.count(read.required(key::step), key::step);
+  h.record.train_seconds = read.seconds(key::train_seconds);
+  h.record.multiscale_data = read.flag(key::multiscale_data);
+  h.record.device = read.text(key::device);
+  h.record.data_path = read.text(key::data);
+  h.config = config_from_json(read.required(key::config), where);
+  // Only --resume needs the Adam steps (restore_training_checkpoint checks there is one per network).
+  if (const nlohmann::json* steps = read.find(key::adam_steps)) {
+    if (!steps->is_array()) throw Error(where + ": corrupt training checkpoint: '" + key::adam_steps + "' must be an array");
+    for (const auto& step : *steps) h.adam_steps.push_back(read.count(step, key::adam_steps));
+  }
+  return h;
+}
+
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
                               const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
                               const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
@@ -170,18 +232,22 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
                                              std::vector<std::unique_ptr<mlp::Mlp>>& networks,
                                              std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log) {
-  const io::CheckpointFile c = read_training_checkpoint(path);
-  check_resumable(config_from_json(c.header.at(key::config), path), config, log);
-  const auto& adam_steps = c.header.at(key::adam_steps);
+  const io::CheckpointFile c = io::read_checkpoint_file(path);
+  const CheckpointHeader header = read_checkpoint_header(c, path);
+  check_resumable(header.config, config, log);
+  if (header.adam_steps.size() != networks.size()) {
+    throw Error(path + ": corrupt training checkpoint: " + std::to_string(header.adam_steps.size()) +
+                " Adam step counts for " + std::to_string(networks.size()) + " networks");
+  }
   for (size_t i = 0; i < networks.size(); ++i) {
     networks[i]->upload_params(c.tensor(tensor_name(i, "params"), path));
     mlp::AdamState state;
-    state.step = adam_steps.at(i).get<int64_t>();
+    state.step = header.adam_steps[i];
     state.m = c.tensor(tensor_name(i, "adam_m"), path);
     state.v = c.tensor(tensor_name(i, "adam_v"), path);
     optimisers[i]->restore(state);
   }
-  return record_of(c);
+  return header.record;
 }
 
 // ---- Trained networks, for rendering ----
@@ -189,10 +255,11 @@ CheckpointRecord restore_training_checkpoint(const std::string& path, const Trai
 std::vector<mlp::Mlp*> TrainedModel::network_pointers() const { return train::network_pointers(networks); }
 
 TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path) {
-  const io::CheckpointFile c = read_training_checkpoint(checkpoint_path);
-  const CheckpointRecord record = record_of(c);
+  const io::CheckpointFile c = io::read_checkpoint_file(checkpoint_path);
+  const CheckpointHeader header = read_checkpoint_header(c, checkpoint_path);
+  const CheckpointRecord& record = header.record;
   TrainedModel model;
-  model.config = config_from_json(c.header.at(key::config), checkpoint_path);
+  model.config = header.config;
   model.spec = make_graph_spec(model.config, record.multiscale_data);
   model.networks = make_networks(ctx, model.spec);
   for (size_t i = 0; i < model.networks.size(); ++i) {

@@ -51,6 +51,17 @@ struct CheckpointRecord {
   std::string data_path;         // the training data's folder or file (absolute); empty in older checkpoints
 };
 
+// What a training checkpoint's header holds, read without a device: the record, the configuration it was trained
+// with, and the Adam step count of each network.
+struct CheckpointHeader {
+  CheckpointRecord record;
+  TrainConfig config;
+  std::vector<int64_t> adam_steps;  // [networks]
+};
+// Reads the header of a parsed checkpoint file; throws mipnerf::Error naming `where` (the file) when it is not a
+// training checkpoint's.
+CheckpointHeader read_checkpoint_header(const io::CheckpointFile& checkpoint, const std::string& where);
+
 // Writes `path`: the record, the configuration (a JSON object), and per network i the tensors
 // network<i>.params, network<i>.adam_m, network<i>.adam_v with the Adam step counts.
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,

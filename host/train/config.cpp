@@ -416,7 +416,11 @@ TrainConfig config_from_json(const nlohmann::json& j, const std::string& where) 
       throw Error(where + ": " + e.what());
     }
   }
-  validate(config);
+  try {
+    validate(config);
+  } catch (const Error& e) {
+    throw Error(where + ": " + e.what());  // the file holds the invalid combination
+  }
   return config;
 }
 

@@ -154,7 +154,8 @@ TEST_CASE("metrics: SSIM of identical images is 1, and SSIM is symmetric") {
 TEST_CASE("metrics: SSIM of two constant images matches the closed form, per channel") {
   // x = a, y = b everywhere: no variance, so SSIM = (2ab + c1)(c2) / ((a² + b² + c1)(c2)).
   const double values[][2] = {{0.5, 0.5}, {0.2, 0.7}, {0.0, 1.0}, {0.25, 0.0}, {0.9, 0.85}};
-  for (const auto& [va, vb] : values) {
+  for (const auto& pair : values) {
+    const double va = pair[0], vb = pair[1];  // CAPTURE cannot capture a structured binding (C++17)
     TestImage a(16, 13, 1, static_cast<float>(va)), b(16, 13, 1, static_cast<float>(vb));
     const double fa = static_cast<float>(va), fb = static_cast<float>(vb);
     const double expected = (2 * fa * fb + kC1) / (fa * fa + fb * fb + kC1);

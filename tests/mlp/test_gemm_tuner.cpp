@@ -124,7 +124,9 @@ TEST_CASE("gemm tuner: the starting sets are complete Xgemm sets that CLBlast ac
   auto& ctx = test::test_context();
   const auto seeds = mlp::gemm_seed_sets();
   REQUIRE(seeds.size() == 4);
-  for (const auto& [name, parameters] : seeds) {
+  for (const auto& seed : seeds) {
+    const auto& name = seed.first;  // INFO cannot capture a structured binding (C++17)
+    const auto& parameters = seed.second;
     INFO(name);
     CHECK(parameters.size() == 16);
     CHECK(mlp::gemmk1_usable({{"Xgemm", parameters}}, 1, 5));

@@ -208,7 +208,8 @@ TEST_CASE("mlp device: the host path's blocks and threads do not change what it 
     MESSAGE("the test device cannot run the host path; nothing to check");
     return;
   }
-  for (const auto& [rows, threads] : {std::pair<size_t, size_t>{1, 3}, {20, 2}, {40, 7}}) {
+  for (const auto& rows_threads : {std::pair<size_t, size_t>{1, 3}, {20, 2}, {40, 7}}) {
+    const size_t rows = rows_threads.first, threads = rows_threads.second;  // INFO cannot capture a structured binding
     INFO("target_block_rows " << rows << ", threads " << threads);
     const mlp::HostMlpOptions options{rows, threads};
     check_against_reference_on(mlp::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 106, &options);

@@ -282,3 +282,43 @@ TEST_CASE("checkpoint: save records the configuration as a JSON object beside th
                        Error);
   fs::remove_all(dir);
 }
+
+TEST_CASE("checkpoint: a header with a missing or mistyped key is refused naming the file and the key") {
+  // A training header as save_training_checkpoint writes it, then one key at a time broken (found by fuzzing: these
+  // escaped as JSON library exceptions, and an invalid configuration did not name the file).
+  const auto valid = [] {
+    io::CheckpointFile c;
+    c.header = {{"format", "mipnerf-cl checkpoint"}, {"version", 1}, {"step", 7},
+                {"config", train::config_json(train::resolve_config("tiny", "mipnerf", {}))},
+                {"multiscale_data", false}, {"device", "cpu"}, {"data", "/scene"}, {"adam_steps", {7}}};
+    return c;
+  };
+  const auto header = train::read_checkpoint_header(valid(), "a.mnck");
+  CHECK(header.record.step == 7);
+  CHECK(header.record.data_path == "/scene");
+  CHECK(header.adam_steps == std::vector<int64_t>{7});
+  auto broken = [&](const char* key, nlohmann::json value, const char* expected) {
+    io::CheckpointFile c = valid();
+    if (value.is_null()) c.header.erase(key);
+    else c.header[key] = value;
+    CAPTURE(key);
+    CHECK_THROWS_WITH_AS(train::read_checkpoint_header(c, "a.mnck"), doctest::Contains(expected), Error);
+  };
+  broken("format", 3, "a.mnck: not a training checkpoint");
+  broken("step", nullptr, "a.mnck: corrupt training checkpoint: its header has no 'step'");
+  broken("step", "7", "a.mnck: corrupt training checkpoint: 'step' must be a count");
+  broken("step", -1, "'step' must be a count");
+  broken("train_seconds", "long", "a.mnck: corrupt training checkpoint: 'train_seconds' must be a number");
+  broken("multiscale_data", 1, "'multiscale_data' must be true or false");
+  broken("device", 2, "'device' must be a string");
+  broken("adam_steps", 5, "'adam_steps' must be an array");
+  broken("adam_steps", {1, "x"}, "'adam_steps' must be a count");
+  broken("config", nullptr, "its header has no 'config'");
+  nlohmann::json bad_config = valid().header["config"];
+  bad_config["max_bad_steps"] = 0;
+  broken("config", bad_config, "a.mnck: invalid configuration: max_bad_steps must be at least 1");
+  // Rendering needs no Adam steps; a header without them still loads (resume checks one per network).
+  io::CheckpointFile without = valid();
+  without.header.erase("adam_steps");
+  CHECK(train::read_checkpoint_header(without, "a.mnck").adam_steps.empty());
+}

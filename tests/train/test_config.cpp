@@ -120,8 +120,8 @@ TEST_CASE("config: each enum's names round-trip, by type and through the setting
   check_names_round_trip<ops::Batching>();
   check_names_round_trip<train::ModelFamily>();
   check_names_round_trip<train::Variant>();
-  for (const auto& [name, choices] : kEnumSettings) {
-    const std::string allowed = choices;  // a structured binding cannot be captured by INFO in C++17
+  for (const auto& [setting_name, choices] : kEnumSettings) {
+    const std::string name = setting_name, allowed = choices;  // INFO cannot capture a structured binding (C++17)
     for (size_t start = 0; start < allowed.size();) {
       const size_t end = std::min(allowed.find(" | ", start), allowed.size());
       const std::string value = allowed.substr(start, end - start);
@@ -164,7 +164,8 @@ TEST_CASE("config: JSON spells enums as before, and records the --variant bundle
   CHECK(j.at("batching") == "all_images");
   CHECK(j.at("density_activation") == "softplus");
   CHECK(train::from_json(j.dump(), "config.json").variant_bundle == c.variant_bundle);
-  for (const auto& [name, bundle] : train::variants()) {
+  for (const auto& entry : train::variants()) {
+    const std::string& name = entry.first;  // INFO cannot capture a structured binding (C++17)
     INFO("variant " << name);
     const auto resolved = train::resolve_config("tiny", name, {});
     REQUIRE(resolved.variant_bundle.has_value());

@@ -277,7 +277,8 @@ TEST_CASE("train: repeated non-finite steps stop the run and keep the last good 
 TEST_CASE("train: every variant trains a few steps on multiscale data and renders") {
   auto& ctx = test::test_context();
   const std::string multiscale = (fs::path(test::small_scene()) / "multiscale").string();
-  for (const auto& [variant, bundle] : train::variants()) {
+  for (const auto& entry : train::variants()) {
+    const std::string& variant = entry.first;  // INFO cannot capture a structured binding (C++17)
     INFO("variant " << variant);
     const std::string out = test::fresh_run_dir("variant-" + variant);
     train::Trainer trainer(ctx, tiny({{"steps", "3"}, {"batch_size", "128"}}, variant), multiscale, out, false);

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The sanitizer build: the whole suite built with clang++ under AddressSanitizer + UndefinedBehaviorSanitizer
+# (MIPNERF_SANITIZE) together with the fuzz targets (MIPNERF_FUZZ), in one extra build folder
+# (${SANITIZE_BUILD_DIR:-build-sanitize}), then run on PoCL's CPU device: every test but the `oclgrind` ones (the
+# normal build runs those), the fuzz targets' short entries (label `fuzz`) included. Any sanitizer report fails its
+# test. scripts/test.sh calls it after the PoCL run; it also runs on its own.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
+jobs="${JOBS:-$(nproc)}"
+export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v ccache || true)}"
+start=$(date +%s)
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DMIPNERF_SANITIZE=ON -DMIPNERF_FUZZ=ON
+cmake --build "$build_dir" -j "$jobs"
+built=$(date +%s)
+echo "test: the whole suite under AddressSanitizer + UBSan, and the fuzz targets, on PoCL's CPU device ($build_dir)"
+ctest --test-dir "$build_dir" --output-on-failure -j "$jobs" -LE oclgrind
+echo "test: sanitizer build $((built - start)) s, its tests $(( $(date +%s) - built )) s"
