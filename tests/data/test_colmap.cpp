@@ -427,7 +427,10 @@ TEST_CASE("colmap: malformed text files are one line naming the file, the line a
       {"1 PINHOLE 8\n", "m/cameras.txt:1: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got 3 fields"},
       {"99999999999 PINHOLE 8 6 7 7 4 3\n", "m/cameras.txt:1: CAMERA_ID '99999999999' is out of range"},
   };
-  for (const auto& [text, expected] : camera_cases) {
+  for (const auto& entry : camera_cases) {
+    // Named references, not a structured binding: CAPTURE/INFO capture them in a lambda (clang 14 refuses bindings).
+    const std::string& text = entry.first;
+    const std::string& expected = entry.second;
     CAPTURE(text);
     const std::string message = camera_error(text);
     CHECK(contains(message, expected));
@@ -449,7 +452,10 @@ TEST_CASE("colmap: malformed text files are one line naming the file, the line a
       {"5 0.5 0.5 0.5 0.5 1 2 3 1 a\x01.png\n", "m/images.txt:1: image 5: the image name holds a control character"},
       {"5 0.5 0.5 0.5 0.5 1 2 3 1 a\xc3(.png\n", "m/images.txt:1: image 5: the image name is not valid UTF-8"},
   };
-  for (const auto& [text, expected] : image_cases) {
+  for (const auto& entry : image_cases) {
+    // Named references, not a structured binding: CAPTURE/INFO capture them in a lambda (clang 14 refuses bindings).
+    const std::string& text = entry.first;
+    const std::string& expected = entry.second;
     CAPTURE(text);
     const std::string message = image_error(text);
     CHECK(contains(message, expected));
@@ -466,7 +472,10 @@ TEST_CASE("colmap: malformed text files are one line naming the file, the line a
       {"1 0 0 0 1 2 300 0.5 4 0\n", "m/points3D.txt:1: a colour (0 to 255) '300' is out of range"},
       {"1 0 0 0 1 2 3 0.5 4 x\n", "m/points3D.txt:1: a track's POINT2D_IDX must be a non-negative integer, got 'x'"},
   };
-  for (const auto& [text, expected] : point_cases) {
+  for (const auto& entry : point_cases) {
+    // Named references, not a structured binding: CAPTURE/INFO capture them in a lambda (clang 14 refuses bindings).
+    const std::string& text = entry.first;
+    const std::string& expected = entry.second;
     CAPTURE(text);
     const std::string message = point_error(text);
     CHECK(contains(message, expected));
@@ -587,9 +596,12 @@ TEST_CASE("colmap: every truncation and random damage of a file parses or is a m
        [](std::string_view b, const std::string& w) { data::parse_colmap_points_binary(b, w); }},
   };
   std::mt19937 rng(11);
-  for (const auto& [name, bytes, parse] : files) {
+  for (const auto& file : files) {
+    const std::string& name = std::get<0>(file);
+    const std::string& bytes = std::get<1>(file);
+    const Parser& parse = std::get<2>(file);
     CAPTURE(name);
-    auto outcome = [&, &name = name, &parse = parse](const std::string& damaged) {
+    auto outcome = [&](const std::string& damaged) {
       try {
         parse(damaged, name);
         return true;
