@@ -145,7 +145,10 @@ std::vector<SplitSpec> parse_transforms_json(const std::string& file, const Load
     const bool held_out = options.holdout_every > 0 && i % options.holdout_every == 0 && frames.size() > 1;
     (held_out ? test : train).frames.push_back(std::move(frames[i]));
   }
-  // The held-out views are also the val split that `train` scores at its end (as for LLFF captures).
+  return with_held_out_splits(std::move(train), std::move(test), options);
+}
+
+std::vector<SplitSpec> with_held_out_splits(SplitSpec train, SplitSpec test, const LoadOptions& options) {
   SplitSpec val = test;
   val.name = "val";
   std::vector<SplitSpec> splits;

@@ -36,6 +36,9 @@ std::vector<SplitSpec> parse_blender(const std::string& dir, const LoadOptions& 
 std::vector<SplitSpec> parse_transforms_json(const std::string& file, const LoadOptions& options);
 // Official multiscale metadata.json.
 std::vector<SplitSpec> parse_multiscale_metadata(const std::string& file, const LoadOptions& options);
+// The splits of a format that holds out views itself (transforms.json, LLFF): train, then the held-out views as
+// "val" (what `train` scores at its end) and as "test"; those options.splits asks for (all when empty) and not empty.
+std::vector<SplitSpec> with_held_out_splits(SplitSpec train, SplitSpec test, const LoadOptions& options);
 // LLFF: DIR/poses_bounds.npy and its images (data/llff.hpp); "val" holds the held-out views, as "test".
 std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& options);
 

@@ -242,15 +242,7 @@ std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& opt
     (held_out ? test : train).frames.push_back(frame);
   }
   // The official evaluates on the held-out views; they are also the val split `train` scores at its end.
-  SplitSpec val = test;
-  val.name = "val";
-  std::vector<SplitSpec> specs;
-  for (auto* spec : {&train, &val, &test}) {
-    const bool wanted = options.splits.empty() ||
-                        std::find(options.splits.begin(), options.splits.end(), spec->name) != options.splits.end();
-    if (wanted && !spec->frames.empty()) specs.push_back(std::move(*spec));
-  }
-  return specs;
+  return with_held_out_splits(std::move(train), std::move(test), options);
 }
 
 }  // namespace detail
