@@ -24,8 +24,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(blender transforms_json multiscale png camera_path config)
-  [ -f tests/fuzz/fuzz_checkpoint.cpp ] && targets+=(checkpoint)
+  targets=(blender transforms_json multiscale llff colmap png jpeg camera_path config checkpoint)
 fi
 build_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
 root="$PWD"
@@ -42,7 +41,10 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
 dictionary_for() {
   if [ -f "tests/fuzz/dictionaries/$1.dict" ]; then echo "-dict=$root/tests/fuzz/dictionaries/$1.dict"
-  elif [ "$1" != png ] && [ "$1" != config ] && [ "$1" != checkpoint ]; then echo "-dict=$root/tests/fuzz/dictionaries/json.dict"
+  else
+    case "$1" in  # the JSON readers without a dictionary of their own (as tests/fuzz/fuzz_tests.cmake)
+      blender|transforms_json|multiscale|camera_path) echo "-dict=$root/tests/fuzz/dictionaries/json.dict" ;;
+    esac
   fi
 }
 

@@ -13,7 +13,33 @@ namespace mipnerf {
 class Error : public std::runtime_error {
  public:
   explicit Error(const std::string& message, std::string details = {}, int status = 0)
-      : std::runtime_error(message), details_(std::move(details)), status_(status) {}
+      : std::runtime_error(one_line(message)), details_(std::move(details)), status_(status) {}
+
+  // `text` with its control characters written out (\n, \r, \t, \xNN): a message quotes text from outside (a file
+  // name, a key or value read from a file), which may hold any byte, and must stay one line on a terminal.
+  static std::string one_line(const std::string& text) {
+    static const char kHex[] = "0123456789abcdef";
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text) {
+      const auto byte = static_cast<unsigned char>(c);
+      if (byte >= 0x20 && byte != 0x7f) {
+        out += c;
+      } else if (c == '\n') {
+        out += "\\n";
+      } else if (c == '\r') {
+        out += "\\r";
+      } else if (c == '\t') {
+        out += "\\t";
+      } else {
+        out += "\\x";
+        out += kHex[byte >> 4];
+        out += kHex[byte & 0xf];
+      }
+    }
+    return out;
+  }
+
   const std::string& details() const { return details_; }
   // The OpenCL or CLBlast status code, 0 for errors that did not come from a call.
   int status() const { return status_; }

@@ -5,6 +5,7 @@
 #include <csetjmp>
 #include <cstdio>
 #include <jpeglib.h>
+#include <jerror.h>
 
 #include "core/error.hpp"
 #include "io/file.hpp"
@@ -26,11 +27,22 @@ extern "C" void on_jpeg_error(j_common_ptr info) {
   std::longjmp(manager->jump, 1);
 }
 
-extern "C" void on_jpeg_warning(j_common_ptr, int) {}  // corrupt-data warnings: the decode goes on, as viewers do
+// Corrupt-data warnings (extraneous bytes before a marker, a restart marker out of place) are common in camera
+// files and harmless: the decode goes on, as viewers do. Missing image data is not: where the file ends
+// (JWRN_JPEG_EOF) or a scan's data stops at a marker before every block is coded (JWRN_HIT_MARKER), libjpeg fills
+// the rest with grey and only warns, so a truncated photo would train as a picture with a grey band. Both are errors
+// here, which also stops a damaged header that claims a huge image at the first rows its data cannot fill.
+extern "C" void on_jpeg_warning(j_common_ptr info, int level) {
+  const int code = info->err->msg_code;
+  if (level < 0 && (code == JWRN_JPEG_EOF || code == JWRN_HIT_MARKER)) on_jpeg_error(info);
+}
 
 // Decodes into `image`; false with manager.message set when libjpeg failed. Only trivially destructible locals
 // live between setjmp and a longjmp back to it; `image` and its vector belong to the caller.
-bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std::vector<unsigned char>& row,
+// The 8-bit samples grow row by row (`samples`, owned by the caller) rather than being allocated from the header's
+// size up front: a damaged file that claims a huge image fails at its first missing row, not after a large
+// allocation.
+bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std::vector<unsigned char>& samples,
                  ErrorManager& manager, bool& too_large, bool& cmyk, bool header_only) {
   jpeg_decompress_struct info;
   info.err = jpeg_std_error(&manager.base);
@@ -63,14 +75,12 @@ bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std:
   }
   image.width = info.output_width;
   image.height = info.output_height;
-  image.rgb.resize(static_cast<size_t>(image.width) * image.height * 3);
-  row.resize(static_cast<size_t>(image.width) * 3);
+  const size_t row_samples = static_cast<size_t>(image.width) * 3;
   while (info.output_scanline < info.output_height) {
-    JSAMPROW rows[1] = {row.data()};
     const size_t y = info.output_scanline;
+    samples.resize((y + 1) * row_samples);
+    JSAMPROW rows[1] = {samples.data() + y * row_samples};
     jpeg_read_scanlines(&info, rows, 1);
-    float* out = image.rgb.data() + y * image.width * 3;
-    for (size_t k = 0; k < row.size(); ++k) out[k] = row[k] / 255.0f;
   }
   jpeg_finish_decompress(&info);
   jpeg_destroy_decompress(&info);
@@ -88,14 +98,16 @@ namespace {
 JpegImage decode(const unsigned char* bytes, size_t size, const std::string& name, bool header_only) {
   if (!looks_like_jpeg(bytes, size)) throw Error(name + ": not a JPEG file (no FF D8 FF start marker)");
   JpegImage image;
-  std::vector<unsigned char> row;
+  std::vector<unsigned char> samples;
   ErrorManager manager{};
   bool too_large = false, cmyk = false;
-  if (!decode_into(bytes, size, image, row, manager, too_large, cmyk, header_only)) {
+  if (!decode_into(bytes, size, image, samples, manager, too_large, cmyk, header_only)) {
     throw Error(name + ": unreadable JPEG (" + manager.message + ")");
   }
   if (cmyk) throw Error(name + ": a CMYK JPEG; save it as RGB");
   if (too_large) throw Error(name + ": a JPEG of more than 2^28 pixels; downsample it first");
+  image.rgb.resize(samples.size());
+  for (size_t k = 0; k < samples.size(); ++k) image.rgb[k] = samples[k] / 255.0f;
   return image;
 }
 

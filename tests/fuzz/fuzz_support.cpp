@@ -38,6 +38,10 @@ void write_images(const fs::path& root) {
   std::vector<uint16_t> rgb16(8 * 8 * 3);
   for (size_t i = 0; i < rgb16.size(); ++i) rgb16[i] = static_cast<uint16_t>(4099 * i);
   io::write_png16((root / "images/16bit.png").string(), 8, 8, 3, rgb16.data());
+  for (const char* file : {"llff/images/000.png", "llff/images/001.png", "llff/images/002.png"}) write_rgba8(root / file, 4);
+  for (const char* file : {"llff/images_2/000.png", "llff/images_2/001.png", "llff/images_2/002.png"}) {
+    write_rgba8(root / file, 2);
+  }
   for (const char* split : {"train", "val", "test"}) {
     for (int view = 0; view < 2; ++view) {
       for (int level = 0; level < 3; ++level) {

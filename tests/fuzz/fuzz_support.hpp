@@ -15,8 +15,9 @@ namespace mipnerf::fuzz {
 
 // <$TMPDIR, else /dev/shm, else /tmp>/mipnerf-fuzz-XXXXXX, created on the first call and removed at exit, holding
 // 4x4 RGBA PNGs where the seed corpora's frames point: train/r_0.png, train/r_1.png, val/r_0.png, test/r_0.png,
-// images/0.png (8-bit), images/16bit.png (16-bit RGB, 8x8), and the multiscale pyramid
-// images_{train,val,test}/00{0,1}_d{0,1,2}.png (4x4, 2x2, 1x1).
+// images/0.png (8-bit), images/16bit.png (16-bit RGB, 8x8), the multiscale pyramid
+// images_{train,val,test}/00{0,1}_d{0,1,2}.png (4x4, 2x2, 1x1), and an LLFF capture's images without its poses:
+// llff/images/00{0,1,2}.png (4x4) and llff/images_2/00{0,1,2}.png (2x2).
 const std::filesystem::path& scratch_folder();
 
 // Writes the input to `path` (replacing what was there).

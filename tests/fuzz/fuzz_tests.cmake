@@ -4,7 +4,9 @@
 # for MIPNERF_FUZZ_SECONDS; any crash, sanitizer report, hang or huge allocation fails the entry. The long runs:
 # scripts/fuzz.sh (bench/results/fuzz.md). Included by tests/CMakeLists.txt, whose folder the paths are relative to.
 set(MIPNERF_FUZZ_SECONDS 20 CACHE STRING "How long each fuzz target's CTest entry fuzzes, in seconds")
-set(MIPNERF_FUZZ_TARGETS blender transforms_json multiscale png camera_path config checkpoint)
+set(MIPNERF_FUZZ_TARGETS blender transforms_json multiscale llff colmap png jpeg camera_path config checkpoint)
+# The targets without a dictionary of their own (fuzz/dictionaries/<target>.dict) that read JSON share json.dict.
+set(MIPNERF_FUZZ_JSON_TARGETS blender transforms_json multiscale camera_path)
 
 add_library(mipnerf_fuzz_support STATIC fuzz/fuzz_support.cpp)
 target_link_libraries(mipnerf_fuzz_support PUBLIC mipnerf)
@@ -15,11 +17,10 @@ foreach(target IN LISTS MIPNERF_FUZZ_TARGETS)
   target_link_libraries(fuzz_${target} PRIVATE mipnerf_fuzz_support)
   target_compile_options(fuzz_${target} PRIVATE -fsanitize=fuzzer)
   target_link_options(fuzz_${target} PRIVATE -fsanitize=fuzzer)
-  # The JSON readers share one dictionary of JSON tokens and the keys the readers look for.
   set(dictionary "")
   if(EXISTS "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/dictionaries/${target}.dict")
     set(dictionary "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/dictionaries/${target}.dict")
-  elseif(NOT target MATCHES "^(png|config|checkpoint)$")
+  elseif(target IN_LIST MIPNERF_FUZZ_JSON_TARGETS)
     set(dictionary "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/dictionaries/json.dict")
   endif()
   add_test(NAME "fuzz: ${target}" COMMAND ${CMAKE_COMMAND} "-DEXE=$<TARGET_FILE:fuzz_${target}>"
@@ -29,6 +30,13 @@ foreach(target IN LISTS MIPNERF_FUZZ_TARGETS)
   set_tests_properties("fuzz: ${target}" PROPERTIES LABELS fuzz TIMEOUT 300 ENVIRONMENT "${MIPNERF_TEST_ENV}")
 endforeach()
 
+# The COLMAP target completes a fuzzed file with the fixture model's other two (tests/data/fixtures/colmap).
+target_compile_definitions(fuzz_colmap PRIVATE
+  MIPNERF_FUZZ_COLMAP_FIXTURE="${CMAKE_CURRENT_SOURCE_DIR}/data/fixtures/colmap")
+
 # The tool that wrote the checkpoint target's seeds (tests/fuzz/checkpoint_seeds.cpp): not a test, kept to remake them.
 add_executable(fuzz_checkpoint_seeds fuzz/checkpoint_seeds.cpp)
 target_link_libraries(fuzz_checkpoint_seeds PRIVATE mipnerf)
+# The tool that wrote the JPEG target's seeds (tests/fuzz/jpeg_seeds.cpp), kept to remake them.
+add_executable(fuzz_jpeg_seeds fuzz/jpeg_seeds.cpp)
+target_link_libraries(fuzz_jpeg_seeds PRIVATE JPEG::JPEG)

@@ -52,5 +52,29 @@ TEST_CASE("jpeg: a smooth image decodes within JPEG's loss, as RGB or as an RGBA
   CHECK_THROWS_WITH_AS(decode(bytes.substr(0, 40)), doctest::Contains("damaged.jpg: unreadable JPEG"), Error);
   CHECK_THROWS_WITH_AS(decode("GIF89a"), doctest::Contains("damaged.jpg: not a JPEG file"), Error);
   CHECK_THROWS_WITH_AS(decode(std::string("\xff\xd8\xff\xd9", 4)), doctest::Contains("unreadable JPEG"), Error);
+  // Cut inside the scan data (the header and tables are the first ~600 bytes): libjpeg alone would fill the missing
+  // rows with grey and only warn; a truncated photo must not train as a picture with a grey band.
+  REQUIRE(bytes.size() > 700);
+  CHECK_NOTHROW(decode(bytes));
+  CHECK_THROWS_WITH_AS(decode(bytes.substr(0, bytes.size() - 40)),
+                       doctest::Contains("damaged.jpg: unreadable JPEG (Premature end of JPEG file)"), Error);
+
+  // The same file with the frame header (SOF0: FF C0, length, precision, height, width) claiming a huge image.
+  const size_t sof = bytes.find("\xff\xc0");
+  REQUIRE(sof != std::string::npos);
+  auto claiming = [&](unsigned claimed_width, unsigned claimed_height) {
+    std::string patched = bytes;
+    patched[sof + 5] = static_cast<char>(claimed_height >> 8);
+    patched[sof + 6] = static_cast<char>(claimed_height & 0xff);
+    patched[sof + 7] = static_cast<char>(claimed_width >> 8);
+    patched[sof + 8] = static_cast<char>(claimed_width & 0xff);
+    return patched;
+  };
+  // Over the limit: refused from the header, before anything is decoded.
+  CHECK_THROWS_WITH_AS(decode(claiming(20000, 20000)), doctest::Contains("damaged.jpg: a JPEG of more than 2^28 pixels"),
+                       Error);
+  // Under it but far more than the data codes: stops where the scan's data ends at the end-of-image marker (rows
+  // are allocated as they decode, so this costs nothing like the 3 GB the claimed size would take as floats).
+  CHECK_THROWS_WITH_AS(decode(claiming(16000, 16000)), doctest::Contains("premature end of data segment"), Error);
   fs::remove_all(dir);
 }
