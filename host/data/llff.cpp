@@ -146,6 +146,24 @@ void read_poses_bounds(const std::string& file, LlffCapture& capture) {
   }
 }
 
+// After the bd_factor rescale the nearest bound is 4/3 scene units. A camera or a far bound beyond kMaxSceneUnits of
+// them cannot be one capture (float32 rays keep no precision there, and the render path's products overflow double:
+// a fuzzed file with positions of 1e222 made NaN cameras), so the file is refused before anything uses it.
+constexpr double kMaxSceneUnits = 1e6;
+
+void check_scene_extent(const LlffCapture& capture, const std::string& file) {
+  for (size_t i = 0; i < capture.camera_to_world.size(); ++i) {
+    const Vec3 position = column(capture.camera_to_world[i], 3);
+    const double distance = std::sqrt(dot(position, position));
+    const double far_bound = capture.bounds[i][1];
+    if (!(distance <= kMaxSceneUnits) || !(far_bound <= kMaxSceneUnits)) {
+      throw Error(file + ": view " + std::to_string(i) + ": position " + std::to_string(distance) + " and far bound " +
+                  std::to_string(far_bound) + " scene units from the origin, with the nearest bound scaled to 4/3: " +
+                  "more than 1e6 of them, so the poses and bounds are not of one capture");
+    }
+  }
+}
+
 }  // namespace
 
 bool is_llff_folder(const std::string& dir) {
@@ -186,6 +204,7 @@ LlffCapture read_llff(const std::string& dir, const LoadOptions& options) {
     for (int r = 0; r < 3; ++r) pose[4 * r + 3] *= s;
   }
   for (auto& b : capture.bounds) b = {b[0] * s, b[1] * s};
+  check_scene_extent(capture, file);
 
   const Matrix34 average = average_pose(capture.camera_to_world);
   for (auto& pose : capture.camera_to_world) pose = inverse_times(average, pose);
@@ -316,6 +335,13 @@ std::vector<Camera> llff_render_path(const LlffCapture& capture, const LoadOptio
   const detail::FrameSpec& frame = specs.at(0).frames.at(0);
   const uint32_t factor = std::max<uint32_t>(1, options.factor / capture.stored_factor);
   for (const auto& pose : path) {
+    // Degenerate captures (every camera at one point, up vectors that cancel) leave a zero vector to normalise.
+    for (double v : pose) {
+      if (!std::isfinite(v)) {
+        throw Error(capture.dir + ": no render path for this capture: its cameras' positions or up vectors are " +
+                    "degenerate (a zero-length axis); render its views with --split instead");
+      }
+    }
     Camera camera;
     camera.camera_to_world = pose;
     camera.width_px = capture.width_px / capture.stored_factor / factor;

@@ -199,6 +199,12 @@ TEST_CASE("llff: the spiral render path circles the capture's average view, look
   }
   CHECK(path[0].camera_to_world[3] != doctest::Approx(path[3].camera_to_world[3]));
   CHECK_THROWS_WITH_AS(data::llff_render_path(capture, options, 0), doctest::Contains("at least one frame"), Error);
+  // Every camera at the origin: the spherical path's circle has no radius and no axis to look along. It is refused
+  // in one line, never returned as NaN cameras.
+  data::LlffCapture collapsed = capture;
+  collapsed.spherify = true;
+  for (auto& pose : collapsed.camera_to_world) pose[3] = pose[7] = pose[11] = 0.0;
+  CHECK_THROWS_WITH_AS(data::llff_render_path(collapsed, options, 4), doctest::Contains("no render path"), Error);
 }
 
 TEST_CASE("llff: a capture of JPEG photos loads like one of PNGs") {
@@ -316,6 +322,19 @@ TEST_CASE("llff: malformed captures give one line naming the file") {
     fs::remove_all(dir / "images_4");
     fs::remove_all(dir / "images");
     expect(dir, "an LLFF capture without its images");
+  }
+  {
+    // Finite but absurd: one camera 1e222 units away (a fuzzed file's; its render path was NaN), or a far bound of
+    // 1e230 (both far beyond 1e6 × the nearest bound).
+    const auto dir = copy_of_capture("llff-far-away");
+    auto values = good.values;
+    values[17 * 4 + 3] = 1e222;
+    io::write_npy((dir / "poses_bounds.npy").string(), values, good.shape);
+    expect(dir, "view 4: position");
+    values = good.values;
+    values[17 * 6 + 16] = 1e230;
+    io::write_npy((dir / "poses_bounds.npy").string(), values, good.shape);
+    expect(dir, "view 6: position");
   }
   {
     const auto dir = copy_of_capture("llff-notnpy");
