@@ -111,4 +111,51 @@ __kernel void gaussian_ipe_fwd(__global const float* origins, __global const flo
   }
 }
 
+#ifdef MIPNERF_CONCAT_PE
+// The concatenated-PE alternative to IPE (mip-NeRF supplement §7, Table 2), built only into the programs of a
+// scene that uses it (the `mipnerf-concat-pe` variant): per row, NeRF's PE of the Gaussian's mean (degrees
+// min_deg..max_deg−1, identity first if asked), then PE of degrees 0..cov_degrees−1 of
+// vec(triu(sign(Σ) ∘ √|Σ|)) of the FULL 3×3 covariance (official lift_gaussian with diag = False): our IPE only
+// needs the diagonal, but with it alone the three off-diagonal entries would be constant features (PE of 0), so
+// this kernel lifts the off-diagonal too. Σ is symmetric, so its upper triangle is all of it; order
+// (xx, xy, xz, yy, yz, zz). Paper: mean L = 12, covariance L = 2: 72 + 24 = 96 features, IPE's width.
+//   features [rows][3·identity + 6L + 12·L_cov]: [identity] [3L mean sines] [3L mean cosines]
+//            [6·L_cov covariance sines] [6·L_cov covariance cosines], index l·6 + element inside the last two.
+// One item per row. sign(0) = 0, so a zero entry (an axis-aligned ray's off-diagonal) encodes as sin 0, cos 0.
+inline float3 signed_sqrt(float3 x) { return sign(x) * sqrt(fabs(x)); }
+
+__kernel void gaussian_concat_pe_fwd(__global const float* origins, __global const float* directions,
+                                     __global const float* radii, __global const float* t_edges,
+                                     __global float* features, const uint n_rays, const uint n_samples,
+                                     const int min_deg, const int max_deg, const uint append_identity,
+                                     const int cov_degrees) {
+  const size_t row = get_global_id(0);
+  if (row >= (size_t)n_rays * n_samples) return;
+  const size_t ray = row / n_samples, i = row % n_samples;
+  __global const float* t = t_edges + ray * (n_samples + 1);
+  const float3 origin = load3(origins, ray), dir = load3(directions, ray);
+  const float3 moments = interval_moments(t[i], t[i + 1], radii[ray]);
+  float3 mean, diagonal;
+  lift_gaussian(origin, dir, moments, &mean, &diagonal);
+  const float3 off = covariance_off_diagonal(dir, moments);
+
+  const uint n_degrees = (uint)(max_deg - min_deg), identity = append_identity ? 3 : 0;
+  __global float* out = features + row * (identity + 6 * n_degrees + 12 * (uint)cov_degrees);
+  if (identity) store3(out, 0, mean);
+  __global float* mean_pe = out + identity;
+  for (uint l = 0; l < n_degrees; ++l) {
+    encode_degree(mean, (float3)(0.0f), min_deg + (int)l, mean_pe + 3 * l, mean_pe + 3 * (n_degrees + l));
+  }
+  const float3 upper_first = signed_sqrt((float3)(diagonal.x, off.x, off.y));   // xx, xy, xz
+  const float3 upper_second = signed_sqrt((float3)(diagonal.y, off.z, diagonal.z));  // yy, yz, zz
+  __global float* cov_pe = mean_pe + 6 * n_degrees;
+  for (int l = 0; l < cov_degrees; ++l) {
+    __global float* sines = cov_pe + 6 * l;
+    __global float* cosines = cov_pe + 6 * (cov_degrees + l);
+    encode_degree(upper_first, (float3)(0.0f), l, sines, cosines);
+    encode_degree(upper_second, (float3)(0.0f), l, sines + 3, cosines + 3);
+  }
+}
+#endif
+
 #endif

@@ -63,15 +63,29 @@ inline void lift_gaussian(float3 origin, float3 dir, float3 moments, float3* mea
   *cov = moments.y * d2 + moments.z * null_outer;
 }
 
+// The off-diagonal of the full 3-D covariance (official lift_gaussian, diag = False), (Σ_xy, Σ_xz, Σ_yz):
+//   Σ = t_var·d dᵀ + r_var·(I − d dᵀ/|d|²),  so  Σ_ij = (t_var − r_var/|d|²)·d_i·d_j  for i ≠ j.
+// Only the concatenated-PE variant reads it (the diagonal is lift_gaussian's); IPE uses the diagonal alone.
+inline float3 covariance_off_diagonal(float3 dir, float3 moments) {
+  const float3 d2 = dir * dir;
+  const float d_mag_sq = fmax(1e-10f, d2.x + d2.y + d2.z);
+  const float along_minus_across = moments.y - moments.z / d_mag_sq;
+  return along_minus_across * (float3)(dir.x * dir.y, dir.x * dir.z, dir.y * dir.z);
+}
+
+// Moments (t_mean, t_var, r_var) of interval [t0, t1] for the RAY_SHAPE this program is built with.
+inline float3 interval_moments(float t0, float t1, float radius) {
+#if RAY_SHAPE == RAY_SHAPE_CYLINDER
+  return cylinder_moments(t0, t1, radius);
+#else
+  return conical_frustum_moments(t0, t1, radius);
+#endif
+}
+
 // The Gaussian of interval [t0, t1] of a ray, for the RAY_SHAPE this program is built with.
 inline void interval_gaussian(float3 origin, float3 dir, float radius, float t0, float t1, float3* mean,
                               float3* cov) {
-#if RAY_SHAPE == RAY_SHAPE_CYLINDER
-  const float3 moments = cylinder_moments(t0, t1, radius);
-#else
-  const float3 moments = conical_frustum_moments(t0, t1, radius);
-#endif
-  lift_gaussian(origin, dir, moments, mean, cov);
+  lift_gaussian(origin, dir, interval_moments(t0, t1, radius), mean, cov);
 }
 
 // The Gaussian of row = ray·N + i (interval i of `ray`).

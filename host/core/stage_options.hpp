@@ -77,11 +77,16 @@ struct EncodingOptions {
   int min_deg = 0;
   int max_deg = 16;              // paper: IPE over 0..15 (96 features)
   bool append_identity = false;  // PE only: the raw input first (views: 0..3 + identity = 27 features)
+  // The concatenated-PE variant only (kernels/encode.cl gaussian_concat_pe_fwd, supplement §7): degrees
+  // 0..covariance_degrees−1 of the PE of the 6 signed square roots of the covariance's upper triangle (paper: 2).
+  int covariance_degrees = 0;
 
   int degrees() const { return max_deg - min_deg; }
-  // Features per row: 6L for IPE (identity never), 3·identity + 6L for PE.
+  // Features per row: 6L for IPE (identity never), 3·identity + 6L for PE, and the concatenated PE's
+  // 3·identity + 6L + 12·L_cov (paper: 72 + 24 = 96).
   int ipe_width() const { return 6 * degrees(); }
   int pe_width() const { return (append_identity ? 3 : 0) + 6 * degrees(); }
+  int concat_pe_width() const { return pe_width() + 12 * covariance_degrees; }
 };
 
 struct RenderOptions {

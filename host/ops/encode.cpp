@@ -30,11 +30,13 @@ bool choose_fused_per_row(const ocl::Context& ctx, const EncodeTuning& tuning) {
 
 Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning)
     : ctx_(&ctx), gaussian_options_(options), fused_per_row_(choose_fused_per_row(ctx, tuning)) {
-  auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"},
-                              gaussian_build_options(options).define("GAUSSIAN_IPE_PER_ROW", fused_per_row_ ? 1 : 0));
+  auto build_options = gaussian_build_options(options).define("GAUSSIAN_IPE_PER_ROW", fused_per_row_ ? 1 : 0);
+  if (tuning.concat_pe) build_options.define("MIPNERF_CONCAT_PE", 1);
+  auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"}, build_options);
   ipe_ = &program.kernel("ipe_fwd");
   pe_ = &program.kernel("pe_fwd");
   gaussian_ipe_ = &program.kernel("gaussian_ipe_fwd");
+  if (tuning.concat_pe) gaussian_concat_pe_ = &program.kernel("gaussian_concat_pe_fwd");
 }
 
 void Encode::ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features) {
@@ -78,6 +80,31 @@ void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& 
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
                 static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
   ocl::launch_1d(*ctx_, *gaussian_ipe_, items, where);
+}
+
+void Encode::gaussian_concat_pe(const EncodingOptions& options, const GaussianInputs& in,
+                                ocl::DeviceArray<float>& features) {
+  const std::string where = "gaussian_concat_pe_fwd";
+  if (gaussian_concat_pe_ == nullptr) {
+    throw Error(where + ": this Encode was built without the concatenated-PE kernel (EncodeTuning::concat_pe)");
+  }
+  check_degrees(options, where, options.append_identity);
+  if (options.covariance_degrees < 1 || options.covariance_degrees > 60) {
+    throw Error(where + ": covariance_degrees = " + std::to_string(options.covariance_degrees) +
+                " is not in 1..60 (the concatenated PE encodes the covariance with at least one degree)");
+  }
+  detail::require(in.rays.origins, 3 * in.n_rays, where);
+  detail::require(in.rays.directions, 3 * in.n_rays, where);
+  detail::require(in.rays.radii, in.n_rays, where);
+  detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
+  const size_t rows = in.n_rays * in.n_samples;
+  detail::require(features, rows * options.concat_pe_width(), where);
+  detail::to_uint(rows, where, "items");
+  ocl::set_args(*gaussian_concat_pe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges,
+                features, detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
+                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg),
+                static_cast<cl_uint>(options.append_identity ? 1 : 0), static_cast<cl_int>(options.covariance_degrees));
+  ocl::launch_1d(*ctx_, *gaussian_concat_pe_, rows, where);
 }
 
 }  // namespace mipnerf::ops

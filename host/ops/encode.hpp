@@ -28,6 +28,9 @@ struct PeInputs {
 struct EncodeTuning {
   enum class FusedItems { device_default, per_row, per_row_and_degree };
   FusedItems fused_items = FusedItems::device_default;  // default: per row on CPUs, per (row, degree) elsewhere
+  // Build the concatenated-PE kernel (MIPNERF_CONCAT_PE) into the program: only a scene that uses it pays for its
+  // compilation; without it the program is the one every other scene builds.
+  bool concat_pe = false;
 };
 
 // Degrees are kernel arguments (EncodingOptions per call: positions and view directions differ); the program is
@@ -43,6 +46,9 @@ class Encode {
   void pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceArray<float>& features);
   // Enqueues gaussian_ipe_fwd: the same features as Gaussian::fwd then ipe(), without the means/covs buffers.
   void gaussian_ipe(const EncodingOptions& options, const GaussianInputs& in, ocl::DeviceArray<float>& features);
+  // Enqueues gaussian_concat_pe_fwd: features [rows][options.concat_pe_width()], PE of the Gaussian's mean then PE
+  // of its signed-sqrt covariance (supplement §7). Needs an Encode built with EncodeTuning::concat_pe.
+  void gaussian_concat_pe(const EncodingOptions& options, const GaussianInputs& in, ocl::DeviceArray<float>& features);
 
  private:
   ocl::Context* ctx_;
@@ -51,6 +57,7 @@ class Encode {
   ::cl::Kernel* ipe_;
   ::cl::Kernel* pe_;
   ::cl::Kernel* gaussian_ipe_;
+  ::cl::Kernel* gaussian_concat_pe_ = nullptr;
 };
 
 }  // namespace mipnerf::ops

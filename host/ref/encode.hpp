@@ -39,4 +39,12 @@ void gaussian_ipe_fwd(const GaussianOptions& gaussian_options, const EncodingOpt
                       const std::vector<double>& radii, const std::vector<double>& t_edges,
                       std::vector<double>& features, size_t n_rays, size_t n_samples);
 
+// Mirror of gaussian_concat_pe_fwd (supplement §7): per row [identity] PE of the mean (degrees min..max−1), then PE
+// of degrees 0..covariance_degrees−1 of the signed square roots of the full covariance's upper triangle
+// (xx, xy, xz, yy, yz, zz): [6·L_cov sines] [6·L_cov cosines], index l·6 + element.
+void gaussian_concat_pe_fwd(const GaussianOptions& gaussian_options, const EncodingOptions& options,
+                            const std::vector<double>& origins, const std::vector<double>& directions,
+                            const std::vector<double>& radii, const std::vector<double>& t_edges,
+                            std::vector<double>& features, size_t n_rays, size_t n_samples);
+
 }  // namespace mipnerf::ref

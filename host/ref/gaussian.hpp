@@ -57,12 +57,30 @@ void lift_gaussian(const T o[3], const T d[3], const FrustumMoments<T>& m, T mea
   }
 }
 
+// Mirror of covariance_off_diagonal: (Σ_xy, Σ_xz, Σ_yz) of the full covariance (official lift_gaussian, diag = False),
+// Σ_ij = (t_var − r_var/max(1e-10, |d|²))·d_i·d_j for i ≠ j.
+template <typename T>
+void covariance_off_diagonal(const T d[3], const FrustumMoments<T>& m, T off[3]) {
+  const T d_mag_sq = std::max(T(1e-10), d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const T along_minus_across = m.t_var - m.r_var / d_mag_sq;
+  off[0] = along_minus_across * d[0] * d[1];
+  off[1] = along_minus_across * d[0] * d[2];
+  off[2] = along_minus_across * d[1] * d[2];
+}
+
 // Mirror of gaussian_fwd (mip-NeRF §3.1: supplement eq. 23 or the cylinder, lifted to 3-D): means, covs [R][N][3] from
 // origins, directions [R][3], radii [R], t_edges [R][N+1].
 void gaussian_fwd(const GaussianOptions& options, const std::vector<double>& origins,
                   const std::vector<double>& directions, const std::vector<double>& radii,
                   const std::vector<double>& t_edges, std::vector<double>& means, std::vector<double>& covs,
                   size_t n_rays, size_t n_samples);
+
+// The full Gaussians the concatenated-PE kernel computes inline: means, covs (diagonal) as gaussian_fwd, and
+// cov_off [R][N][3] = (Σ_xy, Σ_xz, Σ_yz).
+void gaussian_full_fwd(const GaussianOptions& options, const std::vector<double>& origins,
+                       const std::vector<double>& directions, const std::vector<double>& radii,
+                       const std::vector<double>& t_edges, std::vector<double>& means, std::vector<double>& covs,
+                       std::vector<double>& cov_off, size_t n_rays, size_t n_samples);
 
 // Mirror of gaussian_points_fwd (NeRF's point samples): means = o + t_mid·d, covs = 0.
 void gaussian_points_fwd(const std::vector<double>& origins, const std::vector<double>& directions,
