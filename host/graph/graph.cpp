@@ -39,10 +39,10 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
   plan.level_intervals = spec.intervals_per_level();
   plan.training = mode == GraphMode::training;
   for (const auto& level : spec.levels) {
-    const size_t width = level.encoding == Encoding::integrated ? spec.position_encoding.ipe_width()
-                                                                : spec.position_encoding.pe_width();
-    plan.feature_width = std::max(plan.feature_width, width);
-    plan.needs_points = plan.needs_points || level.encoding != Encoding::integrated;
+    plan.feature_width = std::max(plan.feature_width, spec.feature_width(level.encoding));
+    // The fused kernels (IPE, concatenated PE) compute their Gaussians inline; the PE paths stage means first.
+    plan.needs_points = plan.needs_points ||
+                        (level.encoding != Encoding::integrated && level.encoding != Encoding::concat_pe);
     if (level.sampling == Sampling::resample_union) {
       plan.drawn_edges = std::max(plan.drawn_edges, max_chunk_rays * (level.new_samples + 1));
     }
@@ -112,7 +112,9 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> ne
   sample_ = std::make_unique<ops::Sample>(ctx, sample_options);
   resample_ = std::make_unique<ops::Resample>(ctx);
   gaussian_ = std::make_unique<ops::Gaussian>(ctx, spec_.gaussian);
-  encode_ = std::make_unique<ops::Encode>(ctx, spec_.gaussian);
+  ops::EncodeTuning encode_tuning;
+  for (const auto& level : spec_.levels) encode_tuning.concat_pe |= level.encoding == Encoding::concat_pe;
+  encode_ = std::make_unique<ops::Encode>(ctx, spec_.gaussian, encode_tuning);
   render_ = std::make_unique<ops::Render>(ctx, spec_.render, spec_.activation);
   if (training) loss_ = std::make_unique<ops::Loss>(ctx, spec_.loss);
 
@@ -217,6 +219,9 @@ void Graph::encode_level(size_t l, size_t n_rays) {
     case Encoding::midpoint_pe:
       gaussian_->points(intervals, {means_, covs_});
       encode_->pe(spec_.position_encoding, {means_, rows}, features_);
+      break;
+    case Encoding::concat_pe:
+      encode_->gaussian_concat_pe(spec_.position_encoding, intervals, features_);
       break;
   }
 }

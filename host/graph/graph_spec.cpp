@@ -8,6 +8,19 @@
 
 namespace mipnerf::graph {
 
+size_t GraphSpec::feature_width(Encoding encoding) const {
+  switch (encoding) {
+    case Encoding::integrated:
+      return static_cast<size_t>(position_encoding.ipe_width());
+    case Encoding::concat_pe:
+      return static_cast<size_t>(position_encoding.concat_pe_width());
+    case Encoding::frustum_mean_pe:
+    case Encoding::midpoint_pe:
+      break;
+  }
+  return static_cast<size_t>(position_encoding.pe_width());
+}
+
 std::vector<size_t> GraphSpec::intervals_per_level() const {
   std::vector<size_t> out;
   size_t previous = 0;
@@ -33,14 +46,18 @@ void GraphSpec::validate() const {
     if (level.mlp_index >= mlps.size()) throw Error(where + ": names network " + std::to_string(level.mlp_index) +
                                                     " but there are " + std::to_string(mlps.size()));
     const auto& mlp = mlps[level.mlp_index];
-    const size_t width = level.encoding == Encoding::integrated ? static_cast<size_t>(position_encoding.ipe_width())
-                                                                : static_cast<size_t>(position_encoding.pe_width());
+    const size_t width = feature_width(level.encoding);
     if (mlp.input_width != width) {
       throw Error(where + ": the encoding gives " + std::to_string(width) + " features but network " +
                   std::to_string(level.mlp_index) + " expects " + std::to_string(mlp.input_width));
     }
     if (level.encoding == Encoding::integrated && position_encoding.append_identity) {
       throw Error(where + ": IPE has no identity features; set pos_identity = false or use PE");
+    }
+    if ((level.encoding == Encoding::concat_pe) != (position_encoding.covariance_degrees > 0)) {
+      throw Error(where + ": covariance degrees (cov_max_deg = " +
+                  std::to_string(position_encoding.covariance_degrees) +
+                  ") go with the concatenated PE and only with it");
     }
     if (mlp.view_dependence != rays.view_dependence) {
       throw Error(where + ": the network's view dependence does not match the rays'");
@@ -62,6 +79,7 @@ std::string GraphSpec::describe() const {
                                                                   : "resampled + previous";
     const char* encoding = level.encoding == Encoding::integrated        ? "IPE"
                            : level.encoding == Encoding::frustum_mean_pe ? "PE of frustum means"
+                           : level.encoding == Encoding::concat_pe       ? "PE of frustum means ++ PE of sqrt(cov)"
                                                                          : "PE of midpoints";
     out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals, " << encoding
         << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1 << ", network "

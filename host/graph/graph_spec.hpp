@@ -24,6 +24,7 @@ enum class Encoding {
   integrated,       // IPE of the frustum Gaussian (mip-NeRF), fused Gaussian + IPE kernel
   frustum_mean_pe,  // PE of the Gaussian's mean, covariance ignored (mip-NeRF "w/o IPE")
   midpoint_pe,      // PE of the interval's midpoint on the ray (NeRF's point samples)
+  concat_pe,        // PE of the Gaussian's mean ++ PE of its covariance's signed square roots (supplement §7)
 };
 
 struct LevelSpec {
@@ -51,6 +52,8 @@ struct GraphSpec {
   RenderOptions render;
   ops::LossOptions loss;
 
+  // Features per row of `encoding` with position_encoding's degrees.
+  size_t feature_width(Encoding encoding) const;
   // Intervals of each level, in order.
   std::vector<size_t> intervals_per_level() const;
   size_t max_intervals() const;

@@ -66,7 +66,9 @@ struct StageDescription {
 // The stages in data-flow order, the order one level's pass runs them (resampling, fed by the rendering weights,
 // last): rays, sample, gaussian, encode, activations, render, resample. The NeRF baseline's sample_merge_fwd and
 // gaussian_points_fwd have no specialisations of their own and are left out (tests/ops/test_sample.cpp and
-// test_gaussian.cpp check them).
+// test_gaussian.cpp check them). The concatenated-PE variant's gaussian_concat_pe_fwd is built only under
+// MIPNERF_CONCAT_PE (a variant of one study, not a stage every scene runs) and is left out too
+// (tests/ops/test_concat_pe.cpp checks it, with and without that option).
 const std::vector<StageDescription>& ray_math_stages();
 
 }  // namespace mipnerf::ops

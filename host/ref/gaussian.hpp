@@ -47,13 +47,17 @@ FrustumMoments<T> cylinder_moments(T t0, T t1, T radius) {
   return {(t0 + t1) / 2, (t1 - t0) * (t1 - t0) / 12, radius * radius / 4};
 }
 
-// Official lift_gaussian (diag): mean = o + t_mean·d, cov = t_var·d² + r_var·(1 − d²/max(1e-10, |d|²)).
+// Official lift_gaussian (diag): mean = o + t_mean·d, cov = t_var·d² + r_var·(1 − d²/max(1e-10, |d|²)), with
+// 1 − d_a²/|d|² written as the kernel writes it, (sum of the other two squares)/max(1e-10, |d|²): equal wherever
+// |d|² ≥ 1e-10, and like the kernel a zero direction gets a zero covariance (the official form gives r_var there).
 template <typename T>
 void lift_gaussian(const T o[3], const T d[3], const FrustumMoments<T>& m, T mean[3], T cov[3]) {
-  const T d_mag_sq = std::max(T(1e-10), d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const T squares[3] = {d[0] * d[0], d[1] * d[1], d[2] * d[2]};
+  const T d_mag_sq = std::max(T(1e-10), squares[0] + squares[1] + squares[2]);
   for (int a = 0; a < 3; ++a) {
     mean[a] = o[a] + m.t_mean * d[a];
-    cov[a] = m.t_var * d[a] * d[a] + m.r_var * (1 - d[a] * d[a] / d_mag_sq);
+    const T others = squares[(a + 1) % 3] + squares[(a + 2) % 3];
+    cov[a] = m.t_var * squares[a] + m.r_var * (others / d_mag_sq);
   }
 }
 

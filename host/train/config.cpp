@@ -62,6 +62,11 @@ const std::vector<Entry>& table() {
       {{"pos_min_deg", "lowest positional-encoding degree", "model"}, &TrainConfig::pos_min_deg},
       {{"pos_max_deg", "positional-encoding degrees end before this", "model"}, &TrainConfig::pos_max_deg},
       {{"pos_identity", "append the raw position to its encoding", "model"}, &TrainConfig::pos_identity},
+      {{"cov_max_deg",
+        "without IPE: PE degrees of the frustum covariance's signed square roots, concatenated to the PE of the means "
+        "(supplement section 7; 0 = means only)",
+        "model"},
+       &TrainConfig::cov_max_deg},
       {{"view_dependence", "condition colour on the view direction", "model"}, &TrainConfig::view_dependence},
       {{"view_max_deg", "view-direction encoding degrees end before this", "model"}, &TrainConfig::view_max_deg},
       {{"density_activation", "activation of the raw density", "model"}, &TrainConfig::density_activation},
@@ -271,6 +276,12 @@ namespace {
 // Rows of the paper's tables. The NeRF baseline follows the original NeRF: point samples with PE of
 // degree 0..9 plus identity, a coarse and a fine MLP, ReLU density, plain sigmoid, resampling without
 // blur or padding, fine samples added to the coarse ones, corner-offset pixels, no area loss.
+// A bundle less some of its settings: those keep their defaults, which are mip-NeRF's.
+Bundle without(Bundle bundle, std::initializer_list<const char*> names) {
+  for (const char* name : names) bundle.erase(name);
+  return bundle;
+}
+
 Bundle variant_settings(Variant variant) {
   switch (variant) {
     case Variant::mipnerf:
@@ -288,6 +299,16 @@ Bundle variant_settings(Variant variant) {
       return {{"density_activation", "relu"}, {"density_bias", "0"}, {"rgb_padding", "0"}};
     case Variant::mipnerf_no_area_loss:  // w/o the area loss
       return {{"area_loss", "false"}};
+    case Variant::mipnerf_concat_pe:  // supplement §7, Table 2: PE (L = 12) of the mean ++ PE (L = 2) of √Σ
+      return {{"integrated_encoding", "false"}, {"pos_max_deg", "12"}, {"cov_max_deg", "2"}};
+    // Table 3's rows below mip-NeRF, each one more change to the NeRF baseline: the area loss, then pixel centres
+    // at +0.5, then "misc" (softplus(x − 1) density and the widened sigmoid: what mipnerf-no-misc takes away).
+    case Variant::nerf_area:
+      return without(variant_settings(Variant::nerf), {"area_loss"});
+    case Variant::nerf_area_center:
+      return without(variant_settings(Variant::nerf_area), {"pixel_center"});
+    case Variant::nerf_area_center_misc:
+      return without(variant_settings(Variant::nerf_area_center), {"density_activation", "density_bias", "rgb_padding"});
   }
   throw Error("internal error: variant " + std::to_string(static_cast<int>(variant)) + " has no settings");
 }
@@ -343,6 +364,10 @@ void validate(const TrainConfig& c) {
           "the nerf variant needs an even num_samples (coarse = half)");
   require(c.pos_max_deg > c.pos_min_deg && c.pos_min_deg >= 0, "need 0 <= pos_min_deg < pos_max_deg");
   require(c.pos_max_deg <= 24, "pos_max_deg above 24 makes 2^deg exceed float32's exact integers");
+  require(c.cov_max_deg >= 0 && c.cov_max_deg <= 24, "cov_max_deg must be in 0..24");
+  require(c.cov_max_deg == 0 || (!c.integrated_encoding && c.variant == ModelFamily::mipnerf),
+          "cov_max_deg (the concatenated PE of the covariance) needs integrated_encoding = false and the mipnerf "
+          "model family (frustums, not NeRF's points)");
   require(c.view_max_deg >= 1, "view_max_deg must be at least 1");
   require(c.mlp_depth >= 1 && c.mlp_width >= 1 && c.view_branch_width >= 1, "MLP sizes must be positive");
   require(c.mlp_skip >= 0, "mlp_skip must be >= 0 (use a value >= mlp_depth for no skip)");

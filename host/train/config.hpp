@@ -28,15 +28,30 @@ constexpr std::array<EnumName<ModelFamily>, 2> enum_names(ModelFamily) {
 }
 
 // The --variant bundles: rows of the paper's tables, each a set of settings (variants()).
-enum class Variant { mipnerf, mipnerf_no_area_loss, mipnerf_no_ipe, mipnerf_no_misc, mipnerf_two_mlps, nerf };
+enum class Variant {
+  mipnerf,
+  mipnerf_concat_pe,
+  mipnerf_no_area_loss,
+  mipnerf_no_ipe,
+  mipnerf_no_misc,
+  mipnerf_two_mlps,
+  nerf,
+  nerf_area,
+  nerf_area_center,
+  nerf_area_center_misc
+};
 // Alphabetical: the order --help and the unknown-variant error have always listed them in.
-constexpr std::array<EnumName<Variant>, 6> enum_names(Variant) {
+constexpr std::array<EnumName<Variant>, 10> enum_names(Variant) {
   return {{{Variant::mipnerf, "mipnerf"},
+           {Variant::mipnerf_concat_pe, "mipnerf-concat-pe"},
            {Variant::mipnerf_no_area_loss, "mipnerf-no-area-loss"},
            {Variant::mipnerf_no_ipe, "mipnerf-no-ipe"},
            {Variant::mipnerf_no_misc, "mipnerf-no-misc"},
            {Variant::mipnerf_two_mlps, "mipnerf-two-mlps"},
-           {Variant::nerf, "nerf"}}};
+           {Variant::nerf, "nerf"},
+           {Variant::nerf_area, "nerf-area"},
+           {Variant::nerf_area_center, "nerf-area-center"},
+           {Variant::nerf_area_center_misc, "nerf-area-center-misc"}}};
 }
 
 // Every setting of a run. Defaults are the paper's (mip-NeRF, Blender); see presets() for smaller ones.
@@ -64,6 +79,9 @@ struct TrainConfig {
   int pos_min_deg = 0;              // positional encoding degrees [min, max): L = 16 → 96 features
   int pos_max_deg = 16;
   bool pos_identity = false;        // append the raw position (NeRF does, mip-NeRF does not)
+  // With integrated_encoding = false: PE degrees 0..cov_max_deg-1 of the frustum covariance's signed square roots,
+  // concatenated to the PE of the means (supplement §7, Table 2: 2). 0 = the means alone ("w/o IPE").
+  int cov_max_deg = 0;
   bool view_dependence = true;      // condition colour on the view direction (PE degrees 0..view_max_deg-1 + identity)
   int view_max_deg = 4;
   DensityActivation density_activation = DensityActivation::softplus;

@@ -10,6 +10,7 @@ EncodingOptions position_encoding(const TrainConfig& c) {
   e.min_deg = c.pos_min_deg;
   e.max_deg = c.pos_max_deg;
   e.append_identity = c.pos_identity;
+  e.covariance_degrees = c.cov_max_deg;
   return e;
 }
 
@@ -42,9 +43,9 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
 
   const graph::Encoding encoding = nerf                    ? graph::Encoding::midpoint_pe
                                    : c.integrated_encoding ? graph::Encoding::integrated
+                                   : c.cov_max_deg > 0     ? graph::Encoding::concat_pe
                                                            : graph::Encoding::frustum_mean_pe;
-  const size_t input_width = encoding == graph::Encoding::integrated ? spec.position_encoding.ipe_width()
-                                                                     : spec.position_encoding.pe_width();
+  const size_t input_width = spec.feature_width(encoding);
   for (int l = 0; l < c.num_levels; ++l) {
     graph::LevelSpec level;
     const bool first = l == 0, last = l == c.num_levels - 1;

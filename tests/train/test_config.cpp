@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "train/config.hpp"
+#include "train/model.hpp"
 
 using namespace mipnerf;
 
@@ -50,6 +51,33 @@ TEST_CASE("config: order is defaults, preset, variant, explicit settings") {
   for (const auto& [name, bundle] : train::presets()) {
     for (const auto& [variant, v] : train::variants()) CHECK_NOTHROW(train::resolve_config(name, variant, {}));
   }
+}
+
+TEST_CASE("config: Table 3's NeRF rows add one change each, and the concatenated PE is supplement section 7's") {
+  const auto nerf = train::resolve_config("paper", "nerf", {});
+  const auto area = train::resolve_config("paper", "nerf-area", {});
+  const auto center = train::resolve_config("paper", "nerf-area-center", {});
+  const auto misc = train::resolve_config("paper", "nerf-area-center-misc", {});
+  // Each row differs from the one before in exactly its change.
+  CHECK(train::differences(nerf, area) == std::vector<std::string>{"area_loss: false -> true"});
+  CHECK(train::differences(area, center) == std::vector<std::string>{"pixel_center: 0 -> 0.5"});
+  CHECK(train::differences(center, misc) == std::vector<std::string>{"density_activation: relu -> softplus",
+                                                                     "density_bias: 0 -> -1", "rgb_padding: 0 -> 0.001"});
+  // Still the NeRF baseline in everything else: points with PE, two networks, no blur or padding in resampling.
+  CHECK(misc.variant == train::ModelFamily::nerf);
+  CHECK(!misc.single_mlp);
+  CHECK(misc.resample_padding == 0.0);
+  const auto concat = train::resolve_config("paper", "mipnerf-concat-pe", {});
+  CHECK(train::differences(train::resolve_config("paper", "mipnerf", {}), concat) ==
+        std::vector<std::string>{"integrated_encoding: true -> false", "pos_max_deg: 16 -> 12", "cov_max_deg: 0 -> 2"});
+  const auto spec = train::make_graph_spec(concat, false);
+  CHECK(spec.levels.at(0).encoding == graph::Encoding::concat_pe);
+  CHECK(spec.mlps.at(0).input_width == 96u);  // 72 + 24: IPE's width, as the paper pairs them
+  // Covariance degrees without the concatenated PE are refused, naming what they need.
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"cov_max_deg", "2"}}),
+                       doctest::Contains("cov_max_deg (the concatenated PE of the covariance) needs"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "nerf", {{"cov_max_deg", "2"}}),
+                       doctest::Contains("needs integrated_encoding = false and the mipnerf model family"), Error);
 }
 
 TEST_CASE("config: unknown names and bad values are refused with what is accepted") {
@@ -146,8 +174,9 @@ TEST_CASE("config: an unknown value of an enum setting is refused with the setti
     CHECK(train::find_setting(name).help.rfind(choices + ": ", 0) == 0);
   }
   CHECK_THROWS_WITH_AS(train::resolve_config("paper", "nosuch", {}),
-                       "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-no-area-loss, mipnerf-no-ipe, "
-                       "mipnerf-no-misc, mipnerf-two-mlps, nerf",
+                       "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-concat-pe, mipnerf-no-area-loss, "
+                       "mipnerf-no-ipe, mipnerf-no-misc, mipnerf-two-mlps, nerf, nerf-area, nerf-area-center, "
+                       "nerf-area-center-misc",
                        Error);
   CHECK_THROWS_WITH_AS(train::find_setting("nosuch"), doctest::Contains("unknown setting 'nosuch'"), Error);
 }
@@ -181,8 +210,9 @@ TEST_CASE("config: JSON spells enums as before, and records the --variant bundle
   auto bad = j;
   bad["variant_bundle"] = "mipnerf-no-everything";
   CHECK_THROWS_WITH_AS(train::from_json(bad.dump(), "cfg.json"),
-                       "cfg.json: 'variant_bundle' = 'mipnerf-no-everything': expected mipnerf | mipnerf-no-area-loss "
-                       "| mipnerf-no-ipe | mipnerf-no-misc | mipnerf-two-mlps | nerf",
+                       "cfg.json: 'variant_bundle' = 'mipnerf-no-everything': expected mipnerf | mipnerf-concat-pe | "
+                       "mipnerf-no-area-loss | mipnerf-no-ipe | mipnerf-no-misc | mipnerf-two-mlps | nerf | nerf-area "
+                       "| nerf-area-center | nerf-area-center-misc",
                        Error);
 }
 
@@ -254,6 +284,10 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("spherify") == false);
   CHECK(!old.spherify);
   written.erase("spherify");
+  // cov_max_deg (the concatenated-PE variant's) too; without it a configuration loads with its default, 0 (off).
+  CHECK(written.at("cov_max_deg") == 0);
+  CHECK(old.cov_max_deg == 0);
+  written.erase("cov_max_deg");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
