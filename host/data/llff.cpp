@@ -110,7 +110,8 @@ void read_poses_bounds(const std::string& file, LlffCapture& capture) {
   if (array.shape.size() != 2 || array.shape[1] != 17 || array.shape[0] == 0) {
     std::string shape;
     for (size_t d : array.shape) shape += (shape.empty() ? "" : "x") + std::to_string(d);
-    throw Error(file + ": shape " + (shape.empty() ? "()" : shape) + "; expected N x 17 (a 3x5 pose and 2 bounds a view)");
+    throw Error(file + ": shape " + (shape.empty() ? "()" : shape) +
+                "; expected N x 17 (a 3x5 pose and 2 bounds a view)");
   }
   for (size_t i = 0; i < array.shape[0]; ++i) {
     const double* row = array.values.data() + 17 * i;
@@ -244,7 +245,8 @@ std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& opt
   near = options.near.value_or(near);
   far = options.far.value_or(far);
   if (!(near >= 0.0) || !(far > near)) {
-    throw Error(source + ": near = " + std::to_string(near) + ", far = " + std::to_string(far) + ": need 0 <= near < far");
+    throw Error(source + ": near = " + std::to_string(near) + ", far = " + std::to_string(far) +
+                ": need 0 <= near < far");
   }
   SplitSpec train{"train", source, true, {}}, test{"test", source, true, {}};
   for (size_t i = 0; i < capture.image_files.size(); ++i) {
@@ -303,8 +305,8 @@ std::vector<Camera> llff_render_path(const LlffCapture& capture, const LoadOptio
     };
     for (int k = 0; k < frames; ++k) {
       const double theta = 2.0 * M_PI * turns * k / frames;
-      const Vec3 c = transform({std::cos(theta) * radii[0], -std::sin(theta) * radii[1],
-                                -std::sin(theta * z_rate) * radii[2]});
+      const Vec3 c =
+          transform({std::cos(theta) * radii[0], -std::sin(theta) * radii[1], -std::sin(theta * z_rate) * radii[2]});
       const Vec3 z = normalize(sub(c, transform({0, 0, -focus})));
       path.push_back(view_matrix(z, up, c));
     }

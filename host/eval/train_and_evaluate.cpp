@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "core/error.hpp"
 #include "eval/image_renderer.hpp"
@@ -21,14 +22,23 @@ void write_val_png(const std::string& folder, const ImageScore& score, const Ren
   io::write_png((fs::path(folder) / name).string(), image.width, image.height, 3, image.rgb.data());
 }
 
+// The val split as the run's configuration loads it.
+data::Dataset load_val(const train::TrainConfig& c, const std::string& data_path) {
+  return data::load_dataset(data_path, train::load_options(c, data_path, {"val"}));
+}
+
+std::unique_ptr<ImageRenderer> val_renderer(ocl::Context& ctx, train::Trainer& trainer, const data::Split& val) {
+  const size_t chunk = static_cast<size_t>(trainer.config().render_chunk_rays);
+  return std::make_unique<ImageRenderer>(ctx, trainer.spec(), trainer.network_pointers(), val.cameras,
+                                         render_chunk_rays(trainer.spec(), chunk, ctx.device_info(), 0));
+}
+
 // The first config.val_views views of the val split (all: 0), rendered in chunks of config.render_chunk_rays.
 SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const TrainAndEvaluateOptions& options) {
   const auto& c = trainer.config();
-  const data::Dataset val_data =
-      data::load_dataset(options.data_path, train::load_options(c, options.data_path, {"val"}));
+  const data::Dataset val_data = load_val(c, options.data_path);
   const data::Split& val = val_data.split("val");
-  ImageRenderer renderer(ctx, trainer.spec(), trainer.network_pointers(), val.cameras,
-                         render_chunk_rays(trainer.spec(), static_cast<size_t>(c.render_chunk_rays), ctx.device_info(), 0));
+  const std::unique_ptr<ImageRenderer> renderer = val_renderer(ctx, trainer, val);
   EvaluateOptions evaluate;
   evaluate.max_views = static_cast<size_t>(c.val_views);
   evaluate.progress = options.val_progress;
@@ -38,8 +48,28 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
     };
   }
   if (options.on_val_start) options.on_val_start(select_views(val, evaluate.max_views).size());
-  return evaluate_split(renderer, val, evaluate);
+  return evaluate_split(*renderer, val, evaluate);
 }
+
+// The val scores during training (config.val_every): the val split is loaded and the renderer built at the first
+// score and kept; the renderer reads the networks the trainer updates in place.
+struct PeriodicVal {
+  ocl::Context* ctx;
+  std::string data_path;
+  std::unique_ptr<data::Dataset> val_data;
+  std::unique_ptr<ImageRenderer> renderer;
+
+  train::ValScore operator()(train::Trainer& trainer) {
+    if (!renderer) {
+      val_data = std::make_unique<data::Dataset>(load_val(trainer.config(), data_path));
+      renderer = val_renderer(*ctx, trainer, val_data->split("val"));
+    }
+    EvaluateOptions evaluate;
+    evaluate.max_views = static_cast<size_t>(trainer.config().val_views);
+    const SplitScores scores = evaluate_split(*renderer, val_data->split("val"), evaluate);
+    return {scores.mean_psnr, scores.mean_ssim, scores.images.size()};
+  }
+};
 
 }  // namespace
 
@@ -49,7 +79,13 @@ TrainAndEvaluateResult train_and_evaluate(ocl::Context& ctx, const train::TrainC
   if (options.on_setup) options.on_setup(trainer);
   TrainAndEvaluateResult result;
   result.record = train_record(trainer, ctx.device_info().name);
-  result.train = trainer.run(options.hooks);
+  train::TrainHooks hooks = options.hooks;
+  if (config.val_every > 0 && !hooks.score_val) {
+    // One object the hook's copies share (std::function copies its target).
+    auto periodic = std::make_shared<PeriodicVal>(PeriodicVal{&ctx, options.data_path, nullptr, nullptr});
+    hooks.score_val = [periodic](train::Trainer& t) { return (*periodic)(t); };
+  }
+  result.train = trainer.run(hooks);
   if (options.on_trained) options.on_trained(trainer, result.train);
   if (!options.evaluate_val || result.train.interrupted) return result;
   try {

@@ -8,14 +8,14 @@ namespace {
 
 // Element counts of every buffer the graph allocates, computed in one place for allocation and estimates.
 struct BufferPlan {
-  size_t rays = 0;       // R: rays per chunk
-  size_t samples = 0;    // S: R · max intervals
+  size_t rays = 0;     // R: rays per chunk
+  size_t samples = 0;  // S: R · max intervals
   size_t view_width = 0;
   size_t feature_width = 0;
   bool needs_points = false;  // a PE encoding needs means/covs buffers
   size_t drawn_edges = 0;     // union levels: R · (new + 1)
   std::vector<size_t> level_intervals;
-  size_t partial_slots = 0;   // per level (training)
+  size_t partial_slots = 0;  // per level (training)
   bool training = false;
 
   // Floats of every buffer but the ray bundle (RayBundle::bytes_for).
@@ -41,8 +41,8 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
   for (const auto& level : spec.levels) {
     plan.feature_width = std::max(plan.feature_width, spec.feature_width(level.encoding));
     // The fused kernels (IPE, concatenated PE) compute their Gaussians inline; the PE paths stage means first.
-    plan.needs_points = plan.needs_points ||
-                        (level.encoding != Encoding::integrated && level.encoding != Encoding::concat_pe);
+    plan.needs_points =
+        plan.needs_points || (level.encoding != Encoding::integrated && level.encoding != Encoding::concat_pe);
     if (level.sampling == Sampling::resample_union) {
       plan.drawn_edges = std::max(plan.drawn_edges, max_chunk_rays * (level.new_samples + 1));
     }
@@ -72,8 +72,7 @@ constexpr size_t kSmallestLossGroup = 64;
 }  // namespace
 
 size_t Graph::bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays) {
-  size_t bytes =
-      plan_for(spec, mode, max_chunk_rays, max_batch_rays, kSmallestLossGroup).float_count() * sizeof(float);
+  size_t bytes = plan_for(spec, mode, max_chunk_rays, max_batch_rays, kSmallestLossGroup).float_count() * sizeof(float);
   bytes += ops::RayBundle::bytes_for(max_chunk_rays) + 2 * max_chunk_rays * sizeof(uint32_t);
   for (size_t i = 0; i < spec.mlps.size(); ++i) {
     bytes += mlp::Workspace::bytes_for(spec.mlps[i], std::max<size_t>(1, max_rows(spec, i, max_chunk_rays)),
@@ -151,8 +150,8 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> ne
     levels_.push_back(std::move(level));
   }
   for (size_t i = 0; i < networks_.size(); ++i) {
-    workspaces_.push_back(networks_[i]->make_workspace(std::max<size_t>(1, max_rows(spec_, i, R)), R,
-                                                       workspace_mode(mode_)));
+    workspaces_.push_back(
+        networks_[i]->make_workspace(std::max<size_t>(1, max_rows(spec_, i, R)), R, workspace_mode(mode_)));
   }
 }
 
@@ -186,15 +185,15 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
     case Sampling::resample: {
       const LevelBuffers& previous = levels_[l - 1];
       resample_->fwd(resample_options_,
-                     {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples},
-                     out.t_edges, rng);
+                     {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples}, out.t_edges,
+                     rng);
       break;
     }
     case Sampling::resample_union: {
       const LevelBuffers& previous = levels_[l - 1];
       resample_->fwd(resample_options_,
-                     {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples},
-                     drawn_edges_, rng);
+                     {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples}, drawn_edges_,
+                     rng);
       sample_->merge({previous.t_edges, drawn_edges_, n_rays, previous.intervals + 1, level.new_samples + 1},
                      out.t_edges);
       break;
@@ -256,8 +255,8 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
                    {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
   }
   ocl::StageScope stage(*ctx_, "render backward");
-  render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
-                   buffers.weights, {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_});
+  render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals}, buffers.weights,
+                   {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_});
   ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
   networks_[level.mlp_index]->backward(workspaces_[level.mlp_index],
                                        {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)});

@@ -100,8 +100,8 @@ class Graph {
  private:
   struct LevelBuffers {
     size_t intervals = 0;
-    ocl::DeviceArray<float> t_edges;  // [R][N+1]
-    ocl::DeviceArray<float> weights;  // [R][N]
+    ocl::DeviceArray<float> t_edges;   // [R][N+1]
+    ocl::DeviceArray<float> weights;   // [R][N]
     ocl::DeviceArray<float> partials;  // [slots][2] loss sums per work-group (training)
     LevelOutputs outputs;
   };
@@ -131,15 +131,15 @@ class Graph {
   ResampleOptions resample_options_;
 
   // Chunk buffers, R = max_chunk_rays, S = R · max intervals.
-  ocl::DeviceArray<uint32_t> camera_ids_, pixel_ids_;                  // [R]
-  ops::RayBundle chunk_rays_;                                          // R rays: the chunk's, from rays_
-  ocl::DeviceArray<float> view_features_;                              // [R][view width]
-  ocl::DeviceArray<float> features_;                                   // [S][position features]
-  ocl::DeviceArray<float> means_, covs_;                               // [S][3] (PE encodings only)
-  ocl::DeviceArray<float> drawn_edges_;                                // [R][new + 1] (union levels only)
-  ocl::DeviceArray<float> raw_density_, raw_rgb_;                      // [S], [S][3]
-  ocl::DeviceArray<float> d_comp_rgb_;                                 // [R][3] (training)
-  ocl::DeviceArray<float> d_raw_density_, d_raw_rgb_;                  // [S], [S][3] (training)
+  ocl::DeviceArray<uint32_t> camera_ids_, pixel_ids_;  // [R]
+  ops::RayBundle chunk_rays_;                          // R rays: the chunk's, from rays_
+  ocl::DeviceArray<float> view_features_;              // [R][view width]
+  ocl::DeviceArray<float> features_;                   // [S][position features]
+  ocl::DeviceArray<float> means_, covs_;               // [S][3] (PE encodings only)
+  ocl::DeviceArray<float> drawn_edges_;                // [R][new + 1] (union levels only)
+  ocl::DeviceArray<float> raw_density_, raw_rgb_;      // [S], [S][3]
+  ocl::DeviceArray<float> d_comp_rgb_;                 // [R][3] (training)
+  ocl::DeviceArray<float> d_raw_density_, d_raw_rgb_;  // [S], [S][3] (training)
   std::vector<LevelBuffers> levels_;
   std::vector<mlp::Workspace> workspaces_;  // one per network
 

@@ -43,8 +43,9 @@ void GraphSpec::validate() const {
     const auto& level = levels[l];
     const std::string where = "graph level " + std::to_string(l);
     if (level.new_samples < 1) throw Error(where + ": needs at least one sample");
-    if (level.mlp_index >= mlps.size()) throw Error(where + ": names network " + std::to_string(level.mlp_index) +
-                                                    " but there are " + std::to_string(mlps.size()));
+    if (level.mlp_index >= mlps.size())
+      throw Error(where + ": names network " + std::to_string(level.mlp_index) + " but there are " +
+                  std::to_string(mlps.size()));
     const auto& mlp = mlps[level.mlp_index];
     const size_t width = feature_width(level.encoding);
     if (mlp.input_width != width) {
@@ -55,8 +56,8 @@ void GraphSpec::validate() const {
       throw Error(where + ": IPE has no identity features; set pos_identity = false or use PE");
     }
     if ((level.encoding == Encoding::concat_pe) != (position_encoding.covariance_degrees > 0)) {
-      throw Error(where + ": covariance degrees (cov_max_deg = " +
-                  std::to_string(position_encoding.covariance_degrees) +
+      throw Error(where +
+                  ": covariance degrees (cov_max_deg = " + std::to_string(position_encoding.covariance_degrees) +
                   ") go with the concatenated PE and only with it");
     }
     if (mlp.view_dependence != rays.view_dependence) {

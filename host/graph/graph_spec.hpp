@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "core/stage_options.hpp"
 #include "mlp/mlp_config.hpp"
 #include "ops/loss.hpp"
-#include "core/stage_options.hpp"
 
 namespace mipnerf::graph {
 
@@ -43,8 +43,8 @@ struct GraphSpec {
   std::vector<LevelSpec> levels;
   std::vector<mlp::MlpConfig> mlps;  // the networks, indexed by LevelSpec::mlp_index
   RaysOptions rays;
-  SampleOptions sample;          // `randomized` is set per call (training vs rendering)
-  ResampleOptions resample;      // idem
+  SampleOptions sample;      // `randomized` is set per call (training vs rendering)
+  ResampleOptions resample;  // idem
   GaussianOptions gaussian;
   EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
   EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)

@@ -100,8 +100,8 @@ void Encode::gaussian_concat_pe(const EncodingOptions& options, const GaussianIn
   const size_t rows = in.n_rays * in.n_samples;
   detail::require(features, rows * options.concat_pe_width(), where);
   detail::to_uint(rows, where, "items");
-  ocl::set_args(*gaussian_concat_pe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges,
-                features, detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
+  ocl::set_args(*gaussian_concat_pe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features,
+                detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
                 static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg),
                 static_cast<cl_uint>(options.append_identity ? 1 : 0), static_cast<cl_int>(options.covariance_degrees));
   ocl::launch_1d(*ctx_, *gaussian_concat_pe_, rows, where);

@@ -35,8 +35,11 @@ mlp::LrSchedule schedule_of(const TrainConfig& c) {
 // On resume, the log keeps the rows of the steps the checkpoint holds: rows after it (logged before an interrupt,
 // about to be trained again) and a row cut short by a kill are dropped, so each step appears once. Atomic.
 constexpr const char* kTrainingLogHeader = "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
+// val_log.csv (val_every): train_seconds is the training clock at the score (val time excluded), val_seconds what
+// the scoring itself took.
+constexpr const char* kValLogHeader = "step,train_seconds,val_psnr,val_ssim,val_images,val_seconds\n";
 
-void trim_training_log(const std::string& csv_path, int64_t step) {
+void trim_log(const std::string& csv_path, int64_t step, const char* header_line) {
   std::ifstream in(csv_path);
   std::string kept, line;
   bool header = true;
@@ -50,7 +53,16 @@ void trim_training_log(const std::string& csv_path, int64_t step) {
     header = false;
     kept += line + "\n";
   }
-  io::write_bytes_atomically(csv_path, kept.empty() ? std::string(kTrainingLogHeader) : kept);
+  io::write_bytes_atomically(csv_path, kept.empty() ? std::string(header_line) : kept);
+}
+
+// Opens a run's CSV log: appended to (its rows after `step` dropped) when resuming, else started anew.
+void open_log(std::ofstream& csv, const std::string& csv_path, int64_t step, const char* header_line) {
+  const bool append = step > 0 && fs::exists(csv_path);
+  if (append) trim_log(csv_path, step, header_line);
+  csv.open(csv_path, append ? std::ios::app : std::ios::trunc);
+  if (!csv) throw Error(csv_path + ": cannot write this log; check the folder's permissions and free space");
+  if (!append) csv << header_line << std::flush;
 }
 
 }  // namespace
@@ -60,6 +72,7 @@ struct Trainer::Impl {
   ops::BatchArrays batch;
   graph::Graph graph;
   std::ofstream csv;
+  std::ofstream val_csv;  // opened with the first val score
 
   Impl(ocl::Context& ctx, const data::Split& split, size_t batch_rays, const graph::GraphSpec& spec,
        std::vector<mlp::Mlp*> networks, size_t chunk_rays)
@@ -68,8 +81,8 @@ struct Trainer::Impl {
         graph(ctx, spec, std::move(networks), graph::GraphMode::training, chunk_rays, batch_rays) {}
 };
 
-Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string& data_path,
-                 const std::string& out_dir, bool resume)
+Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string& data_path, const std::string& out_dir,
+                 bool resume)
     : ctx_(&ctx), config_(config), out_dir_(out_dir) {
   validate(config_);
   // Before the networks exist: every product from the first one on runs on the chosen backend.
@@ -115,12 +128,10 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   }
   io::write_bytes_atomically((fs::path(out_dir_) / "config.json").string(), to_json(config_) + "\n");
 
-  const std::string csv_path = (fs::path(out_dir_) / "train_log.csv").string();
-  const bool append = step_ > 0 && fs::exists(csv_path);
-  if (append) trim_training_log(csv_path, step_);
-  impl_->csv.open(csv_path, append ? std::ios::app : std::ios::trunc);
-  if (!impl_->csv) throw Error(csv_path + ": cannot write the training log");
-  if (!append) impl_->csv << kTrainingLogHeader;
+  open_log(impl_->csv, (fs::path(out_dir_) / "train_log.csv").string(), step_, kTrainingLogHeader);
+  if (config_.val_every > 0) {
+    open_log(impl_->val_csv, (fs::path(out_dir_) / "val_log.csv").string(), step_, kValLogHeader);
+  }
 }
 
 Trainer::~Trainer() = default;
@@ -183,7 +194,10 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   int64_t last_saved = -1;
   auto window_start = clock::now();
   int64_t window_steps = 0;
-  auto seconds_so_far = [&] { return seconds_before_ + std::chrono::duration<double>(clock::now() - run_start).count(); };
+  double val_seconds = 0.0;  // spent scoring val views in this run: not training time
+  auto seconds_so_far = [&] {
+    return seconds_before_ + std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
+  };
 
   while (step_ < config_.steps) {
     const int64_t step = step_ + 1;
@@ -223,8 +237,8 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
     } else {
       ++result.skipped_steps;
       ++consecutive_bad;
-      ctx_->log(LogLevel::warning, "step " + std::to_string(step) +
-                                       ": non-finite loss or gradients; the update was skipped");
+      ctx_->log(LogLevel::warning,
+                "step " + std::to_string(step) + ": non-finite loss or gradients; the update was skipped");
       if (consecutive_bad >= config_.max_bad_steps) {
         const auto saved = list_checkpoints(checkpoint_folder());
         throw Error("training stopped at step " + std::to_string(step) + " after " + std::to_string(consecutive_bad) +
@@ -257,6 +271,18 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
       window_steps = 0;
     }
     if (hooks.on_step) hooks.on_step(report);
+    if (config_.val_every > 0 && hooks.score_val && (step % config_.val_every == 0 || step == config_.steps)) {
+      const auto val_start = clock::now();
+      const ValScore score = hooks.score_val(*this);
+      const double took = std::chrono::duration<double>(clock::now() - val_start).count();
+      val_seconds += took;
+      impl_->val_csv << step << "," << std::setprecision(6) << seconds_so_far() << "," << std::setprecision(8)
+                     << score.psnr << "," << score.ssim << "," << score.images << "," << std::setprecision(6) << took
+                     << "\n"
+                     << std::flush;
+      window_start = clock::now();  // the next rays/s window starts after the scoring
+      window_steps = 0;
+    }
 
     const bool stop = hooks.should_stop && hooks.should_stop();
     // Periodic checkpoints only after good steps, so a non-finite streak never replaces (or prunes) the
@@ -264,7 +290,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
     if ((finite && step % config_.checkpoint_every == 0) || step == config_.steps || stop) {
       seconds_before_ = seconds_so_far();
       result.checkpoint = save_checkpoint();
-      seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count();
+      seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
       last_saved = step;
     }
     if (stop) {
@@ -275,10 +301,10 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   if (last_saved != step_) {  // nothing left to do (e.g. resumed a finished run): make sure a checkpoint exists
     seconds_before_ = seconds_so_far();
     result.checkpoint = save_checkpoint();
-    seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count();
+    seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
   }
   result.last_step = step_;
-  result.seconds_this_run = std::chrono::duration<double>(clock::now() - run_start).count();
+  result.seconds_this_run = std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
   result.train_seconds = seconds_before_ + result.seconds_this_run;
   seconds_before_ = result.train_seconds;
   return result;

@@ -21,31 +21,43 @@ namespace mipnerf::train {
 
 // What one step did, for progress displays.
 struct StepReport {
-  int64_t step = 0;           // 1-based number of this step
+  int64_t step = 0;  // 1-based number of this step
   int64_t total_steps = 0;
-  double loss = 0.0;          // the official weighted total (λ·coarse + fine)
-  double psnr = 0.0;          // per-channel PSNR of the last level on this batch
+  double loss = 0.0;  // the official weighted total (λ·coarse + fine)
+  double psnr = 0.0;  // per-channel PSNR of the last level on this batch
   double learning_rate = 0.0;
   double rays_per_second = 0.0;  // over the steps since the previous report
   double train_seconds = 0.0;    // of this run plus those before a resume
   bool skipped = false;          // non-finite loss or gradients: no update was applied
 };
 
+class Trainer;
+
+// A val score taken during training (config.val_every): one row of out_dir/val_log.csv.
+struct ValScore {
+  double psnr = 0.0;  // mean over the scored views (and scales)
+  double ssim = 0.0;
+  size_t images = 0;  // how many images were scored
+};
+
 struct TrainHooks {
   std::function<void(const StepReport&)> on_step;  // after every step
   std::function<bool()> should_stop;               // checked after every step: true → checkpoint and return
+  // Every config.val_every steps and after the last: scores the trainer's networks on val views. Its wall time is
+  // logged beside the score and kept out of the training seconds (StepReport, TrainResult, checkpoints).
+  std::function<ValScore(Trainer&)> score_val;
   // Tests: called after the backward of every step, before the gradients are checked (e.g. to inject a NaN).
   std::function<void(int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks)> after_backward;
 };
 
 struct TrainResult {
-  int64_t last_step = 0;          // the step the final checkpoint holds
-  bool interrupted = false;       // stopped by should_stop before the configured steps
-  int64_t skipped_steps = 0;      // non-finite steps of this run
-  double train_seconds = 0.0;     // total, including before a resume
+  int64_t last_step = 0;       // the step the final checkpoint holds
+  bool interrupted = false;    // stopped by should_stop before the configured steps
+  int64_t skipped_steps = 0;   // non-finite steps of this run
+  double train_seconds = 0.0;  // total, including before a resume
   double seconds_this_run = 0.0;
-  std::string checkpoint;         // path of the final checkpoint
-  double final_psnr = 0.0;        // last step's batch PSNR
+  std::string checkpoint;   // path of the final checkpoint
+  double final_psnr = 0.0;  // last step's batch PSNR
 };
 
 class Trainer {
@@ -86,8 +98,8 @@ class Trainer {
   std::vector<std::unique_ptr<mlp::Mlp>> networks_;
   std::vector<std::unique_ptr<mlp::Adam>> optimisers_;
   std::unique_ptr<Impl> impl_;
-  int64_t step_ = 0;              // steps completed
-  double seconds_before_ = 0.0;   // training seconds of earlier runs (resume)
+  int64_t step_ = 0;             // steps completed
+  double seconds_before_ = 0.0;  // training seconds of earlier runs (resume)
 };
 
 }  // namespace mipnerf::train

@@ -14,8 +14,8 @@
 #include "data/scene_traits.hpp"
 #include "io/npy.hpp"
 #include "support/jpeg_writer.hpp"
-#include "train/scene_effects.hpp"
 #include "support/temp_scene.hpp"
+#include "train/scene_effects.hpp"
 
 using namespace mipnerf;
 namespace fs = std::filesystem;
@@ -52,9 +52,7 @@ using data::Matrix34;
 double rotation_product(const Matrix34& a, const Matrix34& b, int r, int c) {
   return a[r] * b[c] + a[4 + r] * b[4 + c] + a[8 + r] * b[8 + c];
 }
-double distance(const Matrix34& a, const Matrix34& b) {
-  return std::hypot(a[3] - b[3], a[7] - b[7], a[11] - b[11]);
-}
+double distance(const Matrix34& a, const Matrix34& b) { return std::hypot(a[3] - b[3], a[7] - b[7], a[11] - b[11]); }
 
 }  // namespace
 
@@ -85,7 +83,8 @@ TEST_CASE("npy: float64 arrays round-trip, and malformed files are one line nami
       {with_header("{'descr': '<i4', 'fortran_order': False, 'shape': (2,), }", 8), "dtype '<i4'"},
       {with_header("{'descr': '>f8', 'fortran_order': False, 'shape': (2,), }", 16), "dtype '>f8'"},
       {with_header("{'descr': '<f8', 'fortran_order': True, 'shape': (2, 2), }", 32), "Fortran-order"},
-      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (3, 17), }", 8 * 60), "480 bytes of data where its shape needs 408"},
+      {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (3, 17), }", 8 * 60),
+       "480 bytes of data where its shape needs 408"},
       {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (99999999999, 99999999999), }", 8),
        "needs more data"},
       {with_header("{'descr': '<f8', 'fortran_order': False, 'shape': (2,), 'extra': 1}", 16), "unknown key 'extra'"},
@@ -145,7 +144,8 @@ TEST_CASE("llff: the official transformations keep the capture's geometry, scale
   CHECK(!data::looks_360(capture));
 }
 
-TEST_CASE("llff: every 8th view is held out as test (and val), NDC bounds, factors from images_<factor> or downsampled") {
+TEST_CASE(
+    "llff: every 8th view is held out as test (and val), NDC bounds, factors from images_<factor> or downsampled") {
   data::LoadOptions options;
   options.factor = 4;
   const data::Dataset dataset = data::load_dataset(capture_dir(), options);
@@ -212,7 +212,8 @@ TEST_CASE("llff: a capture of JPEG photos loads like one of PNGs") {
   for (const auto& entry : fs::directory_iterator(dir / "images_4")) {
     const data::RgbaImage png = data::load_rgba_image(entry.path().string());
     std::vector<float> rgb;
-    for (size_t p = 0; p < png.rgba.size() / 4; ++p) rgb.insert(rgb.end(), png.rgba.begin() + 4 * p, png.rgba.begin() + 4 * p + 3);
+    for (size_t p = 0; p < png.rgba.size() / 4; ++p)
+      rgb.insert(rgb.end(), png.rgba.begin() + 4 * p, png.rgba.begin() + 4 * p + 3);
     test::write_jpeg((dir / "images_4" / entry.path().stem()).string() + ".JPG", png.width, png.height, rgb, 100);
     fs::remove(entry.path());
   }

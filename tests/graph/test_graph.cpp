@@ -17,8 +17,8 @@
 #include "ref/sample.hpp"
 #include "support/gemm_backends.hpp"
 #include "support/test_context.hpp"
-#include "train/model.hpp"
 #include "support/train_fixtures.hpp"
+#include "train/model.hpp"
 
 using namespace mipnerf;
 
@@ -27,8 +27,8 @@ namespace {
 std::vector<double> to_double(const std::vector<float>& v) { return {v.begin(), v.end()}; }
 
 struct ReferenceStep {
-  std::vector<double> level_loss;            // official per-level loss
-  std::vector<std::vector<double>> grads;    // per network
+  std::vector<double> level_loss;          // official per-level loss
+  std::vector<std::vector<double>> grads;  // per network
 };
 
 // The graph's training step for one batch, written out with the reference functions (no chunks).
@@ -62,14 +62,13 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     if (level.encoding == graph::Encoding::integrated) {
       ref::gaussian_ipe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R, n);
     } else {
-      ref::gaussian_concat_pe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R,
-                                  n);
+      ref::gaussian_concat_pe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R, n);
     }
     const auto& mlp_config = spec.mlps[level.mlp_index];
     ref::MlpTape tape;
     ref::mlp_forward(mlp_config, params[level.mlp_index], features, view_features, R, n, raw_density, raw_rgb, &tape);
-    ref::render_raw_fwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, comp, acc, distance,
-                        weights, R, n);
+    ref::render_raw_fwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, comp, acc, distance, weights,
+                        R, n);
     std::vector<double> d_comp(3 * R), partials(2), d_raw_rgb, d_raw_density;
     ref::loss_fwd_bwd(comp.data(), target.data(), spec.loss.multiscale ? lossmult.data() : nullptr, level.loss_weight,
                       1.0 / lossmult_sum, d_comp.data(), partials.data(), 0, 0, R, R);
@@ -84,8 +83,8 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
   return out;
 }
 
-void check_step_against_reference_on(mlp::GemmBackend backend, const std::string& variant,
-                                     const std::string& data_path, const train::Bundle& settings) {
+void check_step_against_reference_on(mlp::GemmBackend backend, const std::string& variant, const std::string& data_path,
+                                     const train::Bundle& settings) {
   auto& ctx = test::test_context();
   test::GemmBackendScope scope(ctx, backend);
   INFO("gemm_backend = " << enum_name(backend));
@@ -123,10 +122,10 @@ void check_step_against_reference_on(mlp::GemmBackend backend, const std::string
   std::vector<std::vector<double>> params;
   for (auto& n : networks) params.push_back(to_double(n->download_params()));
   const auto ref_lossmult = spec.loss.multiscale ? to_double(lossmult) : std::vector<double>(batch_rays, 1.0);
-  const auto expected = reference_step(spec, params, to_double(device_data.cameras().download(ctx)),
-                                       batch.camera_ids.download(ctx), batch.pixel_ids.download(ctx),
-                                       to_double(batch.target_rgb.download(ctx)), ref_lossmult,
-                                       device_data.num_cameras(), {config.seed, step, 0});
+  const auto expected =
+      reference_step(spec, params, to_double(device_data.cameras().download(ctx)), batch.camera_ids.download(ctx),
+                     batch.pixel_ids.download(ctx), to_double(batch.target_rgb.download(ctx)), ref_lossmult,
+                     device_data.num_cameras(), {config.seed, step, 0});
   REQUIRE(losses.size() == expected.level_loss.size());
   for (size_t l = 0; l < losses.size(); ++l) {
     INFO("level " << l);
@@ -164,7 +163,8 @@ TEST_CASE("graph: a chunked training step equals the CPU reference composed stag
 }
 
 TEST_CASE("graph: with the area loss on multiscale data and two networks, still the reference") {
-  check_step_against_reference("mipnerf-two-mlps", (std::filesystem::path(test::small_scene()) / "multiscale").string());
+  check_step_against_reference("mipnerf-two-mlps",
+                               (std::filesystem::path(test::small_scene()) / "multiscale").string());
 }
 
 // The concatenated-PE variant (supplement §7): its features feed the shared MLP; nothing before the encoding is

@@ -55,9 +55,9 @@ Rays random_and_hard_rays(size_t n_samples) {
   add_ray(origin, axis_x, 1e-3f, 2.0, 1e-3, 1e-2);
   add_ray(origin, axis_y, 1e-3f, 2.0, 1e-3, 1e-2);
   add_ray(origin, zero, 1e-3f, 2.0, 1e-3, 1e-2);
-  add_ray(origin, skew, 1e-9f, 2.0, 1e-7, 1e-6);   // tiny frustums: nanometre radius, micrometre widths
-  add_ray(origin, skew, 100.0f, 2.0, 0.5, 5.0);    // huge frustums
-  add_ray(origin, skew, 1e-3f, 1e4, 1e-3, 1e-1);   // far away and thin
+  add_ray(origin, skew, 1e-9f, 2.0, 1e-7, 1e-6);  // tiny frustums: nanometre radius, micrometre widths
+  add_ray(origin, skew, 100.0f, 2.0, 0.5, 5.0);   // huge frustums
+  add_ray(origin, skew, 1e-3f, 1e4, 1e-3, 1e-1);  // far away and thin
   return r;
 }
 
@@ -174,16 +174,17 @@ TEST_CASE("concat-pe: features match the double reference on random and hard ray
         // off-diagonal t_var − r_var/|d|² may cancel, so its error is relative to the sum of the two terms.
         const size_t j = (k - mean_pe) % 12, l = j / 6, e = j % 6;
         const float* dir = &r.directions[0] + 3 * ray;
-        const double d_mag_sq = std::max(1e-10, double(dir[0]) * dir[0] + double(dir[1]) * dir[1] + double(dir[2]) * dir[2]);
+        const double d_mag_sq =
+            std::max(1e-10, double(dir[0]) * dir[0] + double(dir[1]) * dir[1] + double(dir[2]) * dir[2]);
         const int axis_pairs[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
         const int a = axis_pairs[e][0], b = axis_pairs[e][1];
         const double value = a == b ? diag[3 * row + a] : off[3 * row + (a == 0 ? b - 1 : 2)];
         double scale = std::abs(value);
         if (a != b) {
           const auto m = shape == RayShape::cone
-                             ? ref::conical_frustum_moments<double>(r.t_edges[ray * (r.n_samples + 1) + row % r.n_samples],
-                                                                    r.t_edges[ray * (r.n_samples + 1) + row % r.n_samples + 1],
-                                                                    r.radii[ray])
+                             ? ref::conical_frustum_moments<double>(
+                                   r.t_edges[ray * (r.n_samples + 1) + row % r.n_samples],
+                                   r.t_edges[ray * (r.n_samples + 1) + row % r.n_samples + 1], r.radii[ray])
                              : ref::cylinder_moments<double>(r.t_edges[ray * (r.n_samples + 1) + row % r.n_samples],
                                                              r.t_edges[ray * (r.n_samples + 1) + row % r.n_samples + 1],
                                                              r.radii[ray]);

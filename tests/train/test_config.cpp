@@ -2,10 +2,9 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
-
-#include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
 #include "train/config.hpp"
@@ -42,7 +41,7 @@ TEST_CASE("config: the paper preset is exactly the paper's settings") {
 
 TEST_CASE("config: order is defaults, preset, variant, explicit settings") {
   const auto c = train::resolve_config("tiny", "nerf", {{"pos_max_deg", "8"}, {"steps", "7"}});
-  CHECK(c.num_samples == 16);  // from the preset
+  CHECK(c.num_samples == 16);                    // from the preset
   CHECK(c.variant == train::ModelFamily::nerf);  // from the variant
   CHECK(!c.single_mlp);
   CHECK(c.pos_identity);
@@ -62,7 +61,8 @@ TEST_CASE("config: Table 3's NeRF rows add one change each, and the concatenated
   CHECK(train::differences(nerf, area) == std::vector<std::string>{"area_loss: false -> true"});
   CHECK(train::differences(area, center) == std::vector<std::string>{"pixel_center: 0 -> 0.5"});
   CHECK(train::differences(center, misc) == std::vector<std::string>{"density_activation: relu -> softplus",
-                                                                     "density_bias: 0 -> -1", "rgb_padding: 0 -> 0.001"});
+                                                                     "density_bias: 0 -> -1",
+                                                                     "rgb_padding: 0 -> 0.001"});
   // Still the NeRF baseline in everything else: points with PE, two networks, no blur or padding in resampling.
   CHECK(misc.variant == train::ModelFamily::nerf);
   CHECK(!misc.single_mlp);
@@ -89,14 +89,14 @@ TEST_CASE("config: unknown names and bad values are refused with what is accepte
                        doctest::Contains("white | black | none"), Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"batch_size", "12x"}}),
                        doctest::Contains("an integer"), Error);
-  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"lr_init", "nan"}}),
-                       doctest::Contains("finite"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"lr_init", "nan"}}), doctest::Contains("finite"),
+                       Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"randomized", "maybe"}}),
                        doctest::Contains("true or false"), Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"batch_size", "0"}}),
                        doctest::Contains("batch_size"), Error);
-  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "nerf", {{"num_samples", "7"}}),
-                       doctest::Contains("even"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "nerf", {{"num_samples", "7"}}), doctest::Contains("even"),
+                       Error);
 }
 
 TEST_CASE("config: JSON round trip keeps every setting, and differences are listed") {
@@ -288,6 +288,10 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("cov_max_deg") == 0);
   CHECK(old.cov_max_deg == 0);
   written.erase("cov_max_deg");
+  // val_every (val scores during training) too; without it a configuration loads with its default, 0 (off).
+  CHECK(written.at("val_every") == 0);
+  CHECK(old.val_every == 0);
+  written.erase("val_every");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
