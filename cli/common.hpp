@@ -53,5 +53,6 @@ void register_make_multiscale(CLI::App& app);
 void register_render(CLI::App& app);
 void register_eval(CLI::App& app);
 void register_bench(CLI::App& app);
+void register_plot(CLI::App& app);
 
 }  // namespace mipnerf::cli

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   cli::register_render(app);
   cli::register_eval(app);
   cli::register_bench(app);
+  cli::register_plot(app);
 
   try {
     app.parse(argc, argv);

@@ -42,6 +42,14 @@ mipnerf_require(PNG_FOUND "libpng" "libpng-dev")
 find_package(JPEG QUIET)
 mipnerf_require(JPEG_FOUND "libjpeg" "libjpeg-dev")
 
+# PLplot draws `mipnerf-cl plot`'s curves (io/line_plot): SVG with its built-in driver, PNG with its cairo driver
+# (plplot-driver-cairo, checked when a PNG is asked for).
+find_package(PkgConfig QUIET)
+if(PkgConfig_FOUND)
+  pkg_check_modules(PLPLOT QUIET IMPORTED_TARGET plplot)
+endif()
+mipnerf_require(PLPLOT_FOUND "PLplot" "libplplot-dev")
+
 if(MIPNERF_BUILD_TESTS)
   find_package(doctest CONFIG QUIET)
   mipnerf_require(doctest_FOUND "doctest" "doctest-dev")

@@ -10,6 +10,7 @@ packages=(
   oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev libjpeg-dev zlib1g-dev
+  libplplot-dev plplot-driver-cairo  # `mipnerf-cl plot`: curves as SVG, and as PNG through PLplot's cairo driver
   libopenblas-dev   # the GEMM benchmark's CPU BLAS only
   clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
   "$@"

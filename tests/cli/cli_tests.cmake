@@ -306,3 +306,27 @@ add_test(NAME "cli: tune records which backend gemm_backend=auto takes" COMMAND 
   --kernel-rows 128 --width 128 --input-width 72 --view-branch-width 64 --output "${CMAKE_CURRENT_BINARY_DIR}/cli-tune-cache/t.json")
 set_tests_properties("cli: tune records which backend gemm_backend=auto takes" PROPERTIES
   ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "gemm_backend=auto on this device: (host|clblast) \\(whole network, 1024 rows, forward \\+ backward: clblast [0-9.]+ s")
+
+# Val scores during training and their curves: train --set val_every writes val_log.csv, plot draws it as SVG and PNG.
+add_test(NAME "cli: train with val_every: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every")
+set_tests_properties("cli: train with val_every: clear the run folder" PROPERTIES FIXTURES_SETUP cli_val_every_clean)
+add_test(NAME "cli: train with val_every scores val views during training" COMMAND mipnerf-cl train
+  --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every" --preset tiny
+  --steps 6 --set val_every=3 --val_views 1)
+set_tests_properties("cli: train with val_every scores val views during training" PROPERTIES
+  FIXTURES_REQUIRED "cli_scene;cli_val_every_clean" FIXTURES_SETUP cli_val_every ENVIRONMENT "${MIPNERF_TEST_ENV}"
+  PASS_REGULAR_EXPRESSION "trained 6 steps")
+foreach(format svg png)
+  add_test(NAME "cli: plot draws a run's val curve as ${format}" COMMAND mipnerf-cl plot
+    "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every" "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every"
+    --out "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every/curves.${format}" --title "cli test")
+  set_tests_properties("cli: plot draws a run's val curve as ${format}" PROPERTIES FIXTURES_REQUIRED cli_val_every
+    ENVIRONMENT "${MIPNERF_TEST_ENV}" PASS_REGULAR_EXPRESSION "wrote .*cli-val-every/curves.${format} \\(2 curves\\)")
+endforeach()
+mipnerf_add_cli_error_test("plot: a folder without val scores" PATTERN "cli-scene/val_log.csv: no val scores in this run folder; train with --set val_every=N"
+  ARGS plot "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-plot-bad.svg")
+mipnerf_add_cli_error_test("plot: an unknown picture format" PATTERN "cli-plot-bad.pdf: a plot is written as .svg or .png; '.pdf' is neither"
+  ARGS plot "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-plot-bad.pdf")
+mipnerf_add_cli_error_test("plot: an unknown x axis" PATTERN "--x: .*minutes.*not in"
+  ARGS plot "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-plot-bad.svg" --x minutes)
