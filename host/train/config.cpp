@@ -37,6 +37,9 @@ const std::vector<Entry>& table() {
        &TrainConfig::factor},
       {{"multiscale", "build x2 x4 x8 box-downsampled copies of the data on the fly", "scene"},
        &TrainConfig::multiscale},
+      {{"multiscale_scales", "scales the multiscale copy has, full resolution included (the paper's 4: x1 x2 x4 x8)",
+        "scene"},
+       &TrainConfig::multiscale_scales},
       {{"area_loss", "weight each pixel's loss by its area relative to full resolution", "scene"},
        &TrainConfig::area_loss},
       {{"near", "near bound of the sampling range in t (0 = from the dataset)", "scene"}, &TrainConfig::near},
@@ -394,6 +397,7 @@ void validate(const TrainConfig& c) {
   require(c.factor >= 1 && c.factor <= 64 && (c.factor & (c.factor - 1)) == 0,
           "factor must be a power of two, 1 to 64");
   require(c.num_samples >= 2, "num_samples must be at least 2");
+  require(c.multiscale_scales >= 2 && c.multiscale_scales <= 8, "multiscale_scales must be in 2..8");
   require(c.num_levels >= 1, "num_levels must be at least 1");
   require(c.variant != ModelFamily::nerf || c.num_samples % 2 == 0,
           "the nerf variant needs an even num_samples (coarse = half)");

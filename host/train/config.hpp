@@ -57,8 +57,9 @@ constexpr std::array<EnumName<Variant>, 10> enum_names(Variant) {
 struct TrainConfig {
   // --- scene: what the data calls for (each switch compiles a path in or out of the kernels) ---
   Background background = Background::white;  // white for Blender scenes (paper §5)
-  int factor = 1;           // box-downsample the stored images by this power of two first (lego 400 → 100: 4)
-  bool multiscale = false;  // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
+  int factor = 1;             // box-downsample the stored images by this power of two first (lego 400 → 100: 4)
+  bool multiscale = false;    // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
+  int multiscale_scales = 4;  // how many scales `multiscale` builds, full resolution included (paper: 4)
   bool area_loss = true;  // weight each pixel's loss by its area (lossmult); the "w/o area loss" ablation turns it off
   double near = 0.0;      // sampling range in t; 0 takes the dataset's value (Blender: 2)
   double far = 0.0;       // 0 takes the dataset's value (Blender: 6)

@@ -103,7 +103,7 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.factor = static_cast<uint32_t>(config.factor);
   // A folder that is multiscale on disk (metadata.json) already holds its scales; build them otherwise.
   const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
-  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? 4 : 1;
+  options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? config.multiscale_scales : 1;
   if (config.near > 0) options.near = config.near;
   if (config.far > 0) options.far = config.far;
   options.spherify = config.spherify;

@@ -292,6 +292,10 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("val_every") == 0);
   CHECK(old.val_every == 0);
   written.erase("val_every");
+  // multiscale_scales too; without it a configuration loads with the paper's 4.
+  CHECK(written.at("multiscale_scales") == 4);
+  CHECK(old.multiscale_scales == 4);
+  written.erase("multiscale_scales");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
