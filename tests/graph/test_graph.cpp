@@ -27,15 +27,18 @@ namespace {
 std::vector<double> to_double(const std::vector<float>& v) { return {v.begin(), v.end()}; }
 
 struct ReferenceStep {
-  std::vector<double> level_loss;          // official per-level loss
-  std::vector<std::vector<double>> grads;  // per network
+  std::vector<double> level_loss;            // official per-level loss
+  std::vector<std::vector<double>> grads;    // per network
+  std::vector<std::vector<double>> t_edges;  // per level
+  double weighted_loss = 0;                  // Σ_l loss_weight_l · level_loss_l: what the gradients differentiate
 };
 
 // The graph's training step for one batch, written out with the reference functions (no chunks).
 ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std::vector<double>>& params,
                              const std::vector<double>& cameras, const std::vector<uint32_t>& camera_ids,
                              const std::vector<uint32_t>& pixel_ids, const std::vector<double>& target,
-                             const std::vector<double>& lossmult, size_t n_cameras, RngKey key) {
+                             const std::vector<double>& lossmult, size_t n_cameras, RngKey key,
+                             const std::vector<std::vector<double>>* fixed_t_edges = nullptr) {
   const size_t R = camera_ids.size();
   std::vector<double> origins, directions, viewdirs, radii, near, far, ray_lossmult, view_features;
   ref::rays_fwd(spec.rays, cameras, camera_ids, pixel_ids, origins, directions, viewdirs, radii, near, far,
@@ -52,7 +55,11 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     REQUIRE((level.encoding == graph::Encoding::integrated || level.encoding == graph::Encoding::concat_pe));
     std::vector<double> t;
     size_t n = level.new_samples;
-    if (level.sampling == graph::Sampling::stratified) {
+    if (fixed_t_edges && l > 0) {
+      // The stop-gradient between levels, for finite differences: later levels keep the edges the unperturbed
+      // step drew, as the analytic gradient treats them (no gradient flows through resampling).
+      t = (*fixed_t_edges)[l];
+    } else if (level.sampling == graph::Sampling::stratified) {
       ref::sample_stratified_fwd(spec.sample, near, far, t, R, n, key);
     } else {
       REQUIRE(level.sampling == graph::Sampling::resample);
@@ -73,6 +80,8 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     ref::loss_fwd_bwd(comp.data(), target.data(), spec.loss.multiscale ? lossmult.data() : nullptr, level.loss_weight,
                       1.0 / lossmult_sum, d_comp.data(), partials.data(), 0, 0, R, R);
     out.level_loss.push_back(partials[ref::loss_sum_weighted] / lossmult_sum);
+    out.weighted_loss += level.loss_weight * out.level_loss.back();
+    out.t_edges.push_back(t);
     ref::render_raw_bwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, weights, d_comp, nullptr,
                         d_raw_rgb, d_raw_density, R, n);
     ref::mlp_backward(mlp_config, params[level.mlp_index], tape, d_raw_density, d_raw_rgb, out.grads[level.mlp_index]);
@@ -83,8 +92,15 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
   return out;
 }
 
+// A parameter whose device gradient is also checked against central differences of the reference's loss.
+struct ParameterEntry {
+  size_t network = 0;
+  size_t index = 0;  // in the flat parameter buffer
+};
+
 void check_step_against_reference_on(mlp::GemmBackend backend, const std::string& variant, const std::string& data_path,
-                                     const train::Bundle& settings) {
+                                     const train::Bundle& settings,
+                                     const std::vector<ParameterEntry>& finite_difference_entries) {
   auto& ctx = test::test_context();
   test::GemmBackendScope scope(ctx, backend);
   INFO("gemm_backend = " << enum_name(backend));
@@ -122,10 +138,12 @@ void check_step_against_reference_on(mlp::GemmBackend backend, const std::string
   std::vector<std::vector<double>> params;
   for (auto& n : networks) params.push_back(to_double(n->download_params()));
   const auto ref_lossmult = spec.loss.multiscale ? to_double(lossmult) : std::vector<double>(batch_rays, 1.0);
-  const auto expected =
-      reference_step(spec, params, to_double(device_data.cameras().download(ctx)), batch.camera_ids.download(ctx),
-                     batch.pixel_ids.download(ctx), to_double(batch.target_rgb.download(ctx)), ref_lossmult,
-                     device_data.num_cameras(), {config.seed, step, 0});
+  const auto cameras = to_double(device_data.cameras().download(ctx));
+  const auto camera_ids = batch.camera_ids.download(ctx), pixel_ids = batch.pixel_ids.download(ctx);
+  const auto target = to_double(batch.target_rgb.download(ctx));
+  const RngKey key{config.seed, step, 0};
+  const auto expected = reference_step(spec, params, cameras, camera_ids, pixel_ids, target, ref_lossmult,
+                                       device_data.num_cameras(), key);
   REQUIRE(losses.size() == expected.level_loss.size());
   for (size_t l = 0; l < losses.size(); ++l) {
     INFO("level " << l);
@@ -146,13 +164,38 @@ void check_step_against_reference_on(mlp::GemmBackend backend, const std::string
     // Gradients sum many float32 products over 90 rays × 24 samples: 1e-3 of the norm.
     CHECK(std::sqrt(diff / norm) < 1e-3);
   }
+  for (const auto& entry : finite_difference_entries) {
+    // Central differences of the reference's weighted loss in double, the later levels' edges held (the
+    // stop-gradient), step h = 1e-5: truncation O(h²·|L'''|) and rounding O(1e-16/h) both far below the bounds.
+    const double h = 1e-5;
+    auto perturbed = params;
+    perturbed[entry.network][entry.index] += h;
+    const double up = reference_step(spec, perturbed, cameras, camera_ids, pixel_ids, target, ref_lossmult,
+                                     device_data.num_cameras(), key, &expected.t_edges)
+                          .weighted_loss;
+    perturbed[entry.network][entry.index] -= 2 * h;
+    const double down = reference_step(spec, perturbed, cameras, camera_ids, pixel_ids, target, ref_lossmult,
+                                       device_data.num_cameras(), key, &expected.t_edges)
+                            .weighted_loss;
+    const double finite_difference = (up - down) / (2 * h);
+    const double analytic = expected.grads[entry.network][entry.index];
+    const double device = networks[entry.network]->download_grads()[entry.index];
+    double norm = 0;
+    for (double g : expected.grads[entry.network]) norm += g * g;
+    INFO("network " << entry.network << " parameter " << entry.index << ": finite difference " << finite_difference
+                    << ", reference " << analytic << ", device " << device);
+    CHECK(std::abs(finite_difference) > 1e-6 * std::sqrt(norm));  // a parameter the loss depends on
+    CHECK(std::abs(analytic - finite_difference) <= 1e-6 * std::sqrt(norm));
+    CHECK(std::abs(device - finite_difference) <= 1e-3 * std::sqrt(norm));  // as the whole gradient above
+  }
 }
 
 // The same step, against the same reference and tolerances, on every GEMM backend the test device supports.
 void check_step_against_reference(const std::string& variant, const std::string& data_path,
-                                  const train::Bundle& settings = {}) {
+                                  const train::Bundle& settings = {},
+                                  const std::vector<ParameterEntry>& finite_difference_entries = {}) {
   for (const mlp::GemmBackend backend : test::supported_gemm_backends(test::test_context())) {
-    check_step_against_reference_on(backend, variant, data_path, settings);
+    check_step_against_reference_on(backend, variant, data_path, settings, finite_difference_entries);
   }
 }
 
@@ -174,5 +217,15 @@ TEST_CASE("graph: with the area loss on multiscale data and two networks, still 
 // above this test's 1e-3; measured 1.1e-2 at degrees 0..11, 2.7e-3 at 0..9. Every degree's features are held
 // to their own float32 bound in tests/ops/test_concat_pe.cpp; this test checks the composition.
 TEST_CASE("graph: the concatenated-PE variant's step equals the reference too") {
-  check_step_against_reference("mipnerf-concat-pe", test::small_scene(), {{"pos_max_deg", "8"}});
+  // And against finite differences: first-layer weights that read the covariance features (rows 48..71 after the
+  // 48 features of the mean's PE at degrees 0..7), so the check sees the loss depend on the new features.
+  const auto config = train::resolve_config("tiny", "mipnerf-concat-pe", {{"pos_max_deg", "8"}});
+  const auto spec = train::make_graph_spec(config, false);
+  const auto first_layer = mlp::parameter_layout(spec.mlps.at(0)).trunk.at(0);
+  REQUIRE(first_layer.in == 72u);
+  std::vector<ParameterEntry> entries;
+  for (size_t row : {48u, 53u, 60u, 66u, 71u}) {
+    entries.push_back({0, first_layer.weight_offset + row * first_layer.out + 3});
+  }
+  check_step_against_reference("mipnerf-concat-pe", test::small_scene(), {{"pos_max_deg", "8"}}, entries);
 }
