@@ -72,6 +72,8 @@ def write_markdown(record, path):
         lines.append(f"| {degree} | {n['psnr']:.2f} | {n['ssim']:.4f} | {n['train_seconds']:.0f} | {m['psnr']:.2f} | "
                      f"{m['ssim']:.4f} | {m['train_seconds']:.0f} | {n['render_s_per_mp']:.0f} / "
                      f"{m['render_s_per_mp']:.0f} |")
+    for note in record.get("notes", []):  # what the runs' circumstances were (added to the JSON by hand)
+        lines += ["", note]
     lines += ["", "![val PSNR against L](l_sweep.svg)", ""]
     with open(path, "w") as f:
         f.write("\n".join(lines))
