@@ -48,6 +48,9 @@ std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI:
   std::map<std::string, std::string> out;
   if (!args.config_file.empty()) out = train::read_config_file(args.config_file, "--config " + args.config_file);
   for (const auto& s : train::settings()) {
+    // --variant names a bundle (a row of the paper's tables), not the `variant` setting (the model family): the
+    // bundle is applied by resolve_config. Read as the setting, every bundle but mipnerf and nerf was refused.
+    if (s.name == "variant") continue;
     auto* option = cmd.get_option_no_throw("--" + s.name);
     if (option != nullptr && option->count() > 0) out[s.name] = option->as<std::string>();
   }

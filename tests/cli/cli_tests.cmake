@@ -136,7 +136,7 @@ mipnerf_add_cli_error_test("train: bad setting value" PATTERN "setting 'num_samp
   ARGS train --num_samples 12x --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: unknown value of an enum setting" PATTERN "setting 'ray_shape' = 'sphere': expected cone \\| cylinder"
   ARGS train --ray_shape sphere --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
-mipnerf_add_cli_error_test("train: unknown variant" PATTERN "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-no-area-loss, mipnerf-no-ipe, mipnerf-no-misc, mipnerf-two-mlps, nerf"
+mipnerf_add_cli_error_test("train: unknown variant" PATTERN "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-concat-pe, mipnerf-no-area-loss, mipnerf-no-ipe, mipnerf-no-misc, mipnerf-two-mlps, nerf, nerf-area, nerf-area-center, nerf-area-center-misc"
   ARGS train --variant nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'"
   ARGS train --set sampels=3 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
@@ -330,3 +330,18 @@ mipnerf_add_cli_error_test("plot: an unknown picture format" PATTERN "cli-plot-b
   ARGS plot "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-plot-bad.pdf")
 mipnerf_add_cli_error_test("plot: an unknown x axis" PATTERN "--x: .*minutes.*not in"
   ARGS plot "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-plot-bad.svg" --x minutes)
+
+# Every --variant trains through the executable (the bundle, not the model-family setting of the same name) and is
+# recorded as variant_bundle.
+foreach(variant mipnerf-no-ipe nerf-area-center-misc mipnerf-concat-pe)
+  add_test(NAME "cli: train --variant ${variant}: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf
+    "${CMAKE_CURRENT_BINARY_DIR}/cli-variant-${variant}")
+  set_tests_properties("cli: train --variant ${variant}: clear the run folder" PROPERTIES
+    FIXTURES_SETUP cli_variant_clean_${variant})
+  add_test(NAME "cli: train --variant ${variant}" COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
+    --out "${CMAKE_CURRENT_BINARY_DIR}/cli-variant-${variant}" --preset tiny --variant ${variant} --steps 2
+    --val_views 1 --set checkpoint_every=1000)
+  set_tests_properties("cli: train --variant ${variant}" PROPERTIES
+    FIXTURES_REQUIRED "cli_scene;cli_variant_clean_${variant}" ENVIRONMENT "${MIPNERF_TEST_ENV}"
+    PASS_REGULAR_EXPRESSION "trained 2 steps")
+endforeach()
