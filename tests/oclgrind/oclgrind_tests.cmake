@@ -27,7 +27,7 @@ endfunction()
 # for uninitialised reads too (about 25 minutes more; not in CI).
 option(MIPNERF_OCLGRIND_UNINITIALIZED_ALL "Also run the slow stages' kernel tests under oclgrind's uninitialised-value check" OFF)
 set(fast_stages activations gaussian rays specialisations "stage list")
-set(slow_stages encode "loss stage" render resample sample)
+set(slow_stages encode concat-pe "loss stage" render resample sample)
 foreach(stage IN LISTS fast_stages)
   mipnerf_add_oclgrind_test("${stage} kernels" test_ops "${stage}:*" oclgrind ON)
 endforeach()
