@@ -72,7 +72,7 @@ def measure(args):
 
 def plot(exe, runs, scene, path, title):
     dirs = [r["run_dir"] for r in runs if r["scene"] == scene]
-    subprocess.run([exe, "plot", *dirs, "--out", path, "--title", title], check=True)
+    subprocess.run([exe, "plot", *dirs, "--out", path, "--title", title, "--log-x"], check=True)
 
 
 def curves_markdown(record):
@@ -89,6 +89,10 @@ def curves_markdown(record):
         "",
         "Few val views make each point noisy (a few tenths of a dB); the machine is shared, so seconds carry that "
         "noise too.",
+    ]
+    for note in record.get("notes", []):  # the runs' circumstances and what they show (added to the JSON by hand)
+        lines += ["", note]
+    lines += [
         "",
         "![lego x4: val PSNR against training seconds](accuracy_time_curves.svg)",
         "",
@@ -135,6 +139,8 @@ def table3_markdown(record):
         cells = " | ".join(f"{by_level[l]:.2f}" if l in by_level else "-" for l in levels)
         lines.append(f"| {r['variant']} | {cells} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['train_seconds']:.0f} | "
                      f"{r['render_s_per_mp']:.0f} |")
+    for note in record.get("table3_notes", []):
+        lines += ["", note]
     lines.append("")
     return "\n".join(lines)
 

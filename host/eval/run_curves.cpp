@@ -15,7 +15,8 @@ namespace {
 
 constexpr const char* kValLogHeader = "step,train_seconds,val_psnr,val_ssim,val_images,val_seconds";
 
-// "name (variant)" from the folder's name and the variant_bundle config.json records (when it does).
+// "name (variant)" from the folder's name and the variant_bundle config.json records (when it does and the name
+// does not already say it).
 std::string run_label(const fs::path& dir) {
   std::string name = dir.lexically_normal().filename().string();
   if (name.empty() || name == ".") name = fs::absolute(dir).lexically_normal().parent_path().filename().string();
@@ -25,7 +26,7 @@ std::string run_label(const fs::path& dir) {
   const auto j = nlohmann::json::parse(io::read_file_text(config.string()), nullptr, false);
   if (j.is_object() && j.contains("variant_bundle") && j["variant_bundle"].is_string()) {
     const std::string variant = j["variant_bundle"].get<std::string>();
-    if (variant != name) return name + " (" + variant + ")";
+    if (name.find(variant) == std::string::npos) return name + " (" + variant + ")";  // said once is enough
   }
   return name;
 }

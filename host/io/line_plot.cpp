@@ -75,17 +75,20 @@ void draw(const LinePlot& plot, const PlotRanges& r, const char* driver, const s
   plinit();
   plcol0(kInk);
   auto x_of = [&](double x) { return plot.log_x ? std::log10(x) : x; };
-  // axis 0: box, numbers, ticks; 10: with log x. The grid is drawn after, light grey, and the frame again over it.
-  plenv(x_of(r.x_min), x_of(r.x_max), r.y_min, r.y_max, 0, plot.log_x ? 10 : 0);
+  // The frame on the left two thirds of the page, the legend outside it on the right, so it never hides a curve.
+  pladv(0);
+  plvpor(0.09, 0.66, 0.11, 0.91);
+  plwind(x_of(r.x_min), x_of(r.x_max), r.y_min, r.y_max);
+  const char* x_axis = plot.log_x ? "gl" : "g";
   plcol0(kGrid);
-  plbox(plot.log_x ? "gl" : "g", 0, 0, "g", 0, 0);
+  plbox(x_axis, 0, 0, "g", 0, 0);
   plcol0(kInk);
-  plbox("bc", 0, 0, "bc", 0, 0);
+  plbox(plot.log_x ? "bcnstl" : "bcnst", 0, 0, "bcnstv", 0, 0);
   pllab(plot.x_label.c_str(), plot.y_label.c_str(), plot.title.c_str());
   const size_t n = plot.series.size();
   std::vector<PLINT> opts(n, PL_LEGEND_LINE | PL_LEGEND_SYMBOL), colours(n), styles(n), symbol_numbers(n, 3),
       text_colours(n, kInk);
-  std::vector<PLFLT> widths(n, 1.5), symbol_scales(n, 0.6);
+  std::vector<PLFLT> widths(n, 1.5), symbol_scales(n, 0.35);
   std::vector<const char*> texts(n), symbols(n, "#(840)");  // a filled circle (Hershey 840)
   for (size_t s = 0; s < n; ++s) {
     const auto& series = plot.series[s];
@@ -98,15 +101,16 @@ void draw(const LinePlot& plot, const PlotRanges& r, const char* driver, const s
     pllsty(styles[s]);
     plwidth(widths[s]);
     plline(static_cast<PLINT>(x.size()), x.data(), y.data());
-    plssym(0, symbol_scales[s]);
+    plschr(0, 0.5);  // plstring's glyphs scale with the character height
     plstring(static_cast<PLINT>(x.size()), x.data(), y.data(), symbols[s]);
+    plschr(0, 1.0);
   }
   pllsty(1);
   plwidth(1);
   PLFLT legend_width = 0, legend_height = 0;
   pllegend(&legend_width, &legend_height, PL_LEGEND_BACKGROUND | PL_LEGEND_BOUNDING_BOX,
-           PL_POSITION_RIGHT | PL_POSITION_BOTTOM | PL_POSITION_INSIDE, 0.02, 0.02, 0.06, 0, kInk, 1, 0, 0,
-           static_cast<PLINT>(n), opts.data(), 1.0, 0.8, 1.8, 0.0, text_colours.data(), texts.data(), nullptr, nullptr,
+           PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.02, 0.0, 0.04, 0, kInk, 1, 0, 0,
+           static_cast<PLINT>(n), opts.data(), 0.8, 0.65, 1.6, 0.0, text_colours.data(), texts.data(), nullptr, nullptr,
            nullptr, nullptr, colours.data(), styles.data(), widths.data(), colours.data(), symbol_scales.data(),
            symbol_numbers.data(), symbols.data());
   plend();

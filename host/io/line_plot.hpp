@@ -20,7 +20,7 @@ struct LinePlot {
   std::string y_label;
   bool log_x = false;  // a logarithmic x axis (every x must then be > 0)
   std::vector<PlotSeries> series;
-  int width_px = 900;  // the page: pixels for PNG, points for SVG
+  int width_px = 1000;  // the page: pixels for PNG, points for SVG
   int height_px = 560;
 };
 

@@ -35,9 +35,10 @@ TEST_CASE("run curves: val PSNR against training seconds or steps, labelled with
   CHECK(by_seconds.x == std::vector<double>{12.5, 25.0});
   CHECK(by_seconds.y == std::vector<double>{18.25, 20.5});
   CHECK(eval::val_psnr_curve(dir.string(), eval::CurveX::steps).x == std::vector<double>{100, 200});
-  // A folder named as its variant is not labelled twice; without config.json the folder's name alone.
-  const auto same = run_with_log("nerf", std::string(kHeader) + "1,1,10,0.1,1,1\n", R"({"variant_bundle": "nerf"})");
-  CHECK(eval::val_psnr_curve(same.string(), eval::CurveX::steps).label == "nerf");
+  // A folder whose name says its variant is not labelled twice; without config.json the folder's name alone.
+  const auto same =
+      run_with_log("quick-nerf", std::string(kHeader) + "1,1,10,0.1,1,1\n", R"({"variant_bundle": "nerf"})");
+  CHECK(eval::val_psnr_curve(same.string(), eval::CurveX::steps).label == "quick-nerf");
   const auto bare = run_with_log("bare", std::string(kHeader) + "1,1,10,0.1,1,1\n");
   CHECK(eval::val_psnr_curve(bare.string() + "/", eval::CurveX::steps).label == "bare");
   const auto plot = eval::val_psnr_plot({dir.string(), bare.string()}, eval::CurveX::train_seconds, "t");

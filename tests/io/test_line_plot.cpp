@@ -96,7 +96,7 @@ TEST_CASE("line plot: an SVG document, and a PNG of the page's size showing each
   const std::string png = (dir / "curves.png").string();
   io::write_line_plot(png, two_curves());
   const io::PngImage both = io::read_png(png);
-  CHECK(both.width == 900);
+  CHECK(both.width == 1000);
   CHECK(both.height == 560);
   // The first two colours of the palette: (31, 119, 180) and (255, 127, 14).
   CHECK(pixels_of(both, 31, 119, 180) > 100);
