@@ -8,12 +8,11 @@
 
 #include "core/error.hpp"
 #include "io/file.hpp"
+#include "train/trainer.hpp"
 
 namespace mipnerf::eval {
 namespace fs = std::filesystem;
 namespace {
-
-constexpr const char* kValLogHeader = "step,train_seconds,val_psnr,val_ssim,val_images,val_seconds";
 
 // "name (variant)" from the folder's name and the variant_bundle config.json records (when it does and the name
 // does not already say it).
@@ -43,8 +42,8 @@ io::PlotSeries val_psnr_curve(const std::string& run_dir, CurveX x) {
   }
   std::istringstream lines(io::read_file_text(csv.string()));
   std::string line;
-  if (!std::getline(lines, line) || line != kValLogHeader) {
-    throw Error(csv.string() + ": line 1 is not the header '" + std::string(kValLogHeader) + "'");
+  if (!std::getline(lines, line) || line != train::kValLogColumns) {
+    throw Error(csv.string() + ": line 1 is not the header '" + std::string(train::kValLogColumns) + "'");
   }
   io::PlotSeries series;
   series.label = run_label(fs::path(run_dir));

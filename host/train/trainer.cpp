@@ -35,11 +35,8 @@ mlp::LrSchedule schedule_of(const TrainConfig& c) {
 // On resume, the log keeps the rows of the steps the checkpoint holds: rows after it (logged before an interrupt,
 // about to be trained again) and a row cut short by a kill are dropped, so each step appears once. Atomic.
 constexpr const char* kTrainingLogHeader = "step,wall_seconds,loss,psnr,learning_rate,rays_per_second,skipped\n";
-// val_log.csv (val_every): train_seconds is the training clock at the score (val time excluded), val_seconds what
-// the scoring itself took.
-constexpr const char* kValLogHeader = "step,train_seconds,val_psnr,val_ssim,val_images,val_seconds\n";
 
-void trim_log(const std::string& csv_path, int64_t step, const char* header_line) {
+void trim_log(const std::string& csv_path, int64_t step, const std::string& header_line) {
   std::ifstream in(csv_path);
   std::string kept, line;
   bool header = true;
@@ -53,11 +50,11 @@ void trim_log(const std::string& csv_path, int64_t step, const char* header_line
     header = false;
     kept += line + "\n";
   }
-  io::write_bytes_atomically(csv_path, kept.empty() ? std::string(header_line) : kept);
+  io::write_bytes_atomically(csv_path, kept.empty() ? header_line : kept);
 }
 
 // Opens a run's CSV log: appended to (its rows after `step` dropped) when resuming, else started anew.
-void open_log(std::ofstream& csv, const std::string& csv_path, int64_t step, const char* header_line) {
+void open_log(std::ofstream& csv, const std::string& csv_path, int64_t step, const std::string& header_line) {
   const bool append = step > 0 && fs::exists(csv_path);
   if (append) trim_log(csv_path, step, header_line);
   csv.open(csv_path, append ? std::ios::app : std::ios::trunc);
@@ -72,7 +69,7 @@ struct Trainer::Impl {
   ops::BatchArrays batch;
   graph::Graph graph;
   std::ofstream csv;
-  std::ofstream val_csv;  // opened with the first val score
+  std::ofstream val_csv;  // val_log.csv: open when val_every > 0
 
   Impl(ocl::Context& ctx, const data::Split& split, size_t batch_rays, const graph::GraphSpec& spec,
        std::vector<mlp::Mlp*> networks, size_t chunk_rays)
@@ -130,7 +127,7 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
 
   open_log(impl_->csv, (fs::path(out_dir_) / "train_log.csv").string(), step_, kTrainingLogHeader);
   if (config_.val_every > 0) {
-    open_log(impl_->val_csv, (fs::path(out_dir_) / "val_log.csv").string(), step_, kValLogHeader);
+    open_log(impl_->val_csv, (fs::path(out_dir_) / "val_log.csv").string(), step_, std::string(kValLogColumns) + "\n");
   }
 }
 
@@ -195,9 +192,11 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   auto window_start = clock::now();
   int64_t window_steps = 0;
   double val_seconds = 0.0;  // spent scoring val views in this run: not training time
-  auto seconds_so_far = [&] {
-    return seconds_before_ + std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
+  // Training seconds of this run (val scoring excluded), and with those of the runs before a resume.
+  auto seconds_this_run = [&] {
+    return std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
   };
+  auto seconds_so_far = [&] { return seconds_before_ + seconds_this_run(); };
 
   while (step_ < config_.steps) {
     const int64_t step = step_ + 1;
@@ -290,7 +289,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
     if ((finite && step % config_.checkpoint_every == 0) || step == config_.steps || stop) {
       seconds_before_ = seconds_so_far();
       result.checkpoint = save_checkpoint();
-      seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
+      seconds_before_ -= seconds_this_run();
       last_saved = step;
     }
     if (stop) {
@@ -301,10 +300,10 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   if (last_saved != step_) {  // nothing left to do (e.g. resumed a finished run): make sure a checkpoint exists
     seconds_before_ = seconds_so_far();
     result.checkpoint = save_checkpoint();
-    seconds_before_ -= std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
+    seconds_before_ -= seconds_this_run();
   }
   result.last_step = step_;
-  result.seconds_this_run = std::chrono::duration<double>(clock::now() - run_start).count() - val_seconds;
+  result.seconds_this_run = seconds_this_run();
   result.train_seconds = seconds_before_ + result.seconds_this_run;
   seconds_before_ = result.train_seconds;
   return result;

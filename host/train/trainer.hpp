@@ -33,6 +33,10 @@ struct StepReport {
 
 class Trainer;
 
+// The columns of out_dir/val_log.csv (config.val_every), its first line: train_seconds is the training clock at the
+// score (val time excluded), val_seconds what the scoring itself took. Written here, read by eval/run_curves.
+inline constexpr const char* kValLogColumns = "step,train_seconds,val_psnr,val_ssim,val_images,val_seconds";
+
 // A val score taken during training (config.val_every): one row of out_dir/val_log.csv.
 struct ValScore {
   double psnr = 0.0;  // mean over the scored views (and scales)
