@@ -5,10 +5,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <variant>
+
+#include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
 
@@ -28,7 +29,7 @@ struct Entry {
 };
 
 constexpr const char* kVariantBundleKey = "variant_bundle";  // the record's JSON key (TrainConfig::variant_bundle)
-constexpr const char* kSceneEffectsKey = "scene_effects";    // the record's JSON key (TrainConfig::scene_effects)
+constexpr const char* kSceneEffectsKey = "scene_effects";  // the record's JSON key (TrainConfig::scene_effects)
 
 const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
@@ -262,48 +263,19 @@ const std::map<std::string, Bundle>& presets() {
   static const std::map<std::string, Bundle> bundles = {
       {"paper", {}},
       {"tiny",  // the test suite's: trains a few hundred steps of a 64×64 scene in under a minute
-       {{"num_samples", "16"},
-        {"mlp_depth", "4"},
-        {"mlp_width", "64"},
-        {"mlp_skip", "2"},
-        {"view_branch_width", "32"},
-        {"pos_max_deg", "10"},
-        {"batch_size", "256"},
-        {"steps", "300"},
-        {"lr_init", "2e-3"},
-        {"lr_final", "2e-4"},
-        {"lr_warmup_steps", "20"},
-        {"log_every", "25"},
-        {"checkpoint_every", "100"},
-        {"val_views", "2"}}},
+       {{"num_samples", "16"}, {"mlp_depth", "4"}, {"mlp_width", "64"}, {"mlp_skip", "2"},
+        {"view_branch_width", "32"}, {"pos_max_deg", "10"}, {"batch_size", "256"}, {"steps", "300"},
+        {"lr_init", "2e-3"}, {"lr_final", "2e-4"}, {"lr_warmup_steps", "20"}, {"log_every", "25"},
+        {"checkpoint_every", "100"}, {"val_views", "2"}}},
       {"quick",  // the README's quick start: about 5 minutes on two CPU cores (307k rays at ~900 rays/s, tuned GEMMs)
-       {{"num_samples", "32"},
-        {"mlp_depth", "4"},
-        {"mlp_width", "128"},
-        {"mlp_skip", "2"},
-        {"view_branch_width", "64"},
-        {"pos_max_deg", "12"},
-        {"batch_size", "512"},
-        {"steps", "600"},
-        {"lr_init", "2e-3"},
-        {"lr_final", "5e-5"},
-        {"lr_warmup_steps", "50"},
-        {"log_every", "50"},
-        {"checkpoint_every", "200"},
-        {"val_views", "4"}}},
+       {{"num_samples", "32"}, {"mlp_depth", "4"}, {"mlp_width", "128"}, {"mlp_skip", "2"},
+        {"view_branch_width", "64"}, {"pos_max_deg", "12"}, {"batch_size", "512"}, {"steps", "600"},
+        {"lr_init", "2e-3"}, {"lr_final", "5e-5"}, {"lr_warmup_steps", "50"}, {"log_every", "50"},
+        {"checkpoint_every", "200"}, {"val_views", "4"}}},
       {"small",  // the paper's depth at half width: under an hour on two CPU cores (2M rays at ~750 rays/s)
-       {{"num_samples", "32"},
-        {"mlp_depth", "8"},
-        {"mlp_width", "128"},
-        {"view_branch_width", "64"},
-        {"batch_size", "1024"},
-        {"steps", "2000"},
-        {"lr_init", "1e-3"},
-        {"lr_final", "1e-5"},
-        {"lr_warmup_steps", "200"},
-        {"log_every", "100"},
-        {"checkpoint_every", "500"},
-        {"val_views", "8"}}},
+       {{"num_samples", "32"}, {"mlp_depth", "8"}, {"mlp_width", "128"}, {"view_branch_width", "64"},
+        {"batch_size", "1024"}, {"steps", "2000"}, {"lr_init", "1e-3"}, {"lr_final", "1e-5"},
+        {"lr_warmup_steps", "200"}, {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "8"}}},
   };
   return bundles;
 }
@@ -394,8 +366,7 @@ void validate(const TrainConfig& c) {
   auto require = [](bool ok, const std::string& message) {
     if (!ok) throw Error("invalid configuration: " + message);
   };
-  require(c.factor >= 1 && c.factor <= 64 && (c.factor & (c.factor - 1)) == 0,
-          "factor must be a power of two, 1 to 64");
+  require(c.factor >= 1 && c.factor <= 64 && (c.factor & (c.factor - 1)) == 0, "factor must be a power of two, 1 to 64");
   require(c.num_samples >= 2, "num_samples must be at least 2");
   require(c.multiscale_scales >= 2 && c.multiscale_scales <= 8, "multiscale_scales must be in 2..8");
   require(c.num_levels >= 1, "num_levels must be at least 1");

@@ -5,10 +5,11 @@
 #include <array>
 #include <cstdint>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "core/enum_names.hpp"
 #include "core/stage_options.hpp"
@@ -57,18 +58,18 @@ constexpr std::array<EnumName<Variant>, 10> enum_names(Variant) {
 struct TrainConfig {
   // --- scene: what the data calls for (each switch compiles a path in or out of the kernels) ---
   Background background = Background::white;  // white for Blender scenes (paper §5)
-  int factor = 1;             // box-downsample the stored images by this power of two first (lego 400 → 100: 4)
-  bool multiscale = false;    // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
-  int multiscale_scales = 4;  // how many scales `multiscale` builds, full resolution included (paper: 4)
-  bool area_loss = true;  // weight each pixel's loss by its area (lossmult); the "w/o area loss" ablation turns it off
-  double near = 0.0;      // sampling range in t; 0 takes the dataset's value (Blender: 2)
-  double far = 0.0;       // 0 takes the dataset's value (Blender: 6)
+  int factor = 1;                    // box-downsample the stored images by this power of two first (lego 400 → 100: 4)
+  bool multiscale = false;           // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
+  int multiscale_scales = 4;         // how many scales `multiscale` builds, full resolution included (paper: 4)
+  bool area_loss = true;             // weight each pixel's loss by its area (lossmult); the "w/o area loss" ablation turns it off
+  double near = 0.0;                 // sampling range in t; 0 takes the dataset's value (Blender: 2)
+  double far = 0.0;                  // 0 takes the dataset's value (Blender: 6)
   RayShape ray_shape = RayShape::cone;  // cylinder: forward-facing scenes in NDC
-  bool spherify = false;                // LLFF: re-pose a 360° capture around its centre (world rays, cones)
-  bool lindisp = false;                 // sample linearly in disparity instead of depth
+  bool spherify = false;             // LLFF: re-pose a 360° capture around its centre (world rays, cones)
+  bool lindisp = false;              // sample linearly in disparity instead of depth
   ops::Batching batching = ops::Batching::all_images;  // where a batch's rays come from
-  double pixel_center = 0.5;   // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
-  bool jitter_pixels = false;  // each training ray through a random point of its pixel (supersampling baselines)
+  double pixel_center = 0.5;         // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
+  bool jitter_pixels = false;        // each training ray through a random point of its pixel (supersampling baselines)
 
   // --- model ---
   ModelFamily variant = ModelFamily::mipnerf;  // set by --variant's bundle (nerf for the NeRF baseline)
@@ -78,44 +79,44 @@ struct TrainConfig {
   bool integrated_encoding = true;  // IPE of the frustum Gaussian; false = PE of its mean (the "w/o IPE" ablation)
   int pos_min_deg = 0;              // positional encoding degrees [min, max): L = 16 → 96 features
   int pos_max_deg = 16;
-  bool pos_identity = false;  // append the raw position (NeRF does, mip-NeRF does not)
+  bool pos_identity = false;        // append the raw position (NeRF does, mip-NeRF does not)
   // With integrated_encoding = false: PE degrees 0..cov_max_deg-1 of the frustum covariance's signed square roots,
   // concatenated to the PE of the means (supplement §7, Table 2: 2). 0 = the means alone ("w/o IPE").
   int cov_max_deg = 0;
-  bool view_dependence = true;  // condition colour on the view direction (PE degrees 0..view_max_deg-1 + identity)
+  bool view_dependence = true;      // condition colour on the view direction (PE degrees 0..view_max_deg-1 + identity)
   int view_max_deg = 4;
   DensityActivation density_activation = DensityActivation::softplus;
-  double density_bias = -1.0;      // added to the raw density before the activation
-  double rgb_padding = 0.001;      // ε of the widened sigmoid (1 + 2ε)·sigmoid − ε
-  double resample_padding = 0.01;  // α added to the blurred weights before resampling (mip-NeRF; NeRF: 0)
-  bool resample_blur = true;       // blur-pool (max of neighbours, mean of pairs) before resampling (NeRF: false)
-  int mlp_depth = 8;               // dense ReLU layers of the trunk
+  double density_bias = -1.0;       // added to the raw density before the activation
+  double rgb_padding = 0.001;       // ε of the widened sigmoid (1 + 2ε)·sigmoid − ε
+  double resample_padding = 0.01;   // α added to the blurred weights before resampling (mip-NeRF; NeRF: 0)
+  bool resample_blur = true;        // blur-pool (max of neighbours, mean of pairs) before resampling (NeRF: false)
+  int mlp_depth = 8;                // dense ReLU layers of the trunk
   int mlp_width = 256;
-  int mlp_skip = 4;  // the input is concatenated again after trunk layer index mlp_skip (0-based)
+  int mlp_skip = 4;                 // the input is concatenated again after trunk layer index mlp_skip (0-based)
   int view_branch_width = 128;
 
   // --- optimisation ---
-  int batch_size = 4096;    // rays per step
-  int64_t steps = 1000000;  // optimisation steps of the run (the schedule spans them)
-  double lr_init = 5e-4;    // supplement eq. 24: log-linear from lr_init to lr_final ...
+  int batch_size = 4096;            // rays per step
+  int64_t steps = 1000000;          // optimisation steps of the run (the schedule spans them)
+  double lr_init = 5e-4;            // supplement eq. 24: log-linear from lr_init to lr_final ...
   double lr_final = 5e-6;
-  int64_t lr_warmup_steps = 2500;  // ... times a sine warm-up from lr_warmup_mult over these steps
+  int64_t lr_warmup_steps = 2500;   // ... times a sine warm-up from lr_warmup_mult over these steps
   double lr_warmup_mult = 0.01;
-  double grad_max_norm = 0.0;     // clip the global gradient norm; 0 disables
-  double coarse_loss_mult = 0.1;  // λ on the coarse level's loss
-  bool randomized = true;         // jittered stratified sampling and resampling during training
-  uint64_t seed = 20200823;       // everything random is a function of (seed, step, ray)
+  double grad_max_norm = 0.0;       // clip the global gradient norm; 0 disables
+  double coarse_loss_mult = 0.1;    // λ on the coarse level's loss
+  bool randomized = true;           // jittered stratified sampling and resampling during training
+  uint64_t seed = 20200823;         // everything random is a function of (seed, step, ray)
 
   // --- execution ---
-  int chunk_rays = 0;            // rays per chunk of a training step; 0 chooses from device memory
-  int render_chunk_rays = 4096;  // rays per chunk when rendering
+  int chunk_rays = 0;               // rays per chunk of a training step; 0 chooses from device memory
+  int render_chunk_rays = 4096;     // rays per chunk when rendering
   mlp::GemmBackend gemm_backend = mlp::GemmBackend::automatic;  // who runs the MLP's products (mlp/gemm_backend.hpp)
-  int64_t log_every = 100;                                      // steps between CSV log rows and progress updates
+  int64_t log_every = 100;          // steps between CSV log rows and progress updates
   int64_t checkpoint_every = 1000;  // steps between checkpoints (one is always written at the end)
   int keep_checkpoints = 3;         // how many checkpoint files to keep
   int max_bad_steps = 5;            // consecutive non-finite steps before the run stops
   int val_views = 0;                // val views rendered at the end of training; 0 = all
-  int64_t val_every = 0;  // steps between val scores on val_views views during training (val_log.csv); 0 = off
+  int64_t val_every = 0;            // steps between val scores on val_views views during training (val_log.csv); 0 = off
 
   // --- record, not a setting ---
   // The --variant bundle resolve_config applied, written to config.json and every checkpoint so a run says which
