@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "dist/world.hpp"
 #include "common.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
@@ -76,7 +77,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
                                                     "/" + std::to_string(images_total));
   };
   options.progress = [&](size_t done, size_t) { images_done = done; };
-  if (!args.no_images) {
+  if (!args.no_images && dist::world().is_root()) {  // under mpirun, rank 0 writes
     options.on_image = [&](const eval::ImageScore& score, const eval::RenderedImage& image, const float* truth) {
       const std::string stem = (images / stems[score.index]).string();
       eval::write_rendered_image(stem, image, {true, args.exr});
@@ -88,6 +89,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   }
   const eval::SplitScores scores = eval::evaluate_split(renderer, split, options);
   progress.finish();
+  if (!dist::world().is_root()) return;  // every rank scored the gathered images alike; rank 0 reports
 
   eval::EvalRecord record;
   record.checkpoint = checkpoint;

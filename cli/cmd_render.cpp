@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "dist/world.hpp"
 #include "common.hpp"
 #include "data/camera_path.hpp"
 #include "eval/evaluate.hpp"
@@ -179,11 +180,13 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
     rays_before += static_cast<size_t>(image.width) * image.height * args.supersample;
     seconds += image.seconds;
     megapixels += image.megapixels();
+    if (!dist::world().is_root()) continue;  // under mpirun, every rank holds the image; rank 0 writes it
     const auto written =
         eval::write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
     file_paths.push_back(fs::path(written.front()).filename().string());
   }
   progress.finish();
+  if (!dist::world().is_root()) return;
 
   data::write_camera_path((fs::path(out) / "transforms.json").string(), frames.cameras, file_paths);
   eval::RenderRecord record;
@@ -202,11 +205,13 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   eval::write_render_record(out, record);
 
   const auto& first = frames.cameras.front();
-  std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s; images in %s\n",
+  const std::string ranks =
+      dist::world().distributed() ? " (" + std::to_string(dist::world().size()) + " ranks, rank 0's)" : "";
+  std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s%s; images in %s\n",
               frames.cameras.size(), frames.source.c_str(), first.width_px, first.height_px,
               args.supersample > 1 ? (", " + std::to_string(args.supersample) + " rays per pixel").c_str() : "",
               static_cast<long long>(model.step), seconds, megapixels > 0 ? seconds / megapixels : 0.0, device.c_str(),
-              out.c_str());
+              ranks.c_str(), out.c_str());
 }
 
 }  // namespace

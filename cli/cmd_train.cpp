@@ -11,6 +11,7 @@
 
 #include "bench/stage_report.hpp"
 #include "core/error.hpp"
+#include "dist/world.hpp"
 #include "common.hpp"
 #include "data/procedural.hpp"
 #include "eval/report.hpp"
@@ -61,10 +62,16 @@ std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI:
 // The quick start's scene: made once inside the output folder, reused afterwards.
 std::string default_scene(const std::string& out_dir) {
   const fs::path scene = fs::path(out_dir) / "scene";
+  const dist::World& world = dist::world();
+  if (!world.is_root()) {  // under mpirun, rank 0 makes it, the others wait for it
+    world.barrier();
+    return scene.string();
+  }
   if (!fs::exists(scene / "transforms_train.json")) {
     std::cerr << "mipnerf-cl: no --data given: generating the built-in procedural scene in " << scene.string() << "\n";
     data::write_procedural_scene(scene.string(), data::SceneOptions{});
   }
+  world.barrier();
   return scene.string();
 }
 
@@ -122,15 +129,20 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
 
   std::optional<Progress> train_progress, val_progress;
   void (*previous_handler)(int) = SIG_DFL;
+  void (*previous_term_handler)(int) = SIG_DFL;
+  const bool root = dist::world().is_root();  // under mpirun, rank 0 alone prints and writes
   eval::TrainAndEvaluateOptions run;
   run.data_path = data_path;
   run.out_dir = args.out;
   run.resume = args.resume;
   run.val_image_folder = (fs::path(args.out) / "val").string();
   run.on_setup = [&](train::Trainer& trainer) {
-    on_setup(trainer, *ctx, args.preset);
+    if (root) on_setup(trainer, *ctx, args.preset);
+    if (!root) mlp::load_gemm_tuning(*ctx);
     g_stop_requested = false;
     previous_handler = std::signal(SIGINT, on_interrupt);
+    // A scheduler's (or mpirun's) SIGTERM: the same clean stop, all ranks after the same step.
+    previous_term_handler = std::signal(SIGTERM, on_interrupt);
     train_progress.emplace("train", config.steps);
   };
   run.hooks.should_stop = [] { return g_stop_requested.load(); };
@@ -140,8 +152,10 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   };
   run.on_trained = [&](train::Trainer&, const train::TrainResult& result) {
     std::signal(SIGINT, previous_handler);
+    std::signal(SIGTERM, previous_term_handler);
     train_progress->finish();
     ctx->set_profiler(nullptr);
+    if (!root) return;
     report_trained(result, device);
     if (args.profile) write_profile(profiler.profile(), config, device, args.out);
   };
@@ -150,6 +164,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   const eval::TrainAndEvaluateResult result = eval::train_and_evaluate(*ctx, config, run);
   if (result.val) val_progress->finish();
   val_progress.reset();  // a failed evaluation's line ends before the warning
+  if (!root) return;
   if (!result.val_error.empty()) std::cerr << "mipnerf-cl: warning: no val evaluation: " << result.val_error << "\n";
 
   const std::string summary =

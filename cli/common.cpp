@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "core/error.hpp"
+#include "dist/world.hpp"
 #include "mlp/gemm_backend.hpp"
 #include "mlp/gemm_tuning.hpp"
 
@@ -15,15 +16,56 @@ GlobalOptions& global_options() {
   return options;
 }
 
+namespace {
+
+// "mipnerf-cl: ", or "mipnerf-cl (rank 1): " on ranks other than 0 under mpirun.
+std::string line_prefix() {
+  const dist::World& w = dist::world();
+  return w.is_root() ? "mipnerf-cl: " : "mipnerf-cl (rank " + std::to_string(w.rank()) + "): ";
+}
+
+// One entry of a comma-separated --device list per local rank: "0,1" gives local rank 1 device 1.
+std::string device_of_this_rank(const std::string& selector) {
+  if (selector.find(',') == std::string::npos) return selector;
+  std::vector<std::string> entries;
+  size_t start = 0;
+  for (size_t comma; (comma = selector.find(',', start)) != std::string::npos; start = comma + 1) {
+    entries.push_back(selector.substr(start, comma - start));
+  }
+  entries.push_back(selector.substr(start));
+  const dist::World& w = dist::world();
+  if (static_cast<int>(entries.size()) < w.local_size()) {
+    throw dist::CollectiveError("--device '" + selector + "' lists " + std::to_string(entries.size()) +
+                                " devices for " + std::to_string(w.local_size()) +
+                                " ranks on this host: list one per local rank, or one device that they share");
+  }
+  const std::string& mine = entries[static_cast<size_t>(w.local_rank())];
+  if (mine.empty()) throw dist::CollectiveError("--device '" + selector + "': an empty entry in the list");
+  return mine;
+}
+
+}  // namespace
+
+void report_error(const std::exception& e) {
+  const bool collective = dynamic_cast<const dist::CollectiveError*>(&e) != nullptr;
+  // Every rank has it; rank 0 says it once (also among the copies mpirun started of a build without MPI).
+  if (collective && !(dist::world().is_root() && dist::launcher_rank() == 0)) return;
+  std::cerr << line_prefix() << "error: " << e.what() << "\n";
+  const auto* error = dynamic_cast<const Error*>(&e);
+  if (error != nullptr && global_options().verbose && !error->details().empty()) std::cerr << error->details() << "\n";
+}
+
 void print_log(LogLevel level, const std::string& message) {
   if (level == LogLevel::debug && !global_options().verbose) return;
+  // Under mpirun the ranks do the same work: rank 0 tells it, the others only warn.
+  if (level == LogLevel::info && !dist::world().is_root()) return;
   const char* prefix = level == LogLevel::warning ? "warning: " : level == LogLevel::debug ? "debug: " : "";
-  std::cerr << "mipnerf-cl: " << prefix << message << "\n";
+  std::cerr << line_prefix() << prefix << message << "\n";
 }
 
 std::unique_ptr<ocl::Context> open_context(bool profiling) {
   ocl::ContextOptions options;
-  options.device_selector = global_options().device;
+  options.device_selector = device_of_this_rank(global_options().device);
   options.profiling = profiling;
   auto ctx = ocl::Context::create(options);
   ctx->set_log(print_log);

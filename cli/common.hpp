@@ -41,6 +41,10 @@ std::map<std::string, std::string> parse_set_assignments(const std::vector<std::
                                                          const std::string& example);
 
 // Prints a library log message to stderr ("mipnerf-cl: warning: ...").
+// Prints an error as one line ("mipnerf-cl: error: …", with the rank under mpirun); a dist::CollectiveError, which
+// every rank raises alike, is printed by rank 0 alone. Details follow with --verbose.
+void report_error(const std::exception& e);
+
 void print_log(LogLevel level, const std::string& message);
 
 // Each subcommand registers itself on the app; main() calls them all.

@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "common.hpp"
+#include "dist/world.hpp"
 
 namespace mipnerf::cli {
 namespace {
@@ -48,7 +49,18 @@ int main(int argc, char** argv) {
   cli::register_plot(app);
 
   try {
-    app.parse(argc, argv);
+    // First: under mpirun this process is one rank of several (host/dist); the session ends MPI on every return.
+    dist::Session session(&argc, &argv);
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      cli::report_error(e);
+      // An error of this rank alone leaves the others waiting in the next collective: stop them all.
+      if (dynamic_cast<const dist::CollectiveError*>(&e) == nullptr) dist::Session::abort_all(1);
+      return 1;
+    }
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
@@ -60,11 +72,10 @@ int main(int argc, char** argv) {
     std::cerr << "mipnerf-cl: error: " << cli::describe_parse_error(app, e, argc, argv) << "\n";
     return e.get_exit_code();
   } catch (const Error& e) {
-    std::cerr << "mipnerf-cl: error: " << e.what() << "\n";
-    if (global.verbose && !e.details().empty()) std::cerr << e.details() << "\n";
+    cli::report_error(e);
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "mipnerf-cl: error: " << e.what() << "\n";
+    cli::report_error(e);
     return 1;
   }
   return 0;

@@ -1,6 +1,8 @@
 // The progress line of long-running commands.
 #include "progress.hpp"
 
+#include "dist/world.hpp"
+
 #include <unistd.h>
 
 #include <cmath>
@@ -32,11 +34,12 @@ void Progress::update(int64_t done, const std::string& detail) {
 void Progress::finish(const std::string& detail) {
   if (finished_) return;
   draw(total_, detail, true);
-  if (tty_) std::cerr << "\n";
+  if (tty_ && dist::world().is_root()) std::cerr << "\n";
   finished_ = true;
 }
 
 void Progress::draw(int64_t done, const std::string& detail, bool force) {
+  if (!dist::world().is_root()) return;  // under mpirun the ranks progress together: rank 0 shows it
   const auto now = std::chrono::steady_clock::now();
   // A terminal is redrawn ~5 times a second; a log file gets a line every 10 seconds.
   const auto interval = tty_ ? std::chrono::milliseconds(200) : std::chrono::milliseconds(10000);

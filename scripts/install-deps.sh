@@ -13,6 +13,7 @@ packages=(
   libplplot-dev plplot-driver-cairo  # `mipnerf-cl plot`: curves as SVG, and as PNG through PLplot's cairo driver
   libopenblas-dev   # the GEMM benchmark's CPU BLAS only
   clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
+  libopenmpi-dev openmpi-bin  # mpirun: data-parallel training and sharded rendering (optional at build time)
   "$@"
 )
 

@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "dist/world.hpp"
 
 namespace mipnerf::eval {
 namespace {
@@ -79,10 +80,21 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
   const graph::RaySource source{packed_cameras_, camera_ids_, pixel_ids_};
   const auto& out = graph_.level_outputs(graph_.spec().levels.size() - 1);
   const uint64_t seed = camera_seed(settings_.seed, index);
+  // Under mpirun each rank renders a contiguous share of the image's chunks (whole chunks, so every pixel is
+  // computed as in a single-process render), then the shares are gathered; one rank renders them all.
+  const dist::World& world = dist::world();
+  const std::vector<size_t> shares = dist::share_offsets((n_pixels + chunk_rays - 1) / chunk_rays, world.size());
+  const size_t my_begin = std::min(n_pixels, shares[static_cast<size_t>(world.rank())] * chunk_rays);
+  const size_t my_end = std::min(n_pixels, shares[static_cast<size_t>(world.rank()) + 1] * chunk_rays);
   const size_t total_rays = n_pixels * passes;
+  // Progress counts this rank's share, scaled to the image: the ranks advance together.
+  const double progress_scale = my_end > my_begin ? static_cast<double>(n_pixels) / (my_end - my_begin) : 1.0;
+  auto report = [&](size_t rays) {
+    if (progress) progress(std::min(total_rays, static_cast<size_t>(rays * progress_scale)), total_rays);
+  };
   size_t done_rays = 0;
-  for (size_t first = 0; first < n_pixels; first += chunk_rays) {
-    const size_t count = std::min(chunk_rays, n_pixels - first);
+  for (size_t first = my_begin; first < my_end; first += chunk_rays) {
+    const size_t count = std::min(chunk_rays, my_end - first);
     std::iota(ids.begin(), ids.begin() + static_cast<long>(count), static_cast<uint32_t>(first));
     pixel_ids_.upload(*ctx_, ids.data(), count);
     if (passes == 1) {
@@ -102,14 +114,28 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
           image.depth[first + k] += depth[k] / static_cast<float>(passes);
           image.acc[first + k] += acc[k] / static_cast<float>(passes);
         }
-        if (progress && pass + 1 < passes) progress(done_rays + (pass + 1) * count, total_rays);
+        if (pass + 1 < passes) report(done_rays + (pass + 1) * count);
       }
     }
     done_rays += count * passes;
-    if (progress) progress(done_rays, total_rays);
+    report(done_rays);
   }
+  if (world.distributed()) gather_shares(image, shares, chunk_rays);
   image.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return image;
+}
+
+void ImageRenderer::gather_shares(RenderedImage& image, const std::vector<size_t>& chunk_shares, size_t chunk_rays) {
+  const size_t n_pixels = image.acc.size();
+  std::vector<size_t> pixels(chunk_shares.size()), values(chunk_shares.size());
+  for (size_t r = 0; r < chunk_shares.size(); ++r) {
+    pixels[r] = std::min(n_pixels, chunk_shares[r] * chunk_rays);
+    values[r] = 3 * pixels[r];
+  }
+  const dist::World& world = dist::world();
+  world.all_gather_segments(image.rgb.data(), values);
+  world.all_gather_segments(image.depth.data(), pixels);
+  world.all_gather_segments(image.acc.data(), pixels);
 }
 
 double ImageRenderer::warm_up() {

@@ -55,6 +55,10 @@ class ImageRenderer {
   const std::vector<Camera>& cameras() const { return cameras_; }
 
  private:
+  // Under mpirun: every rank receives the pixels the others rendered (rank r rendered the chunks
+  // [chunk_shares[r], chunk_shares[r + 1])).
+  static void gather_shares(RenderedImage& image, const std::vector<size_t>& chunk_shares, size_t chunk_rays);
+
   ocl::Context* ctx_;
   std::vector<Camera> cameras_;
   RenderSettings settings_;

@@ -1,4 +1,5 @@
 // A training run followed by the val evaluation of the networks it trained.
+#include "dist/world.hpp"
 #include "eval/train_and_evaluate.hpp"
 
 #include <cstdio>
@@ -42,7 +43,7 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
   EvaluateOptions evaluate;
   evaluate.max_views = static_cast<size_t>(c.val_views);
   evaluate.progress = options.val_progress;
-  if (!options.val_image_folder.empty()) {
+  if (!options.val_image_folder.empty() && dist::world().is_root()) {  // under mpirun, rank 0 writes
     evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float*) {
       write_val_png(options.val_image_folder, score, image);
     };

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "data/device_dataset.hpp"
+#include "dist/world.hpp"
 #include "graph/graph.hpp"
 #include "io/atomic_file.hpp"
 #include "mlp/gemm_backend.hpp"
@@ -62,6 +63,88 @@ void open_log(std::ofstream& csv, const std::string& csv_path, int64_t step, con
   if (!append) csv << header_line << std::flush;
 }
 
+// What the ranks of a data-parallel run must share before the first step: the same settings (execution ones too:
+// chunking decides which rays each rank trains), the same training data and the same parameters and Adam state.
+uint64_t config_fingerprint(const TrainConfig& config) {
+  const std::string text = to_json(config);
+  return dist::fnv1a(text.data(), text.size());
+}
+
+uint64_t data_fingerprint(const data::Split& split) {
+  const std::vector<float> cameras = pack_cameras(split.cameras);
+  uint64_t hash = dist::fnv1a(cameras.data(), cameras.size() * sizeof(float));
+  hash = dist::fnv1a(split.scale_levels.data(), split.scale_levels.size() * sizeof(uint32_t), hash);
+  return dist::fnv1a(split.rgb.data(), split.rgb.size() * sizeof(float), hash);
+}
+
+uint64_t parameter_fingerprint(const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                               const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
+  uint64_t hash = dist::fnv1a(nullptr, 0);
+  for (size_t i = 0; i < networks.size(); ++i) {
+    const std::vector<float> params = networks[i]->download_params();
+    const mlp::AdamState state = optimisers[i]->state();
+    hash = dist::fnv1a(params.data(), params.size() * sizeof(float), hash);
+    hash = dist::fnv1a(state.m.data(), state.m.size() * sizeof(float), hash);
+    hash = dist::fnv1a(state.v.data(), state.v.size() * sizeof(float), hash);
+    hash = dist::fnv1a(&state.step, sizeof(state.step), hash);
+  }
+  return hash;
+}
+
+// Under mpirun: every rank checks it has rank 0's settings, data and parameters (at the start and after a resume),
+// and all stop with one message otherwise.
+void check_ranks_agree(const TrainConfig& config, const data::Split& train,
+                       const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                       const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
+  if (!dist::world().distributed()) return;
+  dist::require_same_on_every_rank(config_fingerprint(config), "the training settings",
+                                   "start every rank with the same command line and --config file");
+  dist::require_same_on_every_rank(data_fingerprint(train), "the training data (cameras and pixels)",
+                                   "give every rank the same --data, with identical files on every host");
+  dist::require_same_on_every_rank(parameter_fingerprint(networks, optimisers),
+                                   "the parameters and Adam state",
+                                   "every rank must see the same --out folder (a shared filesystem), so that "
+                                   "--resume reads the same checkpoint everywhere");
+}
+
+// The gradients of every network and the step's loss sums, summed over the ranks (one MPI_Allreduce of floats,
+// one of doubles). Each rank's gradients cover its share of the batch and are already divided by the batch's
+// global Σ lossmult (graph begin_step), so their sum is the single-process gradient, up to summation order.
+void sum_over_ranks(ocl::Context& ctx, std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                    std::vector<ops::LevelLoss>& losses, std::vector<float>& flat) {
+  size_t total = 0;
+  for (const auto& network : networks) total += network->parameter_count();
+  flat.resize(total);
+  size_t at = 0;
+  for (auto& network : networks) {
+    network->grads().download(ctx, flat.data() + at, network->parameter_count());
+    at += network->parameter_count();
+  }
+  dist::world().sum_in_place(flat.data(), flat.size());
+  at = 0;
+  for (auto& network : networks) {
+    network->grads().upload(ctx, flat.data() + at, network->parameter_count());
+    at += network->parameter_count();
+  }
+  std::vector<double> sums;
+  for (const auto& l : losses) {
+    sums.push_back(l.weighted_sse);
+    sums.push_back(l.plain_sse);
+  }
+  dist::world().sum_in_place(sums.data(), sums.size());
+  for (size_t i = 0; i < losses.size(); ++i) {
+    losses[i].weighted_sse = sums[2 * i];
+    losses[i].plain_sse = sums[2 * i + 1];
+  }
+}
+
+// True on every rank when any rank asks to stop (Ctrl-C, SIGTERM): all stop after the same step.
+bool any_rank(bool flag) {
+  double value = flag ? 1.0 : 0.0;
+  dist::world().sum_in_place(&value, 1);
+  return value > 0.0;
+}
+
 }  // namespace
 
 struct Trainer::Impl {
@@ -104,31 +187,48 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
 
   impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, network_pointers(), memory_.chunk_rays);
 
-  fs::create_directories(out_dir_);
-  const std::string checkpoints = checkpoint_folder();
-  const auto existing = list_checkpoints(checkpoints);
-  io::remove_stale_temporaries(checkpoints, log);
-  io::remove_stale_temporaries(out_dir_, log);
-  if (resume && !existing.empty()) {
-    const VerifiedCheckpoint newest = newest_verified_checkpoint(checkpoints);
-    for (const auto& skipped : newest.skipped) ctx.log(LogLevel::warning, "--resume: skipped " + skipped);
-    if (newest.path.empty()) {
-      throw Error("--resume: none of the " + std::to_string(existing.size()) + " checkpoints in " + checkpoints +
-                  " verifies (above); start a new --out, or train from scratch here after removing them");
-    }
-    restore(newest.path);
-  } else if (resume) {
-    ctx.log(LogLevel::info, "--resume: no checkpoint yet in " + checkpoints + "; starting at step 0");
-  } else if (!existing.empty()) {
-    throw Error(out_dir_ + " already holds checkpoints (newest: step " + std::to_string(existing.back().first) +
-                "): pass --resume to continue, or choose another --out");
-  }
+  // Rank 0 alone touches the output folder (under mpirun the others read the checkpoint it chose).
+  const dist::World& world = dist::world();
+  std::string start_from;  // the checkpoint to resume from; "" = step 0
+  std::string refusal;     // why the run cannot start here
+  if (world.is_root()) start_from = choose_start(resume, refusal);
+  world.broadcast(refusal);
+  if (!refusal.empty()) throw dist::CollectiveError(refusal);
+  world.broadcast(start_from);
+  if (!start_from.empty()) restore(start_from);
+  check_ranks_agree(config_, train, networks_, optimisers_);
+  if (!world.is_root()) return;
   io::write_bytes_atomically((fs::path(out_dir_) / "config.json").string(), to_json(config_) + "\n");
 
   open_log(impl_->csv, (fs::path(out_dir_) / "train_log.csv").string(), step_, kTrainingLogHeader);
   if (config_.val_every > 0) {
     open_log(impl_->val_csv, (fs::path(out_dir_) / "val_log.csv").string(), step_, std::string(kValLogColumns) + "\n");
   }
+}
+
+std::string Trainer::choose_start(bool resume, std::string& refusal) {
+  fs::create_directories(out_dir_);
+  LogFn log = [this](LogLevel level, const std::string& message) { ctx_->log(level, message); };
+  const std::string checkpoints = checkpoint_folder();
+  const auto existing = list_checkpoints(checkpoints);
+  io::remove_stale_temporaries(checkpoints, log);
+  io::remove_stale_temporaries(out_dir_, log);
+  if (resume && !existing.empty()) {
+    const VerifiedCheckpoint newest = newest_verified_checkpoint(checkpoints);
+    for (const auto& skipped : newest.skipped) ctx_->log(LogLevel::warning, "--resume: skipped " + skipped);
+    if (newest.path.empty()) {
+      refusal = "--resume: none of the " + std::to_string(existing.size()) + " checkpoints in " + checkpoints +
+                " verifies (above); start a new --out, or train from scratch here after removing them";
+    }
+    return newest.path;
+  }
+  if (resume) {
+    ctx_->log(LogLevel::info, "--resume: no checkpoint yet in " + checkpoints + "; starting at step 0");
+  } else if (!existing.empty()) {
+    refusal = out_dir_ + " already holds checkpoints (newest: step " + std::to_string(existing.back().first) +
+              "): pass --resume to continue, or choose another --out";
+  }
+  return "";
 }
 
 Trainer::~Trainer() = default;
@@ -144,6 +244,8 @@ std::vector<mlp::Mlp*> Trainer::network_pointers() const { return train::network
 std::string Trainer::checkpoint_folder() const { return (fs::path(out_dir_) / "checkpoints").string(); }
 
 std::string Trainer::save_checkpoint() {
+  const std::string path = checkpoint_path(checkpoint_folder(), step_);
+  if (!dist::world().is_root()) return path;  // rank 0 writes; every rank holds the same state
   CheckpointRecord record;
   record.step = step_;
   record.train_seconds = seconds_before_;
@@ -151,7 +253,6 @@ std::string Trainer::save_checkpoint() {
   record.device = ctx_->device_info().name;
   // Where the training data was (absolute), so render and eval find the scene without being told.
   record.data_path = fs::absolute(dataset_.path).lexically_normal().string();
-  const std::string path = checkpoint_path(checkpoint_folder(), step_);
   try {
     save_training_checkpoint(path, config_, record, networks_, optimisers_);
   } catch (const Error& e) {
@@ -185,6 +286,14 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   auto& batch = impl_->batch;
   const graph::RaySource source{impl_->device_data.cameras(), batch.camera_ids, batch.pixel_ids};
   const graph::TrainTargets targets{batch.target_rgb, spec_.loss.multiscale ? &batch.lossmult : nullptr};
+  // Data parallel (mpirun): this rank trains a contiguous share of the batch's chunks, whole chunks so each is the
+  // single-process chunk bit for bit; every rank draws the whole batch (cheap), so Σ lossmult stays global.
+  const dist::World& world = dist::world();
+  const size_t n_chunks = (batch_rays + chunk - 1) / chunk;
+  const std::vector<size_t> shares = dist::share_offsets(n_chunks, world.size());
+  const size_t my_first_ray = shares[static_cast<size_t>(world.rank())] * chunk;
+  const size_t my_end_ray = std::min(batch_rays, shares[static_cast<size_t>(world.rank()) + 1] * chunk);
+  std::vector<float> reduce_buffer;
 
   TrainResult result;
   int consecutive_bad = 0;
@@ -212,12 +321,18 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
       }
     }
     impl_->graph.begin_step(batch_rays, lossmult_sum);
-    for (size_t first = 0; first < batch_rays; first += chunk) {
-      impl_->graph.train_chunk(source, {first, std::min(chunk, batch_rays - first)}, targets,
+    for (size_t first = my_first_ray; first < my_end_ray; first += chunk) {
+      impl_->graph.train_chunk(source, {first, std::min(chunk, my_end_ray - first)}, targets,
                                {config_.seed, static_cast<uint32_t>(step)});
     }
-    const std::vector<ops::LevelLoss> losses = impl_->graph.end_step();
+    std::vector<ops::LevelLoss> losses = impl_->graph.end_step();
     if (hooks.after_backward) hooks.after_backward(step, networks_);
+    if (world.distributed()) {
+      // Host work after end_step drained the queue: the gradients' copies to and from the host and the sums.
+      ocl::StageScope reduce_stage(*ctx_, "allreduce (gradient copies + MPI)");
+      ocl::HostTimer reduce_timer(*ctx_);
+      sum_over_ranks(*ctx_, networks_, losses, reduce_buffer);
+    }
 
     bool finite = true;
     for (const auto& l : losses) finite = finite && l.finite();
@@ -240,7 +355,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
                 "step " + std::to_string(step) + ": non-finite loss or gradients; the update was skipped");
       if (consecutive_bad >= config_.max_bad_steps) {
         const auto saved = list_checkpoints(checkpoint_folder());
-        throw Error("training stopped at step " + std::to_string(step) + " after " + std::to_string(consecutive_bad) +
+        throw dist::CollectiveError("training stopped at step " + std::to_string(step) + " after " + std::to_string(consecutive_bad) +
                     " consecutive non-finite steps; the last good checkpoint is " +
                     (saved.empty() ? std::string("none") : saved.back().second) +
                     "; try a lower lr_init or set grad_max_norm");
@@ -261,7 +376,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
     report.rays_per_second = window > 0 ? static_cast<double>(window_steps * batch_rays) / window : 0.0;
     report.train_seconds = seconds_so_far();
     result.final_psnr = report.psnr;
-    if (step % config_.log_every == 0 || !finite || step == config_.steps) {
+    if (world.is_root() && (step % config_.log_every == 0 || !finite || step == config_.steps)) {
       impl_->csv << step << "," << std::setprecision(6) << report.train_seconds << "," << std::setprecision(8)
                  << report.loss << "," << report.psnr << "," << lr << "," << std::setprecision(6)
                  << report.rays_per_second << "," << (finite ? 0 : 1) << "\n"
@@ -275,7 +390,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
       const ValScore score = hooks.score_val(*this);
       const double took = std::chrono::duration<double>(clock::now() - val_start).count();
       val_seconds += took;
-      impl_->val_csv << step << "," << std::setprecision(6) << seconds_so_far() << "," << std::setprecision(8)
+      if (world.is_root()) impl_->val_csv << step << "," << std::setprecision(6) << seconds_so_far() << "," << std::setprecision(8)
                      << score.psnr << "," << score.ssim << "," << score.images << "," << std::setprecision(6) << took
                      << "\n"
                      << std::flush;
@@ -283,7 +398,7 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
       window_steps = 0;
     }
 
-    const bool stop = hooks.should_stop && hooks.should_stop();
+    const bool stop = any_rank(hooks.should_stop && hooks.should_stop());
     // Periodic checkpoints only after good steps, so a non-finite streak never replaces (or prunes) the
     // last good one; the final and the interrupt checkpoints are always written.
     if ((finite && step % config_.checkpoint_every == 0) || step == config_.steps || stop) {

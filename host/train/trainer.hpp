@@ -91,6 +91,9 @@ class Trainer {
  private:
   struct Impl;
   void restore(const std::string& path);
+  // Rank 0's housekeeping of out_dir before the first step: stale temporaries removed, and the checkpoint a
+  // --resume continues from ("" = step 0), or in `refusal` why this folder cannot be trained into.
+  std::string choose_start(bool resume, std::string& refusal);
   std::string checkpoint_folder() const;  // out_dir/checkpoints
 
   ocl::Context* ctx_;

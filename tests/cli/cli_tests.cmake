@@ -192,6 +192,27 @@ if(TARGET test_reliability)
   target_compile_definitions(test_reliability PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
 endif()
 
+# Data-parallel training and sharded rendering under mpirun (tests/mpi): the executable, mpirun (FindMPI's
+# MPIEXEC_EXECUTABLE) and whether this build has MPI; without either the tests say they were skipped.
+if(TARGET test_mpi)
+  add_dependencies(test_mpi mipnerf-cl)
+  target_compile_definitions(test_mpi PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>"
+    MIPNERF_MPIRUN_PATH="${MPIEXEC_EXECUTABLE}")
+  if(MIPNERF_HAVE_MPI)
+    target_compile_definitions(test_mpi PRIVATE MIPNERF_TEST_HAVE_MPI=1)
+  endif()
+endif()
+# A build without MPI, started by mpirun as two copies, refuses once with what to do (the sanitizer build has no MPI).
+find_program(MIPNERF_MPIRUN NAMES mpirun mpiexec)
+if(NOT MIPNERF_HAVE_MPI AND MIPNERF_MPIRUN)
+  add_test(NAME "cli: mpirun of a build without MPI refuses with what to do"
+    COMMAND "${MIPNERF_MPIRUN}" -np 2 $<TARGET_FILE:mipnerf-cl> devices)
+  set_tests_properties("cli: mpirun of a build without MPI refuses with what to do" PROPERTIES
+    ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMPI_MCA_rmaps_base_oversubscribe=1"
+    PASS_REGULAR_EXPRESSION "built without MPI, but an MPI launcher started 2 copies of it.*rebuild, or run it without mpirun"
+    FAIL_REGULAR_EXPRESSION "(rank 1|error:.*error:)")
+endif()
+
 # mipnerf-cl render / eval through the executable: a model trained a few steps on the CLI scene, an orbit and an
 # evaluation of the multiscale data from it, and every kind of bad input as one line and a non-zero exit.
 set(MIPNERF_RENDER_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-render-run")

@@ -44,6 +44,10 @@ class ChildProcess {
     const int out = options.output_file.empty()
                         ? -1
                         : ::open(options.output_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    // A log that cannot be written would leave the checks of its text looking at nothing: never fall back.
+    if (!options.output_file.empty() && out < 0) {
+      throw std::runtime_error("cannot write the child's log " + options.output_file);
+    }
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {

@@ -1,6 +1,7 @@
 // Shared by the training tests: a small procedural scene made once per test process, and fresh run folders.
 #pragma once
 
+#include <filesystem>
 #include <string>
 
 #include "support/temp_scene.hpp"
@@ -13,6 +14,11 @@ inline const std::string& small_scene() {
   return path;
 }
 
-inline std::string fresh_run_dir(const std::string& name) { return fresh_temp_dir("run-" + name).string(); }
+// An empty folder of its own (made, so that logs of child processes can be written into it at once).
+inline std::string fresh_run_dir(const std::string& name) {
+  const auto dir = fresh_temp_dir("run-" + name);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
 
 }  // namespace mipnerf::test

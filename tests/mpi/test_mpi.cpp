@@ -1,0 +1,270 @@
+// Data-parallel training and sharded rendering under `mpirun -np 2`, through the real executable on PoCL (one
+// thread per rank): the weights of N steps against the single-process run, exact resume, a killed rank, ranks that
+// disagree, and sharded render / eval against the single-process outputs. Skipped, with a message, when this build
+// has no MPI or mpirun is missing.
+#include <doctest/doctest.h>
+
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <signal.h>
+#include <sstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.hpp"
+#include "io/checkpoint_file.hpp"
+#include "io/exr.hpp"
+#include "support/child_process.hpp"
+#include "support/train_fixtures.hpp"
+#include "train/checkpoint.hpp"
+
+using namespace mipnerf;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+constexpr int kSteps = 8;
+constexpr const char* kMpirun = MIPNERF_MPIRUN_PATH;  // "" when CMake found none
+
+bool mpi_available() {
+#ifndef MIPNERF_TEST_HAVE_MPI
+  MESSAGE("skipped: this build has no MPI (install libopenmpi-dev and openmpi-bin, then reconfigure)");
+  return false;
+#else
+  if (std::strlen(kMpirun) == 0 || !fs::exists(kMpirun)) {
+    MESSAGE("skipped: mpirun was not found when the build was configured (install openmpi-bin)");
+    return false;
+  }
+  return true;
+#endif
+}
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The mipnerf-cl arguments every run of a test shares: 256 rays in 4 chunks of 64, so each of 2 ranks trains two
+// whole chunks, and a checkpoint every 2 steps.
+std::vector<std::string> train_args(const std::string& out, bool resume, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> argv = {"train",        "--data",       test::small_scene(), "--out",   out,
+                                   "--preset",     "tiny",         "--steps",           std::to_string(kSteps),
+                                   "--batch_size", "256",          "--chunk_rays",      "64",    "--checkpoint_every",
+                                   "2",            "--val_views",  "1"};
+  if (const char* device = std::getenv("MIPNERF_TEST_DEVICE")) {
+    argv.push_back("--device");
+    argv.push_back(device);
+  }
+  if (resume) argv.push_back("--resume");
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return argv;
+}
+
+// One PoCL thread per process, so two ranks share the 2 cores as one process with 2 threads would; root may start
+// mpirun in a container.
+test::ChildOptions options_for(const std::string& log) {
+  test::ChildOptions options;
+  options.environment = {"POCL_MAX_PTHREAD_COUNT=1", "OMPI_ALLOW_RUN_AS_ROOT=1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1",
+                         "OMPI_MCA_rmaps_base_oversubscribe=1"};
+  options.output_file = log;
+  return options;
+}
+
+std::vector<std::string> single(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {MIPNERF_CLI_PATH};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return argv;
+}
+
+std::vector<std::string> two_ranks(const std::vector<std::string>& args) {
+  std::vector<std::string> argv = {kMpirun, "-np", "2", MIPNERF_CLI_PATH};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return argv;
+}
+
+int run(const std::vector<std::string>& argv, const fs::path& log) {
+  test::ChildProcess child(argv, options_for(log.string()));
+  child.wait();
+  return child.exit_code();
+}
+
+io::CheckpointFile final_checkpoint(const fs::path& run_dir) {
+  return io::read_checkpoint_file(train::checkpoint_path((run_dir / "checkpoints").string(), kSteps));
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// The pid of rank `rank` of the mipnerf-cl processes writing into `out` (from /proc), or -1.
+pid_t rank_pid(int rank, const std::string& out) {
+  const std::string wanted = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string cmdline = slurp(entry.path() / "cmdline"), environ_text = slurp(entry.path() / "environ");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    if (cmdline.rfind(MIPNERF_CLI_PATH, 0) != 0 || cmdline.find(out) == std::string::npos) continue;
+    std::replace(environ_text.begin(), environ_text.end(), '\0', '\n');
+    if (("\n" + environ_text).find("\n" + wanted + "\n") != std::string::npos) return std::stoi(name);
+  }
+  return -1;
+}
+
+}  // namespace
+
+TEST_CASE("2 ranks train the single-process weights, within the summation-order bound") {
+  if (!mpi_available()) return;
+  const fs::path root = test::fresh_run_dir("mpi-equal");
+  REQUIRE_MESSAGE(run(single(train_args((root / "one").string(), false)), root / "one.log") == 0,
+                  slurp(root / "one.log"));
+  REQUIRE_MESSAGE(run(two_ranks(train_args((root / "two").string(), false)), root / "two.log") == 0,
+                  slurp(root / "two.log"));
+  const io::CheckpointFile one = final_checkpoint(root / "one"), two = final_checkpoint(root / "two");
+  CHECK(one.header.at("adam_steps") == two.header.at("adam_steps"));
+  // Each chunk's gradient is the same bits in both runs (the same rays, the same kernels); what differs is the
+  // order of the sums: one process adds chunk gradients (g1 + g2) + g3 + g4 as it goes, two ranks add
+  // (g1 + g2) + (g3 + g4). That changes a gradient element by at most a few float32 ulps of Σ|g_c|. Adam's update
+  // lr · m̂ / (√v̂ + ε) is scale-free in g: a relative change δ of the gradient moves it by at most ~2δ · lr (for
+  // |g| ≫ ε; below ε the update is itself < lr · |g| / ε). Over kSteps = 8 steps of lr ≤ 2e-3 (the tiny preset's
+  // lr_init, still in its warm-up) with δ ≤ 1e-5 (cancellation of up to ~100x between the chunks' terms) the
+  // weights differ by at most kSteps · 2δ · lr ≈ 3e-7 in absolute terms; the check allows 1e-6.
+  constexpr double kTolerance = 1e-6;
+  const std::vector<float> a = one.tensor("network0.params", "one process"),
+                           b = two.tensor("network0.params", "two ranks");
+  REQUIRE(a.size() == b.size());
+  double largest = 0.0;
+  size_t differing = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const double d = std::fabs(static_cast<double>(a[i]) - b[i]);
+    largest = std::max(largest, d);
+    differing += d > 0.0 ? 1 : 0;
+  }
+  MESSAGE(differing << " of " << a.size() << " weights differ; the largest difference is " << largest);
+  CHECK(largest <= kTolerance);
+  // The val score each run printed: rank 0 alone reports.
+  const std::string two_log = slurp(root / "two.log");
+  size_t reports = 0;
+  for (size_t at = 0; (at = two_log.find("val PSNR", at)) != std::string::npos; ++at) ++reports;
+  CHECK(reports == 1);
+  fs::remove_all(root);
+}
+
+TEST_CASE("a killed rank stops the job with a message, the checkpoints verify, and --resume continues exactly") {
+  if (!mpi_available()) return;
+  const fs::path root = test::fresh_run_dir("mpi-kill");
+  const fs::path straight = root / "straight", killed = root / "killed";
+  REQUIRE_MESSAGE(run(two_ranks(train_args(straight.string(), false)), root / "straight.log") == 0,
+                  slurp(root / "straight.log"));
+
+  // The same run, slowed by a pause in every atomic write, and rank 1 killed once its step-2 checkpoint exists.
+  test::ChildOptions slowed = options_for((root / "killed.log").string());
+  slowed.environment.push_back("MIPNERF_TEST_PAUSE_IN_WRITE_MS=300");
+  test::ChildProcess job(two_ranks(train_args(killed.string(), false)), slowed);
+  const std::string first_checkpoint = train::checkpoint_path((killed / "checkpoints").string(), 2);
+  const auto give_up = Clock::now() + std::chrono::seconds(120);
+  while (!fs::exists(first_checkpoint) && !job.finished() && Clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const pid_t rank1 = rank_pid(1, killed.string());
+  REQUIRE_MESSAGE(rank1 > 0, slurp(root / "killed.log"));
+  REQUIRE(::kill(rank1, SIGKILL) == 0);
+  const auto killed_at = Clock::now();
+  while (!job.finished() && Clock::now() < killed_at + std::chrono::seconds(60)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  REQUIRE_MESSAGE(job.finished(), "the other rank did not stop within 60 s of rank 1's death");
+  const std::string output = slurp(root / "killed.log");
+  INFO(output);
+  CHECK(job.exit_code() != 0);
+  CHECK(output.find("rank 1") != std::string::npos);  // mpirun names the rank that died
+  // No partial file under a checkpoint's name, and the run did not finish.
+  const auto listed = train::list_checkpoints((killed / "checkpoints").string());
+  REQUIRE(!listed.empty());
+  CHECK(listed.back().first < kSteps);
+  for (const auto& [step, path] : listed) CHECK_NOTHROW(io::read_checkpoint_file(path));
+
+  REQUIRE_MESSAGE(run(two_ranks(train_args(killed.string(), true)), root / "resumed.log") == 0,
+                  slurp(root / "resumed.log"));
+  const io::CheckpointFile a = final_checkpoint(straight), b = final_checkpoint(killed);
+  // Two ranks sum in the same order every time (rank 0's share + rank 1's): bit-equal.
+  for (const char* tensor : {"network0.params", "network0.adam_m", "network0.adam_v"}) {
+    CHECK_MESSAGE(same_bits(a.tensor(tensor, "straight"), b.tensor(tensor, "resumed")), tensor);
+  }
+  fs::remove_all(root);
+}
+
+TEST_CASE("ranks started with different settings stop together with one message") {
+  if (!mpi_available()) return;
+  const fs::path root = test::fresh_run_dir("mpi-disagree");
+  // MPMD: rank 1 gets another learning rate.
+  std::vector<std::string> argv = {kMpirun, "-np", "1", MIPNERF_CLI_PATH};
+  for (const auto& a : train_args((root / "run").string(), false)) argv.push_back(a);
+  argv.insert(argv.end(), {":", "-np", "1", MIPNERF_CLI_PATH});
+  for (const auto& a : train_args((root / "run").string(), false, {"--lr_init", "1e-3"})) argv.push_back(a);
+  const int code = run(argv, root / "log");
+  const std::string output = slurp(root / "log");
+  INFO(output);
+  CHECK(code != 0);
+  CHECK(output.find("the ranks disagree on the training settings: rank(s) 1 differ from rank 0") != std::string::npos);
+  // Said once (rank 0), and no checkpoint was written.
+  CHECK(output.find("disagree") == output.rfind("disagree"));
+  CHECK(train::list_checkpoints((root / "run" / "checkpoints").string()).empty());
+  fs::remove_all(root);
+}
+
+TEST_CASE("sharded render and eval write what one process writes") {
+  if (!mpi_available()) return;
+  const fs::path root = test::fresh_run_dir("mpi-render");
+  const std::string model = (root / "model").string();
+  REQUIRE_MESSAGE(run(single(train_args(model, false)), root / "train.log") == 0, slurp(root / "train.log"));
+  // 40x40 frames in chunks of 300 rays: 6 chunks, 3 per rank, the last one short.
+  const std::vector<std::string> render = {"render", "--checkpoint", model, "--split", "test", "--views", "1",
+                                           "--format", "both", "--size", "40x40", "--chunk", "300"};
+  auto with_out = [](std::vector<std::string> args, const fs::path& out) {
+    args.insert(args.end(), {"--out", out.string()});
+    return args;
+  };
+  REQUIRE_MESSAGE(run(single(with_out(render, root / "r1")), root / "r1.log") == 0, slurp(root / "r1.log"));
+  REQUIRE_MESSAGE(run(two_ranks(with_out(render, root / "r2")), root / "r2.log") == 0, slurp(root / "r2.log"));
+  size_t frames = 0;
+  for (const auto& entry : fs::directory_iterator(root / "r1")) {
+    if (entry.path().extension() != ".exr") continue;
+    ++frames;
+    const io::ExrImage a = io::read_exr(entry.path().string());
+    const io::ExrImage b = io::read_exr((root / "r2" / entry.path().filename()).string());
+    CHECK(same_bits(a.rgb, b.rgb));
+    CHECK(same_bits(a.depth, b.depth));
+    CHECK(same_bits(a.acc, b.acc));
+    const std::string png = entry.path().stem().string() + ".png";
+    CHECK(slurp(root / "r1" / png) == slurp(root / "r2" / png));
+  }
+  CHECK(frames == 1);
+
+  const std::vector<std::string> eval = {"eval", "--checkpoint", model, "--split", "val", "--no-images",
+                                         "--chunk", "300"};
+  REQUIRE_MESSAGE(run(single(with_out(eval, root / "e1")), root / "e1.log") == 0, slurp(root / "e1.log"));
+  REQUIRE_MESSAGE(run(two_ranks(with_out(eval, root / "e2")), root / "e2.log") == 0, slurp(root / "e2.log"));
+  auto scores = [](const fs::path& metrics) {
+    const auto json = nlohmann::json::parse(slurp(metrics));
+    std::vector<double> psnr;
+    for (const auto& image : json.at("images")) psnr.push_back(image.at("psnr").get<double>());
+    return psnr;
+  };
+  const auto s1 = scores(root / "e1" / "metrics.json"), s2 = scores(root / "e2" / "metrics.json");
+  CHECK(!s1.empty());
+  CHECK(s1 == s2);
+  fs::remove_all(root);
+}
