@@ -85,6 +85,8 @@ def main():
     parser.add_argument("--exe", default=os.path.join(REPO, "build", "mipnerf-cl"))
     parser.add_argument("--work", default="/tmp/mipnerf-scaling", help="scene, runs and logs")
     parser.add_argument("--out", default=os.path.join(REPO, "bench", "results", "scaling.md"))
+    parser.add_argument("--note", action="append", default=[],
+                        help="a paragraph on the runs' circumstances, added under the header (repeatable)")
     args = parser.parse_args()
     if shutil.which("mpirun") is None:
         sys.exit("scaling: mpirun not found (scripts/install-deps.sh installs openmpi-bin)")
@@ -116,6 +118,8 @@ def main():
                  f"{commit_of(REPO)}. Scene: the built-in procedural scene. Each preset trained "
                  f"its profiled steps (`--profile`: every step after the first) as one process (PoCL threads on "
                  f"both cores) and as `mpirun -np 2` (one PoCL thread per rank). Commands below.")
+    for note in args.note:
+        lines += ["", note]
     lines += ["", "## Measured", "",
               "Bytes per step: the flat float32 gradient buffer every rank all-reduces (4 bytes per parameter; the "
               "loss sums add 16 bytes per level). All-reduce: rank 0's stage, the gradients' copies to and from the "
@@ -148,9 +152,11 @@ def main():
             _, allreduce64, _ = model_row(0.0, r["bytes"], 64, alpha, beta)
             lines.append(f"| {r['preset']} | " + " | ".join(cells) + f" | {64 * allreduce64 * 1e3:.1f} ms |")
         lines.append("")
-    lines += ["Limits of the split: ranks take whole chunks of `chunk_rays` rays, so a batch of B rays gives at most "
-              "B / chunk_rays ranks work (the paper's 4,096 rays at 64 GPUs need chunk_rays <= 64); ranks without "
-              "a chunk only add to the all-reduce.", "", "## Commands", ""]
+    lines += ["Limits of the split: each rank trains B/N rays of the batch, so the paper's 4,096 rays give a GPU 64 "
+              "rays at N = 64, far too few to keep it busy: the model's T_compute/N assumes the work divides "
+              "perfectly, which a GPU does only down to some thousands of rays. Scaling further means a larger "
+              "global batch (and a retuned learning rate), which is not the paper's schedule.", "",
+              "## Commands", ""]
     lines += [f"    {c}" for c in commands]
     os.makedirs(os.path.dirname(args.out), exist_ok=True)
     with open(args.out, "w") as f:

@@ -33,15 +33,25 @@ std::string device_of_this_rank(const std::string& selector) {
     entries.push_back(selector.substr(start, comma - start));
   }
   entries.push_back(selector.substr(start));
-  const dist::World& w = dist::world();
-  if (static_cast<int>(entries.size()) < w.local_size()) {
-    throw dist::CollectiveError("--device '" + selector + "' lists " + std::to_string(entries.size()) +
-                                " devices for " + std::to_string(w.local_size()) +
-                                " ranks on this host: list one per local rank, or one device that they share");
+  // Every rank reads the same list: what is wrong with the list itself, all of them find (a collective error).
+  for (const auto& entry : entries) {
+    if (entry.empty()) {
+      throw dist::CollectiveError("--device '" + selector + "': an empty entry in the list; give one device per "
+                                  "local rank, e.g. --device 0,1");
+    }
   }
-  const std::string& mine = entries[static_cast<size_t>(w.local_rank())];
-  if (mine.empty()) throw dist::CollectiveError("--device '" + selector + "': an empty entry in the list");
-  return mine;
+  const dist::World& w = dist::world();
+  if (!w.distributed()) {
+    throw Error("--device '" + selector + "' lists several devices, one per rank under mpirun; this process runs "
+                "alone: give one device");
+  }
+  // Hosts may hold different numbers of ranks: only those of a crowded host find this, so it stops the job.
+  if (static_cast<int>(entries.size()) < w.local_size()) {
+    throw Error("--device '" + selector + "' lists " + std::to_string(entries.size()) + " devices for " +
+                std::to_string(w.local_size()) +
+                " ranks on this host: list one per local rank, or one device that they share");
+  }
+  return entries[static_cast<size_t>(w.local_rank())];
 }
 
 }  // namespace

@@ -176,6 +176,11 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   spec_ = make_graph_spec(config_, multiscale_data);
   // The plan comes before the first allocation on the device: what does not fit stops here, naming the setting.
   const size_t batch_rays = static_cast<size_t>(config_.batch_size);
+  if (static_cast<size_t>(dist::world().size()) > batch_rays) {
+    throw dist::CollectiveError("batch_size " + std::to_string(batch_rays) + " is smaller than the " +
+                                std::to_string(dist::world().size()) +
+                                " ranks: each rank needs rays of the batch; raise batch_size or start fewer ranks");
+  }
   memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, training_fixed_bytes(train, spec_, batch_rays),
                         static_cast<size_t>(config_.chunk_rays), true);
   networks_ = make_networks(ctx, spec_);
@@ -286,13 +291,13 @@ TrainResult Trainer::run(const TrainHooks& hooks) {
   auto& batch = impl_->batch;
   const graph::RaySource source{impl_->device_data.cameras(), batch.camera_ids, batch.pixel_ids};
   const graph::TrainTargets targets{batch.target_rgb, spec_.loss.multiscale ? &batch.lossmult : nullptr};
-  // Data parallel (mpirun): this rank trains a contiguous share of the batch's chunks, whole chunks so each is the
-  // single-process chunk bit for bit; every rank draws the whole batch (cheap), so Σ lossmult stays global.
+  // Data parallel (mpirun): this rank trains a contiguous share of the batch's ray indices, in chunks of up to
+  // `chunk` rays; every rank draws the whole batch (cheap), so Σ lossmult stays global. When the share is a multiple
+  // of the chunk, each chunk is a single-process chunk bit for bit.
   const dist::World& world = dist::world();
-  const size_t n_chunks = (batch_rays + chunk - 1) / chunk;
-  const std::vector<size_t> shares = dist::share_offsets(n_chunks, world.size());
-  const size_t my_first_ray = shares[static_cast<size_t>(world.rank())] * chunk;
-  const size_t my_end_ray = std::min(batch_rays, shares[static_cast<size_t>(world.rank()) + 1] * chunk);
+  const std::vector<size_t> shares = dist::share_offsets(batch_rays, world.size());
+  const size_t my_first_ray = shares[static_cast<size_t>(world.rank())];
+  const size_t my_end_ray = shares[static_cast<size_t>(world.rank()) + 1];
   std::vector<float> reduce_buffer;
 
   TrainResult result;

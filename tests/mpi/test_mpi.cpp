@@ -268,3 +268,23 @@ TEST_CASE("sharded render and eval write what one process writes") {
   CHECK(s1 == s2);
   fs::remove_all(root);
 }
+
+TEST_CASE("a --device list gives each local rank its entry, and a malformed list is one message") {
+  if (!mpi_available()) return;
+  const fs::path root = test::fresh_run_dir("mpi-devices");
+  const char* chosen = std::getenv("MIPNERF_TEST_DEVICE");
+  const std::string device = chosen != nullptr ? chosen : "0";
+  auto train_on = [&](const std::string& list, const std::string& name) {
+    std::vector<std::string> args = {"train", "--data", test::small_scene(), "--out", (root / name).string(),
+                                     "--preset", "tiny", "--steps", "2", "--batch_size", "64", "--val_views", "1",
+                                     "--device", list};
+    return run(two_ranks(args), root / (name + ".log"));
+  };
+  CHECK_MESSAGE(train_on(device + "," + device, "listed") == 0, slurp(root / "listed.log"));
+  CHECK(train_on(device + "," + device + ",", "empty") != 0);
+  const std::string output = slurp(root / "empty.log");
+  INFO(output);
+  CHECK(output.find("an empty entry in the list") != std::string::npos);
+  CHECK(output.find("an empty entry") == output.rfind("an empty entry"));  // said once
+  fs::remove_all(root);
+}
