@@ -24,6 +24,7 @@
 #include "io/checkpoint_file.hpp"
 #include "io/exr.hpp"
 #include "support/child_process.hpp"
+#include "support/run_checks.hpp"
 #include "support/train_fixtures.hpp"
 #include "train/checkpoint.hpp"
 
@@ -49,13 +50,6 @@ bool mpi_available() {
 #endif
 }
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // The mipnerf-cl arguments every run of a test shares: 256 rays in 4 chunks of 64, so each of 2 ranks trains two
 // whole chunks, and a checkpoint every 2 steps.
 std::vector<std::string> train_args(const std::string& out, bool resume, const std::vector<std::string>& extra = {}) {
@@ -63,10 +57,7 @@ std::vector<std::string> train_args(const std::string& out, bool resume, const s
                                    "--preset",     "tiny",         "--steps",           std::to_string(kSteps),
                                    "--batch_size", "256",          "--chunk_rays",      "64",    "--checkpoint_every",
                                    "2",            "--val_views",  "1"};
-  if (const char* device = std::getenv("MIPNERF_TEST_DEVICE")) {
-    argv.push_back("--device");
-    argv.push_back(device);
-  }
+  test::add_test_device(argv);
   if (resume) argv.push_back("--resume");
   argv.insert(argv.end(), extra.begin(), extra.end());
   return argv;
@@ -104,17 +95,13 @@ io::CheckpointFile final_checkpoint(const fs::path& run_dir) {
   return io::read_checkpoint_file(train::checkpoint_path((run_dir / "checkpoints").string(), kSteps));
 }
 
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
-
 // The pid of rank `rank` of the mipnerf-cl processes writing into `out` (from /proc), or -1.
 pid_t rank_pid(int rank, const std::string& out) {
   const std::string wanted = "OMPI_COMM_WORLD_RANK=" + std::to_string(rank);
   for (const auto& entry : fs::directory_iterator("/proc")) {
     const std::string name = entry.path().filename().string();
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::string cmdline = slurp(entry.path() / "cmdline"), environ_text = slurp(entry.path() / "environ");
+    std::string cmdline = test::read_text(entry.path() / "cmdline"), environ_text = test::read_text(entry.path() / "environ");
     std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
     if (cmdline.rfind(MIPNERF_CLI_PATH, 0) != 0 || cmdline.find(out) == std::string::npos) continue;
     std::replace(environ_text.begin(), environ_text.end(), '\0', '\n');
@@ -129,9 +116,9 @@ TEST_CASE("2 ranks train the single-process weights, within the summation-order 
   if (!mpi_available()) return;
   const fs::path root = test::fresh_run_dir("mpi-equal");
   REQUIRE_MESSAGE(run(single(train_args((root / "one").string(), false)), root / "one.log") == 0,
-                  slurp(root / "one.log"));
+                  test::read_text(root / "one.log"));
   REQUIRE_MESSAGE(run(two_ranks(train_args((root / "two").string(), false)), root / "two.log") == 0,
-                  slurp(root / "two.log"));
+                  test::read_text(root / "two.log"));
   const io::CheckpointFile one = final_checkpoint(root / "one"), two = final_checkpoint(root / "two");
   CHECK(one.header.at("adam_steps") == two.header.at("adam_steps"));
   // Each chunk's gradient is the same bits in both runs (the same rays, the same kernels); what differs is the
@@ -155,7 +142,7 @@ TEST_CASE("2 ranks train the single-process weights, within the summation-order 
   MESSAGE(differing << " of " << a.size() << " weights differ; the largest difference is " << largest);
   CHECK(largest <= kTolerance);
   // The val score each run printed: rank 0 alone reports.
-  const std::string two_log = slurp(root / "two.log");
+  const std::string two_log = test::read_text(root / "two.log");
   size_t reports = 0;
   for (size_t at = 0; (at = two_log.find("val PSNR", at)) != std::string::npos; ++at) ++reports;
   CHECK(reports == 1);
@@ -167,7 +154,7 @@ TEST_CASE("a killed rank stops the job with a message, the checkpoints verify, a
   const fs::path root = test::fresh_run_dir("mpi-kill");
   const fs::path straight = root / "straight", killed = root / "killed";
   REQUIRE_MESSAGE(run(two_ranks(train_args(straight.string(), false)), root / "straight.log") == 0,
-                  slurp(root / "straight.log"));
+                  test::read_text(root / "straight.log"));
 
   // The same run, slowed by a pause in every atomic write, and rank 1 killed once its step-2 checkpoint exists.
   test::ChildOptions slowed = options_for((root / "killed.log").string());
@@ -179,14 +166,14 @@ TEST_CASE("a killed rank stops the job with a message, the checkpoints verify, a
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   const pid_t rank1 = rank_pid(1, killed.string());
-  REQUIRE_MESSAGE(rank1 > 0, slurp(root / "killed.log"));
+  REQUIRE_MESSAGE(rank1 > 0, test::read_text(root / "killed.log"));
   REQUIRE(::kill(rank1, SIGKILL) == 0);
   const auto killed_at = Clock::now();
   while (!job.finished() && Clock::now() < killed_at + std::chrono::seconds(60)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   REQUIRE_MESSAGE(job.finished(), "the other rank did not stop within 60 s of rank 1's death");
-  const std::string output = slurp(root / "killed.log");
+  const std::string output = test::read_text(root / "killed.log");
   INFO(output);
   CHECK(job.exit_code() != 0);
   CHECK(output.find("rank 1") != std::string::npos);  // mpirun names the rank that died
@@ -197,11 +184,11 @@ TEST_CASE("a killed rank stops the job with a message, the checkpoints verify, a
   for (const auto& [step, path] : listed) CHECK_NOTHROW(io::read_checkpoint_file(path));
 
   REQUIRE_MESSAGE(run(two_ranks(train_args(killed.string(), true)), root / "resumed.log") == 0,
-                  slurp(root / "resumed.log"));
+                  test::read_text(root / "resumed.log"));
   const io::CheckpointFile a = final_checkpoint(straight), b = final_checkpoint(killed);
   // Two ranks sum in the same order every time (rank 0's share + rank 1's): bit-equal.
   for (const char* tensor : {"network0.params", "network0.adam_m", "network0.adam_v"}) {
-    CHECK_MESSAGE(same_bits(a.tensor(tensor, "straight"), b.tensor(tensor, "resumed")), tensor);
+    CHECK_MESSAGE(test::same_bits(a.tensor(tensor, "straight"), b.tensor(tensor, "resumed")), tensor);
   }
   fs::remove_all(root);
 }
@@ -215,7 +202,7 @@ TEST_CASE("ranks started with different settings stop together with one message"
   argv.insert(argv.end(), {":", "-np", "1", MIPNERF_CLI_PATH});
   for (const auto& a : train_args((root / "run").string(), false, {"--lr_init", "1e-3"})) argv.push_back(a);
   const int code = run(argv, root / "log");
-  const std::string output = slurp(root / "log");
+  const std::string output = test::read_text(root / "log");
   INFO(output);
   CHECK(code != 0);
   CHECK(output.find("the ranks disagree on the training settings: rank(s) 1 differ from rank 0") != std::string::npos);
@@ -229,7 +216,7 @@ TEST_CASE("sharded render and eval write what one process writes") {
   if (!mpi_available()) return;
   const fs::path root = test::fresh_run_dir("mpi-render");
   const std::string model = (root / "model").string();
-  REQUIRE_MESSAGE(run(single(train_args(model, false)), root / "train.log") == 0, slurp(root / "train.log"));
+  REQUIRE_MESSAGE(run(single(train_args(model, false)), root / "train.log") == 0, test::read_text(root / "train.log"));
   // 40x40 frames in chunks of 300 rays: 6 chunks, 3 per rank, the last one short.
   const std::vector<std::string> render = {"render", "--checkpoint", model, "--split", "test", "--views", "1",
                                            "--format", "both", "--size", "40x40", "--chunk", "300"};
@@ -237,28 +224,28 @@ TEST_CASE("sharded render and eval write what one process writes") {
     args.insert(args.end(), {"--out", out.string()});
     return args;
   };
-  REQUIRE_MESSAGE(run(single(with_out(render, root / "r1")), root / "r1.log") == 0, slurp(root / "r1.log"));
-  REQUIRE_MESSAGE(run(two_ranks(with_out(render, root / "r2")), root / "r2.log") == 0, slurp(root / "r2.log"));
+  REQUIRE_MESSAGE(run(single(with_out(render, root / "r1")), root / "r1.log") == 0, test::read_text(root / "r1.log"));
+  REQUIRE_MESSAGE(run(two_ranks(with_out(render, root / "r2")), root / "r2.log") == 0, test::read_text(root / "r2.log"));
   size_t frames = 0;
   for (const auto& entry : fs::directory_iterator(root / "r1")) {
     if (entry.path().extension() != ".exr") continue;
     ++frames;
     const io::ExrImage a = io::read_exr(entry.path().string());
     const io::ExrImage b = io::read_exr((root / "r2" / entry.path().filename()).string());
-    CHECK(same_bits(a.rgb, b.rgb));
-    CHECK(same_bits(a.depth, b.depth));
-    CHECK(same_bits(a.acc, b.acc));
+    CHECK(test::same_bits(a.rgb, b.rgb));
+    CHECK(test::same_bits(a.depth, b.depth));
+    CHECK(test::same_bits(a.acc, b.acc));
     const std::string png = entry.path().stem().string() + ".png";
-    CHECK(slurp(root / "r1" / png) == slurp(root / "r2" / png));
+    CHECK(test::read_text(root / "r1" / png) == test::read_text(root / "r2" / png));
   }
   CHECK(frames == 1);
 
   const std::vector<std::string> eval = {"eval", "--checkpoint", model, "--split", "val", "--no-images",
                                          "--chunk", "300"};
-  REQUIRE_MESSAGE(run(single(with_out(eval, root / "e1")), root / "e1.log") == 0, slurp(root / "e1.log"));
-  REQUIRE_MESSAGE(run(two_ranks(with_out(eval, root / "e2")), root / "e2.log") == 0, slurp(root / "e2.log"));
+  REQUIRE_MESSAGE(run(single(with_out(eval, root / "e1")), root / "e1.log") == 0, test::read_text(root / "e1.log"));
+  REQUIRE_MESSAGE(run(two_ranks(with_out(eval, root / "e2")), root / "e2.log") == 0, test::read_text(root / "e2.log"));
   auto scores = [](const fs::path& metrics) {
-    const auto json = nlohmann::json::parse(slurp(metrics));
+    const auto json = nlohmann::json::parse(test::read_text(metrics));
     std::vector<double> psnr;
     for (const auto& image : json.at("images")) psnr.push_back(image.at("psnr").get<double>());
     return psnr;
@@ -280,9 +267,9 @@ TEST_CASE("a --device list gives each local rank its entry, and a malformed list
                                      "--device", list};
     return run(two_ranks(args), root / (name + ".log"));
   };
-  CHECK_MESSAGE(train_on(device + "," + device, "listed") == 0, slurp(root / "listed.log"));
+  CHECK_MESSAGE(train_on(device + "," + device, "listed") == 0, test::read_text(root / "listed.log"));
   CHECK(train_on(device + "," + device + ",", "empty") != 0);
-  const std::string output = slurp(root / "empty.log");
+  const std::string output = test::read_text(root / "empty.log");
   INFO(output);
   CHECK(output.find("an empty entry in the list") != std::string::npos);
   CHECK(output.find("an empty entry") == output.rfind("an empty entry"));  // said once

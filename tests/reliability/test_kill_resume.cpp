@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "io/checkpoint_file.hpp"
 #include "support/child_process.hpp"
+#include "support/run_checks.hpp"
 #include "support/train_fixtures.hpp"
 #include "train/checkpoint.hpp"
 
@@ -34,10 +35,7 @@ std::vector<std::string> train_command(const std::string& out, bool resume, int 
                                    "--preset",         "tiny",         "--steps", std::to_string(steps),
                                    "--batch_size",     "64",           "--checkpoint_every", "4",
                                    "--keep_checkpoints", "3",          "--log_every", "1", "--val_views", "1"};
-  if (const char* device = std::getenv("MIPNERF_TEST_DEVICE")) {
-    argv.push_back("--device");
-    argv.push_back(device);
-  }
+  test::add_test_device(argv);
   if (resume) argv.push_back("--resume");
   argv.insert(argv.end(), extra.begin(), extra.end());
   return argv;
@@ -48,17 +46,6 @@ test::ChildOptions with_pause(const std::string& output_file) {
   options.environment = {"MIPNERF_TEST_PAUSE_IN_WRITE_MS=" + std::to_string(kPauseMs)};
   options.output_file = output_file;
   return options;
-}
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
 // A checkpoint temporary (".ckpt_….mnck.<pid>.<n>.tmp") in `folder`, or "".
@@ -95,7 +82,7 @@ TEST_CASE("reliability: SIGKILL at random moments and inside checkpoint writes, 
   test::ChildProcess straight(train_command(reference.string(), false), with_pause((root / "reference.log").string()));
   straight.wait();
   const double run_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  REQUIRE_MESSAGE(straight.exit_code() == 0, slurp(root / "reference.log"));
+  REQUIRE_MESSAGE(straight.exit_code() == 0, test::read_text(root / "reference.log"));
 
   const unsigned seed = std::random_device{}();
   MESSAGE("kill moments from seed " << seed << " within a run of " << run_seconds << " s");
@@ -120,7 +107,7 @@ TEST_CASE("reliability: SIGKILL at random moments and inside checkpoint writes, 
       in_write = !checkpoint_temporary(checkpoints).empty();
     }
     const bool was_killed = run.kill_now();
-    const std::string output = slurp(log);
+    const std::string output = test::read_text(log);
     INFO("attempt " << attempt << " output:\n" << output);
     if (!was_killed) {
       // It finished first: a complete run proves nothing about kills, so start the killed run over.
@@ -138,7 +125,7 @@ TEST_CASE("reliability: SIGKILL at random moments and inside checkpoint writes, 
 
   test::ChildProcess last(train_command(killed.string(), true), with_pause((root / "last.log").string()));
   last.wait();
-  const std::string last_output = slurp(root / "last.log");
+  const std::string last_output = test::read_text(root / "last.log");
   INFO("the last run's output:\n" << last_output);
   REQUIRE(last.exit_code() == 0);
 
@@ -146,7 +133,7 @@ TEST_CASE("reliability: SIGKILL at random moments and inside checkpoint writes, 
   const auto a = io::read_checkpoint_file(train::checkpoint_path((reference / "checkpoints").string(), kSteps));
   const auto b = io::read_checkpoint_file(train::checkpoint_path(checkpoints.string(), kSteps));
   for (const char* tensor : {"network0.params", "network0.adam_m", "network0.adam_v"}) {
-    CHECK_MESSAGE(same_bits(a.tensor(tensor, "reference"), b.tensor(tensor, "killed")), tensor);
+    CHECK_MESSAGE(test::same_bits(a.tensor(tensor, "reference"), b.tensor(tensor, "killed")), tensor);
   }
   CHECK(a.header.at("adam_steps") == b.header.at("adam_steps"));
   // Nothing half-written is left, and the log has every step once, in order.
@@ -158,7 +145,7 @@ TEST_CASE("reliability: SIGKILL at random moments and inside checkpoint writes, 
   int expected_step = 1;
   while (std::getline(csv, line)) CHECK(std::stoi(line.substr(0, line.find(','))) == expected_step++);
   CHECK(expected_step == kSteps + 1);
-  CHECK(nlohmann::json::parse(slurp(killed / "summary.json")).is_object());
+  CHECK(nlohmann::json::parse(test::read_text(killed / "summary.json")).is_object());
   fs::remove_all(root);
 }
 
@@ -183,7 +170,7 @@ TEST_CASE("reliability: a file-size limit hit while checkpointing stops the run 
   test::ChildOptions limited{{}, log, checkpoint_bytes - 256 * 1024};
   test::ChildProcess second(train_command(out.string(), true, 16, wide), limited);
   const int status = second.wait();
-  const std::string output = slurp(log);
+  const std::string output = test::read_text(log);
   INFO(output);
   REQUIRE(WIFEXITED(status));  // not killed by a signal (SIGXFSZ ignored, the error handled)
   CHECK(WEXITSTATUS(status) != 0);
@@ -192,6 +179,6 @@ TEST_CASE("reliability: a file-size limit hit while checkpointing stops the run 
   CHECK(!fs::exists(train::checkpoint_path((out / "checkpoints").string(), 12)));
   CHECK(checkpoint_temporary(out / "checkpoints").empty());
   const auto after = io::read_checkpoint_file(kept);
-  CHECK(same_bits(after.tensor("network0.params", "after"), before.tensor("network0.params", "before")));
+  CHECK(test::same_bits(after.tensor("network0.params", "after"), before.tensor("network0.params", "before")));
   fs::remove_all(root);
 }
