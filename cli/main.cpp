@@ -47,6 +47,18 @@ int main(int argc, char** argv) {
   cli::register_eval(app);
   cli::register_bench(app);
   cli::register_plot(app);
+  // Under mpirun only train, render and eval share the work between ranks; the other commands would run N times
+  // over the same files.
+  for (CLI::App* sub : app.get_subcommands({})) {
+    const std::string name = sub->get_name();
+    if (name == "train" || name == "render" || name == "eval") continue;
+    sub->preparse_callback([name](size_t) {
+      if (dist::world().distributed()) {
+        throw dist::CollectiveError("mipnerf-cl " + name + " runs as one process: start it without mpirun (train, "
+                                    "render and eval run under mpirun)");
+      }
+    });
+  }
 
   try {
     // First: under mpirun this process is one rank of several (host/dist); the session ends MPI on every return.

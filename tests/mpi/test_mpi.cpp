@@ -275,3 +275,16 @@ TEST_CASE("a --device list gives each local rank its entry, and a malformed list
   CHECK(output.find("an empty entry") == output.rfind("an empty entry"));  // said once
   fs::remove_all(root);
 }
+
+TEST_CASE("commands that do not share work between ranks refuse to run under mpirun, once") {
+  if (!mpi_available()) return;
+  const fs::path root = test::fresh_run_dir("mpi-single");
+  const int code = run(two_ranks({"make-scene", (root / "scene").string()}), root / "log");
+  const std::string output = test::read_text(root / "log");
+  INFO(output);
+  CHECK(code != 0);
+  CHECK(output.find("mipnerf-cl make-scene runs as one process: start it without mpirun") != std::string::npos);
+  CHECK(output.find("runs as one process") == output.rfind("runs as one process"));
+  CHECK(!fs::exists(root / "scene"));
+  fs::remove_all(root);
+}
