@@ -41,7 +41,7 @@ if [ "$report_only" = 0 ]; then
   cmake --build "$build_dir" -j "$jobs" --target "${targets[@]/#/fuzz_}"
 
   # The same sanitizer settings as the CTest entries (tests/CMakeLists.txt).
-  export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1"
+  export ASAN_OPTIONS="detect_leaks=1:halt_on_error=1:intercept_tls_get_addr=0"  # see tests/CMakeLists.txt
   export LSAN_OPTIONS="suppressions=$root/tests/sanitize/lsan.supp:print_suppressions=0"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
