@@ -34,19 +34,23 @@ Matrix34 pose_from_json(const io::Json& value, const std::string& where) {
   for (size_t row = 0; row < value.size(); ++row) {
     const auto& r = value[row];
     if (!r.is_array() || r.size() != 4) throw Error(shape_error);
+    // The whole row is checked for numbers first: the last row's message quotes all four of its entries.
+    double values[4];
     for (size_t col = 0; col < 4; ++col) {
       if (!r[col].is_number()) throw Error(shape_error + " (row " + std::to_string(row) + " holds a " +
                                            io::json_type_name(r[col]) + ")");
-      const double v = r[col].get<double>();
-      if (!std::isfinite(v)) {
+      values[col] = r[col].get<double>();
+      if (!std::isfinite(values[col])) {
         throw Error(where + ": the pose has a non-finite entry at row " + std::to_string(row) + ", column " +
                     std::to_string(col) + "; fix or drop this frame");
       }
-      if (row < 3) m[row * 4 + col] = v;
-      else if (std::abs(v - (col == 3 ? 1.0 : 0.0)) > 1e-6) {
+    }
+    for (size_t col = 0; col < 4; ++col) {
+      if (row < 3) m[row * 4 + col] = values[col];
+      else if (std::abs(values[col] - (col == 3 ? 1.0 : 0.0)) > 1e-6) {
         throw Error(where + ": the pose's last row must be 0 0 0 1 (a rigid camera-to-world matrix), got " +
-                    number_text(r[0].get<double>()) + " " + number_text(r[1].get<double>()) + " " +
-                    number_text(r[2].get<double>()) + " " + number_text(r[3].get<double>()));
+                    number_text(values[0]) + " " + number_text(values[1]) + " " + number_text(values[2]) + " " +
+                    number_text(values[3]));
       }
     }
   }

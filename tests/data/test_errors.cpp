@@ -104,6 +104,12 @@ TEST_CASE("errors: non-rigid, mirrored, malformed and non-finite poses") {
   json["frames"][0]["transform_matrix"][3][0] = 0.5;
   set.write(json);
   CHECK(contains(set.load_error(), "frames[0]: the pose's last row must be 0 0 0 1"));
+  // A wrong last row whose later entry is not a number: the message quoted the row before checking it, and the
+  // JSON library's type error escaped (found by fuzz: blender).
+  json["frames"][0]["transform_matrix"][3][3] = "h";
+  set.write(json);
+  CHECK(contains(set.load_error(), "frames[0]: the pose must be a 4x4 (or 3x4) array of rows of numbers (row 3 "
+                                   "holds a string)"));
   json = set.json();
   json["frames"][0]["transform_matrix"] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   set.write(json);
