@@ -153,7 +153,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   run.on_trained = [&](train::Trainer&, const train::TrainResult& result) {
     std::signal(SIGINT, previous_handler);
     std::signal(SIGTERM, previous_term_handler);
-    train_progress->finish();
+    train_progress->finish_at(result.last_step);
     ctx->set_profiler(nullptr);
     if (!root) return;
     report_trained(result, device);

@@ -31,9 +31,11 @@ void Progress::update(int64_t done, const std::string& detail) {
   draw(done, detail, false);
 }
 
-void Progress::finish(const std::string& detail) {
+void Progress::finish(const std::string& detail) { finish_at(total_, detail); }
+
+void Progress::finish_at(int64_t done, const std::string& detail) {
   if (finished_) return;
-  draw(total_, detail, true);
+  draw(done, detail, true);
   if (tty_ && dist::world().is_root()) std::cerr << "\n";
   finished_ = true;
 }

@@ -20,6 +20,8 @@ class Progress {
   void update(int64_t done, const std::string& detail = {});
   // Ends the line (keeps the last state on screen).
   void finish(const std::string& detail = {});
+  // Ends the line at `done` units: work stopped before the end (an interrupt) shows where it stopped.
+  void finish_at(int64_t done, const std::string& detail = {});
 
   double elapsed_seconds() const;
 
