@@ -75,9 +75,8 @@ std::string default_scene(const std::string& out_dir) {
   return scene.string();
 }
 
-// Before the first step: the GEMM tuning, what is being trained, and the Ctrl-C handler.
-void on_setup(train::Trainer& trainer, ocl::Context& ctx, const std::string& preset) {
-  mlp::load_gemm_tuning(ctx);  // after the inputs are checked, before the first product
+// Before the first step: what is being trained.
+void print_setup(train::Trainer& trainer, ocl::Context& ctx, const std::string& preset) {
   const auto& config = trainer.config();
   if (!config.scene_effects.empty()) std::cerr << "mipnerf-cl: " << config.scene_effects << "\n";
   std::cerr << "mipnerf-cl: training " << enum_name(config.variant) << " (preset " << preset << ") on " << ctx.device_info().name
@@ -137,8 +136,8 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   run.resume = args.resume;
   run.val_image_folder = (fs::path(args.out) / "val").string();
   run.on_setup = [&](train::Trainer& trainer) {
-    if (root) on_setup(trainer, *ctx, args.preset);
-    if (!root) mlp::load_gemm_tuning(*ctx);
+    mlp::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
+    if (root) print_setup(trainer, *ctx, args.preset);
     g_stop_requested = false;
     previous_handler = std::signal(SIGINT, on_interrupt);
     // A scheduler's (or mpirun's) SIGTERM: the same clean stop, all ranks after the same step.

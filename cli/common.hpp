@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <map>
 #include <memory>
 #include <string>
@@ -40,11 +41,11 @@ void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t 
 std::map<std::string, std::string> parse_set_assignments(const std::vector<std::string>& assignments,
                                                          const std::string& example);
 
-// Prints a library log message to stderr ("mipnerf-cl: warning: ...").
 // Prints an error as one line ("mipnerf-cl: error: …", with the rank under mpirun); a dist::CollectiveError, which
 // every rank raises alike, is printed by rank 0 alone. Details follow with --verbose.
 void report_error(const std::exception& e);
 
+// Prints a library log message to stderr ("mipnerf-cl: warning: ..."); under mpirun, info only from rank 0.
 void print_log(LogLevel level, const std::string& message);
 
 // Each subcommand registers itself on the app; main() calls them all.

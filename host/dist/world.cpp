@@ -24,22 +24,9 @@ int env_int(const char* name, int fallback) {
 
 const World& world() { return g_world; }
 
-bool built_with_mpi() {
-#ifdef MIPNERF_HAVE_MPI
-  return true;
-#else
-  return false;
-#endif
-}
-
 int launcher_rank() { return env_int("OMPI_COMM_WORLD_RANK", env_int("PMI_RANK", 0)); }
 
 int launcher_world_size() { return env_int("OMPI_COMM_WORLD_SIZE", env_int("PMI_SIZE", 1)); }
-
-std::string World::describe() const {
-  return "rank " + std::to_string(rank_) + " of " + std::to_string(size_) + " (local " + std::to_string(local_rank_) +
-         " of " + std::to_string(local_size_) + ")";
-}
 
 std::vector<size_t> share_offsets(size_t count, int parts) {
   if (parts < 1) throw Error("share_offsets: " + std::to_string(parts) + " parts; at least 1 is needed");

@@ -2,8 +2,8 @@
 // the few collectives training and rendering need. Without MPI (not built in, or not launched by mpirun) the
 // world is one rank and every collective is the identity, so library code calls them unconditionally.
 //
-// Data-parallel training (issue 18): every rank draws the same batch, trains its contiguous share of the
-// batch's chunks, and the flat gradient buffers are summed across ranks before the identical Adam step.
+// Data-parallel training: every rank draws the same batch, trains a contiguous share of its ray indices, and the
+// flat gradient buffers are summed across ranks before the identical Adam step (docs/ARCHITECTURE.md, "Ranks").
 #pragma once
 
 #include <cstddef>
@@ -30,7 +30,6 @@ class World {
   int local_size() const { return local_size_; }
   bool is_root() const { return rank_ == 0; }
   bool distributed() const { return size_ > 1; }
-  std::string describe() const;  // "rank 1 of 2 (local 1 of 2)"
 
   // Element-wise sums over the ranks, in place; every rank receives the same bits (MPI_Allreduce).
   void sum_in_place(float* values, size_t count) const;
@@ -51,9 +50,6 @@ class World {
 
 // The process's world: one rank until a Session started MPI.
 const World& world();
-
-// True when this build has MPI (CMake found it: MIPNERF_MPI).
-bool built_with_mpi();
 
 // How many processes a launcher says it started (Open MPI, MPICH/PMI, PMIx environments), 1 when none.
 int launcher_world_size();

@@ -83,9 +83,10 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
   // Under mpirun each rank renders a contiguous share of the image's chunks (whole chunks, so every pixel is
   // computed as in a single-process render), then the shares are gathered; one rank renders them all.
   const dist::World& world = dist::world();
-  const std::vector<size_t> shares = dist::share_offsets((n_pixels + chunk_rays - 1) / chunk_rays, world.size());
-  const size_t my_begin = std::min(n_pixels, shares[static_cast<size_t>(world.rank())] * chunk_rays);
-  const size_t my_end = std::min(n_pixels, shares[static_cast<size_t>(world.rank()) + 1] * chunk_rays);
+  std::vector<size_t> pixel_shares = dist::share_offsets((n_pixels + chunk_rays - 1) / chunk_rays, world.size());
+  for (size_t& offset : pixel_shares) offset = std::min(n_pixels, offset * chunk_rays);  // chunks → pixels
+  const size_t my_begin = pixel_shares[static_cast<size_t>(world.rank())];
+  const size_t my_end = pixel_shares[static_cast<size_t>(world.rank()) + 1];
   const size_t total_rays = n_pixels * passes;
   // Progress counts this rank's share, scaled to the image: the ranks advance together.
   const double progress_scale = my_end > my_begin ? static_cast<double>(n_pixels) / (my_end - my_begin) : 1.0;
@@ -120,22 +121,18 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
     done_rays += count * passes;
     report(done_rays);
   }
-  if (world.distributed()) gather_shares(image, shares, chunk_rays);
+  if (world.distributed()) gather_shares(image, pixel_shares);
   image.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return image;
 }
 
-void ImageRenderer::gather_shares(RenderedImage& image, const std::vector<size_t>& chunk_shares, size_t chunk_rays) {
-  const size_t n_pixels = image.acc.size();
-  std::vector<size_t> pixels(chunk_shares.size()), values(chunk_shares.size());
-  for (size_t r = 0; r < chunk_shares.size(); ++r) {
-    pixels[r] = std::min(n_pixels, chunk_shares[r] * chunk_rays);
-    values[r] = 3 * pixels[r];
-  }
+void ImageRenderer::gather_shares(RenderedImage& image, const std::vector<size_t>& pixel_shares) {
+  std::vector<size_t> rgb_shares = pixel_shares;
+  for (size_t& offset : rgb_shares) offset *= 3;
   const dist::World& world = dist::world();
-  world.all_gather_segments(image.rgb.data(), values);
-  world.all_gather_segments(image.depth.data(), pixels);
-  world.all_gather_segments(image.acc.data(), pixels);
+  world.all_gather_segments(image.rgb.data(), rgb_shares);
+  world.all_gather_segments(image.depth.data(), pixel_shares);
+  world.all_gather_segments(image.acc.data(), pixel_shares);
 }
 
 double ImageRenderer::warm_up() {

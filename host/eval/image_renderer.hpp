@@ -55,9 +55,9 @@ class ImageRenderer {
   const std::vector<Camera>& cameras() const { return cameras_; }
 
  private:
-  // Under mpirun: every rank receives the pixels the others rendered (rank r rendered the chunks
-  // [chunk_shares[r], chunk_shares[r + 1])).
-  static void gather_shares(RenderedImage& image, const std::vector<size_t>& chunk_shares, size_t chunk_rays);
+  // Under mpirun: every rank receives the pixels the others rendered (rank r rendered the pixels
+  // [pixel_shares[r], pixel_shares[r + 1])).
+  static void gather_shares(RenderedImage& image, const std::vector<size_t>& pixel_shares);
 
   ocl::Context* ctx_;
   std::vector<Camera> cameras_;

@@ -1,5 +1,4 @@
 // A training run followed by the val evaluation of the networks it trained.
-#include "dist/world.hpp"
 #include "eval/train_and_evaluate.hpp"
 
 #include <cstdio>
@@ -7,6 +6,7 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "dist/world.hpp"
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "io/png.hpp"
