@@ -72,7 +72,7 @@ class Session {
   static void abort_all(int exit_code);
 
  private:
-  bool started_ = false;
+  [[maybe_unused]] bool started_ = false;  // MPI_Init was called (read only in a build with MPI)
 };
 
 // Contiguous shares of `count` items over `parts` ranks: rank r takes [offsets[r], offsets[r + 1]); the first
