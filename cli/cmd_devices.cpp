@@ -25,7 +25,9 @@ std::string selector_source(const std::string& selector) {
 void print_device(const ocl::DeviceInfo& d, const std::string& chosen_because) {
   std::cout << "[" << d.index << "] " << d.name
             << (chosen_because.empty() ? "" : "   <- selected (" + chosen_because + ")") << "\n"
-            << "    platform         " << d.platform_name << "\n"
+            << "    platform         " << d.platform_name << " (" << d.platform_vendor << ")\n"
+            << "    select with      --device '" << ocl::exact_selector(d) << "'\n"
+            << "    vendor           " << d.vendor << "\n"
             << "    type             " << d.type_name() << "\n"
             << "    compute units    " << d.compute_units << "\n"
             << "    global memory    " << gib(d.global_mem_bytes) << "\n"

@@ -40,4 +40,14 @@ for icd in /etc/OpenCL/vendors/*.icd; do
 done
 echo "$library" > "$vendors/intel-cpu.icd"
 
+# The runtime's own platform name, asked of it alone (a folder listing only its ICD file).
+alone="$cache/vendors-intel-only"
+rm -rf "$alone"
+mkdir -p "$alone"
+echo "$library" > "$alone/intel-cpu.icd"
+command -v clinfo >/dev/null || fail "clinfo is missing (scripts/install-deps.sh installs it)"
+platform="$(OCL_ICD_VENDORS="$alone" clinfo -l 2>/dev/null | sed -n 's/^Platform #0: //p')"
+[ -n "$platform" ] || fail "$library is installed but lists no OpenCL platform (clinfo -l over it alone)"
+
 echo "export OCL_ICD_VENDORS=$vendors"
+printf 'export INTEL_OPENCL_PLATFORM=%q\n' "$platform"

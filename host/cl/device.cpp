@@ -36,6 +36,8 @@ DeviceInfo describe(const ::cl::Platform& platform, const ::cl::Device& device, 
   cl_int status = CL_SUCCESS;
   info.platform_name = clean(platform.getInfo<CL_PLATFORM_NAME>(&status));
   check(status, "clGetPlatformInfo(CL_PLATFORM_NAME)");
+  info.platform_vendor = clean(platform.getInfo<CL_PLATFORM_VENDOR>(&status));
+  check(status, "clGetPlatformInfo(CL_PLATFORM_VENDOR)");
   info.name = clean(query<CL_DEVICE_NAME, std::string>(device, "CL_DEVICE_NAME"));
   info.vendor = clean(query<CL_DEVICE_VENDOR, std::string>(device, "CL_DEVICE_VENDOR"));
   info.driver_version = clean(query<CL_DRIVER_VERSION, std::string>(device, "CL_DRIVER_VERSION"));
@@ -91,8 +93,10 @@ std::vector<DeviceInfo> list_devices() {
     const cl_int device_status = platform.getDevices(CL_DEVICE_TYPE_ALL, &platform_devices);
     if (device_status == CL_DEVICE_NOT_FOUND) continue;  // a platform with no device is not an error
     check(device_status, "clGetDeviceIDs");
+    int index_in_platform = 0;
     for (const auto& device : platform_devices) {
       devices.push_back(describe(platform, device, static_cast<int>(devices.size())));
+      devices.back().index_in_platform = index_in_platform++;
     }
   }
   if (devices.empty()) {
@@ -100,6 +104,74 @@ std::vector<DeviceInfo> list_devices() {
   }
   return devices;
 }
+
+namespace {
+
+bool contains(const std::string& haystack, const std::string& lower_needle) {
+  return lower(haystack).find(lower_needle) != std::string::npos;
+}
+
+bool all_digits(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+// The distinct platform names among `matches`, quoted, for an ambiguity error.
+std::string platforms_of(const std::vector<const DeviceInfo*>& matches) {
+  std::vector<std::string> names;
+  for (const auto* d : matches) {
+    if (std::find(names.begin(), names.end(), d->platform_name) == names.end()) names.push_back(d->platform_name);
+  }
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "'" : ", '") + name + "'";
+  return out;
+}
+
+size_t platform_count(const std::vector<const DeviceInfo*>& matches) {
+  std::vector<std::string> names;
+  for (const auto* d : matches) {
+    if (std::find(names.begin(), names.end(), d->platform_name) == names.end()) names.push_back(d->platform_name);
+  }
+  return names.size();
+}
+
+[[noreturn]] void no_match(const std::vector<DeviceInfo>& devices, const std::string& selector, const std::string& why) {
+  throw Error("--device '" + selector + "' " + why + "; the devices are: " + describe_devices(devices) +
+              " (give an index, part of a name, or platform=NAME[:N])");
+}
+
+// "platform=P[:N]": one platform by its whole name or vendor, else by part of them, then its N-th device.
+const DeviceInfo& choose_by_platform(const std::vector<DeviceInfo>& devices, const std::string& selector) {
+  std::string platform = selector.substr(std::string("platform=").size());
+  int index = 0;
+  const auto colon = platform.rfind(':');
+  if (colon != std::string::npos && all_digits(platform.substr(colon + 1)) && platform.size() - colon <= 9) {
+    index = std::stoi(platform.substr(colon + 1));
+    platform = platform.substr(0, colon);
+  }
+  if (platform.empty()) no_match(devices, selector, "names no platform");
+  const std::string needle = lower(platform);
+  std::vector<const DeviceInfo*> matches;
+  for (const auto& d : devices) {
+    if (lower(d.platform_name) == needle || lower(d.platform_vendor) == needle) matches.push_back(&d);
+  }
+  if (matches.empty()) {
+    for (const auto& d : devices) {
+      if (contains(d.platform_name, needle) || contains(d.platform_vendor, needle)) matches.push_back(&d);
+    }
+  }
+  if (matches.empty()) no_match(devices, selector, "matches no platform");
+  if (platform_count(matches) > 1) {
+    no_match(devices, selector, "is part of several platforms' names (" + platforms_of(matches) +
+                                    "): give more of the one you mean");
+  }
+  for (const auto* d : matches) {
+    if (d->index_in_platform == index) return *d;
+  }
+  no_match(devices, selector, "asks for device " + std::to_string(index) + " of platform '" +
+                                  matches.front()->platform_name + "', which has " + std::to_string(matches.size()));
+}
+
+}  // namespace
 
 DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::string& selector,
                          std::string* default_rule) {
@@ -119,26 +191,34 @@ DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::stri
     rule = "the first device; no GPU or CPU device";
     return devices.front();
   }
-  const bool is_index = std::all_of(selector.begin(), selector.end(), [](unsigned char c) { return std::isdigit(c); });
-  if (is_index) {
-    const long index = std::stol(selector);
-    if (index >= 0 && index < static_cast<long>(devices.size())) return devices[static_cast<size_t>(index)];
-  } else {
-    // A device's whole name wins over parts of others' (Intel's CPU runtime calls its device "AMD EPYC", which is
-    // also part of PoCL's "pthread-haswell-AMD EPYC"); else the first device whose or whose platform's name
-    // contains the selector.
-    const std::string needle = lower(selector);
-    for (const auto& d : devices) {
-      if (lower(d.name) == needle) return d;
-    }
-    for (const auto& d : devices) {
-      if (lower(d.name).find(needle) != std::string::npos || lower(d.platform_name).find(needle) != std::string::npos) {
-        return d;
-      }
+  if (all_digits(selector)) {
+    // More than 9 digits is no index of any list (and would overflow stoul).
+    if (selector.size() <= 9 && std::stoul(selector) < devices.size()) return devices[std::stoul(selector)];
+    no_match(devices, selector, "matches no OpenCL device");
+  }
+  if (lower(selector).rfind("platform=", 0) == 0) return choose_by_platform(devices, selector);
+  // A device's whole name wins over parts of others' (Intel's CPU runtime calls its device "AMD EPYC", which is
+  // also part of PoCL's "pthread-haswell-AMD EPYC").
+  const std::string needle = lower(selector);
+  for (const auto& d : devices) {
+    if (lower(d.name) == needle) return d;
+  }
+  std::vector<const DeviceInfo*> matches;
+  for (const auto& d : devices) {
+    if (contains(d.name, needle) || contains(d.platform_name, needle) || contains(d.platform_vendor, needle)) {
+      matches.push_back(&d);
     }
   }
-  throw Error("--device '" + selector + "' matches no OpenCL device; the devices are: " + describe_devices(devices) +
-              " (give an index or part of a name)");
+  if (matches.empty()) no_match(devices, selector, "matches no OpenCL device");
+  if (platform_count(matches) > 1) {
+    no_match(devices, selector, "is ambiguous: it is part of names on several platforms (" + platforms_of(matches) +
+                                    "): choose one with platform=NAME[:N] or an index");
+  }
+  return *matches.front();
+}
+
+std::string exact_selector(const DeviceInfo& device) {
+  return "platform=" + device.platform_name + ":" + std::to_string(device.index_in_platform);
 }
 
 std::string describe_devices(const std::vector<DeviceInfo>& devices) {

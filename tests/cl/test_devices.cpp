@@ -1,6 +1,8 @@
 // Device enumeration and the --device choice rule.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+
 #include "cl/device.hpp"
 #include "cl/error.hpp"
 #include "support/test_context.hpp"
@@ -45,28 +47,98 @@ TEST_CASE("devices: choice by default, index and name substring") {
     CAPTURE(d.name);
     CHECK(ocl::choose_device(devices, upper(d.name)).name == d.name);
   }
-  // A part of a name picks the first device whose name contains it.
+  // A part of a name picks the first device whose name contains it when every such device is on one platform, and
+  // is refused otherwise.
   const std::string part = upper(last.name.substr(0, std::min<size_t>(6, last.name.size())));
+  std::vector<const ocl::DeviceInfo*> holders;
   for (const auto& d : devices) {
-    if (upper(d.name).find(part) == std::string::npos) continue;
-    CHECK(ocl::choose_device(devices, part).index == d.index);
-    break;
+    const bool holds = upper(d.name).find(part) != std::string::npos ||
+                       upper(d.platform_name).find(part) != std::string::npos ||
+                       upper(d.platform_vendor).find(part) != std::string::npos;
+    if (holds) holders.push_back(&d);
   }
+  REQUIRE(!holders.empty());
+  const bool one_platform = std::all_of(holders.begin(), holders.end(), [&](const ocl::DeviceInfo* d) {
+    return d->platform_name == holders.front()->platform_name;
+  });
+  CAPTURE(part);
+  if (one_platform) {
+    CHECK(ocl::choose_device(devices, part).index == holders.front()->index);
+  } else {
+    CHECK_THROWS_WITH_AS(ocl::choose_device(devices, part), doctest::Contains("is ambiguous"), Error);
+  }
+  // Every device's exact selector picks it.
+  for (const auto& d : devices) CHECK(ocl::choose_device(devices, ocl::exact_selector(d)).index == d.index);
 }
 
+namespace {
+
+ocl::DeviceInfo mock_device(int index, int index_in_platform, const std::string& name, const std::string& platform,
+                            const std::string& platform_vendor) {
+  ocl::DeviceInfo d;
+  d.index = index;
+  d.index_in_platform = index_in_platform;
+  d.name = name;
+  d.platform_name = platform;
+  d.platform_vendor = platform_vendor;
+  d.type = CL_DEVICE_TYPE_CPU;
+  return d;
+}
+
+// The message choose_device throws for `selector`, or "" when it chose.
+std::string refusal(const std::vector<ocl::DeviceInfo>& devices, const std::string& selector) {
+  try {
+    ocl::choose_device(devices, selector);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
 TEST_CASE("devices: a whole name wins over the same text inside an earlier device's name") {
-  ocl::DeviceInfo pocl, intel;
-  pocl.index = 0;
-  pocl.name = "pthread-haswell-AMD EPYC";
-  pocl.platform_name = "Portable Computing Language";
-  intel.index = 1;
-  intel.name = "AMD EPYC";
-  intel.platform_name = "Intel(R) OpenCL";
-  const std::vector<ocl::DeviceInfo> devices{pocl, intel};
+  const std::vector<ocl::DeviceInfo> devices{
+      mock_device(0, 0, "pthread-haswell-AMD EPYC", "Portable Computing Language", "The pocl project"),
+      mock_device(1, 0, "AMD EPYC", "Intel(R) OpenCL", "Intel(R) Corporation")};
   CHECK(ocl::choose_device(devices, "amd epyc").index == 1);
-  CHECK(ocl::choose_device(devices, "EPYC").index == 0);   // a part: the first that contains it
   CHECK(ocl::choose_device(devices, "intel").index == 1);  // the platform's name
   CHECK(ocl::choose_device(devices, "haswell").index == 0);
+  CHECK(ocl::choose_device(devices, "pocl").index == 0);   // the platform's vendor
+  // A part of names on both platforms is refused, not resolved by the order the ICD loader happened to list them.
+  CHECK(refusal(devices, "EPYC").find("is ambiguous: it is part of names on several platforms "
+                                      "('Portable Computing Language', 'Intel(R) OpenCL')") != std::string::npos);
+}
+
+// On an Intel host PoCL names its CPU device after the processor, so "Intel" is part of both implementations' names
+// and the first match depends on the ICD loader's platform order, which it does not fix: a stage that asked for
+// Intel's runtime could run on PoCL. Here with PoCL listed first, then last.
+TEST_CASE("devices: PoCL's device named after an Intel processor never stands in for Intel's runtime") {
+  const auto pocl = mock_device(0, 0, "pthread-skylake-avx512-Intel(R) Xeon(R) Processor", "Portable Computing Language",
+                                "The pocl project");
+  const auto intel = mock_device(1, 0, "Intel(R) Xeon(R) Processor", "Intel(R) OpenCL", "Intel(R) Corporation");
+  for (bool pocl_first : {true, false}) {
+    CAPTURE(pocl_first);
+    auto first = pocl_first ? pocl : intel, second = pocl_first ? intel : pocl;
+    first.index = 0;
+    second.index = 1;
+    const std::vector<ocl::DeviceInfo> devices{first, second};
+    const int intel_index = pocl_first ? 1 : 0, pocl_index = 1 - intel_index;
+    CHECK(ocl::choose_device(devices, "platform=Intel(R) OpenCL").index == intel_index);
+    CHECK(ocl::choose_device(devices, "platform=intel(r) opencl:0").index == intel_index);
+    CHECK(ocl::choose_device(devices, "platform=Intel").index == intel_index);  // part of one platform's name only
+    CHECK(ocl::choose_device(devices, "platform=Portable Computing Language").index == pocl_index);
+    CHECK(ocl::choose_device(devices, "platform=The pocl project").index == pocl_index);  // the vendor
+    CHECK(ocl::choose_device(devices, ocl::exact_selector(devices[0])).index == 0);
+    CHECK(ocl::choose_device(devices, ocl::exact_selector(devices[1])).index == 1);
+    CHECK(refusal(devices, "Intel").find("is ambiguous") != std::string::npos);
+    CHECK(refusal(devices, "Xeon").find("is ambiguous") != std::string::npos);
+    CHECK(refusal(devices, "platform=Intel(R) OpenCL:1").find("asks for device 1 of platform 'Intel(R) OpenCL', "
+                                                             "which has 1") != std::string::npos);
+    CHECK(refusal(devices, "platform=o").find("is part of several platforms' names") != std::string::npos);
+    CHECK(refusal(devices, "platform=nosuch").find("matches no platform") != std::string::npos);
+    CHECK(refusal(devices, "platform=").find("names no platform") != std::string::npos);
+  }
 }
 
 TEST_CASE("devices: the default choice says which rule applied") {

@@ -1,7 +1,10 @@
-// The device the tests run on.
+// The device the tests run on, checked against the platform the test stage asked for.
 #include "support/test_context.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdlib>
+#include <iostream>
 #include <memory>
 
 #include "core/error.hpp"
@@ -14,24 +17,51 @@ std::unique_ptr<ocl::Context>& context_slot() {
   return ctx;
 }
 
-std::unique_ptr<ocl::Context> make_test_context() {
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string env_or_empty(const char* name) {
+  const char* value = std::getenv(name);
+  return value ? value : "";
+}
+
+ocl::DeviceInfo choose_test_device() {
   const auto devices = ocl::list_devices();
-  const char* selector = std::getenv("MIPNERF_TEST_DEVICE");
-  if (selector && *selector) {
+  const std::string selector = env_or_empty("MIPNERF_TEST_DEVICE");
+  if (!selector.empty()) {
     try {
-      return std::make_unique<ocl::Context>(ocl::choose_device(devices, selector));
+      return ocl::choose_device(devices, selector);
     } catch (const Error& e) {
       throw Error(std::string("MIPNERF_TEST_DEVICE: ") + e.what());
     }
   }
   for (const auto& d : devices) {
-    if (d.type & CL_DEVICE_TYPE_CPU) return std::make_unique<ocl::Context>(d);
+    if (d.type & CL_DEVICE_TYPE_CPU) return d;
   }
   throw Error("the tests need an OpenCL CPU device (PoCL: 'pocl-opencl-icd') or MIPNERF_TEST_DEVICE naming one; "
               "found: " + ocl::describe_devices(devices));
 }
 
+std::unique_ptr<ocl::Context> make_test_context() {
+  const ocl::DeviceInfo device = choose_test_device();
+  // Said once per test process, so every test's output shows where it ran.
+  std::cerr << "tests: platform '" << device.platform_name << "', device [" << device.index << "] '" << device.name
+            << "', driver " << device.driver_version << "\n";
+  check_test_platform(device);
+  return std::make_unique<ocl::Context>(device);
+}
+
 }  // namespace
+
+void check_test_platform(const ocl::DeviceInfo& device) {
+  const std::string wanted = env_or_empty("MIPNERF_TEST_PLATFORM");
+  if (wanted.empty() || lower(wanted) == lower(device.platform_name)) return;
+  throw Error("the tests run on platform '" + device.platform_name + "' (device '" + device.name +
+              "'), but this test stage asked for platform '" + wanted + "' (MIPNERF_TEST_PLATFORM); MIPNERF_TEST_DEVICE='" +
+              env_or_empty("MIPNERF_TEST_DEVICE") + "' chose the wrong device: qualify it with platform=NAME");
+}
 
 ocl::Context& test_context() {
   auto& ctx = context_slot();

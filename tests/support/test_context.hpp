@@ -6,9 +6,14 @@
 namespace mipnerf::test {
 
 // One context per test process, created on first use. MIPNERF_TEST_DEVICE takes the same
-// selector as --device; by default the first CPU device (PoCL's) is used. Throws mipnerf::Error naming the devices
-// found when there is no such device.
+// selector as --device; by default the first CPU device (PoCL's) is used. Prints the platform and device once (to
+// stderr). Throws mipnerf::Error naming the devices found when there is no such device, and when the device is not
+// on the platform MIPNERF_TEST_PLATFORM names (check_test_platform), so no test passes on the wrong runtime.
 ocl::Context& test_context();
+
+// Throws mipnerf::Error when MIPNERF_TEST_PLATFORM is set and `device`'s platform name is another (case aside): the
+// test stage of scripts/test.sh asked for one implementation and the selector found another.
+void check_test_platform(const ocl::DeviceInfo& device);
 
 // Releases the context (its programs, queue and buffers) if it was made. test_main calls it after the tests, before
 // the process's static destructors run: an OpenCL implementation's own statics may be gone by then (oclgrind's are:
