@@ -6,6 +6,7 @@
 #include "core/error.hpp"
 #include "common.hpp"
 #include "dist/world.hpp"
+#include "planted_fault.hpp"
 
 namespace mipnerf::cli {
 namespace {
@@ -25,6 +26,7 @@ std::string describe_parse_error(CLI::App& app, const CLI::ParseError& e, int ar
 
 int main(int argc, char** argv) {
   using namespace mipnerf;
+  cli::plant_fault_if_asked();  // test-only, sanitizer build only (planted_fault.hpp)
   CLI::App app{"mipnerf-cl: anti-aliased neural radiance fields (mip-NeRF) on any OpenCL device"};
   app.set_version_flag("--version", std::string("mipnerf-cl ") + MIPNERF_VERSION);
   auto& global = cli::global_options();

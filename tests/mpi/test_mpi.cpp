@@ -25,6 +25,7 @@
 #include "io/exr.hpp"
 #include "support/child_process.hpp"
 #include "support/run_checks.hpp"
+#include "support/skip.hpp"
 #include "support/train_fixtures.hpp"
 #include "train/checkpoint.hpp"
 
@@ -39,11 +40,11 @@ constexpr const char* kMpirun = MIPNERF_MPIRUN_PATH;  // "" when CMake found non
 
 bool mpi_available() {
 #ifndef MIPNERF_TEST_HAVE_MPI
-  MESSAGE("skipped: this build has no MPI (install libopenmpi-dev and openmpi-bin, then reconfigure)");
+  test::skip_test("this build has no MPI (install libopenmpi-dev and openmpi-bin, then reconfigure)");
   return false;
 #else
   if (std::strlen(kMpirun) == 0 || !fs::exists(kMpirun)) {
-    MESSAGE("skipped: mpirun was not found when the build was configured (install openmpi-bin)");
+    test::skip_test("mpirun was not found when the build was configured (install openmpi-bin)");
     return false;
   }
   return true;

@@ -1,5 +1,8 @@
 # Runs a test executable's cases under oclgrind and fails on any report.
 #   -DOCLGRIND=path -DEXE=path -DFILTER=doctest test-case filter -DUNINITIALIZED=ON|OFF [-DEXCLUDE=filter]
+#   [-DCANARY=ON]: the other way round, for the canary (tests/oclgrind/canary.cpp, FILTER empty): passes only when oclgrind
+#   reports the canary's own invalid write in its kernel, so oclgrind failing to start, or failing for any other
+#   reason, fails it.
 # Checks: --check-api (OpenCL API misuse), --data-races (inside and across work-groups) and, always on,
 # out-of-bounds accesses; with UNINITIALIZED also --uninitialized (reads of memory nobody wrote). That plugin
 # (oclgrind 21.10) needs two concessions: kernels built with -cl-opt-disable (LLVM's optimiser emits `freeze`
@@ -15,9 +18,20 @@ set(exclude "")
 if(EXCLUDE)
   set(exclude "--test-case-exclude=${EXCLUDE}")
 endif()
-execute_process(COMMAND "${OCLGRIND}" ${checks} "${EXE}" "--test-case=${FILTER}" ${exclude}
+set(filter "")
+if(FILTER)
+  set(filter "--test-case=${FILTER}")
+endif()
+execute_process(COMMAND "${OCLGRIND}" ${checks} "${EXE}" ${filter} ${exclude}
   RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("${out}${err}")
+if(CANARY)
+  if(NOT "${out}${err}" MATCHES "Invalid write of size 4 at global memory address[^\n]*\n[^\n]*Kernel: past_the_end")
+    message(FATAL_ERROR "oclgrind did not report the canary's out-of-bounds write in kernel past_the_end (exit ${status})")
+  endif()
+  message(STATUS "oclgrind reported the canary's out-of-bounds write, as it must")
+  return()
+endif()
 # oclgrind's reports (it keeps running after most of them, so the exit status alone would miss them).
 if("${out}${err}" MATCHES "(Invalid (read|write)[^\n]*|[A-Za-z-]+ data race[^\n]*|Uninitiali[sz]ed value[^\n]*|OpenCL runtime error[^\n]*|OCLGRIND FATAL ERROR[^\n]*|Oclgrind - [^\n]*)")
   message(FATAL_ERROR "oclgrind reported: ${CMAKE_MATCH_1}")

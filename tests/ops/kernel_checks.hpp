@@ -8,12 +8,14 @@
 #include <cstdlib>
 #include <functional>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "ops/ray_bundle.hpp"
+#include "support/comparison_log.hpp"
 
 namespace mipnerf::test {
 
@@ -99,6 +101,10 @@ inline Comparison compare(const std::vector<float>& device, const std::vector<do
     if (std::getenv("MIPNERF_TEST_VERBOSE")) {                                                                       \
       MESSAGE(what << ": worst error " << cmp_.worst_error << " = " << cmp_.worst_ratio << " x tolerance");          \
     }                                                                                                                \
+    std::ostringstream what_;                                                                                        \
+    what_ << what;                                                                                                   \
+    ::mipnerf::test::record_comparison(what_.str(), cmp_.non_finite ? INFINITY : cmp_.worst_ratio,                   \
+                                       cmp_.worst_error);                                                            \
     CHECK(cmp_.non_finite == 0);                                                                                     \
     CHECK(cmp_.failures == 0);                                                                                       \
   } while (0)
