@@ -9,7 +9,17 @@
 #define MIPNERF_COMMON_CL
 
 // Loads/stores a packed 3-vector at element index i (i.e. floats 3i..3i+2).
+#ifndef MIPNERF_TEST_FAULT
 inline float3 load3(__global const float* p, size_t i) { return (float3)(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
+#else
+// Test-only, never defined otherwise: `mipnerf-selftest --inject-build-option=-DMIPNERF_TEST_FAULT` stands in for a
+// driver with a broken vector load. Every 3-vector read loses the low 8 bits of its mantissas (relative error up to
+// 2^-16, far beyond every stage's float32 bound), and the self-test must fail on it.
+inline float drop_low_bits(float x) { return as_float(as_uint(x) & 0xFFFFFF00u); }
+inline float3 load3(__global const float* p, size_t i) {
+  return (float3)(drop_low_bits(p[3 * i]), drop_low_bits(p[3 * i + 1]), drop_low_bits(p[3 * i + 2]));
+}
+#endif
 inline void store3(__global float* p, size_t i, float3 v) {
   p[3 * i] = v.x;
   p[3 * i + 1] = v.y;

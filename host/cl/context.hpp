@@ -39,6 +39,9 @@ class Context {
   // Same, from given sources (tests, tools).
   Program& program_from_sources(const std::vector<SourceFile>& files, const BuildOptions& options = {});
   const ProgramCache& program_cache() const { return programs_; }
+  // Adds options to those every program of this context is built with from now on (the device's base options; the
+  // program cache keys on them, so nothing built before is reused with them). mipnerf-selftest's --inject-define.
+  void add_base_options(const BuildOptions& options) { traits_.base_options.merge(options); }
 
   void finish();  // clFinish, checked
 
