@@ -3,7 +3,8 @@
 # (MIPNERF_SANITIZE) together with the fuzz targets (MIPNERF_FUZZ), in one extra build folder
 # (${SANITIZE_BUILD_DIR:-build-sanitize}), then run on PoCL's CPU device: every test but the `oclgrind` ones (the
 # normal build runs those), the fuzz targets' short entries (label `fuzz`) included. Any sanitizer report fails its
-# test. scripts/test.sh calls it after the PoCL run; it also runs on its own.
+# test. scripts/test.sh calls it with --build-only and runs the tests itself (its `sanitizer` and `fuzz` stages); on its
+# own it builds and runs them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
@@ -14,6 +15,8 @@ cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang
   -DMIPNERF_MPI=OFF  # MPI is tested in the plain build; here, a build without it (refused under mpirun)
 cmake --build "$build_dir" -j "$jobs"
 built=$(date +%s)
+echo "test: sanitizer build $((built - start)) s"
+[ "${1:-}" = "--build-only" ] && exit 0
 echo "test: the whole suite under AddressSanitizer + UBSan, and the fuzz targets, on PoCL's CPU device ($build_dir)"
 ctest --test-dir "$build_dir" --output-on-failure -j "$jobs" -LE oclgrind
 echo "test: sanitizer build $((built - start)) s, its tests $(( $(date +%s) - built )) s"

@@ -1,32 +1,115 @@
 #!/usr/bin/env bash
-# The test command of the README and of CI: install dependencies, build, run the whole suite on every OpenCL
-# implementation we test on (PoCL, then Intel's CPU runtime when it can be installed) and once more built with
-# AddressSanitizer + UBSan together with the fuzz targets; fails if any run fails. SANITIZE=0 leaves out the
-# sanitizer build (the plain runs alone).
-set -euo pipefail
+# The test command of the README and of CI: install dependencies, build, then run every test stage and end with a
+# table of what each stage ran, where, and how it went:
+#   pocl       the whole suite on PoCL's CPU device (but the stages below)
+#   mpi        the MPI tests (mpirun -np 2) on PoCL
+#   oclgrind   the kernel tests under the oclgrind simulator
+#   sanitizer  the whole suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh)
+#   fuzz       each fuzz target for 20 s, in that build
+#   intel      the whole suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI)
+#   selftest   `mipnerf-selftest` on every runtime above (PoCL, oclgrind, Intel's)
+# Every stage runs on a platform it names and checks (MIPNERF_TEST_PLATFORM); a test that cannot run reports skipped.
+# The command fails when a stage fails, runs no test, or could not run. A stage may be left out only by naming it,
+# MIPNERF_SKIP=intel,oclgrind; with CI=true nothing may be left out and a skipped test fails the command.
+# Day to day, the PoCL suite alone: ctest --test-dir build -j2 -LE '^(oclgrind|mpi)$'
+set -uo pipefail
 cd "$(dirname "$0")/.."
-./scripts/install-deps.sh
-./scripts/build.sh
+stages="pocl mpi oclgrind sanitizer fuzz intel selftest"
+ci="${CI:-false}"
+skip_list=",${MIPNERF_SKIP:-},"
+for name in ${MIPNERF_SKIP//,/ }; do
+  case " $stages " in *" $name "*) ;; *) echo "test: MIPNERF_SKIP names '$name', not a stage ($stages)" >&2; exit 2 ;; esac
+done
+if [ "$ci" = true ] && [ "$skip_list" != ",," ]; then
+  echo "test: MIPNERF_SKIP='$MIPNERF_SKIP' with CI=true: in CI every stage must run" >&2
+  exit 2
+fi
+./scripts/install-deps.sh || exit 1
+./scripts/build.sh || exit 1
 build_dir="${BUILD_DIR:-build}"
+sanitize_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
 jobs="${JOBS:-$(nproc)}"
+results="$(mktemp -d)"
+trap 'rm -rf "$results"' EXIT
+start_all=$(date +%s)
+pocl_platform="Portable Computing Language"
+oclgrind_platform="Oclgrind"
 
-# 1. PoCL's CPU device (the tests' default: the first CPU device), and the kernel tests under oclgrind (label
-#    `oclgrind`). Day to day, `ctest --test-dir build -j2 -LE oclgrind` is the quick run on PoCL alone.
-echo "test: the whole suite on PoCL's CPU device, and the kernel tests under oclgrind"
-ctest --test-dir "$build_dir" --output-on-failure -j "$jobs"
+# wanted NAME: whether the stage is to run (MIPNERF_SKIP does not name it).
+wanted() { case "$skip_list" in *",$1,"*) return 1 ;; esac; }
 
-# 2. The sanitizer build (its own build folder, clang++): the suite under AddressSanitizer + UBSan on PoCL, but the
-#    oclgrind tests (run above), and each fuzz target for 20 s (label `fuzz`). scripts/test-sanitize.sh.
-if [ "${SANITIZE:-1}" != 0 ]; then
-  ./scripts/test-sanitize.sh
+# record STAGE WHERE JUNIT NOTE SECONDS: one row of the closing table (JUNIT: the stage's results, or "").
+record() { printf '%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" "${5:-0}" >> "$results/rows.tsv"; }
+
+# device_of SELECTOR: the name of the device the executable picks for SELECTOR.
+device_of() {
+  "$build_dir/mipnerf-cl" --device "$1" devices 2>/dev/null | sed -n 's/^\[[0-9]*\] \(.*\)   <- selected.*/\1/p'
+}
+
+# run_ctest STAGE PLATFORM BUILD_DIR CTEST_ARGS...: a stage of CTest tests, the tests and the executable both on
+# PLATFORM (selected by platform, checked by MIPNERF_TEST_PLATFORM).
+run_ctest() {
+  local stage="$1" platform="$2" dir="$3" started
+  shift 3
+  started=$(date +%s)
+  echo "test: stage '$stage' on platform '$platform' ($(device_of "platform=$platform"))"
+  MIPNERF_TEST_PLATFORM="$platform" MIPNERF_TEST_DEVICE="platform=$platform" MIPNERF_DEVICE="platform=$platform" \
+    ctest --test-dir "$dir" --output-on-failure -j "$jobs" --output-junit "$results/$stage.xml" "$@"
+  record "$stage" "$platform: $(device_of "platform=$platform")" "$results/$stage.xml" "" $(( $(date +%s) - started ))
+}
+
+# run_selftest PLATFORM [LAUNCHER...]: mipnerf-selftest on that platform (under oclgrind, its --quick checks).
+run_selftest() {
+  local platform="$1" started quick=()
+  shift
+  [ $# -gt 0 ] && quick=(--quick)
+  started=$(date +%s)
+  echo "test: stage 'selftest' on platform '$platform'"
+  "$@" "$build_dir/mipnerf-selftest" "${quick[@]}" --device "platform=$platform" --expect-platform "$platform" \
+    --junit "$results/selftest-$platform.xml"
+  record selftest "$platform" "$results/selftest-$platform.xml" "exit $?" $(( $(date +%s) - started ))
+}
+
+for name in ${MIPNERF_SKIP//,/ }; do record "$name" "-" "" "left out by request (MIPNERF_SKIP)"; done
+
+# PoCL: the suite, then the MPI tests, and the self-test.
+if wanted pocl; then run_ctest pocl "$pocl_platform" "$build_dir" -LE '^(oclgrind|mpi)$'; fi
+if wanted mpi; then run_ctest mpi "$pocl_platform" "$build_dir" -L '^mpi$'; fi
+if wanted selftest; then run_selftest "$pocl_platform"; fi
+
+# oclgrind: the kernel tests under the simulator, and the self-test under it.
+if wanted oclgrind; then
+  if command -v oclgrind >/dev/null; then
+    run_ctest oclgrind "$oclgrind_platform" "$build_dir" -L '^oclgrind$'
+    if wanted selftest; then run_selftest "$oclgrind_platform" oclgrind; fi
+  else
+    record oclgrind "-" "" "could not run: oclgrind is not installed (Debian package 'oclgrind')"
+  fi
 fi
 
-# 3. Intel's CPU OpenCL runtime, a second, independent implementation (installed into a cache folder from PyPI).
-#    MIPNERF_TEST_DEVICE picks the tests' device, MIPNERF_DEVICE the executable's (the CLI tests).
-if environment="$(./scripts/install-intel-opencl.sh)"; then
-  eval "$environment"
-  echo "test: the whole suite on Intel's CPU OpenCL runtime ($OCL_ICD_VENDORS)"
-  MIPNERF_TEST_DEVICE=Intel MIPNERF_DEVICE=Intel ctest --test-dir "$build_dir" --output-on-failure -j "$jobs" -LE oclgrind
-else
-  echo "test: Intel's CPU OpenCL runtime could not be installed (above); the PoCL run decides"
+# The sanitizer build (clang++, ASan + UBSan, no MPI): its suite but the oclgrind and MPI tests (run above), then
+# the fuzz targets' short runs.
+if wanted sanitizer || wanted fuzz; then
+  if ./scripts/test-sanitize.sh --build-only; then
+    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi)$'; fi
+    if wanted fuzz; then run_ctest fuzz "$pocl_platform" "$sanitize_dir" -L '^fuzz$'; fi
+  else
+    for stage in sanitizer fuzz; do
+      if wanted "$stage"; then record "$stage" "-" "" "could not run: the sanitizer build failed (above)"; fi
+    done
+  fi
 fi
+
+# Intel's CPU OpenCL runtime, installed into a cache folder from PyPI; its platform name comes from the runtime.
+if wanted intel; then
+  if environment="$(./scripts/install-intel-opencl.sh)"; then
+    eval "$environment"
+    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^oclgrind$'
+    if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM"; fi
+  else
+    record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"
+  fi
+fi
+
+# The closing table, and the command's status.
+python3 scripts/stage_table.py "$results/rows.tsv" --ci "$ci" --seconds $(( $(date +%s) - start_all ))
