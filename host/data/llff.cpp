@@ -311,7 +311,8 @@ std::vector<Camera> llff_render_path(const LlffCapture& capture, const LoadOptio
       path.push_back(view_matrix(z, up, c));
     }
   } else {
-    // The official spherical path: a circle at the cameras' mean height, looking at the centre.
+    // The official spherical path: a circle at the cameras' mean height, looking at the centre, at angles
+    // np.linspace(0, 2π, frames), whose last angle is 2π: the last frame repeats the first, as the official's does.
     Vec3 centroid{0, 0, 0};
     double mean_square = 0;
     for (const auto& p : capture.camera_to_world) {
@@ -321,7 +322,7 @@ std::vector<Camera> llff_render_path(const LlffCapture& capture, const LoadOptio
     const double height = centroid[2];
     const double radius = std::sqrt(std::max(mean_square - height * height, 0.0));
     for (int k = 0; k < frames; ++k) {
-      const double theta = 2.0 * M_PI * k / frames;
+      const double theta = frames > 1 ? 2.0 * M_PI * k / (frames - 1) : 0.0;
       const Vec3 origin{radius * std::cos(theta), radius * std::sin(theta), height};
       const Vec3 z = normalize(origin);
       const Vec3 x = normalize(cross(z, {0, 0, -1}));
