@@ -34,8 +34,14 @@ __kernel void adam_step(__global float* params, __global const float* grad, __gl
   if (i >= n) return;
   const float g = grad[i] * grad_scale;
   const float m_new = beta1 * m[i] + (1.0f - beta1) * g;
-  const float v_new = beta2 * v[i] + (1.0f - beta2) * (g * g);
+  // Guard: ((1 − β2)·g)·g, not (1 − β2)·g². g² overflows float32 for |g| > 1.8e19, while the term it feeds stays
+  // representable up to |g| ≈ 5.8e20 (β2 = 0.999); the official flax Adam squares first (lax.square), stores
+  // v = +∞ there, and from then on every update of that parameter is m̂/∞ = 0. The same two roundings either way.
+  const float v_new = beta2 * v[i] + (1.0f - beta2) * g * g;
   m[i] = m_new;
   v[i] = v_new;
-  params[i] -= lr * (m_new * inv_bias1) / (sqrt(v_new * inv_bias2) + epsilon);
+  // Guard: √v̂ as √v·√(1/(1 − β2^t)), not √(v/(1 − β2^t)). v̂ = v·inv_bias2 overflows float32 for v > 3.4e35 at
+  // step 1 (inv_bias2 = 1000) although √v̂ ≤ 1.9e19·31.6 is far inside the range; the official code divides
+  // first (grad_sq_ema / (1 − β2^t)) and gets √∞ = ∞, an update of 0. m̂ = m·inv_bias1 ≤ max|g| cannot overflow.
+  params[i] -= lr * (m_new * inv_bias1) / (sqrt(v_new) * sqrt(inv_bias2) + epsilon);
 }

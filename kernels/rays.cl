@@ -20,6 +20,9 @@
 //    to infinity, and the radius is the mean of the distances from the pixel's NDC origin to its horizontal and
 //    vertical neighbours' (the next pixel; the previous one in the last column/row, as official), times 2/√12.
 //    The dataset packs near = 0, far = 1 for these scenes; this kernel copies near/far from the camera either way.
+//    Origins on the near plane (t = 0) or behind it (t < 0) convert as officially; a direction parallel to the near
+//    plane (d_z = 0, where the official conversion gives Inf and NaN) converts as if d_z were ±NDC_MIN_DIR_Z
+//    (ndc_direction_z): a finite ray outside the NDC box.
 //  - Invalid input (camera id ≥ n_cameras, pixel id ≥ width·height) gives NaN in every output of that ray, so
 //    it cannot pass unnoticed downstream.
 
@@ -43,6 +46,9 @@
 #ifndef NDC_NEAR_PLANE
 #define NDC_NEAR_PLANE 1.0f
 #endif
+#ifndef NDC_MIN_DIR_Z
+#define NDC_MIN_DIR_Z 1e-8f
+#endif
 
 #define RADIUS_PER_PIXEL_WIDTH 0.577350269189625764f /* 2/√12 = 1/√3 */
 
@@ -57,17 +63,42 @@ inline float3 camera_origin(__global const float* cam) {
   return (float3)(cam[CAMERA_TO_WORLD + 3], cam[CAMERA_TO_WORLD + 7], cam[CAMERA_TO_WORLD + 11]);
 }
 
+// Guard: a direction's z as the NDC conversion uses it, at least NDC_MIN_DIR_Z away from 0: +NDC_MIN_DIR_Z for a
+// tiny positive z, −NDC_MIN_DIR_Z for a tiny negative one and for ±0 (towards the scene, which forward-facing
+// cameras look at down −z; not by the sign of a zero, which depends on how the rotation's sums ran). NaN passes
+// through. A ray parallel to the near plane (d_z = 0) never reaches it: the official convert_to_ndc divides by d_z
+// and gives ±Inf and NaN origins, directions and radii. Converted as if tilted by 1e-8, it is a finite ray far
+// outside the NDC box [−1, 1]³ (its origin ~(n + o_z)·|d|/1e-8 away), which samples only empty space. The
+// camera-frame direction has z = −1, so |d| ≥ 1 for a rotation and the guard only moves rays within 1e-8 rad of
+// parallel, where float32's own rounding of d_z (~1e-7·|d|₁ for a general rotation) is larger than d_z.
+inline float ndc_direction_z(float z) {
+  return fabs(z) < NDC_MIN_DIR_Z ? (z > 0.0f ? NDC_MIN_DIR_Z : -NDC_MIN_DIR_Z) : z;
+}
+
 // Change of the NDC origin between the ray of world direction `dir` and its neighbour of direction dir + step
 // (both from world origin o). NDC origin: o_near = o + t·d on the plane z = −n, o_ndc = (2fx/(w·n)·o_near.x,
 // 2fy/(h·n)·o_near.y, −1), o_near.x = o.x − (n + o.z)·d.x/d.z. The difference of d.x/d.z between the two rays is
-// written (step.x·d.z − d.x·step.z)/(d.z·(d.z + step.z)), which does not cancel.
+// written (step.x·z0 − d.x·(z1 − z0))/(z0·z1) with z0 = d.z, z1 = d.z + step.z (so z1 − z0 = step.z), which does
+// not cancel; each z goes through the guard above (then z1 − z0 is their difference), and hypot keeps the
+// distance of such a far-off pair from overflowing in its squares.
 inline float ndc_neighbour_distance(float3 o, float3 dir, float3 step, float sx, float sy) {
   const float n = NDC_NEAR_PLANE;
-  const float scale = -(n + o.z) / (dir.z * (dir.z + step.z));
-  const float dx = scale * (step.x * dir.z - dir.x * step.z);
-  const float dy = scale * (step.y * dir.z - dir.y * step.z);
+  const float z0 = ndc_direction_z(dir.z), z1 = ndc_direction_z(dir.z + step.z);
+  const float dz = z0 == dir.z && z1 == dir.z + step.z ? step.z : z1 - z0;
+  const float scale = -(n + o.z) / (z0 * z1);
+  const float dx = scale * (step.x * z0 - dir.x * dz);
+  const float dy = scale * (step.y * z0 - dir.y * dz);
   const float ex = sx / n * dx, ey = sy / n * dy;
-  return sqrt(ex * ex + ey * ey);
+  return hypot(ex, ey);
+}
+
+// Where the pair of neighbouring pixels that sets a pixel's NDC radius starts, relative to the pixel p (along an axis
+// of `size` pixels): the pixel itself (p, p + 1), except in the last column / row, where google/mipnerf's
+// LLFF._generate_rays pads its neighbour distances with the second-to-last pair's (dx[:, -2:-1]: pixels size − 3 and
+// size − 2), two before p; a 2-pixel axis has only the pair (0, 1), and a 1-pixel axis looks one pixel outside.
+inline float pair_start_shift(uint p, uint size) {
+  if (p + 1 < size) return 0.0f;
+  return size >= 3 ? -2.0f : -1.0f;
 }
 
 inline void write_nan_ray(size_t i, __global float* origins, __global float* directions, __global float* viewdirs,
@@ -126,19 +157,29 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
 #if RAY_SHAPE == RAY_SHAPE_CYLINDER
   const float n = NDC_NEAR_PLANE;
   const float w = cam[CAMERA_WIDTH], h = cam[CAMERA_HEIGHT];
-  // Official convert_to_ndc. The shifted origin's z is −n by construction and is used exactly.
-  const float t_shift = -(n + origin.z) / dir.z;
-  const float3 o_near = origin + t_shift * dir;
+  // Official convert_to_ndc, with d_z through the guard ndc_direction_z. The shifted origin's z is −n by
+  // construction and is used exactly. The official direction a·(d/d_z − o_near/o_near_z) is computed as its exact
+  // equal a·(o·d_z − o_z·d)/(n·d_z) (o_near = o + t·d, t = −(n + o_z)/d_z): the official form subtracts two terms
+  // of size |d/d_z|, which for a large slope (a wide field of view, a ray nearly parallel to the near plane) leaves
+  // an error u·|d/d_z| that can dwarf the result (a·o/n exactly when o_z = 0).
+  const float dir_z = ndc_direction_z(dir.z);
+  const float t_shift = -(n + origin.z) / dir_z;
+  const float2 o_near = origin.xy + t_shift * dir.xy;
   const float ax = -2.0f * fx / w, ay = -2.0f * fy / h;
   store3(origins, i, (float3)(ax * o_near.x / -n, ay * o_near.y / -n, -1.0f));
-  store3(directions, i, (float3)(ax * (dir.x / dir.z - o_near.x / -n), ay * (dir.y / dir.z - o_near.y / -n), 2.0f));
-  // Neighbours: the next pixel, or the previous one in the last column / row.
-  const float step_x = px + 1 < width ? 1.0f : -1.0f, step_y = py + 1 < height ? 1.0f : -1.0f;
-  const float3 step_h = camera_rotate(cam, (float3)(step_x / fx, 0.0f, 0.0f));
-  const float3 step_v = camera_rotate(cam, (float3)(0.0f, -step_y / fy, 0.0f));
+  const float n_dir_z = n * dir_z;
+  store3(directions, i,
+         (float3)(ax * ((origin.x * dir_z - origin.z * dir.x) / n_dir_z),
+                  ay * ((origin.y * dir_z - origin.z * dir.y) / n_dir_z), 2.0f));
+  // The radius is the mean distance to the next pixel's NDC origin across and down, measured from the first pixel
+  // of a pair of neighbours: this pixel and the next, or in the last column / row the pair the official code repeats
+  // there (pair_start_shift).
+  const float shift_x = pair_start_shift(px, width), shift_y = pair_start_shift(py, height);
+  const float3 step_h = camera_rotate(cam, (float3)(1.0f / fx, 0.0f, 0.0f));
+  const float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / fy, 0.0f));
   const float sx = 2.0f * fx / w, sy = 2.0f * fy / h;
-  const float dist_h = ndc_neighbour_distance(origin, dir, step_h, sx, sy);
-  const float dist_v = ndc_neighbour_distance(origin, dir, step_v, sx, sy);
+  const float dist_h = ndc_neighbour_distance(origin, dir + shift_x * step_h, step_h, sx, sy);
+  const float dist_v = ndc_neighbour_distance(origin, dir + shift_y * step_v, step_v, sx, sy);
   radii[i] = 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
 #else
   store3(origins, i, origin);

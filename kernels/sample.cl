@@ -3,11 +3,13 @@
 //
 // t_edges [R][N+1]: edge k of N + 1 before jitter is
 //   t_k = near·(1 − s) + far·s                    (linear in depth), or
-//   t_k = 1 / ((1 − s)/near + s/far)              (SAMPLE_LINDISP: linear in disparity; needs near > 0)
+//   t_k = 1 / ((1 − s)/near + s/far)              (SAMPLE_LINDISP: linear in disparity; near = 0 gives its limit)
 // with s = k/N. Jittered (randomized != 0), edge k is drawn uniformly between the midpoints of its neighbours:
 //   lower_k = k = 0 ? t_0 : (t_{k−1} + t_k)/2,   upper_k = k = N ? t_N : (t_k + t_{k+1})/2
 //   edge_k = lower_k + (upper_k − lower_k)·u_k
-// so the edges stay sorted and t_0, t_N stay inside [near, far]. u_k is the (k mod 4)-th value of
+// so the edges stay sorted and t_0, t_N stay inside [near, far]. near = far gives N empty intervals at that depth;
+// far < near gives edges running from near down to far, as the official formula does (render gives such reversed
+// intervals no weight: it treats δ ≤ 0 as empty). u_k is the (k mod 4)-th value of
 // rng_uniform4(seed, first_ray + ray, step, k / 4, RNG_STREAM_STRATIFIED): a function of (seed, step, ray),
 // whatever the chunking or device. Sampling is a constant for the gradient (no backward).
 
@@ -19,10 +21,18 @@
 #endif
 
 // Deterministic edge k of n_samples intervals between near and far.
+// Guard (SAMPLE_LINDISP): a term whose weight is 0 (1 − s at the last edge, s at the first) is left out rather than
+// evaluated as 0/0 when its bound is 0, so a zero near (or far) gives the formula's limit, 0 at every edge where
+// its term has weight (near = 0: every edge but the last, which is far), instead of NaN. The official
+// sample_along_rays computes 1/near·(1 − s) + 1/far·s as written, where ∞·0 makes the edge at the other end NaN
+// (the last for near = 0, the first for far = 0, both for near = far = 0). For positive bounds the left-out term
+// is exactly 0 anyway: the result is bit for bit the plain formula's.
 inline float stratified_edge(float near, float far, uint k, uint n_samples) {
   const float s = (float)k / (float)n_samples;
 #if SAMPLE_LINDISP
-  return 1.0f / ((1.0f - s) / near + s / far);
+  const float near_term = s < 1.0f ? (1.0f - s) / near : 0.0f;
+  const float far_term = s > 0.0f ? s / far : 0.0f;
+  return 1.0f / (near_term + far_term);
 #else
   return near * (1.0f - s) + far * s;
 #endif

@@ -26,8 +26,10 @@ void adam_step(double* params, const double* grad, double* m, double* v, size_t 
   for (size_t i = 0; i < n; ++i) {
     const double g = grad[i] * grad_scale;
     m[i] = beta1 * m[i] + (1.0 - beta1) * g;
+    // The kernel's guards, in the same order (kernels/adam.cl): ((1 − β2)·g)·g, and √v̂ = √v·√inv_bias2, which
+    // keep v and √v̂ finite in float32 where the official lax.square(g) and √(v/(1 − β2^t)) overflow to ∞.
     v[i] = beta2 * v[i] + (1.0 - beta2) * g * g;
-    params[i] -= lr * (m[i] * inv_bias1) / (std::sqrt(v[i] * inv_bias2) + epsilon);
+    params[i] -= lr * (m[i] * inv_bias1) / (std::sqrt(v[i]) * std::sqrt(inv_bias2) + epsilon);
   }
 }
 

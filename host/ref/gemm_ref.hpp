@@ -3,13 +3,13 @@
 
 #include <cstddef>
 
-#include "mlp/gemm.hpp"
+#include "gemm/gemm.hpp"
 
 namespace mipnerf::ref {
 
 // C[m×n] = alpha · op(A) · op(B) + beta · C (row-major, ld in elements), accumulated in double.
 template <typename T>
-void gemm(const mlp::GemmShape& s, double alpha, const T* a, size_t lda, const T* b, size_t ldb, double beta, T* c,
+void gemm(const gemm::GemmShape& s, double alpha, const T* a, size_t lda, const T* b, size_t ldb, double beta, T* c,
           size_t ldc) {
   for (size_t i = 0; i < s.m; ++i) {
     for (size_t j = 0; j < s.n; ++j) {

@@ -15,7 +15,7 @@ double relu_keep_nan(double v) { return v < 0.0 ? 0.0 : v; }
 std::vector<double> dense_forward(const mlp::DenseLayer& layer, const std::vector<double>& params,
                                   const std::vector<double>& in, size_t rows, bool relu) {
   std::vector<double> out(rows * layer.out);
-  gemm<double>(mlp::gemm_shape(rows, layer.out, layer.in), 1.0, in.data(), layer.in, params.data() + layer.weight_offset,
+  gemm<double>(gemm::gemm_shape(rows, layer.out, layer.in), 1.0, in.data(), layer.in, params.data() + layer.weight_offset,
                layer.out, 0.0, out.data(), layer.out);
   mlp_bias_act_fwd(out.data(), 0, layer.out, rows, layer.out, params.data(), layer.bias_offset, relu);
   return out;
@@ -29,10 +29,10 @@ std::vector<double> dense_backward(const mlp::DenseLayer& layer, const std::vect
   mlp_act_bwd_partial(d_out.data(), 0, layer.out, act, 0, layer.out, rows, layer.out, std::max<size_t>(rows, 1),
                       act != nullptr, column_sums.data());
   mlp_sum_partials(column_sums.data(), 1, layer.out, grads.data(), layer.bias_offset);
-  gemm<double>(mlp::gemm_shape(layer.in, layer.out, rows, true), 1.0, in.data(), layer.in, d_out.data(), layer.out, 1.0,
+  gemm<double>(gemm::gemm_shape(layer.in, layer.out, rows, true), 1.0, in.data(), layer.in, d_out.data(), layer.out, 1.0,
                grads.data() + layer.weight_offset, layer.out);
   std::vector<double> d_in(rows * layer.in);
-  gemm<double>(mlp::gemm_shape(rows, layer.in, layer.out, false, true), 1.0, d_out.data(), layer.out,
+  gemm<double>(gemm::gemm_shape(rows, layer.in, layer.out, false, true), 1.0, d_out.data(), layer.out,
                params.data() + layer.weight_offset, layer.out, 0.0, d_in.data(), layer.in);
   return d_in;
 }

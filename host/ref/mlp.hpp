@@ -28,7 +28,7 @@ void mlp_act_bwd_partial(double* dz, size_t dz_offset, size_t dz_ld, const doubl
 // grad[grad_offset + c] += Σ_b partials[b][c].
 void mlp_sum_partials(const double* partials, size_t n_blocks, size_t cols, double* grad, size_t grad_offset);
 
-// ---- The whole network (mirrors mlp::Mlp::forward / backward) ----
+// ---- The whole network (mirrors mlp::Network::forward / backward) ----
 
 // What the reference forward keeps for its backward.
 struct MlpTape {

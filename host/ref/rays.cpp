@@ -51,6 +51,14 @@ RayOut cone_ray(const Camera& cam, double x, double y, uint32_t px) {
   return out;
 }
 
+// Where the pair of neighbouring pixels that sets pixel p's NDC radius starts, relative to p: p itself, but in the
+// last column / row the official code's padding pair (google/mipnerf LLFF._generate_rays, dx[:, -2:-1]: pixels
+// size − 3 and size − 2); a 2-pixel axis has only (0, 1), a 1-pixel axis looks one pixel outside.
+double pair_start_shift(uint32_t p, uint32_t size) {
+  if (p + 1 < size) return 0.0;
+  return size >= 3 ? -2.0 : -1.0;
+}
+
 RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, double near_plane) {
   const auto ndc_origin = [&](double xx, double yy, double o_ndc[3], double d_ndc[3]) {
     const Ray r = camera_ray(cam, xx, yy);
@@ -59,10 +67,15 @@ RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, 
   };
   RayOut out;
   ndc_origin(x, y, out.origin, out.direction);
-  double o_h[3], o_v[3], unused[3];
-  ndc_origin(x + (px + 1 < cam.width_px ? 1.0 : -1.0), y, o_h, unused);
-  ndc_origin(x, y + (py + 1 < cam.height_px ? 1.0 : -1.0), o_v, unused);
-  out.radius = 0.5 * (distance3(out.origin, o_h) + distance3(out.origin, o_v)) * kRadiusPerPixelWidth;
+  // The mean distance between the NDC origins of a pair of neighbours across and down: the pixel and the next, or
+  // in the last column / row the pair the official code repeats there (pair_start_shift).
+  const double shift_x = pair_start_shift(px, cam.width_px), shift_y = pair_start_shift(py, cam.height_px);
+  double h0[3], h1[3], v0[3], v1[3], unused[3];
+  ndc_origin(x + shift_x, y, h0, unused);
+  ndc_origin(x + shift_x + 1.0, y, h1, unused);
+  ndc_origin(x, y + shift_y, v0, unused);
+  ndc_origin(x, y + shift_y + 1.0, v1, unused);
+  out.radius = 0.5 * (distance3(h0, h1) + distance3(v0, v1)) * kRadiusPerPixelWidth;
   return out;
 }
 
@@ -70,14 +83,19 @@ RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, 
 
 void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width, double height,
                     double near_plane, double o_ndc[3], double d_ndc[3]) {
-  const double t = -(near_plane + o[2]) / d[2];
-  const double o_near[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+  // The kernel's guard (kernels/rays.cl ndc_direction_z): d_z within 1e-8 of 0, a ray (nearly) parallel to the near
+  // plane, converts as if d_z were +1e-8 (d_z > 0) or −1e-8 (d_z < 0 or ±0), 1e-8 as the float the kernel compares
+  // with, where the official code divides by d_z = 0 and returns Inf and NaN. Otherwise the official formulas.
+  constexpr double min_dir_z = 1e-8f;
+  const double d_z = std::abs(d[2]) < min_dir_z ? (d[2] > 0 ? min_dir_z : -min_dir_z) : d[2];
+  const double t = -(near_plane + o[2]) / d_z;
+  const double o_near[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d_z};
   const double ax = -2.0 * focal_x / width, ay = -2.0 * focal_y / height;
   o_ndc[0] = ax * o_near[0] / o_near[2];
   o_ndc[1] = ay * o_near[1] / o_near[2];
   o_ndc[2] = 1.0 + 2.0 * near_plane / o_near[2];
-  d_ndc[0] = ax * (d[0] / d[2] - o_near[0] / o_near[2]);
-  d_ndc[1] = ay * (d[1] / d[2] - o_near[1] / o_near[2]);
+  d_ndc[0] = ax * (d[0] / d_z - o_near[0] / o_near[2]);
+  d_ndc[1] = ay * (d[1] / d_z - o_near[1] / o_near[2]);
   d_ndc[2] = -2.0 * near_plane / o_near[2];
 }
 

@@ -21,7 +21,9 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
               std::vector<double>& lossmult, size_t n_rays, size_t n_cameras, const RngKey& key);
 
 // Official convert_to_ndc for one ray (world origin o, direction d) with the given focal lengths, image size and
-// near plane: the ray shifted to the plane z = −near, then projected. Writes the NDC origin and direction.
+// near plane: the ray shifted to the plane z = −near, then projected. Writes the NDC origin and direction. With the
+// kernel's guard: |d_z| < 1e-8 (parallel to the near plane, where the official code gives Inf and NaN) is taken as
+// +1e-8 if d_z > 0, else −1e-8.
 void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width, double height,
                     double near_plane, double o_ndc[3], double d_ndc[3]);
 

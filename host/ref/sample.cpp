@@ -8,9 +8,14 @@
 namespace mipnerf::ref {
 namespace {
 
+// The kernel's guard too: in disparity, a term of weight 0 is left out, so a zero bound gives the formula's limit
+// (0 wherever its term has weight) where the official 1/near·(1 − s) + 1/far·s makes ∞·0 = NaN (kernels/sample.cl).
 double stratified_edge(bool lindisp, double near, double far, size_t k, size_t n_samples) {
   const double s = static_cast<double>(k) / static_cast<double>(n_samples);
-  return lindisp ? 1.0 / ((1.0 - s) / near + s / far) : near * (1.0 - s) + far * s;
+  if (!lindisp) return near * (1.0 - s) + far * s;
+  const double near_term = s < 1.0 ? (1.0 - s) / near : 0.0;
+  const double far_term = s > 0.0 ? s / far : 0.0;
+  return 1.0 / (near_term + far_term);
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
-// Adam on the device against its double reference, the gradient statistics (norm, non-finite count), clipping,
-// the optimiser state round trip, and the learning-rate schedule of supplement eq. 24 at key steps.
+// Adam on the device against its double reference (also with denormal moments, moments around 1e30 and gradients
+// whose square overflows float32), the gradient statistics (norm, non-finite count), clipping, the optimiser state
+// round trip, and the learning-rate schedule of supplement eq. 24 at key steps.
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "core/error.hpp"
 #include "mlp/adam.hpp"
@@ -74,6 +76,121 @@ TEST_CASE("adam: device steps match the reference, with bias correction") {
 TEST_CASE("adam: global-norm clipping scales the gradient as the official code does") {
   // max norm far below the gradients' norm (≈ 0.1·√5000·…): every step is clipped.
   check_adam_against_reference(0.05, 32);
+}
+
+TEST_CASE("adam: denormal moments, moments around 1e30 and gradients whose square overflows match the reference") {
+  // Three groups of 3000 parameters, each from a restored state, over 6 steps from t = 1 (the largest bias
+  // corrections: inv_bias1 = 10, inv_bias2 = 1000):
+  //  - denormal: m, v in 1e-45..1e-39 (float denormals), gradients 0 or ±1e-44..1e-38 (denormal too, whose
+  //    squares underflow), so the moments stay denormal;
+  //  - huge: m = ±1e30·(0.1..10), v = 1e30..1e36 with gradients 1e14..1e17 (v̂ = v·inv_bias2 beyond FLT_MAX at
+  //    t = 1 once v > 3.4e35, while √v̂ is ~1e19);
+  //  - overflowing squares: m = v = 0 and gradients ±(1.9e19..1e20), so g² > FLT_MAX while (1 − β2)·g² and v
+  //    (≤ 6·1e37 after 6 steps) are representable.
+  // The reference runs in double on the same float inputs (betas, lr and the float bias corrections the kernel
+  // receives), so every difference is the kernel's float32 rounding; the bound is that rounding propagated
+  // through the steps (below).
+  auto& ctx = test::test_context();
+  std::mt19937 rng(35);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const size_t group = 3000, n = 3 * group;
+  const int steps = 6;
+  mlp::Adam adam(ctx, n);
+  const mlp::AdamHyper hyper = adam.hyper();
+  mlp::AdamState start;
+  start.m.resize(n);
+  start.v.resize(n);
+  const auto sign = [&] { return unit(rng) < 0.5 ? -1.0 : 1.0; };
+  const auto log_uniform = [&](double lo, double hi) { return std::exp(std::log(lo) + unit(rng) * std::log(hi / lo)); };
+  for (size_t i = 0; i < group; ++i) {
+    start.m[i] = static_cast<float>(sign() * log_uniform(1e-45, 1e-39));
+    start.v[i] = static_cast<float>(log_uniform(1e-45, 1e-39));
+    start.m[group + i] = static_cast<float>(sign() * 1e30 * log_uniform(0.1, 10.0));
+    start.v[group + i] = static_cast<float>(log_uniform(1e30, 1e36));
+  }
+  adam.restore(start);  // step 0: the next update has t = 1
+  const auto params0 = test::random_floats(n, rng);
+  auto params_dev = test::device_copy(ctx, params0, "params");
+  ocl::DeviceArray<float> grads_dev(ctx, n, "grads");
+
+  // Per element, the float32 error of the kernel, propagated step by step in double next to the reference:
+  //  - m = β1·m + (1 − β1)·g (1 − β1 exact): two products and a sum, ≤ 3u·(β1|m| + (1 − β1)|g|), earlier error × β1;
+  //  - v = β2·v + ((1 − β2)·g)·g likewise, ≤ 3u·(β2·v + (1 − β2)·g²), earlier error × β2;
+  //  - the update lr·(m·b1)/(√v·√b2 + ε): relative ≤ 21u (sqrt ≤ 3 ulp twice, division ≤ 2.5 ulp, four products
+  //    and a sum) plus the moments' errors, e_m/|m| and e_v/(2v) (√ halves a relative error), as absolute terms;
+  //  - the parameter's own rounding, u·|p|.
+  // Each float operation may also lose up to half a denormal ulp (2^-150), or all of a value below FLT_MIN when the
+  // device flushes denormals (CL_FP_DENORM is optional in OpenCL 1.2): `floor` per operation.
+  cl_device_fp_config fp_config = 0;
+  clGetDeviceInfo(ctx.raw_device(), CL_DEVICE_SINGLE_FP_CONFIG, sizeof(fp_config), &fp_config, nullptr);
+  const double floor = (fp_config & CL_FP_DENORM) ? std::ldexp(1.0, -150) : std::ldexp(1.0, -126);
+  auto params = test::as_double(params0);
+  std::vector<double> m = test::as_double(start.m), v = test::as_double(start.v);
+  std::vector<double> e_m(n, 0.0), e_v(n, 0.0), e_p(n, 0.0);
+  const double b1 = hyper.beta1, b2 = hyper.beta2, eps = hyper.epsilon;
+  for (int t = 1; t <= steps; ++t) {
+    std::vector<float> grads(n);
+    for (size_t i = 0; i < group; ++i) {
+      grads[i] = i % 5 == 0 ? 0.0f : static_cast<float>(sign() * log_uniform(1e-44, 1e-38));
+      grads[group + i] = static_cast<float>(sign() * log_uniform(1e14, 1e17));
+      grads[2 * group + i] = static_cast<float>(sign() * log_uniform(1.9e19, 1e20));
+    }
+    for (size_t i = 2 * group; i < n; ++i) REQUIRE(std::isinf(grads[i] * grads[i]));  // the square overflows
+    grads_dev.upload(ctx, grads);
+    const float lr = 1e-3f;
+    adam.step(params_dev, grads_dev, lr, nullptr);  // no clipping (gradient_stats' float norm overflows here)
+    const double inv_bias1 = static_cast<float>(1.0 / (1.0 - std::pow(b1, t)));  // as Adam::step passes them
+    const double inv_bias2 = static_cast<float>(1.0 / (1.0 - std::pow(b2, t)));
+    const auto g = test::as_double(grads);
+    const auto m_before = m, v_before = v;
+    ref::adam_step(params.data(), g.data(), m.data(), v.data(), n, lr, b1, b2, eps, inv_bias1, inv_bias2, 1.0);
+    for (size_t i = 0; i < n; ++i) {
+      e_m[i] = b1 * e_m[i] + 3 * kU * (b1 * std::abs(m_before[i]) + (1 - b1) * std::abs(g[i])) + 3 * floor;
+      e_v[i] = b2 * e_v[i] + 3 * kU * (b2 * v_before[i] + (1 - b2) * g[i] * g[i]) + 3 * floor;
+      const double denominator = std::sqrt(v[i]) * std::sqrt(inv_bias2) + eps;
+      const double update = lr * std::abs(m[i]) * inv_bias1 / denominator;
+      const double through_moments =
+          lr * inv_bias1 * e_m[i] / denominator + update * std::min(1.0, e_v[i] / (2 * std::max(v[i], 1e-300)));
+      e_p[i] += 21 * kU * update + through_moments + kU * std::abs(params[i]) + 7 * floor;
+    }
+  }
+  const auto state = adam.state();
+  const auto dev_params = params_dev.download(ctx);
+  const std::string names[3] = {"denormal moments", "moments around 1e30", "gradients whose square overflows"};
+  for (int k = 0; k < 3; ++k) {
+    INFO(names[k]);
+    struct Compared {
+      std::string what;
+      const std::vector<float>* device;
+      const std::vector<double>* reference;
+      const std::vector<double>* bound;
+    };
+    for (const Compared& c : {Compared{"m", &state.m, &m, &e_m}, Compared{"v", &state.v, &v, &e_v},
+                              Compared{"params", &dev_params, &params, &e_p}}) {
+      double worst_ratio = 0.0;
+      size_t worst = k * group, non_finite = 0;
+      for (size_t i = k * group; i < (k + 1) * group; ++i) {
+        if (!std::isfinite((*c.device)[i])) ++non_finite;
+        const double ratio = std::abs((*c.device)[i] - (*c.reference)[i]) / (2 * (*c.bound)[i]);  // twice the bound
+        if (!(ratio <= worst_ratio)) {
+          worst_ratio = ratio;
+          worst = i;
+        }
+      }
+      INFO(c.what << ": worst element " << worst - k * group << " device " << (*c.device)[worst] << " reference "
+                  << (*c.reference)[worst] << " = " << worst_ratio << " x tolerance");
+      if (std::getenv("MLP_TEST_VERBOSE")) {
+        MESSAGE(names[k] << ", " << c.what << ": worst " << worst_ratio << " x tolerance");
+      }
+      CHECK(non_finite == 0);
+      CHECK(worst_ratio <= 1.0);
+    }
+  }
+  // The groups really are what they say: denormal moments stayed below FLT_MIN, the huge ones moved the parameters,
+  // and the overflowing squares left v finite and near 6·(1 − β2)·g².
+  for (size_t i = 0; i < group; ++i) REQUIRE(std::abs(m[i]) < std::ldexp(1.0, -126));
+  for (size_t i = group; i < 2 * group; ++i) REQUIRE(std::abs(params[i] - params0[i]) > 1e-4);
+  for (size_t i = 2 * group; i < n; ++i) REQUIRE(v[i] > 1e35);
 }
 
 TEST_CASE("adam: gradient statistics find the norm and every non-finite element") {

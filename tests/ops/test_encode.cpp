@@ -1,7 +1,9 @@
 // Encodings (kernels/encode.cl): IPE and PE against the reference, large arguments against long double, the
-// feature order written out, σ² = 0 ≡ PE, σ² = 1e12 → 0, IPE against Monte Carlo, and the fused Gaussian + IPE.
+// feature order written out, σ² = 0 ≡ PE, σ² = 1e12 → 0, IPE against Monte Carlo, the fused Gaussian + IPE, and
+// IPE = PE wherever a zero radius, an axis-aligned or a zero direction leaves no variance.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cfloat>
 
 #include "kernel_checks.hpp"
@@ -195,6 +197,90 @@ TEST_CASE("encode: IPE is the expectation of sin and cos under the Gaussian (Mon
       CHECK(std::abs(dev[3 * l + a] - sum_sin[l] / samples) <= tol);
       CHECK(std::abs(dev[12 + 3 * l + a] - sum_cos[l] / samples) <= tol);
     }
+  }
+}
+
+TEST_CASE("encode: zero radius, axis-aligned and zero directions - IPE is PE of the means where the covariance is 0") {
+  // A cone or cylinder of radius exactly 0 keeps the spread along the ray, t_var·d_a², so IPE equals PE of the mean
+  // exactly on the axes where that vanishes: every axis of a zero-width interval (t0 = t1: t_var = 0 as well), the
+  // axes perpendicular to a ray along a coordinate axis, and every axis of a zero direction (the reference's
+  // definition: covariance 0). There exp(−½·4^l·0) = 1 exactly, so the features must equal PE bit for bit;
+  // everywhere they must match the reference within the fused test's bound (below).
+  auto& ctx = test::test_context();
+  std::mt19937 rng(27);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
+  const std::vector<std::array<float, 3>> dirs = {{1, 0, 0}, {0, -1, 0}, {0, 0, -1}, {0, 0, 2}, {0, 0, 0},
+                                                  {0.3f, -1.2f, 0.5f}, {-0.7f, 0.2f, -1.9f}};
+  const size_t n_samples = 24;
+  std::vector<float> origins, directions, radii, t_edges;
+  for (int copy = 0; copy < 20; ++copy) {
+    for (const auto& d : dirs) {
+      for (float radius : {0.0f, 1e-3f}) {
+        for (int a = 0; a < 3; ++a) origins.push_back(static_cast<float>(3 * signed_unit(rng)));
+        directions.insert(directions.end(), d.begin(), d.end());
+        radii.push_back(radius);
+        float t = copy % 4 == 0 ? 0.0f : static_cast<float>(2 + unit(rng));
+        t_edges.push_back(t);
+        for (size_t k = 0; k < n_samples; ++k) {
+          if (unit(rng) > 0.25) t += static_cast<float>(test::log_uniform(rng, 1e-4, 0.1));  // a quarter empty
+          t_edges.push_back(t);
+        }
+      }
+    }
+  }
+  const size_t n_rays = radii.size(), rows = n_rays * n_samples;
+  ops::RayBundle rays(ctx, n_rays);
+  rays.origins.upload(ctx, origins);
+  rays.directions.upload(ctx, directions);
+  rays.radii.upload(ctx, radii);
+  auto t = test::upload(ctx, t_edges, "t_edges");
+  const EncodingOptions options;  // degrees 0..15
+  const ops::GaussianInputs in{rays, t, n_rays, n_samples};
+  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
+    INFO("ray shape " << static_cast<int>(shape));
+    ocl::DeviceArray<float> means(ctx, 3 * rows, "means"), covs(ctx, 3 * rows, "covs");
+    ops::Gaussian(ctx, {shape}).fwd(in, {means, covs});
+    ops::Encode encode(ctx, {shape});
+    auto fused = test::filled(ctx, rows * 96, 7.0f, "fused"), separate = test::filled(ctx, rows * 96, 7.0f, "ipe");
+    auto pe = test::filled(ctx, rows * 96, 7.0f, "pe of the means");
+    encode.gaussian_ipe(options, in, fused);
+    encode.ipe(options, {means, covs, rows}, separate);
+    encode.pe(options, {means, rows}, pe);
+    const auto fused_values = fused.download(ctx), pe_values = pe.download(ctx);
+    const auto cov_values = covs.download(ctx), mean_values = means.download(ctx);
+    CHECK(fused_values == separate.download(ctx));
+    size_t exact_axes = 0;
+    for (size_t row = 0; row < rows; ++row) {
+      for (int a = 0; a < 3; ++a) {
+        if (cov_values[3 * row + a] != 0.0f) continue;
+        ++exact_axes;
+        for (int l = 0; l < 16; ++l) {
+          for (size_t k : {size_t(3 * l + a), size_t(48 + 3 * l + a)}) {
+            REQUIRE(fused_values[row * 96 + k] == pe_values[row * 96 + k]);
+          }
+        }
+      }
+    }
+    // Zero directions (3 axes of 960 rows), radius-0 rays along an axis (2 axes of 1,920 rows), and the empty
+    // intervals of the other radius-0 rays: more than 6,700 axes.
+    CHECK(exact_axes > 6700);
+    std::vector<double> features, means_ref, covs_ref;
+    ref::gaussian_ipe_fwd({shape}, options, test::to_double(origins), test::to_double(directions),
+                          test::to_double(radii), test::to_double(t_edges), features, n_rays, n_samples);
+    ref::gaussian_fwd({shape}, test::to_double(origins), test::to_double(directions), test::to_double(radii),
+                      test::to_double(t_edges), means_ref, covs_ref, n_rays, n_samples);
+    for (float m : mean_values) REQUIRE(std::isfinite(m));
+    // The fused test's bound: the feature's own 32u, plus 2^l times the float mean's error (≤ 2u·|o| + 12u·|t·d|,
+    // test_gaussian) in the argument and the variance's (≤ 35u relative) through the attenuation; twice those terms.
+    MIPNERF_CHECK_CLOSE("zero-radius and axis-aligned features", fused_values, features, [&](size_t i) {
+      const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
+      const double scale = std::ldexp(1.0, static_cast<int>(l));
+      const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
+                              12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
+      const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
+      const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
+      return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err);
+    });
   }
 }
 

@@ -1,6 +1,7 @@
 // Frustum/cylinder Gaussians (kernels/gaussian.cl): against the double reference, frustum moments over six decades
 // of distance and seven of width against a long-double quadrature of the frustum, the naive eqs. 20–22 failing
-// where the stable eq. 23 holds, the lifted covariance against Monte Carlo, and NeRF's point samples.
+// where the stable eq. 23 holds, rays exactly along an axis, a zero direction and a zero radius, the lifted
+// covariance against Monte Carlo, and NeRF's point samples.
 #include <doctest/doctest.h>
 
 #include <array>
@@ -121,6 +122,61 @@ std::vector<Frustum> hard_frustums() {
   return out;
 }
 
+// Rays exactly along ±x, ±y, ±z (unit and longer), a zero direction and random directions, each with radius 0,
+// 1e-3 and 0.1; edges from 0 (a first interval [0, 0], then [0, t]) or from 0.05..2, with some empty intervals.
+Rays axis_zero_and_zero_radius_rays(size_t n_samples, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
+  const std::vector<std::array<float, 3>> fixed = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1},
+                                                   {0, 0, -1}, {0, 0, -2}, {3, 0, 0}, {0, -0.5f, 0}, {0, 0, 0}};
+  Rays r;
+  r.n_samples = n_samples;
+  for (int copy = 0; copy < 12; ++copy) {
+    for (size_t k = 0; k < fixed.size() + 2; ++k) {
+      for (float radius : {0.0f, 1e-3f, 0.1f}) {
+        for (int a = 0; a < 3; ++a) r.origins.push_back(static_cast<float>(3 * signed_unit(rng)));
+        for (int a = 0; a < 3; ++a) {
+          r.directions.push_back(k < fixed.size() ? fixed[k][a] : static_cast<float>(signed_unit(rng)));
+        }
+        r.radii.push_back(radius);
+        const bool from_zero = copy % 3 == 0;
+        float t = from_zero ? 0.0f : static_cast<float>(0.05 + 2 * unit(rng));
+        r.t_edges.push_back(t);
+        for (size_t i = 0; i < n_samples; ++i) {
+          const bool empty = (from_zero && i == 0) || unit(rng) < 0.1;
+          if (!empty) t += static_cast<float>(test::log_uniform(rng, 1e-6, 0.5));
+          r.t_edges.push_back(t);
+        }
+        ++r.n_rays;
+      }
+    }
+  }
+  return r;
+}
+
+// The tolerances of the first test below (its comment derives them): per element, twice the float32 bound of the
+// mean (2u·|o_a| + 12u·|t_mean·d_a|) and of the covariance (35u of its two non-negative terms).
+void gaussian_tolerances(RayShape shape, const Rays& r, std::vector<double>& mean_tol, std::vector<double>& cov_tol) {
+  const size_t rows = r.n_rays * r.n_samples;
+  mean_tol.assign(3 * rows, 0.0);
+  cov_tol.assign(3 * rows, 0.0);
+  for (size_t ray = 0; ray < r.n_rays; ++ray) {
+    const double d[3] = {r.directions[3 * ray], r.directions[3 * ray + 1], r.directions[3 * ray + 2]};
+    const double d_sq = std::max(1e-10, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (size_t i = 0; i < r.n_samples; ++i) {
+      const double t0 = r.t_edges[ray * (r.n_samples + 1) + i], t1 = r.t_edges[ray * (r.n_samples + 1) + i + 1];
+      const auto m = shape == RayShape::cone ? ref::conical_frustum_moments(t0, t1, double(r.radii[ray]))
+                                             : ref::cylinder_moments(t0, t1, double(r.radii[ray]));
+      for (int a = 0; a < 3; ++a) {
+        const size_t at = 3 * (ray * r.n_samples + i) + a;
+        mean_tol[at] = 2 * (2 * kUnitRoundoff * std::abs(r.origins[3 * ray + a]) +
+                            12 * kUnitRoundoff * std::abs(m.t_mean * d[a]));
+        cov_tol[at] = 2 * 35 * kUnitRoundoff * (m.t_var * d[a] * d[a] + m.r_var * (1 - d[a] * d[a] / d_sq)) + 1e-44;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 TEST_CASE("gaussian: cone and cylinder Gaussians match the CPU reference on 12,800 random intervals") {
@@ -132,31 +188,52 @@ TEST_CASE("gaussian: cone and cylinder Gaussians match the CPU reference on 12,8
     std::vector<double> means, covs;
     ref::gaussian_fwd(options, test::to_double(r.origins), test::to_double(r.directions), test::to_double(r.radii),
                       test::to_double(r.t_edges), means, covs, r.n_rays, r.n_samples);
-    // Tolerances. t_mean = t_μ·(1 + 2·ratio) is ≤ 10 roundings (two sums, squares, the 2.5-ulp division) of
-    // itself, so mean_a = o_a + t_mean·d_a is within 2u·|o_a| + 12u·|t_mean·d_a|. The variances: the bracket of
-    // t_var, 1/3 − (4/15)·ratio·q ∈ [3/20, 1/3], amplifies the ~15u error of ratio·q by at most 11/9, so t_var
-    // (and r_var likewise) carry ≤ 25u; d²/|d|² written as (d_b² + d_c²)/|d|² adds ≤ 8u without cancellation.
-    // So |Δcov_a| ≤ 35u·(t_var·d_a² + r_var·(1 − d_a²/|d|²)). Tolerances are twice these bounds.
-    std::vector<double> mean_scale(means.size()), cov_scale(covs.size());
-    for (size_t ray = 0; ray < r.n_rays; ++ray) {
-      const double* d = nullptr;
-      std::vector<double> dd(r.directions.begin() + 3 * ray, r.directions.begin() + 3 * ray + 3);
-      d = dd.data();
-      const double d_sq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-      for (size_t i = 0; i < r.n_samples; ++i) {
-        const double t0 = r.t_edges[ray * (r.n_samples + 1) + i], t1 = r.t_edges[ray * (r.n_samples + 1) + i + 1];
-        const auto m = shape == RayShape::cone ? ref::conical_frustum_moments(t0, t1, double(r.radii[ray]))
-                                                    : ref::cylinder_moments(t0, t1, double(r.radii[ray]));
-        for (int a = 0; a < 3; ++a) {
-          const size_t at = 3 * (ray * r.n_samples + i) + a;
-          mean_scale[at] = 2 * (2 * kUnitRoundoff * std::abs(r.origins[3 * ray + a]) +
-                                12 * kUnitRoundoff * std::abs(m.t_mean * d[a]));
-          cov_scale[at] = 2 * 35 * kUnitRoundoff * (m.t_var * d[a] * d[a] + m.r_var * (1 - d[a] * d[a] / d_sq)) + 1e-44;
+    // Tolerances (gaussian_tolerances). t_mean = t_μ·(1 + 2·ratio) is ≤ 10 roundings (two sums, squares, the
+    // 2.5-ulp division) of itself, so mean_a = o_a + t_mean·d_a is within 2u·|o_a| + 12u·|t_mean·d_a|. The
+    // variances: the bracket of t_var, 1/3 − (4/15)·ratio·q ∈ [3/20, 1/3], amplifies the ~15u error of ratio·q by at
+    // most 11/9, so t_var (and r_var likewise) carry ≤ 25u; d²/|d|² written as (d_b² + d_c²)/|d|² adds ≤ 8u without
+    // cancellation. So |Δcov_a| ≤ 35u·(t_var·d_a² + r_var·(1 − d_a²/|d|²)). Tolerances are twice these bounds.
+    std::vector<double> mean_scale, cov_scale;
+    gaussian_tolerances(shape, r, mean_scale, cov_scale);
+    MIPNERF_CHECK_CLOSE("means", dev.means, means, [&](size_t i) { return mean_scale[i]; });
+    MIPNERF_CHECK_CLOSE("covs", dev.covs, covs, [&](size_t i) { return cov_scale[i]; });
+  }
+}
+
+TEST_CASE("gaussian: rays along an axis, a zero direction and a zero radius give the reference's Gaussians") {
+  // Radius exactly 0 (a cone or cylinder of zero width) leaves only the spread along the ray, t_var·d²; a
+  // direction exactly along an axis makes the other two components of the mean the origin's and of the covariance
+  // r_var (d_a² = 0, (d_b² + d_c²)/|d|² = 1, both exact); a zero direction is the reference's definition: mean = o,
+  // covariance 0 (|d|² clamped to 1e-10 as officially, then 0/1e-10; the official 1 − d²/|d|² gives r_var there).
+  const Rays r = axis_zero_and_zero_radius_rays(16, 35);
+  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
+    INFO("ray shape " << static_cast<int>(shape));
+    const GaussianOptions options{shape};
+    const auto dev = run_device(options, r);
+    std::vector<double> means, covs;
+    ref::gaussian_fwd(options, test::to_double(r.origins), test::to_double(r.directions), test::to_double(r.radii),
+                      test::to_double(r.t_edges), means, covs, r.n_rays, r.n_samples);
+    std::vector<double> mean_tol, cov_tol;
+    gaussian_tolerances(shape, r, mean_tol, cov_tol);
+    MIPNERF_CHECK_CLOSE("means (axes, zero direction, zero radius)", dev.means, means,
+                        [&](size_t i) { return mean_tol[i]; });
+    MIPNERF_CHECK_CLOSE("covs (axes, zero direction, zero radius)", dev.covs, covs,
+                        [&](size_t i) { return cov_tol[i]; });
+    size_t exact_zero_covs = 0;
+    for (size_t row = 0; row < r.n_rays * r.n_samples; ++row) {
+      const size_t ray = row / r.n_samples;
+      const float* d = &r.directions[3 * ray];
+      for (int a = 0; a < 3; ++a) {
+        if (d[a] != 0.0f) continue;
+        // o_a + t_mean·0 and, with radius 0, t_var·0 + 0·(…): exact in float32 as in the reference.
+        REQUIRE(dev.means[3 * row + a] == r.origins[3 * ray + a]);
+        if (r.radii[ray] == 0.0f || (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f)) {
+          REQUIRE(dev.covs[3 * row + a] == 0.0f);
+          ++exact_zero_covs;
         }
       }
     }
-    MIPNERF_CHECK_CLOSE("means", dev.means, means, [&](size_t i) { return mean_scale[i]; });
-    MIPNERF_CHECK_CLOSE("covs", dev.covs, covs, [&](size_t i) { return cov_scale[i]; });
+    CHECK(exact_zero_covs > 1000);  // the cases are really there
   }
 }
 

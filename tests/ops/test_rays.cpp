@@ -1,6 +1,7 @@
 // Camera rays (kernels/rays.cl): cone and NDC rays against the reference (which differences neighbouring pixels
-// literally, as the official code), pixel-centre offset, sub-pixel jitter and its reproducibility, view
-// dependence off, and invalid ids.
+// literally, as the official code), cameras looking exactly along an axis, NDC rays nearly parallel to the near plane
+// or starting on or behind it, pixel-centre offset, sub-pixel jitter and its reproducibility, view dependence off,
+// and invalid ids.
 #include <doctest/doctest.h>
 
 #include <array>
@@ -126,35 +127,8 @@ void check_cone_rays(const RaysOptions& options, const Scene& s, const RngKey& k
   MIPNERF_CHECK_CLOSE("radii", dev.radii, r.radii, [&](size_t i) { return 2 * 16 * kUnitRoundoff * r.radii[i]; });
 }
 
-}  // namespace
-
-TEST_CASE("rays: cone rays match the CPU reference on 10,000 random pixels of 40 cameras") {
-  const Scene s = random_scene(40, 10000, 51, false);
-  check_cone_rays({}, s);
-}
-
-TEST_CASE("rays: the cone radius is the neighbouring-pixel distance times 2 over sqrt 12") {
-  // An unrotated camera with fx = 500: neighbouring directions differ by exactly 1/500, so r = 1/(500·√3).
-  Scene s;
-  Camera cam;
-  cam.focal_x_px = cam.focal_y_px = 500;
-  cam.width_px = 400;
-  cam.height_px = 300;
-  cam.center_x_px = 200;
-  cam.center_y_px = 150;
-  s.cameras = {cam};
-  s.camera_ids = {0, 0, 0};
-  s.pixel_ids = {0, 399, 300 * 400 - 1};  // first pixel, last of a row, last pixel
-  const auto dev = run_device({}, s);
-  for (float r : dev.radii) CHECK(r == doctest::Approx(1.0 / (500.0 * std::sqrt(3.0))).epsilon(1e-6));
-  // Pixel (0, 0) is sampled at its centre (0.5, 0.5): direction ((0.5 − 200)/500, −(0.5 − 150)/500, −1).
-  CHECK(dev.directions[0] == doctest::Approx(-199.5 / 500).epsilon(1e-7));
-  CHECK(dev.directions[1] == doctest::Approx(149.5 / 500).epsilon(1e-7));
-  CHECK(dev.directions[2] == -1.0f);
-}
-
-TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official conversion") {
-  const Scene s = random_scene(20, 10000, 52, true);
+// NDC rays of `s` against the reference, with the float32 bounds derived below.
+void check_ndc_rays(const Scene& s) {
   RaysOptions options;
   options.ray_shape = RayShape::cylinder;
   const auto dev = run_device(options, s);
@@ -186,6 +160,179 @@ TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official 
     REQUIRE(dev.origins[3 * i + 2] == -1.0f);    // every NDC ray starts on the near plane z = −1 ...
     REQUIRE(dev.directions[3 * i + 2] == 2.0f);  // ... and reaches z = 1 (infinity) at t = 1
   }
+}
+
+}  // namespace
+
+TEST_CASE("rays: cone rays match the CPU reference on 10,000 random pixels of 40 cameras") {
+  const Scene s = random_scene(40, 10000, 51, false);
+  check_cone_rays({}, s);
+}
+
+TEST_CASE("rays: the cone radius is the neighbouring-pixel distance times 2 over sqrt 12") {
+  // An unrotated camera with fx = 500: neighbouring directions differ by exactly 1/500, so r = 1/(500·√3).
+  Scene s;
+  Camera cam;
+  cam.focal_x_px = cam.focal_y_px = 500;
+  cam.width_px = 400;
+  cam.height_px = 300;
+  cam.center_x_px = 200;
+  cam.center_y_px = 150;
+  s.cameras = {cam};
+  s.camera_ids = {0, 0, 0};
+  s.pixel_ids = {0, 399, 300 * 400 - 1};  // first pixel, last of a row, last pixel
+  const auto dev = run_device({}, s);
+  for (float r : dev.radii) CHECK(r == doctest::Approx(1.0 / (500.0 * std::sqrt(3.0))).epsilon(1e-6));
+  // Pixel (0, 0) is sampled at its centre (0.5, 0.5): direction ((0.5 − 200)/500, −(0.5 − 150)/500, −1).
+  CHECK(dev.directions[0] == doctest::Approx(-199.5 / 500).epsilon(1e-7));
+  CHECK(dev.directions[1] == doctest::Approx(149.5 / 500).epsilon(1e-7));
+  CHECK(dev.directions[2] == -1.0f);
+}
+
+TEST_CASE("rays: cameras looking exactly along an axis give exact axis rays at the principal point") {
+  // Quarter and half turns: the camera looks down −z (identity), +z, ±x and ±y. With the principal point on a pixel
+  // centre, that pixel's camera-frame direction is (0, −0, −1) and its world direction exactly the axis (products
+  // with 0 and ±1, sums with 0); every pixel matches the reference within the cone-ray bounds. What the Gaussian and
+  // encoding stages make of axis-aligned (and zero) directions is tested in test_gaussian.cpp and test_encode.cpp.
+  const std::vector<std::array<double, 9>> rotations = {
+      {1, 0, 0, 0, 1, 0, 0, 0, 1},  {-1, 0, 0, 0, 1, 0, 0, 0, -1}, {0, 0, 1, 0, 1, 0, -1, 0, 0},
+      {0, 0, -1, 0, 1, 0, 1, 0, 0}, {1, 0, 0, 0, 0, 1, 0, -1, 0},  {1, 0, 0, 0, 0, -1, 0, 1, 0}};
+  const double looks[6][3] = {{0, 0, -1}, {0, 0, 1}, {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}};
+  Scene s;
+  const uint32_t size = 33;
+  for (size_t c = 0; c < rotations.size(); ++c) {
+    Camera cam;
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) cam.camera_to_world[row * 4 + col] = rotations[c][row * 3 + col];
+      cam.camera_to_world[row * 4 + 3] = 0.5 * row - 0.25;
+    }
+    cam.width_px = cam.height_px = size;
+    cam.focal_x_px = cam.focal_y_px = 40;
+    cam.center_x_px = cam.center_y_px = 16.5;  // the centre of pixel (16, 16)
+    s.cameras.push_back(cam);
+    for (uint32_t p = 0; p < size * size; ++p) {
+      s.camera_ids.push_back(static_cast<uint32_t>(c));
+      s.pixel_ids.push_back(p);
+    }
+  }
+  check_cone_rays({}, s);
+  const auto dev = run_device({}, s);
+  for (size_t c = 0; c < rotations.size(); ++c) {
+    const size_t ray = c * size * size + 16 * size + 16;
+    INFO("camera looking along (" << looks[c][0] << ", " << looks[c][1] << ", " << looks[c][2] << ")");
+    for (int a = 0; a < 3; ++a) {
+      CHECK(dev.directions[3 * ray + a] == static_cast<float>(looks[c][a]));
+      CHECK(dev.viewdirs[3 * ray + a] == static_cast<float>(looks[c][a]));
+    }
+  }
+}
+
+TEST_CASE("rays: NDC cylinder rays for forward-facing scenes match the official conversion") {
+  check_ndc_rays(random_scene(20, 10000, 52, true));
+}
+
+TEST_CASE("rays: NDC rays nearly parallel to the near plane, or from on or behind it, match the official conversion") {
+  // Cameras whose arithmetic is exact in float32 (rotations by quarter turns, focal lengths powers of 2, principal
+  // points on the half-pixel grid), so the world origin and direction the kernel converts are exactly the
+  // reference's and every difference is the conversion's own rounding:
+  //  - tilted a quarter turn about x or y: each pixel's direction has z = ±(p − c + 0.5)/f, down to 0.5/2^20 ≈ 5e-7
+  //    (nearly parallel to the near plane z = −1), and with c on a pixel centre exactly 0 in one row or column;
+  //  - unrotated with f = 2^-4 (a field of view of 179.6°): z = −1 but slopes d_x/d_z up to 248.
+  // Origins at z = 0 and 0.25 (in front of the near plane), −1 (on it: the shift t is 0) and −1.5 (behind it: t < 0).
+  // Where d_z = 0 the official conversion divides by 0 (Inf and NaN); the kernel and the reference convert such a
+  // ray as if d_z were −1e-8 (kernels/rays.cl, NDC_MIN_DIR_Z): a finite ray far outside the NDC box.
+  constexpr double kMinDirZ = 1e-8f;  // NDC_MIN_DIR_Z, as the float the kernel compares with
+  Scene s;
+  const std::array<double, 9> quarter_x = {1, 0, 0, 0, 0, -1, 0, 1, 0}, quarter_y = {0, 0, 1, 0, 1, 0, -1, 0, 0},
+                              minus_quarter_x = {1, 0, 0, 0, 0, 1, 0, -1, 0}, identity = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  struct Setup {
+    std::array<double, 9> rotation;
+    double focal, center_offset;  // center = size/2 + offset (0.5: a pixel centre, where a direction z can be 0)
+  };
+  const std::vector<Setup> setups = {{quarter_x, 1.0, 0.0},          {quarter_x, 64.0, 0.5},
+                                     {quarter_y, 4096.0, 0.0},       {minus_quarter_x, 1048576.0, 0.0},
+                                     {quarter_y, 1048576.0, 0.5},    {identity, 0.0625, 0.0},
+                                     {identity, 0.0625, 0.5}};
+  const double origins_z[4] = {0.0, 0.25, -1.0, -1.5};
+  const uint32_t size = 32;
+  for (size_t c = 0; c < setups.size() * 4; ++c) {
+    const Setup& setup = setups[c / 4];
+    Camera cam;
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) cam.camera_to_world[row * 4 + col] = setup.rotation[row * 3 + col];
+    }
+    cam.camera_to_world[3] = c % 2 ? 0.125 : -0.375;
+    cam.camera_to_world[7] = c % 3 ? 0.25 : -0.5;
+    cam.camera_to_world[11] = origins_z[c % 4];
+    cam.width_px = cam.height_px = size;
+    cam.focal_x_px = cam.focal_y_px = setup.focal;
+    cam.center_x_px = cam.center_y_px = size / 2 + setup.center_offset;
+    cam.near = 0.0;
+    cam.far = 1.0;
+    s.cameras.push_back(cam);
+    for (uint32_t p = 0; p < size * size; ++p) {
+      s.camera_ids.push_back(static_cast<uint32_t>(c));
+      s.pixel_ids.push_back(p);
+    }
+  }
+  RaysOptions options;
+  options.ray_shape = RayShape::cylinder;
+  const auto dev = run_device(options, s);
+  const auto r = run_ref(options, s);
+  for (const auto* v : {&dev.origins, &dev.directions, &dev.viewdirs, &dev.radii}) REQUIRE(test::all_finite(*v));
+  // Bounds, from the exact inputs (n = 1):
+  //  - t = −(n + o_z)/d_z: a sum and a division (≤ 2.5 ulp): ≤ 6u relative. o_near = o + t·d: ≤ 8u·(|o_a| + |t·d_a|).
+  //    Origin a·o_near/(−n) with a = 2f/w (≤ 5u, a division): ≤ 14u·a·(|o_a| + |t·d_a|).
+  //  - Direction a·(o_a·d_z − o_z·d_a)/(n·d_z): two products and their difference ≤ 2u·(|o_a·d_z| + |o_z·d_a|),
+  //    the division, a and the product ≤ 11u more: ≤ 14u·a·(|o_a| + |o_z·d_a/d_z|)/n.
+  //  - Radius: the neighbour differences' closed form (n + o_z)/(z0·z1)·(s_a·z0 − d_a·(z1 − z0)) scaled by a, each
+  //    term one product or none of two (no cancellation for these cameras: one of them is 0), then hypot (≤ 4 ulp),
+  //    the mean and 2/√12: ≤ 28u relative.
+  // The reference converts in double (the official formulas: its d/d_z − o_near/o_near_z cancels, but only to
+  // ~1e-16 of the slope); the tolerances are twice the float32 bounds.
+  std::vector<double> origin_tol(r.origins.size()), direction_tol(r.directions.size());
+  size_t guarded = 0;
+  for (size_t i = 0; i < s.camera_ids.size(); ++i) {
+    const auto& cam = s.cameras[s.camera_ids[i]];
+    const Ray ray = camera_ray(cam, s.pixel_ids[i] % size + 0.5, s.pixel_ids[i] / size + 0.5);
+    double d_z = ray.direction_world[2];
+    if (std::abs(d_z) < kMinDirZ) {
+      d_z = d_z > 0 ? kMinDirZ : -kMinDirZ;
+      ++guarded;
+    }
+    const double o_z = ray.origin_world[2], t = -(1.0 + o_z) / d_z;
+    for (int a = 0; a < 2; ++a) {
+      const double scale = 2 * (a == 0 ? cam.focal_x_px : cam.focal_y_px) / size;
+      const double o = std::abs(ray.origin_world[a]), d = ray.direction_world[a];
+      origin_tol[3 * i + a] = 2 * 14 * kUnitRoundoff * scale * (o + std::abs(t * d));
+      direction_tol[3 * i + a] = 2 * 14 * kUnitRoundoff * scale * (o + std::abs(o_z * d / d_z));
+    }
+    // z: the kernel writes −1 and 2 exactly (checked below); the reference's 1 + 2n/o_near_z and −2n/o_near_z
+    // carry its double rounding of o_near_z = o_z + t·d_z = −n, ~1e-16.
+    origin_tol[3 * i + 2] = direction_tol[3 * i + 2] = 1e-12;
+  }
+  CHECK(guarded == 4 * 2 * size);  // two setups (× 4 origins) have a row or column of directions with z = 0
+  MIPNERF_CHECK_CLOSE("NDC origins (hard cameras)", dev.origins, r.origins, [&](size_t i) { return origin_tol[i]; });
+  MIPNERF_CHECK_CLOSE("NDC directions (hard cameras)", dev.directions, r.directions,
+                      [&](size_t i) { return direction_tol[i]; });
+  MIPNERF_CHECK_CLOSE("NDC radii (hard cameras)", dev.radii, r.radii,
+                      [&](size_t i) { return 2 * 28 * kUnitRoundoff * r.radii[i]; });
+  MIPNERF_CHECK_CLOSE("viewdirs (hard cameras)", dev.viewdirs, r.viewdirs,
+                      [](size_t) { return 2 * 48 * kUnitRoundoff; });
+  for (size_t i = 0; i < s.camera_ids.size(); ++i) {
+    REQUIRE(dev.origins[3 * i + 2] == -1.0f);
+    REQUIRE(dev.directions[3 * i + 2] == 2.0f);
+  }
+}
+
+TEST_CASE("rays: NDC rays of random forward-facing cameras on and behind the near plane match the official one") {
+  // The forward-facing scenes of the test above with every origin moved to z = −1 (on the near plane: t = 0) or
+  // into z ∈ [−3, −1) (behind it: t < 0, the ray is shifted back to the plane). Same bounds as there.
+  Scene s = random_scene(20, 10000, 57, true);
+  std::mt19937 rng(58);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (size_t c = 0; c < s.cameras.size(); ++c) s.cameras[c].camera_to_world[11] = c % 2 ? -1.0 : -1.0 - 2 * unit(rng);
+  check_ndc_rays(s);
 }
 
 TEST_CASE("rays: pixel-centre offset 0 and sub-pixel jitter match the reference") {

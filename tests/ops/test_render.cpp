@@ -1,9 +1,11 @@
 // Volume rendering (kernels/render.cl): forward and backward against the double reference with derived float32
-// bounds, the backward against central finite differences, the hard cases (σ = 0, σ = 1e10, δ = 0, acc = 0),
-// every background, and the fused activation + render kernels against the composition.
+// bounds, the backward against central finite differences, the hard cases (σ = 0, σ = 1e10, δ = 0, acc = 0, σ·δ
+// overflowing to +∞, t around 1e4), every background, and the fused activation + render kernels against the
+// composition.
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <limits>
 
 #include "kernel_checks.hpp"
 #include "ops/activations.hpp"
@@ -359,6 +361,85 @@ TEST_CASE("render: hard cases stay finite - sigma 0, sigma 1e10, empty intervals
     Batch finite = b;
     for (size_t i = 0; i < n; ++i) finite.density[3 * n + i] = 1e10f;
     check_against_reference(options, finite, true);
+  }
+}
+
+TEST_CASE("render: sigma times delta overflowing to +inf, and far distances around t = 1e4, forward and backward") {
+  // Rays 0..199: edges shifted to t ≈ 1e4 (float32 spacing 1e-3 there, so the smallest gaps are a few ulps) with
+  // densities 1e-5..10: the far distances. Rays 200..: σ = FLT_MAX on intervals of t-width 2.5 (δ ≥ 1.25 for
+  // |d| ≥ 0.5), so s = σ·δ overflows to +∞ in float32 while the reference's double s is finite (~1e38..1e39): α = 1,
+  // everything behind has T = 0. Placed first, after clear space, behind an opaque σ = 1e10 sample, and twice in a
+  // row. The reference and the bounds of float_bounds apply unchanged: exp(−s) is 0 in both, and the weights,
+  // sums and gradients behind such a sample are exactly 0 in both.
+  const size_t n = 24, far_rays = 200, overflow_rays = 4 * 50;
+  Batch b = random_batch(far_rays + overflow_rays, n, 606, 1e-5, 10.0);
+  for (size_t ray = 0; ray < far_rays; ++ray) {
+    for (size_t k = 0; k <= n; ++k) b.t_edges[ray * (n + 1) + k] += 1e4f;
+  }
+  constexpr float kHuge = std::numeric_limits<float>::max();
+  for (size_t ray = far_rays; ray < b.n_rays; ++ray) {
+    const size_t kind = (ray - far_rays) % 4;
+    for (size_t k = 0; k <= n; ++k) b.t_edges[ray * (n + 1) + k] = 2.0f + 2.5f * k;  // δ = 2.5·|d| ≥ 1.25
+    const size_t at = ray * n;
+    const size_t hit = kind == 0 ? 0 : 7;
+    for (size_t i = 0; i < n; ++i) b.density[at + i] = i < hit ? 0.0f : 0.5f;
+    b.density[at + hit] = kHuge;
+    if (kind == 2) b.density[at + hit - 2] = 1e10f;  // an opaque sample in front of the overflow
+    if (kind == 3) b.density[at + hit + 1] = kHuge;  // two overflowing samples in a row
+  }
+  for (auto background : kBackgrounds) {
+    for (bool with_d_acc : {false, true}) {
+      INFO("background " << static_cast<int>(background) << ", d_acc " << with_d_acc);
+      const RenderOptions options{background};
+      const auto dev = run_device(options, b, with_d_acc);
+      const auto r = run_ref(options, b, with_d_acc);
+      for (size_t ray = far_rays; ray < b.n_rays; ++ray) {  // the reference's s is finite but beyond float32
+        const size_t hit = (ray - far_rays) % 4 == 0 ? 0 : 7;
+        const double delta = (double(b.t_edges[ray * (n + 1) + hit + 1]) - b.t_edges[ray * (n + 1) + hit]) *
+                             std::sqrt(double(b.directions[3 * ray]) * b.directions[3 * ray] +
+                                       double(b.directions[3 * ray + 1]) * b.directions[3 * ray + 1] +
+                                       double(b.directions[3 * ray + 2]) * b.directions[3 * ray + 2]);
+        REQUIRE(delta > 1.0);
+        REQUIRE(std::isinf(kHuge * static_cast<float>(delta)));
+      }
+      check_against_reference(options, b, with_d_acc);
+      // The overflowing sample takes all the weight that reaches it; behind it nothing moves the colour.
+      for (size_t ray = far_rays; ray < b.n_rays; ++ray) {
+        const size_t kind = (ray - far_rays) % 4, hit = kind == 0 ? 0 : 7;
+        if (kind != 2) CHECK(dev.weights[ray * n + hit] == doctest::Approx(r.weights[ray * n + hit]).epsilon(1e-6));
+        for (size_t i = hit + 1; i < n; ++i) {
+          CHECK(dev.weights[ray * n + i] == 0.0f);
+          CHECK(dev.d_density[ray * n + i] == 0.0f);
+        }
+        CHECK(dev.d_density[ray * n + hit] == 0.0f);  // δ·(g·T_{i+1} − Σ_{k>i} g_k·w_k) with T_{i+1} = 0, w_k = 0
+      }
+    }
+  }
+  // The fused kernels on raw values (what training runs): raw densities of FLT_MAX overflow s the same way and give
+  // exactly the composition activations → render, finite.
+  auto& ctx = test::test_context();
+  Batch raw = b;
+  for (auto& x : raw.density) x = x == kHuge ? kHuge : (x == 0.0f ? -30.0f : x);
+  for (auto& x : raw.rgb) x = 8 * x - 4;
+  const size_t rows = raw.n_rays * n;
+  for (auto background : kBackgrounds) {
+    INFO("fused, background " << static_cast<int>(background));
+    const RenderOptions options{background};
+    const auto fused = run_device(options, raw, true, true);
+    for (const auto* v : {&fused.comp_rgb, &fused.acc, &fused.distance, &fused.weights, &fused.d_rgb,
+                          &fused.d_density}) {
+      CHECK(test::all_finite(*v));
+    }
+    auto raw_density = test::upload(ctx, raw.density, "raw_density"), raw_rgb = test::upload(ctx, raw.rgb, "raw_rgb");
+    ocl::DeviceArray<float> density(ctx, rows, "density"), rgb(ctx, 3 * rows, "rgb");
+    ops::Activations(ctx, {}).fwd({raw_density, raw_rgb, rows}, {density, rgb});
+    Batch activated = raw;
+    activated.density = density.download(ctx);
+    activated.rgb = rgb.download(ctx);
+    const auto composed = run_device(options, activated, true);
+    CHECK(fused.comp_rgb == composed.comp_rgb);
+    CHECK(fused.weights == composed.weights);
+    CHECK(fused.distance == composed.distance);
   }
 }
 

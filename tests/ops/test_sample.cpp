@@ -1,8 +1,10 @@
 // Stratified sampling and merging (kernels/sample.cl): against the reference, linear in depth or disparity,
-// deterministic or jittered, sortedness, reproducibility across chunkings, and the sorted union of two edge sets.
+// deterministic or jittered, sortedness, degenerate ranges (near = far, far < near, a zero bound in disparity),
+// reproducibility across chunkings, and the sorted union of two edge sets.
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <functional>
 
 #include "kernel_checks.hpp"
 #include "ops/sample.hpp"
@@ -75,6 +77,62 @@ TEST_CASE("sample: stratified edges match the CPU reference, linear in depth or 
           if (!randomized) REQUIRE(t[n] == r.far[ray]);
           REQUIRE(t[0] >= r.near[ray]);
           REQUIRE(t[n] <= r.far[ray]);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("sample: near = far and far < near give the reference's edges, finite, in depth or disparity") {
+  // Degenerate ranges: near = far (positive, and both 0), far < near (both positive, and far = 0), and near = 0 <
+  // far (an NDC scene's [0, 1] sampled in disparity). In disparity a zero bound is the guarded case: the official
+  // 1/near·(1 − s) + 1/far·s gives ∞·0 = NaN at the other end's edge, the kernel and the reference the formula's
+  // limit (0 at every edge the zero bound's term reaches). Elsewhere the edges are the official formula's,
+  // decreasing when far < near.
+  const std::vector<std::pair<float, float>> ranges = {{2.0f, 2.0f}, {0.5f, 0.5f}, {1e-3f, 1e-3f}, {7.25f, 7.25f},
+                                                       {0.0f, 0.0f}, {6.0f, 2.0f}, {3.0f, 0.5f}, {1.0f, 0.999f},
+                                                       {2.0f, 0.0f}, {0.0f, 1.0f}};
+  const size_t n = 16, copies = 50;  // each range on 50 rays, so the jitter draws differ
+  Ranges r;
+  for (size_t c = 0; c < copies; ++c) {
+    for (const auto& [near, far] : ranges) {
+      r.near.push_back(near);
+      r.far.push_back(far);
+    }
+  }
+  const size_t n_rays = r.near.size();
+  const RngKey key{77, 2, 40};
+  for (bool lindisp : {false, true}) {
+    for (bool randomized : {false, true}) {
+      INFO("lindisp " << lindisp << ", randomized " << randomized);
+      const SampleOptions options{lindisp, randomized};
+      const auto dev = run_stratified(options, r, n, key);
+      std::vector<double> t_edges;
+      ref::sample_stratified_fwd(options, test::to_double(r.near), test::to_double(r.far), t_edges, n_rays, n, key);
+      for (double t : t_edges) REQUIRE(std::isfinite(t));  // the reference's guard: a value for every range here
+      // The bounds of the test above, which do not depend on the order of near and far: linear ≤ 12u·(near + far);
+      // disparity ≤ 16u·|t| plus the jitter's midpoint and interpolation roundings, 6u of the larger bound (far
+      // there, max(near, far) here). A term of a zero bound is exactly 0 or ∞ in both, so those edges are exact.
+      // Twice the bounds.
+      MIPNERF_CHECK_CLOSE("t_edges of degenerate ranges", dev, t_edges, [&](size_t i) {
+        const size_t ray = i / (n + 1);
+        const double near = r.near[ray], far = r.far[ray];
+        return lindisp ? 2 * (16 * kUnitRoundoff * std::abs(t_edges[i]) + 6 * kUnitRoundoff * std::max(near, far))
+                       : 2 * 12 * kUnitRoundoff * (near + far);
+      });
+      for (size_t ray = 0; ray < n_rays; ++ray) {
+        const float* t = dev.data() + ray * (n + 1);
+        INFO("near " << r.near[ray] << ", far " << r.far[ray]);
+        // Edges run from near towards far: increasing, or decreasing when far < near.
+        if (r.far[ray] < r.near[ray]) {
+          REQUIRE(std::is_sorted(t, t + n + 1, std::greater<float>()));
+        } else if (r.far[ray] > r.near[ray]) {
+          REQUIRE(std::is_sorted(t, t + n + 1));
+        }
+        // The first and last edges are near and far themselves (1·near + 0·far, and the disparity guard's one term).
+        if (!randomized) {
+          CHECK(t[0] == r.near[ray]);
+          CHECK(t[n] == r.far[ray]);
         }
       }
     }
