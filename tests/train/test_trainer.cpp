@@ -1,4 +1,5 @@
-// End-to-end training on the device: learning, resume equality, non-finite steps, every variant.
+// End-to-end training on the device: learning, resume equality, non-finite steps, an all-background scene, every
+// variant.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -13,7 +14,11 @@
 
 #include "core/error.hpp"
 #include "eval/evaluate.hpp"
+#include "eval/image_renderer.hpp"
 #include "eval/metrics.hpp"
+#include "io/json.hpp"
+#include "io/png.hpp"
+#include "data/pose.hpp"
 #include "support/test_context.hpp"
 #include "train/checkpoint.hpp"
 #include "data/forward_facing.hpp"
@@ -56,7 +61,7 @@ eval::SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const
                                const data::LoadOptions& options = {}) {
   const auto dataset = data::load_dataset(scene, options);
   const auto& val = dataset.split("val");
-  std::vector<mlp::Mlp*> networks;
+  std::vector<mlp::Network*> networks;
   for (auto& n : trainer.networks()) networks.push_back(n.get());
   eval::ImageRenderer renderer(ctx, trainer.spec(), networks, val.cameras, 1024);
   return eval::evaluate_split(renderer, val, {});
@@ -230,25 +235,142 @@ TEST_CASE("train: config.json and checkpoints record the variant, and a checkpoi
   fs::remove_all(out);
 }
 
-TEST_CASE("train: a NaN in the gradients skips that step and the run goes on") {
+TEST_CASE("train: 500 steps on an all-background scene stay finite - losses, parameters, moments and a render") {
+  // Every pixel of every image is the background: fully transparent PNGs, composited onto the white background.
+  // The best model is empty space (acc → 0, density pushed towards 0 through the softplus), the regime where
+  // the density and colour activations saturate and the loss can reach exactly 0 (PSNR +∞, a legitimate value);
+  // nothing may become NaN or ±∞ on the way.
+  auto& ctx = test::test_context();
+  const auto scene = test::fresh_temp_dir("background-scene");
+  const uint32_t size = 24;
+  const std::vector<uint8_t> transparent(4 * size * size, 0);
+  const std::vector<std::pair<std::string, int>> splits = {{"train", 8}, {"val", 1}, {"test", 1}};
+  for (const auto& [split, count] : splits) {
+    fs::create_directories(scene / split);
+    io::Json frames = io::Json::array();
+    for (int k = 0; k < count; ++k) {
+      const std::string name = split + "/r_" + std::to_string(k);
+      io::write_png8((scene / (name + ".png")).string(), size, size, 4, transparent.data());
+      const double angle = 0.8 * k + (split == "train" ? 0.0 : 0.4);
+      const auto pose = data::look_at_pose({4.0 * std::cos(angle), 4.0 * std::sin(angle), 1.5}, {0, 0, 0}, {0, 0, 1});
+      frames.push_back({{"file_path", "./" + name}, {"transform_matrix", data::pose_to_json(pose)}});
+    }
+    io::write_json((scene / ("transforms_" + split + ".json")).string(),
+                   {{"camera_angle_x", 0.69}, {"near", 2.0}, {"far", 6.0}, {"frames", frames}});
+  }
+  const std::string out = test::fresh_run_dir("background");
+  train::Trainer trainer(ctx, tiny({{"steps", "500"}, {"batch_size", "64"}, {"checkpoint_every", "500"}}),
+                         scene.string(), out, false);
+  REQUIRE(trainer.config().background == Background::white);
+  std::vector<double> losses;
+  bool psnr_nan = false;
+  train::TrainHooks hooks;
+  hooks.on_step = [&](const train::StepReport& r) {
+    losses.push_back(r.loss);
+    psnr_nan = psnr_nan || std::isnan(r.psnr);
+  };
+  const auto result = trainer.run(hooks);
+  CHECK(result.last_step == 500);
+  CHECK(result.skipped_steps == 0);  // a skipped step is a non-finite loss or gradient
+  REQUIRE(losses.size() == 500);
+  for (double l : losses) REQUIRE(std::isfinite(l));
+  CHECK_FALSE(psnr_nan);
+  MESSAGE("all-background scene: loss " << losses.front() << " at step 1, " << losses.back() << " at step 500 ("
+                                        << result.train_seconds << " s)");
+  CHECK(losses.back() < losses.front());  // it learns the empty scene
+  for (auto& network : trainer.networks()) {
+    for (float p : network->download_params()) REQUIRE(std::isfinite(p));
+  }
+  const auto checkpoint =
+      io::read_checkpoint_file(train::checkpoint_path((fs::path(out) / "checkpoints").string(), 500));
+  for (const char* moment : {"network0.adam_m", "network0.adam_v"}) {
+    for (float x : checkpoint.tensor(moment, "checkpoint")) REQUIRE(std::isfinite(x));
+  }
+  const auto dataset = data::load_dataset(scene.string(), {});
+  std::vector<mlp::Network*> networks;
+  for (auto& n : trainer.networks()) networks.push_back(n.get());
+  eval::ImageRenderer renderer(ctx, trainer.spec(), networks, dataset.split("val").cameras, 256);
+  const auto image = renderer.render(0);
+  REQUIRE(image.rgb.size() == 3u * size * size);
+  for (float v : image.rgb) REQUIRE(std::isfinite(v));
+  for (float d : image.depth) REQUIRE(std::isfinite(d));
+  for (float a : image.acc) REQUIRE(std::isfinite(a));
+  double worst = 0.0;
+  for (float v : image.rgb) worst = std::max(worst, std::abs(1.0 - v));
+  MESSAGE("render of the held-out view: largest |1 - rgb| " << worst);
+  CHECK(worst < 1e-2);  // it rendered the empty scene: background everywhere (measured 2e-5)
+  fs::remove_all(out);
+  fs::remove_all(scene);
+}
+
+namespace {
+
+// Every network's parameters and Adam state (moments and update count), downloaded: what a step may change.
+struct TrainingState {
+  std::vector<std::vector<float>> params;
+  std::vector<mlp::AdamState> adam;
+};
+
+TrainingState training_state(train::Trainer& trainer) {
+  TrainingState state;
+  for (auto& network : trainer.networks()) state.params.push_back(network->download_params());
+  for (const auto& optimiser : trainer.optimisers()) state.adam.push_back(optimiser->state());
+  return state;
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// Whether two states are equal bit for bit, naming the first tensor that differs in `first_difference`.
+bool same_state(const TrainingState& a, const TrainingState& b, std::string& first_difference) {
+  if (a.params.size() != b.params.size() || a.adam.size() != b.adam.size()) {
+    first_difference = "the number of networks";
+    return false;
+  }
+  for (size_t n = 0; n < a.params.size(); ++n) {
+    const std::string net = "network " + std::to_string(n);
+    if (!same_bits(a.params[n], b.params[n])) first_difference = net + " parameters";
+    else if (!same_bits(a.adam[n].m, b.adam[n].m)) first_difference = net + " Adam first moments";
+    else if (!same_bits(a.adam[n].v, b.adam[n].v)) first_difference = net + " Adam second moments";
+    else if (a.adam[n].step != b.adam[n].step) first_difference = net + " Adam update count";
+    else continue;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("train: a NaN in the gradients skips that step, leaving weights and Adam state bit for bit, and goes on") {
   auto& ctx = test::test_context();
   const std::string out = test::fresh_run_dir("nan");
   train::Trainer trainer(ctx, tiny({{"steps", "6"}, {"batch_size", "64"}}), test::small_scene(), out, false);
-  std::vector<float> before_bad_step;
+  TrainingState before_bad_step, after_bad_step, after_next_step;
   train::TrainHooks hooks;
-  hooks.after_backward = [&](int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
+  hooks.after_backward = [&](int64_t step, std::vector<std::unique_ptr<mlp::Network>>& networks) {
     if (step != 3) return;
-    before_bad_step = networks[0]->download_params();
+    before_bad_step = training_state(trainer);  // the state step 2 left: the bad step's update is not applied yet
     const float nan = std::numeric_limits<float>::quiet_NaN();
     networks[0]->grads().upload(ctx, &nan, 1, 17);
   };
   std::vector<bool> skipped;
-  hooks.on_step = [&](const train::StepReport& r) { skipped.push_back(r.skipped); };
+  hooks.on_step = [&](const train::StepReport& r) {
+    skipped.push_back(r.skipped);
+    if (r.step == 3) after_bad_step = training_state(trainer);
+    if (r.step == 4) after_next_step = training_state(trainer);
+  };
   const auto result = trainer.run(hooks);
   CHECK(result.last_step == 6);
   CHECK(result.skipped_steps == 1);
   REQUIRE(skipped.size() == 6);
   CHECK(skipped == std::vector<bool>{false, false, true, false, false, false});
+  REQUIRE(!before_bad_step.params.empty());
+  std::string difference;
+  CHECK_MESSAGE(same_state(before_bad_step, after_bad_step, difference), "the skipped step changed " << difference);
+  // The check can fail: the next, good step changes the parameters and the moments, and counts one update more.
+  CHECK_FALSE(same_state(after_bad_step, after_next_step, difference));
+  CHECK(after_next_step.adam[0].step == after_bad_step.adam[0].step + 1);
   for (float p : trainer.networks()[0]->download_params()) REQUIRE(std::isfinite(p));
   fs::remove_all(out);
 }
@@ -260,7 +382,7 @@ TEST_CASE("train: repeated non-finite steps stop the run and keep the last good 
                                     {"max_bad_steps", "3"}}),
                          test::small_scene(), out, false);
   train::TrainHooks hooks;
-  hooks.after_backward = [&](int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
+  hooks.after_backward = [&](int64_t step, std::vector<std::unique_ptr<mlp::Network>>& networks) {
     if (step < 5) return;
     const float inf = std::numeric_limits<float>::infinity();
     networks[0]->grads().upload(ctx, &inf, 1, 0);
