@@ -26,9 +26,9 @@
 #include "bench/gemm_bench.hpp"
 #include "cl/context.hpp"
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm_tuning.hpp"
-#include "mlp/mlp.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "mlp/network.hpp"
 
 using namespace mipnerf;
 
@@ -98,7 +98,7 @@ void print_products(const ocl::Context& ctx, const bench::GemmBenchResult& r, bo
   std::string openblas = OPENBLAS_VERSION;  // " OpenBLAS 0.3.21 "
   openblas.erase(0, openblas.find_first_not_of(' '));
   openblas.erase(openblas.find_last_not_of(' ') + 1);
-  std::printf("## bench_gemm: %s, CLBlast %s, %s\n\n", ctx.device_info().name.c_str(), mlp::clblast_version().c_str(),
+  std::printf("## bench_gemm: %s, CLBlast %s, %s\n\n", ctx.device_info().name.c_str(), gemm::clblast_version().c_str(),
               openblas.c_str());
   std::printf("GFLOP/s, best call of %zu rounds × %zu (median in brackets); tuned parameters: %s\n\n", r.options.rounds,
               r.options.reps, tuned ? path.c_str() : "none found (run `mipnerf-cl tune`)");
@@ -133,7 +133,8 @@ void print_products(const ocl::Context& ctx, const bench::GemmBenchResult& r, bo
 // The whole paper network (8×256, skip, view branch) on one chunk, GEMMs and mlp.cl kernels together.
 void print_network(ocl::Context& ctx, const Args& args, const std::vector<bench::GemmConfig>& configs) {
   mlp::MlpConfig config;
-  mlp::Mlp net(ctx, config);
+  const auto device_network = mlp::make_network(ctx, config, gemm::GemmBackend::clblast);
+  mlp::Network& net = *device_network;
   const size_t rows = args.mlp_rays * args.mlp_samples;
   const double flops_per_row = 2.0 * static_cast<double>(net.parameter_count());  // forward multiply-adds
   std::printf("\nThe paper's network on one chunk of %zu rays × %zu samples = %zu rows (best of %zu):\n\n",
@@ -143,20 +144,20 @@ void print_network(ocl::Context& ctx, const Args& args, const std::vector<bench:
   for (const auto& config : configs) {
     if (config.on_host()) continue;
     if (config.tuning) {
-      mlp::install_gemm_tuning(ctx, *config.tuning);
+      gemm::install_gemm_tuning(ctx, *config.tuning);
     } else {
-      mlp::clear_gemm_tuning(ctx);
+      gemm::clear_gemm_tuning(ctx);
     }
     const auto t = bench::time_mlp_chunk(ctx, net, args.mlp_rays, args.mlp_samples, args.options.reps);
     std::printf("| %s | %.0f ms (%.0f GFLOP/s) | %.0f ms | %.0f ms | %.0f |\n", config.name.c_str(), t.forward * 1e3,
                 flops_per_row * rows / t.forward * 1e-9, t.backward * 1e3, t.inference * 1e3,
                 t.training_rows_per_second());
   }
-  mlp::clear_gemm_tuning(ctx);
+  gemm::clear_gemm_tuning(ctx);
   if (auto host = bench::host_backend_config(ctx)) {  // the same network with gemm_backend=host
-    ctx.set_gemm_on_host(true);
-    const auto t = bench::time_mlp_chunk(ctx, net, args.mlp_rays, args.mlp_samples, args.options.reps);
-    ctx.set_gemm_on_host(false);
+    const auto host_network = mlp::make_network(ctx, config, gemm::GemmBackend::host);
+    host_network->upload_params(net.download_params());
+    const auto t = bench::time_mlp_chunk(ctx, *host_network, args.mlp_rays, args.mlp_samples, args.options.reps);
     std::printf("| %s | %.0f ms (%.0f GFLOP/s) | %.0f ms | %.0f ms | %.0f |\n", host->name.c_str(), t.forward * 1e3,
                 flops_per_row * rows / t.forward * 1e-9, t.backward * 1e3, t.inference * 1e3,
                 t.training_rows_per_second());
@@ -170,8 +171,8 @@ int main(int argc, char** argv) try {
   auto devices = ocl::list_devices();
   // A profiling queue costs nothing measurable here and lets POCL_TRACING=text time every kernel CLBlast runs.
   ocl::Context ctx(ocl::choose_device(devices, args.device), /*profiling=*/true);
-  const std::string tuning_path = args.tuning.empty() ? mlp::tuning_file_path(ctx.device_info()) : args.tuning;
-  const auto tuning = mlp::read_tuning(tuning_path);
+  const std::string tuning_path = args.tuning.empty() ? gemm::tuning_file_path(ctx.device_info()) : args.tuning;
+  const auto tuning = gemm::read_tuning(tuning_path);
 
   auto configs = bench::clblast_configs(tuning);
   configs.push_back({"OpenBLAS", std::nullopt, time_openblas});

@@ -25,7 +25,7 @@
 #include "eval/report.hpp"
 #include "io/atomic_file.hpp"
 #include "io/temporary_folder.hpp"
-#include "mlp/clblast_check.hpp"
+#include "gemm/clblast_check.hpp"
 #include "progress.hpp"
 #include "train/config.hpp"
 
@@ -173,10 +173,10 @@ std::string device_label(const ocl::DeviceInfo& device) { return "[" + std::to_s
 
 void bench_gemm(const BenchArgs& a, const ocl::DeviceInfo& device, bench::DeviceBench& d) {
   auto ctx = fresh_context(device);
-  std::optional<mlp::GemmTuning> tuning;
+  std::optional<gemm::GemmTuning> tuning;
   if (d.tuning_found) {
     try {
-      tuning = mlp::read_tuning(d.tuning_file);
+      tuning = gemm::read_tuning(d.tuning_file);
     } catch (const Error& e) {  // the defaults are still worth measuring
       std::cerr << "mipnerf-cl: warning: " << e.what() << "; GEMM with CLBlast's defaults only\n";
       d.errors.push_back({"gemm tuning file", e.what()});
@@ -214,7 +214,7 @@ std::map<std::string, std::string> explicit_settings(const BenchArgs& a) {
 void bench_preset(const BenchArgs& a, const std::string& preset, const std::string& scene, const fs::path& scratch,
                   const ocl::DeviceInfo& device, bench::DeviceBench& d) {
   auto ctx = fresh_context(device, a.profile_steps > 0);
-  mlp::load_gemm_tuning(*ctx);  // as `train` does
+  gemm::load_gemm_tuning(*ctx);  // as `train` does
   bench::PresetBenchOptions options;
   options.preset = preset;
   options.settings = explicit_settings(a);
@@ -311,8 +311,8 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
       run.devices.emplace_back();
       bench::DeviceBench& d = run.devices.back();
       d.device = eval::device_record(device);
-      d.clblast_version = mlp::clblast_version();
-      d.tuning_file = mlp::tuning_file_path(device);
+      d.clblast_version = gemm::clblast_version();
+      d.tuning_file = gemm::tuning_file_path(device);
       d.tuning_found = fs::exists(d.tuning_file);
       std::cerr << "mipnerf-cl: benchmarking " << device_label(device) << device.name << " (" << device.platform_name
                 << "); GEMM tuning: " << (d.tuning_found ? d.tuning_file : "none (CLBlast's defaults only)") << "\n";

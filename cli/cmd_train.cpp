@@ -17,7 +17,7 @@
 #include "eval/report.hpp"
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_tuning.hpp"
 #include "train/config_file.hpp"
 #include "train/scene_effects.hpp"
 #include "progress.hpp"
@@ -136,7 +136,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   run.resume = args.resume;
   run.val_image_folder = (fs::path(args.out) / "val").string();
   run.on_setup = [&](train::Trainer& trainer) {
-    mlp::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
+    gemm::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
     if (root) print_setup(trainer, *ctx, args.preset);
     g_stop_requested = false;
     previous_handler = std::signal(SIGINT, on_interrupt);

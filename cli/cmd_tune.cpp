@@ -1,7 +1,7 @@
 // `mipnerf-cl tune`: measures CLBlast GEMM parameters for this device on the MLP's own products and stores the
 // best in the per-device file every later run loads (host/mlp/gemm_tuning.hpp).
 //
-// The search itself (what to try, scoring, the winners, the report) is mlp::GemmTuner (host/mlp/gemm_tuner.hpp).
+// The search itself (what to try, scoring, the winners, the report) is gemm::GemmTuner (host/mlp/gemm_tuner.hpp).
 // This file holds the flags, the printing, and how each step runs: in a child process (this executable's
 // hidden `__tune-step` subcommand), because CLBlast's tuners compile hundreds of kernel variants and a driver
 // can crash on one (PoCL does, e.g. TuneTranspose on a non-square matrix), which then costs that step only.
@@ -28,12 +28,13 @@
 #include "io/atomic_file.hpp"
 #include "io/json.hpp"
 #include "io/temporary_folder.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm_backend.hpp"
-#include "mlp/gemm_tune_steps.hpp"
-#include "mlp/gemm_tuner.hpp"
-#include "mlp/gemm_tuning.hpp"
-#include "mlp/mlp.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm_backend.hpp"
+#include "gemm/gemm_tune_steps.hpp"
+#include "gemm/gemm_tuner.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "mlp/mlp_products.hpp"
+#include "mlp/network.hpp"
 #include "progress.hpp"
 
 namespace mipnerf::cli {
@@ -42,7 +43,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct TuneArgs {
-  mlp::GemmTuneSettings settings;
+  gemm::GemmTuneSettings settings;
+  size_t input_width = 96;  // the network tuned for: its input features, view branch, view dependence
+  size_t view_branch_width = 128;
   bool no_view = false;
   std::string output;       // default: the per-device file
   bool if_missing = false;  // do nothing when the per-device file already exists (quick start re-runs)
@@ -68,7 +71,7 @@ void run_step(const StepArgs& args) {
   auto ctx = open_context();
   // The step's messages go to its stderr as they are: the parent shows the last line when the step fails.
   const LogFn to_stderr = [](LogLevel, const std::string& message) { std::cerr << message << "\n"; };
-  const io::Json result = mlp::run_tune_step(*ctx, spec, to_stderr);
+  const io::Json result = gemm::run_tune_step(*ctx, spec, to_stderr);
   io::write_bytes_atomically(args.result, result.dump());
 }
 
@@ -118,8 +121,8 @@ class ChildStepRunner {
   void finish_progress() { progress_.finish("done"); }
 
   // Runs one step in a child with a deadline, showing the overall progress while it runs.
-  mlp::TuneStepOutcome run(const std::string& name, const io::Json& spec, double timeout_s) {
-    mlp::TuneStepOutcome outcome;
+  gemm::TuneStepOutcome run(const std::string& name, const io::Json& spec, double timeout_s) {
+    gemm::TuneStepOutcome outcome;
     if (g_interrupted) {
       outcome.status = "interrupted";
       return outcome;
@@ -189,7 +192,7 @@ class ChildStepRunner {
     }
   }
 
-  static void read_result(const std::string& result_path, mlp::TuneStepOutcome& outcome) {
+  static void read_result(const std::string& result_path, gemm::TuneStepOutcome& outcome) {
     try {
       outcome.result = io::Json::parse(read_text(result_path));
       outcome.ok = true;
@@ -216,11 +219,11 @@ class ChildStepRunner {
   int step_count_ = 0;
 };
 
-void print_summary(const mlp::GemmTuner& tuner, const ocl::DeviceInfo& device, size_t rows) {
-  std::cout << "GEMM parameters for " << device.name << " (" << mlp::clblast_version() << "), time per step of "
+void print_summary(const gemm::GemmTuner& tuner, const ocl::DeviceInfo& device, size_t rows) {
+  std::cout << "GEMM parameters for " << device.name << " (" << gemm::clblast_version() << "), time per step of "
             << "the MLP's products at " << rows << " rows:\n";
   for (const auto& winner : tuner.winners()) {
-    std::printf("  %-17s %8.3f s  %s", mlp::gemm_kind_name(winner.kind), winner.seconds, winner.candidate.c_str());
+    std::printf("  %-17s %8.3f s  %s", gemm::gemm_kind_name(winner.kind), winner.seconds, winner.candidate.c_str());
     if (winner.default_seconds && *winner.default_seconds > 0) {
       std::printf("  (CLBlast defaults %.3f s: %.2fx faster)", *winner.default_seconds,
                   *winner.default_seconds / winner.seconds);
@@ -231,7 +234,7 @@ void print_summary(const mlp::GemmTuner& tuner, const ocl::DeviceInfo& device, s
 }
 
 void check_args(const TuneArgs& args) {
-  const mlp::GemmTuneSettings& s = args.settings;
+  const gemm::GemmTuneSettings& s = args.settings;
   if (s.minutes <= 0) throw Error("--minutes must be positive");
   if (s.rows % 64 != 0 || s.kernel_rows % 128 != 0 || s.rows == 0 || s.kernel_rows == 0) {
     throw Error("--rows must be a multiple of 64 and --kernel-rows of 128 (CLBlast's tuners need whole tiles)");
@@ -243,28 +246,34 @@ void check_args(const TuneArgs& args) {
 // device supports, CLBlast with the parameters just found; the faster becomes what gemm_backend=auto takes on this
 // device (GemmTuning::auto_backend in the same file). Per network rather than per product: the host path fuses the
 // products with their element-wise work (mlp/host_mlp.hpp), so a product alone is not what it runs.
-void measure_backends(const ocl::DeviceInfo& device, const std::string& path, const mlp::GemmTuneSettings& s) {
-  std::optional<mlp::GemmTuning> tuning = mlp::read_tuning(path);
+// The network `tune` tunes for, from its flags (the bottleneck as wide as the trunk, as the presets have it).
+mlp::MlpConfig tuned_network(const TuneArgs& args) {
+  mlp::MlpConfig config;
+  config.width = args.settings.width;
+  config.input_width = args.input_width;
+  config.view_branch_width = args.view_branch_width;
+  config.bottleneck_width = args.settings.width;
+  config.view_dependence = !args.no_view;
+  return config;
+}
+
+void measure_backends(const ocl::DeviceInfo& device, const std::string& path, const TuneArgs& args) {
+  std::optional<gemm::GemmTuning> tuning = gemm::read_tuning(path);
   if (!tuning) return;
   ocl::Context ctx(device);
-  mlp::install_gemm_tuning(ctx, *tuning);
-  mlp::MlpConfig config;
-  config.width = s.width;
-  config.input_width = s.input_width;
-  config.view_branch_width = s.view_branch_width;
-  config.bottleneck_width = s.width;  // as the presets have it
-  config.view_dependence = s.view_dependence;
-  const size_t samples = 64, rays = std::max<size_t>(1, s.rows / samples);
+  gemm::install_gemm_tuning(ctx, *tuning);
+  const mlp::MlpConfig config = tuned_network(args);
+  const size_t samples = 64, rays = std::max<size_t>(1, args.settings.rows / samples);
   io::Json seconds = io::Json::object();
-  std::optional<std::pair<mlp::GemmBackend, double>> best;
-  for (const mlp::GemmBackend backend : {mlp::GemmBackend::clblast, mlp::GemmBackend::host}) {
+  std::optional<std::pair<gemm::GemmBackend, double>> best;
+  for (const gemm::GemmBackend backend : {gemm::GemmBackend::clblast, gemm::GemmBackend::host}) {
+    std::unique_ptr<mlp::Network> net;
     try {
-      mlp::use_gemm_backend(ctx, backend);
+      net = mlp::make_network(ctx, config, backend);
     } catch (const Error&) {
       continue;  // not possible on this device or in this build
     }
-    mlp::Mlp net(ctx, config);
-    const bench::MlpChunkTimes t = bench::time_mlp_chunk(ctx, net, rays, samples, 2);
+    const bench::MlpChunkTimes t = bench::time_mlp_chunk(ctx, *net, rays, samples, 2);
     const double step = t.forward + t.backward;
     seconds[enum_name(backend)] = step;
     if (!best || step < best->second) best = {backend, step};
@@ -277,7 +286,7 @@ void measure_backends(const ocl::DeviceInfo& device, const std::string& path, co
                {"rows", rays * samples},
                {"seconds", seconds}}
           .dump();
-  mlp::save_tuning(path, *tuning);
+  gemm::save_tuning(path, *tuning);
   std::printf("gemm_backend=auto on this device: %s (whole network, %zu rows, forward + backward:", enum_name(best->first),
               rays * samples);
   for (const auto& [name, value] : seconds.items()) std::printf(" %s %.3f s", name.c_str(), value.get<double>());
@@ -288,24 +297,24 @@ void run_tune(const TuneArgs& args) {
   check_args(args);
   const auto devices = ocl::list_devices();
   const ocl::DeviceInfo device = ocl::choose_device(devices, global_options().device);
-  const std::string path = args.output.empty() ? mlp::tuning_file_path(device) : args.output;
+  const std::string path = args.output.empty() ? gemm::tuning_file_path(device) : args.output;
   if (args.if_missing && std::filesystem::exists(path)) {
     std::cerr << "mipnerf-cl: tune: " << path << " exists; nothing to do (--if-missing)\n";
     return;
   }
   // CLBlast's parameters only matter where CLBlast runs the products: with gemm_backend=auto a CPU device that
   // shares host memory uses the host BLAS instead, so the quick start need not spend minutes tuning it.
-  if (args.if_missing && mlp::resolve_gemm_backend(mlp::GemmBackend::automatic, device, mlp::host_blas_available()) ==
-                             mlp::GemmBackend::host) {
+  if (args.if_missing && gemm::resolve_gemm_backend(gemm::GemmBackend::automatic, device, gemm::host_blas_available()) ==
+                             gemm::GemmBackend::host) {
     std::cerr << "mipnerf-cl: tune: not needed: on " << device.name
               << " the MLP's products run on the host BLAS (gemm_backend=auto); tuning matters with "
                  "gemm_backend=clblast (run tune without --if-missing)\n";
     return;
   }
-  mlp::GemmTuneSettings settings = args.settings;
-  settings.view_dependence = !args.no_view;
+  gemm::GemmTuneSettings settings = args.settings;
+  settings.problems = mlp::mlp_gemm_problems(tuned_network(args), settings.rows);
   ChildStepRunner runner(device, settings.minutes);
-  mlp::GemmTuner tuner(
+  gemm::GemmTuner tuner(
       settings, device, path,
       [&runner](const std::string& name, const io::Json& spec, double timeout_s) {
         return runner.run(name, spec, timeout_s);
@@ -313,14 +322,14 @@ void run_tune(const TuneArgs& args) {
       [](LogLevel, const std::string& message) { note(message); }, [] { return g_interrupted.load(); });
   std::signal(SIGINT, on_tune_interrupt);
   std::signal(SIGTERM, on_tune_interrupt);
-  std::cerr << "mipnerf-cl: tune: " << device.name << ", CLBlast " << mlp::clblast_version() << ", time box "
+  std::cerr << "mipnerf-cl: tune: " << device.name << ", CLBlast " << gemm::clblast_version() << ", time box "
             << format_duration(settings.minutes * 60.0) << "; every step runs in its own process; results go to "
             << path << "\n";
   tuner.run();
   runner.finish_progress();
   print_summary(tuner, device, settings.rows);
   if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + path);
-  measure_backends(device, path, settings);
+  measure_backends(device, path, args);
 }
 
 }  // namespace
@@ -337,9 +346,9 @@ void register_tune(CLI::App& app) {
   cmd->add_option("--kernel-rows", args->settings.kernel_rows, "Rows of the kernel-level tuners (multiple of 128)")
       ->capture_default_str();
   cmd->add_option("--width", args->settings.width, "MLP width W")->capture_default_str();
-  cmd->add_option("--input-width", args->settings.input_width, "MLP input features (IPE: 96, NeRF PE: 63)")
+  cmd->add_option("--input-width", args->input_width, "MLP input features (IPE: 96, NeRF PE: 63)")
       ->capture_default_str();
-  cmd->add_option("--view-branch-width", args->settings.view_branch_width, "Width of the view branch")
+  cmd->add_option("--view-branch-width", args->view_branch_width, "Width of the view branch")
       ->capture_default_str();
   cmd->add_flag("--no-view", args->no_view, "The MLP has no view branch");
   cmd->add_option("--output", args->output, "Write the parameters here instead of the per-device cache file");

@@ -6,8 +6,8 @@
 
 #include "core/error.hpp"
 #include "dist/world.hpp"
-#include "mlp/gemm_backend.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_backend.hpp"
+#include "gemm/gemm_tuning.hpp"
 
 namespace mipnerf::cli {
 
@@ -104,8 +104,11 @@ std::map<std::string, std::string> parse_set_assignments(const std::vector<std::
 }
 
 void prepare_gemm_for_rendering(ocl::Context& ctx) {
-  mlp::load_gemm_tuning(ctx);
-  mlp::use_gemm_backend(ctx, mlp::GemmBackend::automatic);
+  // CLBlast's parameters matter only where CLBlast runs the networks' products (gemm_backend=auto's choice for the
+  // device): on a CPU device that uses the host BLAS, nothing is loaded and no tune is suggested.
+  if (gemm::choose_gemm_backend(ctx, gemm::GemmBackend::automatic) == gemm::GemmBackend::clblast) {
+    gemm::load_gemm_tuning(ctx);
+  }
 }
 
 }  // namespace mipnerf::cli

@@ -24,7 +24,7 @@ struct GlobalOptions {
 GlobalOptions& global_options();
 
 // Opens the device chosen by --device, with the library's log routed to stderr.
-// Commands that run GEMMs then call mlp::load_gemm_tuning once their inputs are checked.
+// Commands that run GEMMs then call gemm::load_gemm_tuning once their inputs are checked.
 std::unique_ptr<ocl::Context> open_context(bool profiling = false);
 
 // For commands that render a trained model (render, eval): installs ctx's GEMM tuning and picks the GEMM backend for

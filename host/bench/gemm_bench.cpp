@@ -8,8 +8,8 @@
 #include <clblast.h>
 
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm_backend.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm_backend.hpp"
 
 namespace mipnerf::bench {
 
@@ -24,7 +24,7 @@ std::string GemmProduct::layout() const {
 std::vector<GemmProduct> mlp_products(const std::vector<size_t>& widths, size_t rows) {
   std::vector<GemmProduct> products;
   for (size_t w : widths) {
-    mlp::GemmShape forward, data, weights;
+    gemm::GemmShape forward, data, weights;
     forward.m = data.m = rows;
     forward.n = forward.k = data.n = data.k = w;
     data.transpose_b = true;
@@ -72,12 +72,12 @@ GemmOperands::GemmOperands(ocl::Context& ctx, const std::vector<GemmProduct>& pr
   b_device.upload(ctx, b);
 }
 
-double time_clblast_gemm(ocl::Context& ctx, GemmOperands& operands, const GemmProduct& product) {
+double time_gemm(ocl::Context& ctx, gemm::GemmBackend backend, GemmOperands& operands, const GemmProduct& product) {
   const auto& s = product.shape;
   const size_t lda = s.transpose_a ? s.m : s.k, ldb = s.transpose_b ? s.k : s.n;
   return time_call([&] {
-    mlp::gemm(ctx, s, 1.0f, mlp::view(operands.a_device, lda), mlp::view(operands.b_device, ldb), 0.0f,
-              mlp::view(operands.c_device, s.n), product.label());
+    gemm::sgemm(ctx, backend, s, 1.0f, ocl::view(operands.a_device, lda), ocl::view(operands.b_device, ldb), 0.0f,
+                ocl::view(operands.c_device, s.n), product.label());
     ctx.finish();
   });
 }
@@ -97,9 +97,9 @@ namespace {
 void install(ocl::Context& ctx, const GemmConfig& config) {
   if (config.on_host()) return;
   if (config.tuning) {
-    mlp::install_gemm_tuning(ctx, *config.tuning);
+    gemm::install_gemm_tuning(ctx, *config.tuning);
   } else {
-    mlp::clear_gemm_tuning(ctx);
+    gemm::clear_gemm_tuning(ctx);
   }
 }
 
@@ -109,7 +109,7 @@ void time_round(ocl::Context& ctx, GemmOperands& operands, const std::vector<Gem
                 const std::function<void(size_t)>& after_product) {
   install(ctx, config);
   const auto call = [&](const GemmProduct& p) {
-    return config.on_host() ? config.host_call(p, operands) : time_clblast_gemm(ctx, operands, p);
+    return config.on_host() ? config.host_call(p, operands) : time_gemm(ctx, gemm::GemmBackend::clblast, operands, p);
   };
   for (size_t i = 0; i < products.size(); ++i) {
     const double first = call(products[i]);
@@ -151,14 +151,14 @@ GemmBenchResult run_gemm_bench(ocl::Context& ctx, const GemmBenchOptions& option
       }
     }
   } catch (...) {
-    mlp::clear_gemm_tuning(ctx);
+    gemm::clear_gemm_tuning(ctx);
     throw;
   }
-  mlp::clear_gemm_tuning(ctx);
+  gemm::clear_gemm_tuning(ctx);
   return result;
 }
 
-std::vector<GemmConfig> clblast_configs(const std::optional<mlp::GemmTuning>& tuning) {
+std::vector<GemmConfig> clblast_configs(const std::optional<gemm::GemmTuning>& tuning) {
   std::vector<GemmConfig> configs = {{"CLBlast default", std::nullopt, {}}};
   if (tuning) configs.push_back({"CLBlast tuned", tuning, {}});
   return configs;
@@ -166,24 +166,20 @@ std::vector<GemmConfig> clblast_configs(const std::optional<mlp::GemmTuning>& tu
 
 std::optional<GemmConfig> host_backend_config(ocl::Context& ctx) {
   try {
-    mlp::resolve_gemm_backend(mlp::GemmBackend::host, ctx.device_info(), mlp::host_blas_available());
+    gemm::resolve_gemm_backend(gemm::GemmBackend::host, ctx.device_info(), gemm::host_blas_available());
   } catch (const Error&) {
     return std::nullopt;  // a device with its own memory, or no host BLAS in this build
   }
-  mlp::use_gemm_backend(ctx, mlp::GemmBackend::host);  // sets the BLAS's threads as a run would
-  ctx.set_gemm_on_host(false);
+  gemm::choose_gemm_backend(ctx, gemm::GemmBackend::host);  // sets the BLAS's threads as a run would
   GemmConfig config;
   config.name = "host BLAS (mapped)";
   config.host_call = [&ctx](const GemmProduct& product, GemmOperands& operands) {
-    ctx.set_gemm_on_host(true);
-    const double seconds = time_clblast_gemm(ctx, operands, product);  // mlp::gemm, which now takes the host path
-    ctx.set_gemm_on_host(false);
-    return seconds;
+    return time_gemm(ctx, gemm::GemmBackend::host, operands, product);
   };
   return config;
 }
 
-MlpChunkTimes time_mlp_chunk(ocl::Context& ctx, mlp::Mlp& net, size_t rays, size_t samples, size_t reps) {
+MlpChunkTimes time_mlp_chunk(ocl::Context& ctx, mlp::Network& net, size_t rays, size_t samples, size_t reps) {
   const size_t rows = rays * samples;
   const auto& c = net.config();
   std::mt19937 rng(2);
@@ -223,6 +219,6 @@ MlpChunkTimes time_mlp_chunk(ocl::Context& ctx, mlp::Mlp& net, size_t rays, size
   return best;
 }
 
-void clear_clblast_programs() { mlp::check_clblast(clblast::ClearCache(), "clblast::ClearCache"); }
+void clear_clblast_programs() { gemm::check_clblast(clblast::ClearCache(), "clblast::ClearCache"); }
 
 }  // namespace mipnerf::bench

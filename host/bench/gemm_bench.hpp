@@ -19,15 +19,15 @@
 #include "bench/timing.hpp"
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
-#include "mlp/gemm.hpp"
-#include "mlp/gemm_tuning.hpp"
-#include "mlp/mlp.hpp"
+#include "gemm/gemm.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "mlp/network.hpp"
 
 namespace mipnerf::bench {
 
 struct GemmProduct {
   std::string kind;  // "forward", "backward data", "backward weights"
-  mlp::GemmShape shape;
+  gemm::GemmShape shape;
   double flops() const { return 2.0 * static_cast<double>(shape.m) * shape.n * shape.k; }
   std::string label() const;   // "forward 65536x256x256"
   std::string layout() const;  // "A·B", "A·Bᵀ" or "Aᵀ·B"
@@ -43,14 +43,15 @@ struct GemmOperands {
   ocl::DeviceArray<float> a_device, b_device, c_device;
 };
 
-// Wall seconds of one CLBlast product (mlp::gemm, with whatever parameters are installed), clFinish included.
-double time_clblast_gemm(ocl::Context& ctx, GemmOperands& operands, const GemmProduct& product);
+// Wall seconds of one product on `backend` (gemm::sgemm; CLBlast with whatever parameters are installed), clFinish
+// included.
+double time_gemm(ocl::Context& ctx, gemm::GemmBackend backend, GemmOperands& operands, const GemmProduct& product);
 
 // A configuration to time. Device: CLBlast with `tuning` installed, or with its defaults when there is none. Host:
 // `host_call` set (e.g. OpenBLAS on operands.a/b/c), returning the wall seconds of one product; no warm-up call.
 struct GemmConfig {
   std::string name;  // "CLBlast default", "CLBlast tuned", "OpenBLAS"
-  std::optional<mlp::GemmTuning> tuning;
+  std::optional<gemm::GemmTuning> tuning;
   std::function<double(const GemmProduct&, GemmOperands&)> host_call;
   bool on_host() const { return static_cast<bool>(host_call); }
 };
@@ -77,13 +78,13 @@ struct GemmBenchResult {
 };
 
 // Times every product with every configuration. Leaves CLBlast's defaults installed afterwards: a caller that wants
-// its tuning for later work installs it again (mlp::load_gemm_tuning).
+// its tuning for later work installs it again (gemm::load_gemm_tuning).
 // `progress` is called after each (round, configuration, product) with a label and the latest figure.
 GemmBenchResult run_gemm_bench(ocl::Context& ctx, const GemmBenchOptions& options,
                                const std::vector<GemmConfig>& configs, const ProgressFn& progress = {});
 
 // The device configurations for a device: CLBlast's defaults, then the tuned file when `tuning` holds one.
-std::vector<GemmConfig> clblast_configs(const std::optional<mlp::GemmTuning>& tuning);
+std::vector<GemmConfig> clblast_configs(const std::optional<gemm::GemmTuning>& tuning);
 
 // The host GEMM backend (mlp::gemm with gemm_backend=host: blocking maps of the device buffers, the CPU BLAS,
 // unmaps, clFinish), as a configuration beside CLBlast's; nothing when ctx's device cannot run it. Each timed call
@@ -98,7 +99,7 @@ struct MlpChunkTimes {
   double forward = 0, backward = 0, inference = 0;
   double training_rows_per_second() const { return rows / (forward + backward); }
 };
-MlpChunkTimes time_mlp_chunk(ocl::Context& ctx, mlp::Mlp& net, size_t rays, size_t samples, size_t reps);
+MlpChunkTimes time_mlp_chunk(ocl::Context& ctx, mlp::Network& net, size_t rays, size_t samples, size_t reps);
 
 // Forgets every program CLBlast compiled in this process (clblast::ClearCache), so the next first call of each
 // parameter set builds it again (PoCL's on-disk cache aside): what a fresh process would pay.

@@ -8,7 +8,7 @@
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/train_and_evaluate.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_tuning.hpp"
 
 namespace mipnerf::bench {
 namespace {
@@ -72,8 +72,8 @@ void record_setup(const train::Trainer& trainer, ocl::Context& ctx, TrainTiming&
   t.chunk_rays = trainer.memory().chunk_rays;
   t.planned_device_bytes = trainer.memory().total();
   t.memory_budget_bytes = trainer.memory().budget_bytes;
-  t.gemm_tuned = mlp::gemm_tuning_installed(ctx);
-  t.gemm_on_host = ctx.gemm_on_host();  // the trainer has applied gemm_backend by now
+  t.gemm_tuned = gemm::gemm_tuning_installed(ctx);
+  t.gemm_on_host = trainer.networks().front()->backend() == gemm::GemmBackend::host;
 }
 
 RenderTiming time_render(ocl::Context& ctx, train::Trainer& trainer, const PresetBenchOptions& options) {

@@ -117,4 +117,17 @@ inline MatrixView view(const ocl::DeviceArray<float>& array, size_t ld, size_t o
   return MatrixView{&array, offset, ld};
 }
 
+// Throws mipnerf::Error (naming `where`, `which` and the buffer) unless `v` holds a rows×cols matrix: a buffer, a
+// leading dimension of at least cols, and room for its last row. Every product and every network call checks its
+// matrices with it before any backend reads or writes them.
+inline void require_matrix(const MatrixView& v, size_t rows, size_t cols, const char* which, const std::string& where) {
+  if (v.array == nullptr) throw Error(where + ": matrix " + which + " has no buffer");
+  if (v.ld < cols) {
+    throw Error(where + ": matrix " + which + " has leading dimension " + std::to_string(v.ld) + " < its " +
+                std::to_string(cols) + " columns");
+  }
+  const size_t span = rows == 0 ? 0 : (rows - 1) * v.ld + cols;
+  v.array->require_size(v.offset + span, where + " matrix " + which);
+}
+
 }  // namespace mipnerf::ocl

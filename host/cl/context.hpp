@@ -45,12 +45,6 @@ class Context {
 
   void finish();  // clFinish, checked
 
-  // Whether mlp::gemm runs this context's products on the host BLAS over mapped buffers (true) or through CLBlast
-  // (false, the default). mlp::use_gemm_backend decides it; it is kept here because every product is given the
-  // context, and the decision belongs to the device the context runs on.
-  bool gemm_on_host() const { return gemm_on_host_; }
-  void set_gemm_on_host(bool on) { gemm_on_host_ = on; }
-
   // The stage profiler recording this context's commands, or nullptr (the default). Not owned; see profiler.hpp.
   StageProfiler* profiler() const { return profiler_; }
   // The profiler while it records a step (between begin_step and end_step), else nullptr: what code that adds to a
@@ -71,7 +65,6 @@ class Context {
   ::cl::CommandQueue queue_;
   ProgramCache programs_;
   LogFn log_;
-  bool gemm_on_host_ = false;
   bool profiling_queue_ = false;
   StageProfiler* profiler_ = nullptr;
 };

@@ -30,11 +30,11 @@ uint64_t camera_seed(uint64_t seed, size_t index) {
 
 }  // namespace
 
-ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
+ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                              const std::vector<Camera>& cameras, size_t chunk_rays)
     : ImageRenderer(ctx, spec, std::move(networks), cameras, RenderSettings{chunk_rays, 1, 0}) {}
 
-ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
+ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                              const std::vector<Camera>& cameras, const RenderSettings& settings)
     : ctx_(&ctx),
       cameras_(cameras),

@@ -37,9 +37,9 @@ struct RenderSettings {
 class ImageRenderer {
  public:
   // `cameras` are uploaded once; chunk_rays bounds the rays (and so the memory) of one launch sequence.
-  ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
+  ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                 const std::vector<Camera>& cameras, size_t chunk_rays);
-  ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Mlp*> networks,
+  ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                 const std::vector<Camera>& cameras, const RenderSettings& settings);
 
   // Renders camera `index`; `progress(done_rays, total_rays)` is called after every chunk (total_rays counts

@@ -1,9 +1,9 @@
 // CLBlast status names.
-#include "mlp/clblast_check.hpp"
+#include "gemm/clblast_check.hpp"
 
 #include "cl/error.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 std::string clblast_status_name(clblast::StatusCode status) {
   using S = clblast::StatusCode;
@@ -53,4 +53,4 @@ std::string clblast_version() {
          std::to_string(CLBLAST_VERSION_PATCH);
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -5,7 +5,7 @@
 
 #include <clblast.h>
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 // "kInsufficientMemoryC" for -1009; OpenCL codes shared with CLBlast give their CL_ name.
 std::string clblast_status_name(clblast::StatusCode status);
@@ -16,4 +16,4 @@ void check_clblast(clblast::StatusCode status, const std::string& call);
 // "1.5.3", from the header the library was built against.
 std::string clblast_version();
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

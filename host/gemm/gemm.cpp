@@ -1,43 +1,29 @@
-// Row-major SGEMM through CLBlast or the host BLAS (the context's backend), with shape checks that name the product.
-#include "mlp/gemm.hpp"
+// Row-major SGEMM through CLBlast or the host BLAS (the caller's backend), with shape checks that name the product.
+#include "gemm/gemm.hpp"
 
 #include <clblast.h>
 
 #include "cl/error.hpp"
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm_tuning.hpp"
-#include "mlp/host_gemm.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "gemm/host_gemm.hpp"
 
-namespace mipnerf::mlp {
-namespace {
+namespace mipnerf::gemm {
 
-// Elements a row-major rows×cols matrix with leading dimension ld spans from its offset.
-size_t span(size_t rows, size_t cols, size_t ld) { return rows == 0 ? 0 : (rows - 1) * ld + cols; }
-
-void require_fits(const MatrixView& v, size_t rows, size_t cols, const char* which, const std::string& what) {
-  if (v.array == nullptr) throw Error("gemm(" + what + "): matrix " + which + " has no buffer");
-  if (v.ld < cols) {
-    throw Error("gemm(" + what + "): matrix " + which + " has leading dimension " + std::to_string(v.ld) +
-                " < its " + std::to_string(cols) + " columns");
-  }
-  v.array->require_size(v.offset + span(rows, cols, v.ld), "gemm(" + what + ") matrix " + which);
-}
-
-}  // namespace
-
-void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& a, const MatrixView& b, float beta,
-          const MatrixView& c, const std::string& what) {
+void sgemm(ocl::Context& ctx, GemmBackend backend, const GemmShape& s, float alpha, const MatrixView& a,
+           const MatrixView& b, float beta, const MatrixView& c, const std::string& what) {
   if (s.m == 0 || s.n == 0) return;
-  require_fits(a, s.transpose_a ? s.k : s.m, s.transpose_a ? s.m : s.k, "A", what);
-  require_fits(b, s.transpose_b ? s.n : s.k, s.transpose_b ? s.k : s.n, "B", what);
-  require_fits(c, s.m, s.n, "C", what);
+  const std::string where = "gemm(" + what + ")";
+  ocl::require_matrix(a, s.transpose_a ? s.k : s.m, s.transpose_a ? s.m : s.k, "A", where);
+  ocl::require_matrix(b, s.transpose_b ? s.n : s.k, s.transpose_b ? s.k : s.n, "B", where);
+  ocl::require_matrix(c, s.m, s.n, "C", where);
   // Profiled under "gemm <kind>", with its FLOPs, so the report can give GFLOP/s and the GEMM-bound limit.
   ocl::StageScope stage(ctx, std::string("gemm ") + gemm_kind_name(gemm_kind(s)));
   ocl::StageProfiler* profiler = ctx.recording_profiler();
   if (profiler) profiler->add_flops(2.0 * static_cast<double>(s.m) * s.n * s.k);
-  // The context's backend (mlp/gemm_backend.hpp): the host BLAS on mapped buffers, or CLBlast on the queue.
-  if (ctx.gemm_on_host()) {
+  if (backend == GemmBackend::automatic) throw Error("gemm(" + what + "): resolve gemm_backend=auto before a product");
+  if (backend == GemmBackend::host) {
     host_gemm(ctx, s, alpha, a, b, beta, c, what);
     return;
   }
@@ -61,4 +47,4 @@ void gemm(ocl::Context& ctx, const GemmShape& s, float alpha, const MatrixView& 
                             " k=" + std::to_string(s.k) + ")");
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

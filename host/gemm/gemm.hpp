@@ -1,13 +1,14 @@
-// Row-major SGEMM on the device's buffers, through CLBlast or the host BLAS (mlp/gemm_backend.hpp chooses per
-// context): the only matrix product the MLP uses.
+// Row-major SGEMM on the device's buffers, through CLBlast or the host BLAS (gemm_backend.hpp): the matrix product
+// of the networks (mlp/), the tuner and the benchmarks. The caller says which backend runs it.
 #pragma once
 
 #include <string>
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
+#include "gemm/gemm_backend.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 // C[m×n] = alpha · op(A) · op(B) + beta · C, all row-major. op(A) is m×k: A is stored m×k, or k×m
 // when transpose_a. op(B) is k×n: B is stored k×n, or n×k when transpose_b.
@@ -26,10 +27,11 @@ inline GemmShape gemm_shape(size_t m, size_t n, size_t k, bool transpose_a = fal
 using ocl::MatrixView;
 using ocl::view;
 
-// The product, in queue order: CLBlast enqueues it (asynchronous); the host backend waits for the queue, computes
-// it and unmaps before returning (mlp/host_gemm.hpp). `what` names the product in error messages
-// (e.g. "layer 3 forward"). Sizes are checked against the buffers before either backend is called.
-void gemm(ocl::Context& ctx, const GemmShape& shape, float alpha, const MatrixView& a, const MatrixView& b,
-          float beta, const MatrixView& c, const std::string& what);
+// The product, in queue order, on `backend` (clblast or host; never automatic): CLBlast enqueues it (asynchronous);
+// the host backend waits for the queue, computes it and unmaps before returning (gemm/host_gemm.hpp). `what` names
+// the product in error messages (e.g. "layer 3 forward"). Sizes are checked against the buffers before either
+// backend is called.
+void sgemm(ocl::Context& ctx, GemmBackend backend, const GemmShape& shape, float alpha, const MatrixView& a,
+           const MatrixView& b, float beta, const MatrixView& c, const std::string& what);
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -1,14 +1,14 @@
 // Choosing the GEMM backend per device, and the host BLAS's thread count.
-#include "mlp/gemm_backend.hpp"
+#include "gemm/gemm_backend.hpp"
 
 #include <algorithm>
 #include <string>
 
 #include "core/error.hpp"
-#include "mlp/gemm_tuning.hpp"
-#include "mlp/host_gemm.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "gemm/host_gemm.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 bool host_blas_available() {
 #ifdef MIPNERF_HAVE_OPENBLAS
@@ -57,12 +57,11 @@ std::optional<GemmBackend> measured_auto_backend(const ocl::DeviceInfo& device, 
   }
 }
 
-GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
+GemmBackend choose_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
   const LogFn log = [&ctx](LogLevel level, const std::string& message) { ctx.log(level, message); };
   const std::optional<GemmBackend> measured =
       wanted == GemmBackend::automatic ? measured_auto_backend(ctx.device_info(), log) : std::nullopt;
   const GemmBackend backend = resolve_gemm_backend(measured.value_or(wanted), ctx.device_info(), host_blas_available());
-  ctx.set_gemm_on_host(backend == GemmBackend::host);
   if (backend == GemmBackend::host) {
     // Threads: the device's kernels (PoCL's pthread pool, one worker per compute unit) and the BLAS never run at the
     // same time, because every host product starts with a blocking map that drains the queue and ends before the
@@ -79,4 +78,4 @@ GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
   return backend;
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

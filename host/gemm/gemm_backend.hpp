@@ -9,7 +9,7 @@
 #include "cl/context.hpp"
 #include "core/enum_names.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 enum class GemmBackend {
   automatic,  // the host BLAS on CPU devices that share host memory (when built in), CLBlast elsewhere
@@ -33,10 +33,10 @@ GemmBackend resolve_gemm_backend(GemmBackend wanted, const ocl::DeviceInfo& devi
 // nothing, and `log` hears why when the file could not be read.
 std::optional<GemmBackend> measured_auto_backend(const ocl::DeviceInfo& device, const LogFn& log);
 
-// Resolves `wanted` for ctx's device (auto: tune's measurement when there is one, else the rule above), makes the
-// MLP use it from the next product on, and for the host backend
-// sets the host BLAS's thread count to the device's compute units (see gemm_backend.cpp for why). Logs the choice.
-// Returns the backend in use.
-GemmBackend use_gemm_backend(ocl::Context& ctx, GemmBackend wanted);
+// What `wanted` means for ctx's device (auto: tune's measurement when there is one, else the rule above; never
+// automatic), logged through the context. For the host backend it also sets the host BLAS's thread count to the
+// device's compute units (see gemm_backend.cpp for why). mlp::make_network calls it: the backend belongs to the
+// network that runs its products, not to the context.
+GemmBackend choose_gemm_backend(ocl::Context& ctx, GemmBackend wanted);
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -1,6 +1,6 @@
 // The GEMM tune's steps on the device: CLBlast's tuners, a candidate timed and checked through mlp::gemm, and
 // the direct/indirect crossover.
-#include "mlp/gemm_tune_steps.hpp"
+#include "gemm/gemm_tune_steps.hpp"
 
 #include <clblast.h>
 
@@ -14,10 +14,10 @@
 
 #include "cl/buffer.hpp"
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -99,7 +99,7 @@ std::pair<double, double> exact_element(const GemmShape& s, const Operands& x, s
 void run_gemm(ocl::Context& ctx, const GemmShape& s, const ocl::DeviceArray<float>& a, const ocl::DeviceArray<float>& b,
               ocl::DeviceArray<float>& c, const char* label) {
   const size_t lda = s.transpose_a ? s.m : s.k, ldb = s.transpose_b ? s.k : s.n;
-  gemm(ctx, s, 1.0f, view(a, lda), view(b, ldb), 0.0f, view(c, s.n), label);
+  sgemm(ctx, GemmBackend::clblast, s, 1.0f, view(a, lda), view(b, ldb), 0.0f, view(c, s.n), label);
 }
 
 std::vector<float> random_values(size_t count, std::mt19937& rng) {
@@ -311,4 +311,4 @@ ParameterSet parameter_set_from_json(const Json& j) {
   return set;
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

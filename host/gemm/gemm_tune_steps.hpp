@@ -19,9 +19,9 @@
 #include "cl/context.hpp"
 #include "core/log.hpp"
 #include "io/json.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_tuning.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 // `tuner` is the name without "Tune" ("Xgemm", "Copy", ...); k = 0 for the tuners that take no k.
 io::Json kernel_tuner_step(const std::string& tuner, size_t m, size_t n, size_t k, double fraction);
@@ -44,4 +44,4 @@ double gemm_error_ratio(double computed, double exact, double magnitude, size_t 
 io::Json parameter_set_json(const ParameterSet& set);
 ParameterSet parameter_set_from_json(const io::Json& json);
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -1,5 +1,5 @@
 // The GEMM tune's search: the plan within the time box, scoring candidates, the winners and the report.
-#include "mlp/gemm_tuner.hpp"
+#include "gemm/gemm_tuner.hpp"
 
 #include <clblast.h>
 
@@ -11,9 +11,9 @@
 
 #include "core/duration.hpp"
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
+#include "gemm/clblast_check.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 namespace {
 
 using io::Json;
@@ -33,16 +33,6 @@ double fraction_for(double seconds, double configurations) {
 
 constexpr GemmKind kTunedKinds[] = {GemmKind::forward, GemmKind::backward_data, GemmKind::backward_weights};
 
-MlpConfig mlp_config_of(const GemmTuneSettings& settings) {
-  MlpConfig config;
-  config.width = settings.width;
-  config.input_width = settings.input_width;
-  config.view_branch_width = settings.view_branch_width;
-  config.bottleneck_width = settings.width;
-  config.view_dependence = settings.view_dependence;
-  return config;
-}
-
 std::vector<double> doubles_of(const Json& array) {
   std::vector<double> values;
   for (const auto& v : array) values.push_back(v.get<double>());
@@ -61,7 +51,8 @@ GemmTuner::GemmTuner(const GemmTuneSettings& settings, const ocl::DeviceInfo& de
       should_stop_(std::move(should_stop)),
       start_(std::chrono::steady_clock::now()) {
   if (!run_step_) throw Error("GemmTuner needs a step runner (it never touches the device itself)");
-  problems_ = mlp_gemm_problems(mlp_config_of(settings), settings.rows);
+  if (settings.problems.empty()) throw Error("GemmTuner needs the products to tune for (GemmTuneSettings::problems)");
+  problems_ = settings.problems;
   report_ = {{"rows", settings.rows},
              {"kernel_rows", settings.kernel_rows},
              {"time_box_minutes", settings.minutes},
@@ -388,4 +379,4 @@ std::string describe_parameter_set(const ParameterSet& set) {
   return text;
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -21,20 +21,20 @@
 #include "cl/context.hpp"
 #include "core/log.hpp"
 #include "io/json.hpp"
-#include "mlp/gemm_tune_steps.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_tune_steps.hpp"
+#include "gemm/gemm_tuning.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 // The products to tune for and the time box (the flags of `mipnerf-cl tune`).
 struct GemmTuneSettings {
   double minutes = 30.0;      // the time box
   size_t rows = 65536;        // rows of the products timed through the routine
   size_t kernel_rows = 4096;  // rows of the kernel-level tuners (same tiles, shorter runs)
-  size_t width = 256;         // the MLP's width W
-  size_t input_width = 96;    // its input (IPE 96; NeRF 63)
-  size_t view_branch_width = 128;
-  bool view_dependence = true;  // false: the MLP has no view branch
+  size_t width = 256;         // the width of the matrices the helper kernels move and of the crossover's products
+  // The products of one training step at `rows` rows, with their counts (mlp::mlp_gemm_problems of the network):
+  // what the candidates are timed on. Must not be empty.
+  std::vector<GemmProblem> problems;
 };
 
 // How one step went. `status` is "ok", "interrupted", "timed out after 5m00s", "crashed (signal 11)",
@@ -146,4 +146,4 @@ DirectSwitch direct_switch_from(const std::vector<size_t>& rows, const std::vect
 // "Xgemm: GEMMK=1 KREG=8 ...; Copy: ..." ("CLBlast defaults" for an empty set).
 std::string describe_parameter_set(const ParameterSet& set);
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -1,5 +1,5 @@
 // Per-device CLBlast GEMM parameters: problems, the tuning store, and installing it.
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_tuning.hpp"
 
 #include <clblast.h>
 
@@ -17,9 +17,9 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
-#include "mlp/clblast_check.hpp"
+#include "gemm/clblast_check.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 namespace {
 
 // ---- what is installed, per device (CLBlast's own parameter cache is process-wide per device too) ----
@@ -98,25 +98,6 @@ std::string sanitize(const std::string& text) {
   return collapsed;
 }
 
-void add_problem(std::vector<GemmProblem>& problems, size_t m, size_t n, size_t k, bool ta, bool tb, size_t count) {
-  if (count == 0) return;
-  for (auto& p : problems) {
-    if (p.shape.m == m && p.shape.n == n && p.shape.k == k && p.shape.transpose_a == ta && p.shape.transpose_b == tb) {
-      p.count += count;
-      return;
-    }
-  }
-  GemmProblem p;
-  p.shape.m = m;
-  p.shape.n = n;
-  p.shape.k = k;
-  p.shape.transpose_a = ta;
-  p.shape.transpose_b = tb;
-  p.count = count;
-  p.label = std::string(gemm_kind_name(p.kind())) + " " + std::to_string(m) + "x" + std::to_string(n) + "x" +
-            std::to_string(k);
-  problems.push_back(p);
-}
 
 const std::map<GemmKind, std::string>& kind_names() {
   static const std::map<GemmKind, std::string> names = {{GemmKind::forward, "forward"},
@@ -156,33 +137,24 @@ GemmKind gemm_kind(const GemmShape& s) {
 
 const char* gemm_kind_name(GemmKind kind) { return kind_names().at(kind).c_str(); }
 
-std::vector<GemmProblem> mlp_gemm_problems(const MlpConfig& c, size_t rows) {
-  c.validate();
-  std::vector<GemmProblem> problems;
-  const size_t W = c.width;
-  for (size_t i = 0; i < c.depth; ++i) {
-    const bool from_features = i == 0;
-    const bool skip = i > 0 && skip_after(c, i - 1);
-    if (!from_features) {
-      add_problem(problems, rows, W, W, false, false, 1);  // forward
-      add_problem(problems, rows, W, W, false, true, 1);   // ∂act_{i−1}
-      add_problem(problems, W, W, rows, true, false, 1);   // ∂W
-    }
-    if (from_features || skip) {
-      add_problem(problems, rows, W, c.input_width, false, false, 1);
-      add_problem(problems, c.input_width, W, rows, true, false, 1);
+void add_gemm_problem(std::vector<GemmProblem>& problems, size_t m, size_t n, size_t k, bool ta, bool tb, size_t count) {
+  if (count == 0) return;
+  for (auto& p : problems) {
+    if (p.shape.m == m && p.shape.n == n && p.shape.k == k && p.shape.transpose_a == ta && p.shape.transpose_b == tb) {
+      p.count += count;
+      return;
     }
   }
-  if (c.view_dependence) {
-    const size_t Wb = c.bottleneck_width, Wv = c.view_branch_width;
-    add_problem(problems, rows, Wb, W, false, false, 1);
-    add_problem(problems, rows, W, Wb, false, true, 1);
-    add_problem(problems, W, Wb, rows, true, false, 1);
-    add_problem(problems, rows, Wv, Wb, false, false, 1);
-    add_problem(problems, rows, Wb, Wv, false, true, 1);
-    add_problem(problems, Wb, Wv, rows, true, false, 1);
-  }
-  return problems;
+  GemmProblem p;
+  p.shape.m = m;
+  p.shape.n = n;
+  p.shape.k = k;
+  p.shape.transpose_a = ta;
+  p.shape.transpose_b = tb;
+  p.count = count;
+  p.label = std::string(gemm_kind_name(p.kind())) + " " + std::to_string(m) + "x" + std::to_string(n) + "x" +
+            std::to_string(k);
+  problems.push_back(p);
 }
 
 std::string tuning_cache_dir() {
@@ -357,4 +329,4 @@ bool load_gemm_tuning(ocl::Context& ctx) {
   return false;
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -1,4 +1,4 @@
-// Per-device CLBlast GEMM parameters: the MLP's product shapes, the store `mipnerf-cl tune` writes (one JSON file
+// Per-device CLBlast GEMM parameters: product shapes, the store `mipnerf-cl tune` writes (one JSON file
 // per device name, driver version and CLBlast version under the user's cache folder), and how a run installs
 // it through clblast::OverrideParameters before its first GEMM.
 //
@@ -19,11 +19,10 @@
 #include <vector>
 
 #include "cl/context.hpp"
-#include "mlp/gemm.hpp"
-#include "mlp/gemm_backend.hpp"
-#include "mlp/mlp_config.hpp"
+#include "gemm/gemm.hpp"
+#include "gemm/gemm_backend.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 using KernelParameters = std::map<std::string, size_t>;     // one CLBlast kernel's full parameter set
 using ParameterSet = std::map<std::string, KernelParameters>;  // CLBlast kernel name → its parameters
@@ -43,9 +42,9 @@ struct GemmProblem {
   double flops() const { return 2.0 * static_cast<double>(shape.m) * shape.n * shape.k; }
 };
 
-// The distinct products whose cost matters for `config` at `rows` rows (trunk, skip, bottleneck and view
-// branch; the thin heads are left out), with how often each occurs. Used by `tune` and the benchmark.
-std::vector<GemmProblem> mlp_gemm_problems(const MlpConfig& config, size_t rows);
+// Adds the product m×k · k×n (op per ta, tb) to `problems`, `count` times: an equal shape already listed only counts
+// up. The networks' list of products is built with it (mlp::mlp_gemm_problems).
+void add_gemm_problem(std::vector<GemmProblem>& problems, size_t m, size_t n, size_t k, bool ta, bool tb, size_t count);
 
 // What `mipnerf-cl tune` found for one device.
 struct GemmTuning {
@@ -92,4 +91,4 @@ bool load_gemm_tuning(ocl::Context& ctx);
 // Called by gemm() before each product: applies the installed set for `kind` if it is not applied yet.
 void select_gemm_kind(ocl::Context& ctx, GemmKind kind);
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -1,15 +1,15 @@
 // The host GEMM backend: map (blocking), cblas_sgemm, unmap. See host_gemm.hpp for the queue ordering.
-#include "mlp/host_gemm.hpp"
+#include "gemm/host_gemm.hpp"
 
 #include "cl/error.hpp"
 #include "core/error.hpp"
-#include "mlp/mapped_buffers.hpp"
+#include "gemm/mapped_buffers.hpp"
 
 #ifdef MIPNERF_HAVE_OPENBLAS
 #include <cblas.h>
 #endif
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 #ifdef MIPNERF_HAVE_OPENBLAS
 
@@ -45,4 +45,4 @@ int host_blas_threads() { return 1; }
 
 #endif
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

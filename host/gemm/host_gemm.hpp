@@ -15,9 +15,9 @@
 #include <string>
 
 #include "cl/context.hpp"
-#include "mlp/gemm.hpp"
+#include "gemm/gemm.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 // C = alpha · op(A) · op(B) + beta · C (GemmShape's conventions), finished when it returns. The views' sizes must
 // have been checked (gemm() does). Throws mipnerf::Error when this build has no host BLAS or a map fails.
@@ -28,4 +28,4 @@ void host_gemm(ocl::Context& ctx, const GemmShape& shape, float alpha, const Mat
 void set_host_blas_threads(int threads);
 int host_blas_threads();
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

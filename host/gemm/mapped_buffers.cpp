@@ -1,12 +1,12 @@
 // Mapping device buffers into host memory (see mapped_buffers.hpp).
-#include "mlp/mapped_buffers.hpp"
+#include "gemm/mapped_buffers.hpp"
 
 #include <algorithm>
 
 #include "cl/error.hpp"
 #include "core/error.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 MappedBuffers::~MappedBuffers() {
   for (const Mapping& m : mappings_) {
@@ -48,4 +48,4 @@ float* MappedBuffers::at(const ocl::DeviceArray<float>* array) const {
   throw Error("internal error: " + what_ + " used buffer '" + array->name() + "' that it did not map");
 }
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -13,7 +13,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 
-namespace mipnerf::mlp {
+namespace mipnerf::gemm {
 
 class MappedBuffers {
  public:
@@ -47,4 +47,4 @@ class MappedBuffers {
   std::vector<Mapping> mappings_;
 };
 
-}  // namespace mipnerf::mlp
+}  // namespace mipnerf::gemm

@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "core/error.hpp"
-#include "mlp/host_gemm.hpp"
+#include "gemm/host_gemm.hpp"
 
 #ifdef MIPNERF_HAVE_OPENBLAS
 #include <cblas.h>
@@ -176,8 +176,8 @@ size_t run_blocks(size_t threads, size_t n_blocks, const Work& work) {
 // Sets the host BLAS to one thread per call while it lives (our threads split the rows), then restores it.
 class SingleThreadedBlas {
  public:
-  SingleThreadedBlas() : previous_(host_blas_threads()) { set_host_blas_threads(1); }
-  ~SingleThreadedBlas() { set_host_blas_threads(previous_); }
+  SingleThreadedBlas() : previous_(gemm::host_blas_threads()) { gemm::set_host_blas_threads(1); }
+  ~SingleThreadedBlas() { gemm::set_host_blas_threads(previous_); }
   SingleThreadedBlas(const SingleThreadedBlas&) = delete;
   SingleThreadedBlas& operator=(const SingleThreadedBlas&) = delete;
 

@@ -206,7 +206,7 @@ CheckpointHeader read_checkpoint_header(const io::CheckpointFile& c, const std::
 }
 
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
-                              const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                              const std::vector<std::unique_ptr<mlp::Network>>& networks,
                               const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
   io::CheckpointFile c;
   c.header[key::format] = kFormat;
@@ -230,7 +230,7 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
 }
 
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
-                                             std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                                             std::vector<std::unique_ptr<mlp::Network>>& networks,
                                              std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log) {
   const io::CheckpointFile c = io::read_checkpoint_file(path);
   const CheckpointHeader header = read_checkpoint_header(c, path);
@@ -252,16 +252,16 @@ CheckpointRecord restore_training_checkpoint(const std::string& path, const Trai
 
 // ---- Trained networks, for rendering ----
 
-std::vector<mlp::Mlp*> TrainedModel::network_pointers() const { return train::network_pointers(networks); }
+std::vector<mlp::Network*> TrainedModel::network_pointers() const { return mlp::network_pointers(networks); }
 
-TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path) {
+TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path, gemm::GemmBackend backend) {
   const io::CheckpointFile c = io::read_checkpoint_file(checkpoint_path);
   const CheckpointHeader header = read_checkpoint_header(c, checkpoint_path);
   const CheckpointRecord& record = header.record;
   TrainedModel model;
   model.config = header.config;
   model.spec = make_graph_spec(model.config, record.multiscale_data);
-  model.networks = make_networks(ctx, model.spec);
+  model.networks = make_networks(ctx, model.spec, backend);
   for (size_t i = 0; i < model.networks.size(); ++i) {
     model.networks[i]->upload_params(c.tensor(tensor_name(i, "params"), checkpoint_path));
   }

@@ -14,7 +14,7 @@
 #include "graph/graph_spec.hpp"
 #include "io/checkpoint_file.hpp"
 #include "mlp/adam.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "train/config.hpp"
 
 namespace mipnerf::train {
@@ -65,14 +65,14 @@ CheckpointHeader read_checkpoint_header(const io::CheckpointFile& checkpoint, co
 // Writes `path`: the record, the configuration (a JSON object), and per network i the tensors
 // network<i>.params, network<i>.adam_m, network<i>.adam_v with the Adam step counts.
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
-                              const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                              const std::vector<std::unique_ptr<mlp::Network>>& networks,
                               const std::vector<std::unique_ptr<mlp::Adam>>& optimisers);
 
 // Restores networks and optimisers from `path` exactly, and returns its record. The checkpoint's configuration
 // must equal `config` except for execution settings and `steps` (logged as a warning through `log`); otherwise
 // throws mipnerf::Error naming the differing settings.
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
-                                             std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                                             std::vector<std::unique_ptr<mlp::Network>>& networks,
                                              std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log);
 
 // ---- Trained networks, for rendering ----
@@ -82,14 +82,16 @@ CheckpointRecord restore_training_checkpoint(const std::string& path, const Trai
 struct TrainedModel {
   TrainConfig config;
   graph::GraphSpec spec;
-  std::vector<std::unique_ptr<mlp::Mlp>> networks;
+  std::vector<std::unique_ptr<mlp::Network>> networks;
   int64_t step = 0;
   std::string data_path;     // the training data's folder or file (absolute); empty in older checkpoints
   double train_seconds = 0;  // training time up to this checkpoint
   std::string trained_on;    // the device that trained it
-  std::vector<mlp::Mlp*> network_pointers() const;
+  std::vector<mlp::Network*> network_pointers() const;
 };
-// Throws mipnerf::Error naming the file when it is not a training checkpoint or does not fit its configuration.
-TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path);
+// Throws mipnerf::Error naming the file when it is not a training checkpoint or does not fit its configuration. The
+// networks run their products on `backend` (automatic: the device's choice, mlp::make_network).
+TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path,
+                                gemm::GemmBackend backend = gemm::GemmBackend::automatic);
 
 }  // namespace mipnerf::train

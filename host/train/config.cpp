@@ -19,7 +19,7 @@ namespace {
 using Member = std::variant<bool TrainConfig::*, int TrainConfig::*, int64_t TrainConfig::*, uint64_t TrainConfig::*,
                             double TrainConfig::*, Background TrainConfig::*, RayShape TrainConfig::*,
                             ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*,
-                            mlp::GemmBackend TrainConfig::*>;
+                            gemm::GemmBackend TrainConfig::*>;
 
 // One row of the table. An enum setting's `help` says what it does; its allowed values are prepended from the
 // enum's name table (with_full_help), so they are written once.

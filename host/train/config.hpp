@@ -13,7 +13,7 @@
 
 #include "core/enum_names.hpp"
 #include "core/stage_options.hpp"
-#include "mlp/gemm_backend.hpp"
+#include "gemm/gemm_backend.hpp"
 #include "ops/batch.hpp"
 
 namespace mipnerf::train {
@@ -110,7 +110,7 @@ struct TrainConfig {
   // --- execution ---
   int chunk_rays = 0;               // rays per chunk of a training step; 0 chooses from device memory
   int render_chunk_rays = 4096;     // rays per chunk when rendering
-  mlp::GemmBackend gemm_backend = mlp::GemmBackend::automatic;  // who runs the MLP's products (mlp/gemm_backend.hpp)
+  gemm::GemmBackend gemm_backend = gemm::GemmBackend::automatic;  // who runs the MLP's products (mlp/gemm_backend.hpp)
   int64_t log_every = 100;          // steps between CSV log rows and progress updates
   int64_t checkpoint_every = 1000;  // steps between checkpoints (one is always written at the end)
   int keep_checkpoints = 3;         // how many checkpoint files to keep

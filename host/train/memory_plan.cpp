@@ -8,7 +8,7 @@
 #include "data/device_dataset.hpp"
 #include "graph/graph.hpp"
 #include "mlp/adam.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "ops/batch.hpp"
 
 namespace mipnerf::train {
@@ -35,7 +35,7 @@ FixedBytes training_fixed_bytes(const data::Split& train_split, const graph::Gra
   fixed.largest_buffer = std::max(data::DeviceDataset::largest_buffer_for(train_split), fixed.batch);
   for (const auto& network : spec.mlps) {
     const size_t parameters = mlp::parameter_layout(network).total;
-    fixed.networks += mlp::Mlp::bytes_for(network) + mlp::Adam::bytes_for(parameters);
+    fixed.networks += mlp::Network::bytes_for(network) + mlp::Adam::bytes_for(parameters);
     fixed.largest_buffer = std::max(fixed.largest_buffer, parameters * sizeof(float));
   }
   return fixed;
@@ -44,7 +44,7 @@ FixedBytes training_fixed_bytes(const data::Split& train_split, const graph::Gra
 FixedBytes rendering_fixed_bytes(const graph::GraphSpec& spec) {
   FixedBytes fixed;
   for (const auto& network : spec.mlps) {
-    fixed.networks += mlp::Mlp::bytes_for(network);
+    fixed.networks += mlp::Network::bytes_for(network);
     fixed.largest_buffer = std::max(fixed.largest_buffer, mlp::parameter_layout(network).total * sizeof(float));
   }
   return fixed;

@@ -16,7 +16,7 @@ namespace mipnerf::train {
 struct FixedBytes {
   size_t data = 0;            // the training split (data::DeviceDataset): lower `factor`, or use fewer images
   size_t batch = 0;           // the batch arrays (ops::BatchArrays): lower `batch_size`
-  size_t networks = 0;        // parameters, gradients, optimiser state (mlp::Mlp, mlp::Adam): lower `mlp_width`
+  size_t networks = 0;        // parameters, gradients, optimiser state (mlp::Network, mlp::Adam): lower `mlp_width`
   size_t largest_buffer = 0;  // the biggest single one of them (the split's pixels, usually)
   size_t total() const { return data + batch + networks; }
 };
@@ -42,10 +42,10 @@ MemoryPlan plan_memory(const graph::GraphSpec& spec, const ocl::DeviceInfo& devi
                        const FixedBytes& fixed, size_t requested_chunk, bool training);
 
 // What a training run keeps on the device whatever the chunk size, from each owner's bytes_for: the training
-// split (data::DeviceDataset), every network's parameters and gradients (mlp::Mlp), their optimisers (mlp::Adam)
+// split (data::DeviceDataset), every network's parameters and gradients (mlp::Network), their optimisers (mlp::Adam)
 // and the batch arrays (ops::BatchArrays). The `fixed` of a training plan.
 FixedBytes training_fixed_bytes(const data::Split& train_split, const graph::GraphSpec& spec, size_t batch_rays);
-// What rendering keeps: the networks (mlp::Mlp::bytes_for).
+// What rendering keeps: the networks (mlp::Network::bytes_for).
 FixedBytes rendering_fixed_bytes(const graph::GraphSpec& spec);
 
 // The largest single buffer the graph allocates for a chunk of `chunk_rays` (features or an MLP layer).

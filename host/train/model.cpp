@@ -84,16 +84,11 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   return spec;
 }
 
-std::vector<std::unique_ptr<mlp::Mlp>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec) {
-  std::vector<std::unique_ptr<mlp::Mlp>> networks;
-  for (const auto& config : spec.mlps) networks.push_back(std::make_unique<mlp::Mlp>(ctx, config));
+std::vector<std::unique_ptr<mlp::Network>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec,
+                                                        gemm::GemmBackend backend) {
+  std::vector<std::unique_ptr<mlp::Network>> networks;
+  for (const auto& config : spec.mlps) networks.push_back(mlp::make_network(ctx, config, backend));
   return networks;
-}
-
-std::vector<mlp::Mlp*> network_pointers(const std::vector<std::unique_ptr<mlp::Mlp>>& networks) {
-  std::vector<mlp::Mlp*> out;
-  for (const auto& n : networks) out.push_back(n.get());
-  return out;
 }
 
 data::LoadOptions load_options(const TrainConfig& config, const std::string& data_path, std::vector<std::string> splits,

@@ -10,7 +10,7 @@
 #include "cl/context.hpp"
 #include "data/dataset.hpp"
 #include "graph/graph_spec.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "train/config.hpp"
 
 namespace mipnerf::train {
@@ -19,10 +19,10 @@ namespace mipnerf::train {
 // loss is compiled in only then, and only when config.area_loss asks for it.
 graph::GraphSpec make_graph_spec(const TrainConfig& config, bool multiscale_data);
 
-// One network per entry of spec.mlps, freshly initialised (MlpConfig::seed).
-std::vector<std::unique_ptr<mlp::Mlp>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec);
-// The networks as the graph and the renderer take them (not owning).
-std::vector<mlp::Mlp*> network_pointers(const std::vector<std::unique_ptr<mlp::Mlp>>& networks);
+// One network per entry of spec.mlps, freshly initialised (MlpConfig::seed), its products on `backend` (automatic:
+// resolved for ctx's device by mlp::make_network).
+std::vector<std::unique_ptr<mlp::Network>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec,
+                                                        gemm::GemmBackend backend);
 
 // How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
 // (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0

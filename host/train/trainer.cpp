@@ -13,7 +13,7 @@
 #include "dist/world.hpp"
 #include "graph/graph.hpp"
 #include "io/atomic_file.hpp"
-#include "mlp/gemm_backend.hpp"
+#include "gemm/gemm_backend.hpp"
 #include "ops/batch.hpp"
 #include "train/checkpoint.hpp"
 #include "train/model.hpp"
@@ -77,7 +77,7 @@ uint64_t data_fingerprint(const data::Split& split) {
   return dist::fnv1a(split.rgb.data(), split.rgb.size() * sizeof(float), hash);
 }
 
-uint64_t parameter_fingerprint(const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+uint64_t parameter_fingerprint(const std::vector<std::unique_ptr<mlp::Network>>& networks,
                                const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
   uint64_t hash = dist::fnv1a(nullptr, 0);
   for (size_t i = 0; i < networks.size(); ++i) {
@@ -94,7 +94,7 @@ uint64_t parameter_fingerprint(const std::vector<std::unique_ptr<mlp::Mlp>>& net
 // Under mpirun: every rank checks it has rank 0's settings, data and parameters (at the start and after a resume),
 // and all stop with one message otherwise.
 void check_ranks_agree(const TrainConfig& config, const data::Split& train,
-                       const std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+                       const std::vector<std::unique_ptr<mlp::Network>>& networks,
                        const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
   if (!dist::world().distributed()) return;
   dist::require_same_on_every_rank(config_fingerprint(config), "the training settings",
@@ -110,7 +110,7 @@ void check_ranks_agree(const TrainConfig& config, const data::Split& train,
 // The gradients of every network and the step's loss sums, summed over the ranks (one MPI_Allreduce of floats,
 // one of doubles). Each rank's gradients cover its share of the batch and are already divided by the batch's
 // global Σ lossmult (graph begin_step), so their sum is the single-process gradient, up to summation order.
-void sum_over_ranks(ocl::Context& ctx, std::vector<std::unique_ptr<mlp::Mlp>>& networks,
+void sum_over_ranks(ocl::Context& ctx, std::vector<std::unique_ptr<mlp::Network>>& networks,
                     std::vector<ops::LevelLoss>& losses, std::vector<float>& flat) {
   size_t total = 0;
   for (const auto& network : networks) total += network->parameter_count();
@@ -155,7 +155,7 @@ struct Trainer::Impl {
   std::ofstream val_csv;  // val_log.csv: open when val_every > 0
 
   Impl(ocl::Context& ctx, const data::Split& split, size_t batch_rays, const graph::GraphSpec& spec,
-       std::vector<mlp::Mlp*> networks, size_t chunk_rays)
+       std::vector<mlp::Network*> networks, size_t chunk_rays)
       : device_data(ctx, split),
         batch(ctx, batch_rays),
         graph(ctx, spec, std::move(networks), graph::GraphMode::training, chunk_rays, batch_rays) {}
@@ -165,8 +165,6 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
                  bool resume)
     : ctx_(&ctx), config_(config), out_dir_(out_dir) {
   validate(config_);
-  // Before the networks exist: every product from the first one on runs on the chosen backend.
-  mlp::use_gemm_backend(ctx, config_.gemm_backend);
   LogFn log = [&ctx](LogLevel level, const std::string& message) { ctx.log(level, message); };
   data::LoadOptions options = load_options(config_, data_path, {"train"});
   options.log = log;
@@ -183,7 +181,7 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   }
   memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, training_fixed_bytes(train, spec_, batch_rays),
                         static_cast<size_t>(config_.chunk_rays), true);
-  networks_ = make_networks(ctx, spec_);
+  networks_ = make_networks(ctx, spec_, config_.gemm_backend);
   for (const auto& network : networks_) {
     mlp::AdamHyper hyper;
     hyper.grad_max_norm = config_.grad_max_norm;
@@ -244,7 +242,7 @@ size_t Trainer::parameter_count() const {
   return n;
 }
 
-std::vector<mlp::Mlp*> Trainer::network_pointers() const { return train::network_pointers(networks_); }
+std::vector<mlp::Network*> Trainer::network_pointers() const { return mlp::network_pointers(networks_); }
 
 std::string Trainer::checkpoint_folder() const { return (fs::path(out_dir_) / "checkpoints").string(); }
 

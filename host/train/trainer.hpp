@@ -12,7 +12,7 @@
 #include "data/dataset.hpp"
 #include "graph/graph_spec.hpp"
 #include "mlp/adam.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "ops/loss.hpp"
 #include "train/config.hpp"
 #include "train/memory_plan.hpp"
@@ -51,7 +51,7 @@ struct TrainHooks {
   // logged beside the score and kept out of the training seconds (StepReport, TrainResult, checkpoints).
   std::function<ValScore(Trainer&)> score_val;
   // Tests: called after the backward of every step, before the gradients are checked (e.g. to inject a NaN).
-  std::function<void(int64_t step, std::vector<std::unique_ptr<mlp::Mlp>>& networks)> after_backward;
+  std::function<void(int64_t step, std::vector<std::unique_ptr<mlp::Network>>& networks)> after_backward;
 };
 
 struct TrainResult {
@@ -79,8 +79,10 @@ class Trainer {
   const graph::GraphSpec& spec() const { return spec_; }
   const MemoryPlan& memory() const { return memory_; }
   const data::Dataset& dataset() const { return dataset_; }
-  std::vector<std::unique_ptr<mlp::Mlp>>& networks() { return networks_; }
-  std::vector<mlp::Mlp*> network_pointers() const;  // as the graph and the renderer take them
+  std::vector<std::unique_ptr<mlp::Network>>& networks() { return networks_; }
+  const std::vector<std::unique_ptr<mlp::Network>>& networks() const { return networks_; }
+  const std::vector<std::unique_ptr<mlp::Adam>>& optimisers() const { return optimisers_; }  // one per network
+  std::vector<mlp::Network*> network_pointers() const;  // as the graph and the renderer take them
   int64_t step() const { return step_; }
   size_t parameter_count() const;
 
@@ -102,7 +104,7 @@ class Trainer {
   data::Dataset dataset_;
   graph::GraphSpec spec_;
   MemoryPlan memory_;
-  std::vector<std::unique_ptr<mlp::Mlp>> networks_;
+  std::vector<std::unique_ptr<mlp::Network>> networks_;
   std::vector<std::unique_ptr<mlp::Adam>> optimisers_;
   std::unique_ptr<Impl> impl_;
   int64_t step_ = 0;             // steps completed

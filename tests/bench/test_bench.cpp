@@ -26,9 +26,9 @@
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "io/json.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm_backend.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm_backend.hpp"
+#include "gemm/gemm_tuning.hpp"
 #include "ops/stage_list.hpp"
 #include "support/temp_scene.hpp"
 #include "support/mlp_fixtures.hpp"
@@ -70,15 +70,15 @@ bench::GemmBenchOptions tiny_gemm_options() {
 
 // A "tuned" set that exercises installing and switching without a new CLBlast compile: CLBlast's own value of the
 // direct/indirect switch (every product here is small enough for the direct kernel, already built by the defaults).
-mlp::GemmTuning same_as_defaults_tuning() {
+gemm::GemmTuning same_as_defaults_tuning() {
   auto& ctx = test::test_context();
   std::unordered_map<std::string, size_t> values;
-  mlp::check_clblast(clblast::RetrieveParameters(ctx.raw_device(), "GemmRoutine", clblast::Precision::kSingle, values),
+  gemm::check_clblast(clblast::RetrieveParameters(ctx.raw_device(), "GemmRoutine", clblast::Precision::kSingle, values),
                      "RetrieveParameters");
-  mlp::GemmTuning t;
+  gemm::GemmTuning t;
   t.device_name = ctx.device_info().name;
   t.driver_version = ctx.device_info().driver_version;
-  t.clblast_version = mlp::clblast_version();
+  t.clblast_version = gemm::clblast_version();
   t.common["GemmRoutine"] = {values.begin(), values.end()};
   return t;
 }
@@ -120,7 +120,7 @@ const bench::GemmBenchResult& gemm_result() {
 
 const bench::PresetBenchResult& preset_result() {
   static const auto r = [] {
-    mlp::clear_gemm_tuning(test::test_context());
+    gemm::clear_gemm_tuning(test::test_context());
     const auto options = tiny_preset_options("preset");
     auto result = bench::run_preset_bench(test::test_context(), options);
     fs::remove_all(options.work_dir);
@@ -229,7 +229,7 @@ TEST_CASE("bench gemm: forward, backward data and backward weights per width, ev
       CHECK(s.gflops_best(r.products[i], i) >= s.gflops_median(r.products[i], i));
     }
   }
-  CHECK_FALSE(mlp::gemm_tuning_installed(test::test_context()));
+  CHECK_FALSE(gemm::gemm_tuning_installed(test::test_context()));
 }
 
 TEST_CASE("bench gemm: zero rows or reps are refused") {
@@ -243,7 +243,8 @@ TEST_CASE("bench gemm: zero rows or reps are refused") {
 }
 
 TEST_CASE("bench gemm: the whole network on one chunk") {
-  mlp::Mlp net(test::test_context(), test::small_mlp_config());
+  const auto net_owner = mlp::make_network(test::test_context(), test::small_mlp_config(), gemm::GemmBackend::automatic);
+  mlp::Network& net = *net_owner;
   const auto t = bench::time_mlp_chunk(test::test_context(), net, 4, 8, 1);
   CHECK(t.rows == 32);
   CHECK(positive_finite(t.forward));
@@ -377,7 +378,7 @@ TEST_CASE("bench report: bench.json names the device, driver, OpenCL C and CLBla
   run.presets.warm_steps = 2;
   bench::DeviceBench d;
   d.device = eval::device_record(ctx.device_info());
-  d.clblast_version = mlp::clblast_version();
+  d.clblast_version = gemm::clblast_version();
   d.tuning_file = "/nowhere/gemm.json";
   d.gemm = gemm_result();
   d.kernels = kernel_result();
@@ -416,7 +417,7 @@ TEST_CASE("bench report: bench.json names the device, driver, OpenCL C and CLBla
 
   const std::string md = bench::bench_markdown(run);
   for (const std::string& expected : {ctx.device_info().name, ctx.device_info().driver_version,
-                                      ctx.device_info().opencl_c_version, "CLBlast | " + mlp::clblast_version(),
+                                      ctx.device_info().opencl_c_version, "CLBlast | " + gemm::clblast_version(),
                                       run.date, std::string("No tuning file"), std::string("### Training steps"),
                                       std::string("| tiny | 32 × 16 × 2 |"), std::string("train paper: did not fit")}) {
     CHECK_MESSAGE(md.find(expected) != std::string::npos, expected);
@@ -454,7 +455,7 @@ TEST_CASE("bench CLI: mipnerf-cl bench --quick on tiny sizes writes bench.json a
   // A tuning file for this device in a cache folder of the test's own (never the user's): the bench finds it and
   // adds the tuned column; its one set equals CLBlast's default, so nothing new is compiled.
   CacheHome cache_home(cache);
-  mlp::save_tuning(mlp::tuning_file_path(test::test_context().device_info()), same_as_defaults_tuning());
+  gemm::save_tuning(gemm::tuning_file_path(test::test_context().device_info()), same_as_defaults_tuning());
   // gemm_backend=clblast: the training preset must show the file reaching CLBlast (auto takes the host BLAS on CPUs).
   const std::string log = (bench_temp("cli-log")).string();
   const std::string command = "XDG_CACHE_HOME=\"" + cache.string() + "\" \"" + MIPNERF_CLI_PATH + "\" --device " +
@@ -485,7 +486,7 @@ TEST_CASE("bench CLI: mipnerf-cl bench --quick on tiny sizes writes bench.json a
   REQUIRE(d.at("gemm").at("products").size() == 3);
   CHECK(d.at("gemm").at("products")[2].at("CLBlast tuned").at("gflops_best").get<double>() > 0);
   // The host GEMM backend stands beside CLBlast wherever the device can run it.
-  const bool host_backend = test::test_context().device_info().host_unified_memory && mlp::host_blas_available();
+  const bool host_backend = test::test_context().device_info().host_unified_memory && gemm::host_blas_available();
   CHECK(d.at("gemm").at("products")[2].contains("host BLAS (mapped)") == host_backend);
   CHECK(d.at("kernels").at("stages").size() == 13);
   REQUIRE(d.at("training").size() == 1);

@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
         {{"mlp_depth", "1"}, {"mlp_width", "2"}, {"mlp_skip", "4"}, {"view_branch_width", "1"}, {"pos_max_deg", "1"},
          {"view_max_deg", "1"}, {"num_samples", "2"}});
     const auto spec = train::make_graph_spec(config, false);
-    auto networks = train::make_networks(ctx, spec);
+    auto networks = train::make_networks(ctx, spec, gemm::GemmBackend::automatic);
     std::vector<std::unique_ptr<mlp::Adam>> optimisers;
     for (const auto& network : networks) optimisers.push_back(std::make_unique<mlp::Adam>(ctx, network->parameter_count()));
     train::CheckpointRecord record;

@@ -2,10 +2,10 @@
 #include <doctest/doctest.h>
 
 #include "core/error.hpp"
-#include "mlp/gemm_backend.hpp"
+#include "gemm/gemm_backend.hpp"
 
 using namespace mipnerf;
-using mlp::GemmBackend;
+using gemm::GemmBackend;
 
 namespace {
 
@@ -23,37 +23,37 @@ ocl::DeviceInfo fake_device(cl_device_type type, bool unified) {
 
 TEST_CASE("gemm backend: host is refused on a device with its own memory, saying why and what to do") {
   const auto gpu = fake_device(CL_DEVICE_TYPE_GPU, false);
-  CHECK_THROWS_WITH_AS(mlp::resolve_gemm_backend(GemmBackend::host, gpu, true),
+  CHECK_THROWS_WITH_AS(gemm::resolve_gemm_backend(GemmBackend::host, gpu, true),
                        doctest::Contains("'Fake GPU' has its own memory (CL_DEVICE_HOST_UNIFIED_MEMORY is false)"),
                        Error);
-  CHECK_THROWS_WITH_AS(mlp::resolve_gemm_backend(GemmBackend::host, gpu, true),
+  CHECK_THROWS_WITH_AS(gemm::resolve_gemm_backend(GemmBackend::host, gpu, true),
                        doctest::Contains("use gemm_backend=clblast or auto"), Error);
 }
 
 TEST_CASE("gemm backend: host is refused without a host BLAS, naming the package") {
-  CHECK_THROWS_WITH_AS(mlp::resolve_gemm_backend(GemmBackend::host, fake_device(CL_DEVICE_TYPE_CPU, true), false),
+  CHECK_THROWS_WITH_AS(gemm::resolve_gemm_backend(GemmBackend::host, fake_device(CL_DEVICE_TYPE_CPU, true), false),
                        doctest::Contains("libopenblas-dev"), Error);
 }
 
 TEST_CASE("gemm backend: auto picks the host BLAS only on CPU devices that share host memory") {
   const auto cpu = fake_device(CL_DEVICE_TYPE_CPU, true);
-  CHECK(mlp::resolve_gemm_backend(GemmBackend::automatic, cpu, true) == GemmBackend::host);
-  CHECK(mlp::resolve_gemm_backend(GemmBackend::automatic, cpu, false) == GemmBackend::clblast);
+  CHECK(gemm::resolve_gemm_backend(GemmBackend::automatic, cpu, true) == GemmBackend::host);
+  CHECK(gemm::resolve_gemm_backend(GemmBackend::automatic, cpu, false) == GemmBackend::clblast);
   // An integrated GPU shares host memory but runs its own kernels faster than the host's cores: CLBlast.
-  CHECK(mlp::resolve_gemm_backend(GemmBackend::automatic, fake_device(CL_DEVICE_TYPE_GPU, true), true) ==
+  CHECK(gemm::resolve_gemm_backend(GemmBackend::automatic, fake_device(CL_DEVICE_TYPE_GPU, true), true) ==
         GemmBackend::clblast);
-  CHECK(mlp::resolve_gemm_backend(GemmBackend::automatic, fake_device(CL_DEVICE_TYPE_GPU, false), true) ==
+  CHECK(gemm::resolve_gemm_backend(GemmBackend::automatic, fake_device(CL_DEVICE_TYPE_GPU, false), true) ==
         GemmBackend::clblast);
-  CHECK(mlp::resolve_gemm_backend(GemmBackend::automatic, fake_device(CL_DEVICE_TYPE_CPU, false), true) ==
+  CHECK(gemm::resolve_gemm_backend(GemmBackend::automatic, fake_device(CL_DEVICE_TYPE_CPU, false), true) ==
         GemmBackend::clblast);
 }
 
 TEST_CASE("gemm backend: clblast is taken on every device, and host where it is allowed") {
   for (const bool unified : {false, true}) {
-    CHECK(mlp::resolve_gemm_backend(GemmBackend::clblast, fake_device(CL_DEVICE_TYPE_GPU, unified), false) ==
+    CHECK(gemm::resolve_gemm_backend(GemmBackend::clblast, fake_device(CL_DEVICE_TYPE_GPU, unified), false) ==
           GemmBackend::clblast);
   }
-  CHECK(mlp::resolve_gemm_backend(GemmBackend::host, fake_device(CL_DEVICE_TYPE_CPU, true), true) == GemmBackend::host);
+  CHECK(gemm::resolve_gemm_backend(GemmBackend::host, fake_device(CL_DEVICE_TYPE_CPU, true), true) == GemmBackend::host);
 }
 
 TEST_CASE("gemm backend: the setting's names") {

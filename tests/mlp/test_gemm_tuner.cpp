@@ -13,15 +13,16 @@
 
 #include "core/error.hpp"
 #include "io/json.hpp"
-#include "mlp/gemm_tuner.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/gemm_tuner.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "mlp/mlp_products.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
 
 namespace {
 
-mlp::ParameterSet xgemm(size_t gemmk, size_t mwg, size_t nwg) {
+gemm::ParameterSet xgemm(size_t gemmk, size_t mwg, size_t nwg) {
   return {{"Xgemm", {{"GEMMK", gemmk}, {"MWG", mwg}, {"NWG", nwg}}}};
 }
 
@@ -48,7 +49,7 @@ class ScratchFolder {
 // seconds per product kind, candidates whose results are wrong, candidates whose step crashes. Kernel tuners
 // always crash, so only CLBlast's defaults and the starting sets compete.
 struct FakeDevice {
-  std::map<std::string, std::map<mlp::GemmKind, double>> seconds;  // candidate → kind → seconds per product
+  std::map<std::string, std::map<gemm::GemmKind, double>> seconds;  // candidate → kind → seconds per product
   std::map<std::string, double> error_ratio;                       // candidate → its error ratio (else 0.01)
   std::vector<std::string> crashes;                                // candidates whose step crashes
   std::vector<std::string> steps;                                  // names of the steps run, in order
@@ -59,7 +60,7 @@ struct FakeDevice {
     return again == std::string::npos ? name : name.substr(0, again);
   }
 
-  mlp::TuneStepOutcome run(const std::string& step, const io::Json& spec) {
+  gemm::TuneStepOutcome run(const std::string& step, const io::Json& spec) {
     steps.push_back(step);
     const std::string type = spec.at("type");
     if (type == "tuner") return {false, "crashed (signal 11)", 1.0, {}};
@@ -78,22 +79,31 @@ struct FakeDevice {
     }
     io::Json times = io::Json::array(), errors = io::Json::array();
     for (const auto& p : spec.at("problems")) {
-      mlp::GemmShape s;
+      gemm::GemmShape s;
       s.transpose_a = p.at("ta");
       s.transpose_b = p.at("tb");
-      times.push_back(seconds.at(candidate).at(mlp::gemm_kind(s)));
+      times.push_back(seconds.at(candidate).at(gemm::gemm_kind(s)));
       errors.push_back(error_ratio.count(candidate) ? error_ratio.at(candidate) : 0.01);
     }
     return {true, "ok", 1.0, {{"seconds", times}, {"error_ratio", errors}, {"probe_error_ratio", 0.01}}};
   }
 };
 
-mlp::GemmTuneSettings small_settings() {
-  mlp::GemmTuneSettings settings;
+// The network tuned for: the presets' layout at width 128.
+mlp::MlpConfig tuned_network() {
+  mlp::MlpConfig config;
+  config.width = 128;
+  config.bottleneck_width = 128;
+  return config;
+}
+
+gemm::GemmTuneSettings small_settings() {
+  gemm::GemmTuneSettings settings;
   settings.minutes = 30.0;  // the fake steps take no time: every step of the plan fits
   settings.rows = 1024;
   settings.kernel_rows = 128;
   settings.width = 128;
+  settings.problems = mlp::mlp_gemm_problems(tuned_network(), settings.rows);
   return settings;
 }
 
@@ -105,14 +115,9 @@ ocl::DeviceInfo fake_device() {
 }
 
 // Seconds per training step of `kind` when each of its products takes `seconds_each`.
-double per_step(const mlp::GemmTuneSettings& settings, mlp::GemmKind kind, double seconds_each) {
-  mlp::MlpConfig config;
-  config.width = settings.width;
-  config.input_width = settings.input_width;
-  config.view_branch_width = settings.view_branch_width;
-  config.bottleneck_width = settings.width;
+double per_step(const gemm::GemmTuneSettings& settings, gemm::GemmKind kind, double seconds_each) {
   double total = 0.0;
-  for (const auto& p : mlp::mlp_gemm_problems(config, settings.rows)) {
+  for (const auto& p : settings.problems) {
     if (p.kind() == kind) total += seconds_each * static_cast<double>(p.count);
   }
   return total;
@@ -122,55 +127,55 @@ double per_step(const mlp::GemmTuneSettings& settings, mlp::GemmKind kind, doubl
 
 TEST_CASE("gemm tuner: the starting sets are complete Xgemm sets that CLBlast accepts and the GEMMK = 1 rule keeps") {
   auto& ctx = test::test_context();
-  const auto seeds = mlp::gemm_seed_sets();
+  const auto seeds = gemm::gemm_seed_sets();
   REQUIRE(seeds.size() == 4);
   for (const auto& seed : seeds) {
     const auto& name = seed.first;  // INFO cannot capture a structured binding (C++17)
     const auto& parameters = seed.second;
     INFO(name);
     CHECK(parameters.size() == 16);
-    CHECK(mlp::gemmk1_usable({{"Xgemm", parameters}}, 1, 5));
-    mlp::GemmTuning tuning;
+    CHECK(gemm::gemmk1_usable({{"Xgemm", parameters}}, 1, 5));
+    gemm::GemmTuning tuning;
     tuning.common["Xgemm"] = parameters;
-    CHECK_NOTHROW(mlp::install_gemm_tuning(ctx, tuning));  // CLBlast checks names and completeness
-    mlp::clear_gemm_tuning(ctx);
+    CHECK_NOTHROW(gemm::install_gemm_tuning(ctx, tuning));  // CLBlast checks names and completeness
+    gemm::clear_gemm_tuning(ctx);
   }
 }
 
 TEST_CASE("gemm tuner: GEMMK = 1 with MWG != NWG is not timed before CLBlast 1.6") {
-  CHECK_FALSE(mlp::gemmk1_usable(xgemm(1, 64, 128), 1, 5));
-  CHECK(mlp::gemmk1_usable(xgemm(1, 64, 128), 1, 6));
-  CHECK(mlp::gemmk1_usable(xgemm(1, 64, 128), 2, 0));
-  CHECK(mlp::gemmk1_usable(xgemm(1, 64, 64), 1, 5));
-  CHECK(mlp::gemmk1_usable(xgemm(0, 64, 128), 1, 5));
-  CHECK(mlp::gemmk1_usable({}, 1, 5));
-  CHECK(mlp::gemmk1_usable({{"XgemmDirect", {{"WGD", 32}}}}, 1, 5));
+  CHECK_FALSE(gemm::gemmk1_usable(xgemm(1, 64, 128), 1, 5));
+  CHECK(gemm::gemmk1_usable(xgemm(1, 64, 128), 1, 6));
+  CHECK(gemm::gemmk1_usable(xgemm(1, 64, 128), 2, 0));
+  CHECK(gemm::gemmk1_usable(xgemm(1, 64, 64), 1, 5));
+  CHECK(gemm::gemmk1_usable(xgemm(0, 64, 128), 1, 5));
+  CHECK(gemm::gemmk1_usable({}, 1, 5));
+  CHECK(gemm::gemmk1_usable({{"XgemmDirect", {{"WGD", 32}}}}, 1, 5));
   // The one-argument form asks about the CLBlast this was built against.
-  CHECK(mlp::gemmk1_usable(xgemm(1, 64, 128)) ==
-        mlp::gemmk1_usable(xgemm(1, 64, 128), CLBLAST_VERSION_MAJOR, CLBLAST_VERSION_MINOR));
+  CHECK(gemm::gemmk1_usable(xgemm(1, 64, 128)) ==
+        gemm::gemmk1_usable(xgemm(1, 64, 128), CLBLAST_VERSION_MAJOR, CLBLAST_VERSION_MINOR));
 }
 
 TEST_CASE("gemm tuner: the direct switch starts where the indirect kernel never loses again") {
   const std::vector<size_t> rows = {512, 1024, 2048, 4096};
   // Indirect wins at 1024, loses at 2048, wins from 4096: the switch is at 4096 rows, cbrt(4096·128·128) = 406.
-  auto chosen = mlp::direct_switch_from(rows, {2.0, 1.0, 3.0, 1.0}, {1.0, 2.0, 2.0, 2.0}, 128);
+  auto chosen = gemm::direct_switch_from(rows, {2.0, 1.0, 3.0, 1.0}, {1.0, 2.0, 2.0, 2.0}, 128);
   REQUIRE(chosen.from_rows.has_value());
   CHECK(*chosen.from_rows == 4096);
   CHECK(chosen.min_indirect_size == 406);
   // A tie counts for the indirect kernel.
-  chosen = mlp::direct_switch_from(rows, {1.0, 1.0, 1.0, 1.0}, {1.0, 1.0, 1.0, 1.0}, 128);
+  chosen = gemm::direct_switch_from(rows, {1.0, 1.0, 1.0, 1.0}, {1.0, 1.0, 1.0, 1.0}, 128);
   CHECK(chosen.from_rows == std::optional<size_t>(512));
-  chosen = mlp::direct_switch_from(rows, {2.0, 2.0, 2.0, 2.0}, {1.0, 1.0, 1.0, 1.0}, 128);
+  chosen = gemm::direct_switch_from(rows, {2.0, 2.0, 2.0, 2.0}, {1.0, 1.0, 1.0, 1.0}, 128);
   CHECK_FALSE(chosen.from_rows.has_value());
   CHECK(chosen.min_indirect_size == size_t{1} << 20);
-  CHECK_THROWS_AS(mlp::direct_switch_from(rows, {1.0}, {1.0, 1.0, 1.0, 1.0}, 128), Error);
+  CHECK_THROWS_AS(gemm::direct_switch_from(rows, {1.0}, {1.0, 1.0, 1.0, 1.0}, 128), Error);
 }
 
 TEST_CASE("gemm tuner: each kind keeps its fastest correct candidate, wrong and crashed ones never win") {
   ScratchFolder scratch;
   const auto settings = small_settings();
-  using K = mlp::GemmKind;
-  const auto seeds = mlp::gemm_seed_sets();
+  using K = gemm::GemmKind;
+  const auto seeds = gemm::gemm_seed_sets();
   REQUIRE(seeds.size() == 4);
   FakeDevice fake;
   fake.seconds["CLBlast defaults"] = {{K::forward, 1.0}, {K::backward_data, 1.0}, {K::backward_weights, 1.0}};
@@ -180,13 +185,13 @@ TEST_CASE("gemm tuner: each kind keeps its fastest correct candidate, wrong and 
   fake.seconds[seeds[2].first] = {{K::forward, 3.0}, {K::backward_data, 3.0}, {K::backward_weights, 0.4}};
   fake.crashes.push_back(seeds[3].first);
   std::vector<std::string> notes;
-  mlp::GemmTuner tuner(
+  gemm::GemmTuner tuner(
       settings, fake_device(), scratch.file("tuning.json"),
       [&](const std::string& name, const io::Json& spec, double) { return fake.run(name, spec); },
       [&](LogLevel, const std::string& message) { notes.push_back(message); });
   tuner.run();
 
-  std::map<K, mlp::GemmTuneWinner> by_kind;
+  std::map<K, gemm::GemmTuneWinner> by_kind;
   for (const auto& w : tuner.winners()) by_kind[w.kind] = w;
   REQUIRE(by_kind.size() == 3);
   CHECK(by_kind[K::forward].candidate == seeds[0].first);
@@ -209,7 +214,7 @@ TEST_CASE("gemm tuner: each kind keeps its fastest correct candidate, wrong and 
   CHECK_FALSE(ran("evaluate " + seeds[3].first + " (again)"));
 
   // The file: per-kind winners, with the switch of the crossover (indirect from 2048 rows: cbrt(2048·128²)).
-  const auto saved = mlp::read_tuning(scratch.file("tuning.json"));
+  const auto saved = gemm::read_tuning(scratch.file("tuning.json"));
   REQUIRE(saved.has_value());
   CHECK(saved->device_name == "fake device");
   CHECK(saved->per_kind.at(K::forward).at("Xgemm") == seeds[0].second);
@@ -228,23 +233,23 @@ TEST_CASE("gemm tuner: each kind keeps its fastest correct candidate, wrong and 
 
 TEST_CASE("gemm tuner: once asked to stop, no further step starts and the best so far is kept") {
   ScratchFolder scratch;
-  using K = mlp::GemmKind;
+  using K = gemm::GemmKind;
   FakeDevice fake;
   fake.seconds["CLBlast defaults"] = {{K::forward, 1.0}, {K::backward_data, 1.0}, {K::backward_weights, 1.0}};
-  mlp::GemmTuner tuner(
+  gemm::GemmTuner tuner(
       small_settings(), fake_device(), scratch.file("tuning.json"),
       [&](const std::string& name, const io::Json& spec, double) { return fake.run(name, spec); }, {},
       [&] { return !fake.steps.empty(); });
   tuner.run();
   CHECK(fake.steps == std::vector<std::string>{"evaluate CLBlast defaults"});
-  const auto saved = mlp::read_tuning(scratch.file("tuning.json"));
+  const auto saved = gemm::read_tuning(scratch.file("tuning.json"));
   REQUIRE(saved.has_value());
   CHECK(io::Json::parse(saved->report_json).at("chosen").at("forward").at("candidate") == "CLBlast defaults");
 }
 
 TEST_CASE("gemm tuner: the parameter sets' JSON round-trips, and describes itself for people") {
-  const mlp::ParameterSet set = {{"Xgemm", {{"GEMMK", 1}, {"MWG", 64}}}, {"Copy", {{"COPY_DIMX", 8}}}};
-  CHECK(mlp::parameter_set_from_json(mlp::parameter_set_json(set)) == set);
-  CHECK(mlp::describe_parameter_set(set) == "Copy: COPY_DIMX=8; Xgemm: GEMMK=1 MWG=64");
-  CHECK(mlp::describe_parameter_set({}) == "CLBlast defaults");
+  const gemm::ParameterSet set = {{"Xgemm", {{"GEMMK", 1}, {"MWG", 64}}}, {"Copy", {{"COPY_DIMX", 8}}}};
+  CHECK(gemm::parameter_set_from_json(gemm::parameter_set_json(set)) == set);
+  CHECK(gemm::describe_parameter_set(set) == "Copy: COPY_DIMX=8; Xgemm: GEMMK=1 MWG=64");
+  CHECK(gemm::describe_parameter_set({}) == "CLBlast defaults");
 }

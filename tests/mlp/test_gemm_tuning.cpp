@@ -12,11 +12,13 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/gemm.hpp"
-#include "mlp/gemm_tuning.hpp"
+#include "gemm/clblast_check.hpp"
+#include "gemm/gemm.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "mlp/network.hpp"
 #include "mlp_checks.hpp"
 #include "ref/gemm_ref.hpp"
+#include "support/mlp_fixtures.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -36,7 +38,7 @@ class ScratchCache {
     ::setenv("XDG_CACHE_HOME", folder_.c_str(), 1);
   }
   ~ScratchCache() {
-    mlp::clear_gemm_tuning(test::test_context());
+    gemm::clear_gemm_tuning(test::test_context());
     if (had_old_) {
       ::setenv("XDG_CACHE_HOME", old_.c_str(), 1);
     } else {
@@ -53,29 +55,29 @@ class ScratchCache {
   bool had_old_ = false;
 };
 
-mlp::KernelParameters current(const std::string& kernel) {
+gemm::KernelParameters current(const std::string& kernel) {
   std::unordered_map<std::string, size_t> values;
-  mlp::check_clblast(clblast::RetrieveParameters(test::test_context().raw_device(), kernel,
+  gemm::check_clblast(clblast::RetrieveParameters(test::test_context().raw_device(), kernel,
                                                  clblast::Precision::kSingle, values),
                      "RetrieveParameters");
   return {values.begin(), values.end()};
 }
 
 // A GEMMK = 0 Xgemm set unlike CLBlast's PoCL defaults (which use 32×32 tiles), valid for any device.
-mlp::KernelParameters xgemm_set(size_t mwg) {
+gemm::KernelParameters xgemm_set(size_t mwg) {
   return {{"GEMMK", 0}, {"KREG", 1}, {"MWG", mwg}, {"NWG", 64},  {"KWG", 16},  {"MDIMC", 8}, {"NDIMC", 8}, {"MDIMA", 8},
           {"NDIMB", 8}, {"KWI", 2},  {"VWM", 2},   {"VWN", 4},   {"STRM", 0},  {"STRN", 0},  {"SA", 0},    {"SB", 0}};
 }
 
-mlp::GemmTuning tuning_for_this_device() {
+gemm::GemmTuning tuning_for_this_device() {
   const auto& device = test::test_context().device_info();
-  mlp::GemmTuning t;
+  gemm::GemmTuning t;
   t.device_name = device.name;
   t.driver_version = device.driver_version;
-  t.clblast_version = mlp::clblast_version();
+  t.clblast_version = gemm::clblast_version();
   t.common["GemmRoutine"] = {{"XGEMM_MIN_INDIRECT_SIZE", 8}};  // the indirect kernel for every product below
-  t.per_kind[mlp::GemmKind::forward]["Xgemm"] = xgemm_set(64);
-  t.per_kind[mlp::GemmKind::backward_weights]["Xgemm"] = xgemm_set(16);
+  t.per_kind[gemm::GemmKind::forward]["Xgemm"] = xgemm_set(64);
+  t.per_kind[gemm::GemmKind::backward_weights]["Xgemm"] = xgemm_set(16);
   return t;
 }
 
@@ -83,7 +85,7 @@ mlp::GemmTuning tuning_for_this_device() {
 void check_product(bool transpose_a, bool transpose_b) {
   auto& ctx = test::test_context();
   std::mt19937 rng(3);
-  mlp::GemmShape s;
+  gemm::GemmShape s;
   s.m = 100;
   s.n = 70;
   s.k = 45;
@@ -93,7 +95,8 @@ void check_product(bool transpose_a, bool transpose_b) {
   const auto a = test::random_floats(s.m * s.k, rng), b = test::random_floats(s.k * s.n, rng);
   auto a_dev = test::device_copy(ctx, a, "A"), b_dev = test::device_copy(ctx, b, "B");
   ocl::DeviceArray<float> c_dev(ctx, s.m * s.n, "C");
-  mlp::gemm(ctx, s, 1.0f, ocl::view(a_dev, lda), ocl::view(b_dev, ldb), 0.0f, ocl::view(c_dev, s.n), "tuned");
+  gemm::sgemm(ctx, gemm::GemmBackend::clblast, s, 1.0f, ocl::view(a_dev, lda), ocl::view(b_dev, ldb), 0.0f,
+              ocl::view(c_dev, s.n), "tuned");
   const auto ad = test::as_double(a), bd = test::as_double(b);
   std::vector<double> c(s.m * s.n);
   ref::gemm<double>(s, 1.0, ad.data(), lda, bd.data(), ldb, 0.0, c.data(), s.n);
@@ -108,13 +111,13 @@ TEST_CASE("gemm tuning: the file is keyed by device, driver and CLBlast version,
   ocl::DeviceInfo device;
   device.name = "pthread-haswell AMD EPYC 7B13";
   device.driver_version = "3.1+debian";
-  const std::string path = mlp::tuning_file_path(device);
+  const std::string path = gemm::tuning_file_path(device);
   CHECK(path.rfind(cache.folder() + "/mipnerf-cl/", 0) == 0);
   CHECK(path.find("pthread-haswell_AMD_EPYC_7B13") != std::string::npos);
   CHECK(path.find("3.1+debian") != std::string::npos);
-  CHECK(path.find("clblast-" + mlp::clblast_version()) != std::string::npos);
+  CHECK(path.find("clblast-" + gemm::clblast_version()) != std::string::npos);
   device.driver_version = "3.2";
-  CHECK(mlp::tuning_file_path(device) != path);
+  CHECK(gemm::tuning_file_path(device) != path);
 }
 
 TEST_CASE("gemm tuning: the file round-trips, and a malformed one is refused with its name") {
@@ -122,19 +125,19 @@ TEST_CASE("gemm tuning: the file round-trips, and a malformed one is refused wit
   auto tuning = tuning_for_this_device();
   tuning.report_json = R"({"note": "measured"})";
   const std::string path = cache.folder() + "/sub/dir/tuning.json";
-  mlp::save_tuning(path, tuning);
-  const auto back = mlp::read_tuning(path);
+  gemm::save_tuning(path, tuning);
+  const auto back = gemm::read_tuning(path);
   REQUIRE(back.has_value());
   CHECK(back->device_name == tuning.device_name);
   CHECK(back->common == tuning.common);
   CHECK(back->per_kind == tuning.per_kind);
   CHECK(back->report_json.find("measured") != std::string::npos);
-  CHECK_FALSE(mlp::read_tuning(cache.folder() + "/absent.json").has_value());
+  CHECK_FALSE(gemm::read_tuning(cache.folder() + "/absent.json").has_value());
   std::ofstream(cache.folder() + "/bad.json") << "{not json";
-  CHECK_THROWS_WITH_AS(mlp::read_tuning(cache.folder() + "/bad.json"), doctest::Contains("bad.json"), Error);
+  CHECK_THROWS_WITH_AS(gemm::read_tuning(cache.folder() + "/bad.json"), doctest::Contains("bad.json"), Error);
   std::ofstream(cache.folder() + "/kind.json")
       << R"({"format": "mipnerf-cl gemm tuning 1", "per_kind": {"sideways": {}}})";
-  CHECK_THROWS_WITH_AS(mlp::read_tuning(cache.folder() + "/kind.json"), doctest::Contains("sideways"), Error);
+  CHECK_THROWS_WITH_AS(gemm::read_tuning(cache.folder() + "/kind.json"), doctest::Contains("sideways"), Error);
 }
 
 TEST_CASE("gemm tuning: installed sets reach CLBlast per product kind, products stay correct, clear restores") {
@@ -142,23 +145,23 @@ TEST_CASE("gemm tuning: installed sets reach CLBlast per product kind, products 
   auto& ctx = test::test_context();
   const auto default_xgemm = current("Xgemm");
   const auto default_routine = current("GemmRoutine");
-  mlp::install_gemm_tuning(ctx, tuning_for_this_device());
-  CHECK(mlp::gemm_tuning_installed(ctx));
+  gemm::install_gemm_tuning(ctx, tuning_for_this_device());
+  CHECK(gemm::gemm_tuning_installed(ctx));
   CHECK(current("GemmRoutine").at("XGEMM_MIN_INDIRECT_SIZE") == 8);
 
-  mlp::select_gemm_kind(ctx, mlp::GemmKind::forward);
+  gemm::select_gemm_kind(ctx, gemm::GemmKind::forward);
   CHECK(current("Xgemm") == xgemm_set(64));
   check_product(false, false);
-  mlp::select_gemm_kind(ctx, mlp::GemmKind::backward_weights);
+  gemm::select_gemm_kind(ctx, gemm::GemmKind::backward_weights);
   CHECK(current("Xgemm") == xgemm_set(16));
   check_product(true, false);
   // A kind without its own set runs CLBlast's defaults for that kernel.
-  mlp::select_gemm_kind(ctx, mlp::GemmKind::backward_data);
+  gemm::select_gemm_kind(ctx, gemm::GemmKind::backward_data);
   CHECK(current("Xgemm") == default_xgemm);
   check_product(false, true);
 
-  mlp::clear_gemm_tuning(ctx);
-  CHECK_FALSE(mlp::gemm_tuning_installed(ctx));
+  gemm::clear_gemm_tuning(ctx);
+  CHECK_FALSE(gemm::gemm_tuning_installed(ctx));
   CHECK(current("Xgemm") == default_xgemm);
   CHECK(current("GemmRoutine") == default_routine);
 }
@@ -168,14 +171,14 @@ TEST_CASE("gemm tuning: a set CLBlast refuses is not installed at all") {
   auto& ctx = test::test_context();
   const auto default_routine = current("GemmRoutine");
   auto tuning = tuning_for_this_device();
-  tuning.per_kind[mlp::GemmKind::forward]["Xgemm"].erase("KWI");  // incomplete: CLBlast needs every parameter
-  CHECK_THROWS_WITH_AS(mlp::install_gemm_tuning(ctx, tuning), doctest::Contains("Xgemm"), Error);
-  CHECK_FALSE(mlp::gemm_tuning_installed(ctx));
+  tuning.per_kind[gemm::GemmKind::forward]["Xgemm"].erase("KWI");  // incomplete: CLBlast needs every parameter
+  CHECK_THROWS_WITH_AS(gemm::install_gemm_tuning(ctx, tuning), doctest::Contains("Xgemm"), Error);
+  CHECK_FALSE(gemm::gemm_tuning_installed(ctx));
   CHECK(current("GemmRoutine") == default_routine);
   tuning = tuning_for_this_device();
   tuning.common["NoSuchKernel"] = {{"X", 1}};
-  CHECK_THROWS_AS(mlp::install_gemm_tuning(ctx, tuning), Error);
-  CHECK_FALSE(mlp::gemm_tuning_installed(ctx));
+  CHECK_THROWS_AS(gemm::install_gemm_tuning(ctx, tuning), Error);
+  CHECK_FALSE(gemm::gemm_tuning_installed(ctx));
 }
 
 TEST_CASE("gemm tuning: the CLI's load step uses the device's file, and says once when there is none") {
@@ -185,29 +188,29 @@ TEST_CASE("gemm tuning: the CLI's load step uses the device's file, and says onc
   ctx.set_log([&](LogLevel level, const std::string& message) { messages.emplace_back(level, message); });
 
   // No file: defaults, and a hint, once per device and process (only this test case loads).
-  CHECK_FALSE(mlp::load_gemm_tuning(ctx));
-  CHECK_FALSE(mlp::gemm_tuning_installed(ctx));
+  CHECK_FALSE(gemm::load_gemm_tuning(ctx));
+  CHECK_FALSE(gemm::gemm_tuning_installed(ctx));
   REQUIRE(messages.size() == 1);
   CHECK(messages[0].second.find("mipnerf-cl tune") != std::string::npos);
-  CHECK_FALSE(mlp::load_gemm_tuning(ctx));
+  CHECK_FALSE(gemm::load_gemm_tuning(ctx));
   CHECK(messages.size() == 1);
 
   // A file for this device is installed.
-  mlp::save_tuning(mlp::tuning_file_path(ctx.device_info()), tuning_for_this_device());
+  gemm::save_tuning(gemm::tuning_file_path(ctx.device_info()), tuning_for_this_device());
   messages.clear();
-  CHECK(mlp::load_gemm_tuning(ctx));
-  CHECK(mlp::gemm_tuning_installed(ctx));
+  CHECK(gemm::load_gemm_tuning(ctx));
+  CHECK(gemm::gemm_tuning_installed(ctx));
   REQUIRE(messages.size() == 1);
   CHECK(messages[0].second.find("loaded from") != std::string::npos);
-  mlp::clear_gemm_tuning(ctx);
+  gemm::clear_gemm_tuning(ctx);
 
   // A file written for another driver is ignored, with a warning.
   auto other = tuning_for_this_device();
   other.driver_version += "-other";
-  mlp::save_tuning(mlp::tuning_file_path(ctx.device_info()), other);
+  gemm::save_tuning(gemm::tuning_file_path(ctx.device_info()), other);
   messages.clear();
-  CHECK_FALSE(mlp::load_gemm_tuning(ctx));
-  CHECK_FALSE(mlp::gemm_tuning_installed(ctx));
+  CHECK_FALSE(gemm::load_gemm_tuning(ctx));
+  CHECK_FALSE(gemm::gemm_tuning_installed(ctx));
   REQUIRE_FALSE(messages.empty());
   CHECK(messages[0].first == LogLevel::warning);
   CHECK(messages[0].second.find("another device, driver or CLBlast version") != std::string::npos);
@@ -217,36 +220,35 @@ TEST_CASE("gemm tuning: the CLI's load step uses the device's file, and says onc
 TEST_CASE("gemm tuning: auto_backend round-trips, and gemm_backend=auto follows tune's measurement for its device") {
   ScratchCache cache;
   auto& ctx = test::test_context();
-  const bool was_on_host = ctx.gemm_on_host();
   auto tuning = tuning_for_this_device();
-  const std::string path = mlp::tuning_file_path(ctx.device_info());
-  CHECK_FALSE(mlp::measured_auto_backend(ctx.device_info(), {}).has_value());  // no file: the rule
+  const std::string path = gemm::tuning_file_path(ctx.device_info());
+  CHECK_FALSE(gemm::measured_auto_backend(ctx.device_info(), {}).has_value());  // no file: the rule
 
-  tuning.auto_backend = mlp::GemmBackend::clblast;
+  tuning.auto_backend = gemm::GemmBackend::clblast;
   tuning.backend_measurement_json = R"({"seconds": {"clblast": 1.0, "host": 2.0}})";
-  mlp::save_tuning(path, tuning);
-  const auto back = mlp::read_tuning(path);
+  gemm::save_tuning(path, tuning);
+  const auto back = gemm::read_tuning(path);
   REQUIRE(back.has_value());
-  CHECK(back->auto_backend == mlp::GemmBackend::clblast);
+  CHECK(back->auto_backend == gemm::GemmBackend::clblast);
   CHECK(back->backend_measurement_json.find("\"host\":2.0") != std::string::npos);
   // On the CPU test device the rule would take host (when it can); the measurement wins.
-  CHECK(mlp::use_gemm_backend(ctx, mlp::GemmBackend::automatic) == mlp::GemmBackend::clblast);
-  CHECK_FALSE(ctx.gemm_on_host());
+  CHECK(gemm::choose_gemm_backend(ctx, gemm::GemmBackend::automatic) == gemm::GemmBackend::clblast);
+  CHECK(mlp::make_network(ctx, test::small_mlp_config(true), gemm::GemmBackend::automatic)->backend() ==
+        gemm::GemmBackend::clblast);
   // An explicit choice is never overridden.
-  if (mlp::host_blas_available() && ctx.device_info().host_unified_memory) {
-    CHECK(mlp::use_gemm_backend(ctx, mlp::GemmBackend::host) == mlp::GemmBackend::host);
+  if (gemm::host_blas_available() && ctx.device_info().host_unified_memory) {
+    CHECK(gemm::choose_gemm_backend(ctx, gemm::GemmBackend::host) == gemm::GemmBackend::host);
   }
   // A file of another driver version is not this device's measurement.
   tuning.driver_version = "another";
-  mlp::save_tuning(path, tuning);
-  CHECK_FALSE(mlp::measured_auto_backend(ctx.device_info(), {}).has_value());
+  gemm::save_tuning(path, tuning);
+  CHECK_FALSE(gemm::measured_auto_backend(ctx.device_info(), {}).has_value());
   // A malformed choice is refused by the reader, and auto falls back to its rule with a warning.
   std::ofstream(path) << R"({"format": "mipnerf-cl gemm tuning 1", "auto_backend": "fastest"})";
-  CHECK_THROWS_WITH_AS(mlp::read_tuning(path), doctest::Contains("auto_backend 'fastest' is not clblast or host"),
+  CHECK_THROWS_WITH_AS(gemm::read_tuning(path), doctest::Contains("auto_backend 'fastest' is not clblast or host"),
                        Error);
   std::string warning;
-  CHECK_FALSE(mlp::measured_auto_backend(ctx.device_info(), [&](LogLevel, const std::string& m) { warning = m; })
+  CHECK_FALSE(gemm::measured_auto_backend(ctx.device_info(), [&](LogLevel, const std::string& m) { warning = m; })
                   .has_value());
   CHECK(warning.find("follows its rule") != std::string::npos);
-  ctx.set_gemm_on_host(was_on_host);
 }

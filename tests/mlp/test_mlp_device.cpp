@@ -12,8 +12,8 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
-#include "mlp/clblast_check.hpp"
-#include "mlp/mlp.hpp"
+#include "gemm/clblast_check.hpp"
+#include "mlp/network.hpp"
 #include "mlp_checks.hpp"
 #include "ref/mlp.hpp"
 #include "support/gemm_backends.hpp"
@@ -90,15 +90,15 @@ mlp::MlpOutputGradients gradients_for(const DevicePass& d, const mlp::MlpConfig&
 // Two passes (think coarse and fine, different sample counts) through one MLP: forward A, forward B,
 // backward B, backward A, as the training graph orders them; gradients accumulate into one buffer.
 // host_options: how the host path splits the rows (blocks, threads); its defaults when null.
-void check_against_reference_on(mlp::GemmBackend backend, const mlp::MlpConfig& config, size_t n_rays,
+void check_against_reference_on(gemm::GemmBackend backend, const mlp::MlpConfig& config, size_t n_rays,
                                 size_t samples_a, size_t samples_b, unsigned seed,
                                 const mlp::HostMlpOptions* host_options = nullptr) {
   auto& ctx = test::test_context();
-  test::GemmBackendScope scope(ctx, backend);
   INFO("gemm_backend = " << enum_name(backend));
   std::mt19937 rng(seed);
-  mlp::Mlp net(ctx, config);
-  if (host_options) net.set_host_options(*host_options);
+  const auto network = mlp::make_network(ctx, config, backend, host_options);
+  REQUIRE(network->backend() == backend);
+  mlp::Network& net = *network;
   // Random biases (Glorot leaves them at zero) so every bias path carries a value.
   auto params = net.download_params();
   for (const auto* layer : net.layout().all()) {
@@ -152,7 +152,7 @@ void check_against_reference_on(mlp::GemmBackend backend, const mlp::MlpConfig& 
 // The same check on every GEMM backend the test device supports, same tolerances.
 void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t samples_a, size_t samples_b,
                              unsigned seed) {
-  for (const mlp::GemmBackend backend : test::supported_gemm_backends(test::test_context())) {
+  for (const gemm::GemmBackend backend : test::supported_gemm_backends(test::test_context())) {
     check_against_reference_on(backend, config, n_rays, samples_a, samples_b, seed);
   }
 }
@@ -161,7 +161,7 @@ void check_against_reference(const mlp::MlpConfig& config, size_t n_rays, size_t
 class GemmRoutineOverride {
  public:
   GemmRoutineOverride(cl_device_id device, size_t min_indirect_size) : device_(device) {
-    mlp::check_clblast(clblast::RetrieveParameters(device_, "GemmRoutine", clblast::Precision::kSingle, saved_),
+    gemm::check_clblast(clblast::RetrieveParameters(device_, "GemmRoutine", clblast::Precision::kSingle, saved_),
                        "clblast::RetrieveParameters(GemmRoutine)");
     set({{"XGEMM_MIN_INDIRECT_SIZE", min_indirect_size}});
   }
@@ -169,7 +169,7 @@ class GemmRoutineOverride {
 
  private:
   void set(const std::unordered_map<std::string, size_t>& p) {
-    mlp::check_clblast(clblast::OverrideParameters(device_, "GemmRoutine", clblast::Precision::kSingle, p),
+    gemm::check_clblast(clblast::OverrideParameters(device_, "GemmRoutine", clblast::Precision::kSingle, p),
                        "clblast::OverrideParameters(GemmRoutine)");
   }
   cl_device_id device_;
@@ -198,7 +198,7 @@ TEST_CASE("mlp device: the paper's network through CLBlast's indirect GEMM path 
   GemmRoutineOverride indirect(test::test_context().raw_device(), 1);
   mlp::MlpConfig config;
   config.seed = 5;
-  check_against_reference_on(mlp::GemmBackend::clblast, config, 3, 16, 8, 104);
+  check_against_reference_on(gemm::GemmBackend::clblast, config, 3, 16, 8, 104);
 }
 
 TEST_CASE("mlp device: the host path's blocks and threads do not change what it computes") {
@@ -213,20 +213,21 @@ TEST_CASE("mlp device: the host path's blocks and threads do not change what it 
     const size_t rows = rows_threads.first, threads = rows_threads.second;  // INFO cannot capture a structured binding
     INFO("target_block_rows " << rows << ", threads " << threads);
     const mlp::HostMlpOptions options{rows, threads};
-    check_against_reference_on(mlp::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 106, &options);
-    check_against_reference_on(mlp::GemmBackend::host, test::small_mlp_config(false), 4, 7, 3, 107, &options);
+    check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 106, &options);
+    check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(false), 4, 7, 3, 107, &options);
   }
   mlp::MlpConfig paper;
   paper.seed = 8;
   const mlp::HostMlpOptions one_ray_per_block{1, 2};
-  check_against_reference_on(mlp::GemmBackend::host, paper, 3, 16, 8, 108, &one_ray_per_block);
+  check_against_reference_on(gemm::GemmBackend::host, paper, 3, 16, 8, 108, &one_ray_per_block);
 }
 
 TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exactly twice") {
   auto& ctx = test::test_context();
   const auto config = test::small_mlp_config(true);
   std::mt19937 rng(7);
-  mlp::Mlp net(ctx, config);
+  const auto net_owner = mlp::make_network(ctx, config, gemm::GemmBackend::automatic);
+  mlp::Network& net = *net_owner;
   const Pass p = make_pass(config, 3, 4, rng);
   DevicePass d(ctx, config, p);
   auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
@@ -245,33 +246,48 @@ TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exa
   for (float g : net.download_grads()) CHECK(g == 0.0f);
 }
 
-TEST_CASE("mlp device: misuse is refused with a message that says what to do") {
+TEST_CASE("mlp device: misuse is refused with a message that says what to do, on every backend") {
   auto& ctx = test::test_context();
   const auto config = test::small_mlp_config(true);
-  std::mt19937 rng(8);
-  mlp::Mlp net(ctx, config);
-  const Pass p = make_pass(config, 4, 4, rng);
-  DevicePass d(ctx, config, p);
-  auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
-  CHECK_THROWS_WITH_AS(net.backward(ws, gradients_for(d, config)), doctest::Contains("no forward"), Error);
-  auto small = net.make_workspace(p.rows() - 1, p.n_rays, mlp::WorkspaceMode::training);
-  CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), outputs_for(d, config), small),
-                       doctest::Contains("exceeds the workspace"), Error);
-  auto infer = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::inference);
-  net.forward(inputs_for(d, p, config), outputs_for(d, config), infer);
-  CHECK_THROWS_WITH_AS(net.backward(infer, gradients_for(d, config)), doctest::Contains("inference workspace"),
-                       Error);
-  auto other = mlp::Mlp(ctx, test::small_mlp_config(false)).make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
-  CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), outputs_for(d, config), other),
-                       doctest::Contains("another MLP configuration"), Error);
-  CHECK_THROWS_WITH_AS(net.upload_params(std::vector<float>(3)), doctest::Contains("parameter values"), Error);
-  ocl::DeviceArray<float> short_density(ctx, p.rows() - 1, "raw_density too short");
-  CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config),
-                                   {ocl::view(short_density, 1), ocl::view(d.raw_rgb, config.rgb_outputs)}, ws),
-                       doctest::Contains("raw_density too short"), Error);
-  mlp::MlpInputs no_view = inputs_for(d, p, config);
-  no_view.view_encoding = {};
-  CHECK_THROWS_WITH_AS(net.forward(no_view, outputs_for(d, config), ws), doctest::Contains("view encoding"), Error);
+  for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+    INFO("gemm_backend = " << enum_name(backend));
+    std::mt19937 rng(8);
+    const auto net_owner = mlp::make_network(ctx, config, backend);
+    mlp::Network& net = *net_owner;
+    const Pass p = make_pass(config, 4, 4, rng);
+    DevicePass d(ctx, config, p);
+    auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+    CHECK_THROWS_WITH_AS(net.backward(ws, gradients_for(d, config)), doctest::Contains("no forward"), Error);
+    auto small = net.make_workspace(p.rows() - 1, p.n_rays, mlp::WorkspaceMode::training);
+    CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), outputs_for(d, config), small),
+                         doctest::Contains("exceeds the workspace"), Error);
+    auto infer = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::inference);
+    net.forward(inputs_for(d, p, config), outputs_for(d, config), infer);
+    CHECK_THROWS_WITH_AS(net.backward(infer, gradients_for(d, config)), doctest::Contains("inference workspace"),
+                         Error);
+    auto other = mlp::make_network(ctx, test::small_mlp_config(false), backend)
+                     ->make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+    CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), outputs_for(d, config), other),
+                         doctest::Contains("another MLP configuration"), Error);
+    CHECK_THROWS_WITH_AS(net.upload_params(std::vector<float>(3)), doctest::Contains("parameter values"), Error);
+    // Buffers too small for the chunk are refused before either backend touches them (the host one would write
+    // through a mapped pointer past the end).
+    ocl::DeviceArray<float> short_density(ctx, p.rows() - 1, "raw_density too short");
+    CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config),
+                                     {ocl::view(short_density, 1), ocl::view(d.raw_rgb, config.rgb_outputs)}, ws),
+                         doctest::Contains("raw_density too short"), Error);
+    ocl::DeviceArray<float> short_features(ctx, p.rows() * config.input_width - 1, "features too short");
+    mlp::MlpInputs short_in = inputs_for(d, p, config);
+    short_in.features = ocl::view(short_features, config.input_width);
+    CHECK_THROWS_WITH_AS(net.forward(short_in, outputs_for(d, config), ws), doctest::Contains("features too short"),
+                         Error);
+    net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+    CHECK_THROWS_WITH_AS(net.backward(ws, {ocl::view(short_density, 1), ocl::view(d.d_rgb, config.rgb_outputs)}),
+                         doctest::Contains("raw_density too short"), Error);
+    mlp::MlpInputs no_view = inputs_for(d, p, config);
+    no_view.view_encoding = {};
+    CHECK_THROWS_WITH_AS(net.forward(no_view, outputs_for(d, config), ws), doctest::Contains("view encoding"), Error);
+  }
 }
 
 TEST_CASE("mlp device: workspace size estimate matches what it allocates, and bounds memory by chunk") {
@@ -294,14 +310,14 @@ struct BackendRun {
 };
 
 // One forward and backward of the paper's network on `backend`, from the same seed (so the same data and weights).
-BackendRun run_on(mlp::GemmBackend backend, unsigned seed) {
+BackendRun run_on(gemm::GemmBackend backend, unsigned seed) {
   auto& ctx = test::test_context();
-  test::GemmBackendScope scope(ctx, backend);
-  REQUIRE(ctx.gemm_on_host() == (backend == mlp::GemmBackend::host));
   mlp::MlpConfig config;
   config.seed = 6;
   std::mt19937 rng(seed);
-  mlp::Mlp net(ctx, config);
+  const auto network = mlp::make_network(ctx, config, backend);
+  REQUIRE(network->backend() == backend);
+  mlp::Network& net = *network;
   const Pass p = make_pass(config, 6, 32, rng);
   DevicePass d(ctx, config, p);
   auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
@@ -319,8 +335,8 @@ TEST_CASE("mlp device: the host BLAS and CLBlast backends agree on outputs and g
     test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
     return;
   }
-  const BackendRun clblast = run_on(mlp::GemmBackend::clblast, 105);
-  const BackendRun host = run_on(mlp::GemmBackend::host, 105);
+  const BackendRun clblast = run_on(gemm::GemmBackend::clblast, 105);
+  const BackendRun host = run_on(gemm::GemmBackend::host, 105);
   // Both are float32 with different summation orders. Each stays within the float32 bound above (≈ 5.5e-6 of a
   // tensor's largest value, from √(chain) · √K · u) of the exact result, so they differ by at most twice that:
   // 1.1e-5 of the tensor's largest value (plus 1e-7 absolute for tensors that are all ~0). Not kRelative (3e-5):
@@ -374,11 +390,11 @@ TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same 
   ocl::Context ctx(test::test_context().device_info(), true);
   for (const bool view : {true, false}) {
     const mlp::MlpConfig config = test::small_mlp_config(view);
-    for (const mlp::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+    for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
       INFO("gemm_backend = " << enum_name(backend) << ", view dependence " << view);
-      mlp::use_gemm_backend(ctx, backend);
       std::mt19937 rng(109);
-      mlp::Mlp net(ctx, config);
+      const auto network = mlp::make_network(ctx, config, backend);
+      mlp::Network& net = *network;
       const Pass p = make_pass(config, 5, 6, rng);
       DevicePass d(ctx, config, p);
       auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
@@ -406,7 +422,7 @@ TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same 
   }
 }
 
-TEST_CASE("mlp device: a workspace made for the host path refuses the device backward, saying what to do") {
+TEST_CASE("mlp device: a host network's workspace refuses the device network's backward, saying what to do") {
   auto& ctx = test::test_context();
   if (test::supported_gemm_backends(ctx).size() < 2) {
     test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
@@ -414,16 +430,12 @@ TEST_CASE("mlp device: a workspace made for the host path refuses the device bac
   }
   const mlp::MlpConfig config = test::small_mlp_config(true);
   std::mt19937 rng(110);
-  mlp::Mlp net(ctx, config);
+  const auto device_network = mlp::make_network(ctx, config, gemm::GemmBackend::clblast);
+  const auto host_network = mlp::make_network(ctx, config, gemm::GemmBackend::host);
   const Pass p = make_pass(config, 2, 4, rng);
   DevicePass d(ctx, config, p);
-  std::optional<mlp::Workspace> ws;
-  {
-    test::GemmBackendScope host(ctx, mlp::GemmBackend::host);
-    ws.emplace(net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training));
-  }
-  test::GemmBackendScope clblast(ctx, mlp::GemmBackend::clblast);
-  net.forward(inputs_for(d, p, config), outputs_for(d, config), *ws);
-  CHECK_THROWS_WITH_AS(net.backward(*ws, gradients_for(d, config)),
-                       doctest::Contains("make workspaces after choosing the backend"), Error);
+  auto ws = host_network->make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+  device_network->forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+  CHECK_THROWS_WITH_AS(device_network->backward(ws, gradients_for(d, config)),
+                       doctest::Contains("make each network's workspaces with its own make_workspace"), Error);
 }

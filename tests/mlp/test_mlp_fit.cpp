@@ -5,7 +5,7 @@
 #include <random>
 
 #include "mlp/adam.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "mlp_checks.hpp"
 #include "support/test_context.hpp"
 
@@ -66,7 +66,7 @@ class Fit {
   mlp::MlpInputs inputs() const { return {ocl::view(features_, kFeatures), ocl::view(view_, 3), s_.n_rays, s_.samples_per_ray}; }
 
   // Mean squared error over rows and the 4 outputs; with gradients, uploads ∂loss/∂raw outputs.
-  double loss(mlp::Mlp& net, mlp::Workspace& ws, bool upload_gradients) {
+  double loss(mlp::Network& net, mlp::Workspace& ws, bool upload_gradients) {
     net.forward(inputs(), {ocl::view(density_, 1), ocl::view(rgb_, 3)}, ws);
     const auto density = density_.download(ctx_), rgb = rgb_.download(ctx_);
     std::vector<float> d_density(rows_), d_rgb(rows_ * 3);
@@ -112,7 +112,8 @@ TEST_CASE("mlp fit: Adam with the eq. 24 schedule fits a view-dependent function
   config.view_branch_width = 16;
   config.bottleneck_width = 32;
   config.seed = 1;
-  mlp::Mlp net(ctx, config);
+  const auto net_owner = mlp::make_network(ctx, config, gemm::GemmBackend::automatic);
+  mlp::Network& net = *net_owner;
   mlp::AdamHyper hyper;
   hyper.grad_max_norm = 1.0;  // exercise clipping on the way
   mlp::Adam adam(ctx, net.parameter_count(), hyper);

@@ -16,9 +16,10 @@ int main() {
   try {
     auto& ctx = test::test_context();
     const std::vector<ocl::SourceFile> files = {
-        {"canary.cl", "__kernel void past_the_end(__global float* y, const uint n) {\n"
-                      "  if (get_global_id(0) == 0) y[n] = 1.0f;  // one past the last element\n"
-                      "}\n"}};
+        {"canary.cl",
+         "__kernel void past_the_end(__global float* y, const uint n) {\n"
+         "  if (get_global_id(0) == 0) y[n] = 1.0f;  // one past the last element\n"
+         "}\n"}};
     auto& kernel = ctx.program_from_sources(files).kernel("past_the_end");
     ocl::DeviceArray<float> y(ctx, 16, "y");
     ocl::set_args(kernel, "past_the_end", y, static_cast<cl_uint>(16));

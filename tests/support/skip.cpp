@@ -1,11 +1,11 @@
 // Skipping a test that cannot run here: skipped locally, failed under CI.
 #include "support/skip.hpp"
 
+#include <doctest/doctest.h>
+
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
-
-#include <doctest/doctest.h>
 
 namespace mipnerf::test {
 namespace {

@@ -211,7 +211,7 @@ TEST_CASE("checkpoint: a version-1 file written byte by byte loads for rendering
   REQUIRE(model.networks.size() == 1);
   CHECK(same_bits(model.networks[0]->download_params(), params));
 
-  auto networks = train::make_networks(ctx, spec);
+  auto networks = train::make_networks(ctx, spec, gemm::GemmBackend::automatic);
   std::vector<std::unique_ptr<mlp::Adam>> optimisers;
   optimisers.push_back(std::make_unique<mlp::Adam>(ctx, n));
   std::vector<std::string> warnings;
@@ -238,7 +238,7 @@ TEST_CASE("checkpoint: save records the configuration as a JSON object beside th
   const auto dir = fresh_dir("ckpt-save");
   const auto config = small_config();
   const graph::GraphSpec spec = train::make_graph_spec(config, false);
-  const auto networks = train::make_networks(ctx, spec);
+  const auto networks = train::make_networks(ctx, spec, gemm::GemmBackend::automatic);
   std::vector<std::unique_ptr<mlp::Adam>> optimisers;
   optimisers.push_back(std::make_unique<mlp::Adam>(ctx, networks[0]->parameter_count()));
   train::CheckpointRecord record;

@@ -278,7 +278,7 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   written.erase("variant_bundle");
   // gemm_backend came later still (an execution setting); a configuration without it loads with its default, auto.
   CHECK(written.at("gemm_backend") == "auto");
-  CHECK(old.gemm_backend == mlp::GemmBackend::automatic);
+  CHECK(old.gemm_backend == gemm::GemmBackend::automatic);
   written.erase("gemm_backend");
   // spherify (a scene setting for LLFF captures) too; without it a configuration loads with its default, false.
   CHECK(written.at("spherify") == false);

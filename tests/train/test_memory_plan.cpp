@@ -5,7 +5,7 @@
 #include "core/camera.hpp"
 #include "data/device_dataset.hpp"
 #include "mlp/adam.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "ops/batch.hpp"
 #include "support/test_context.hpp"
 #include "support/train_fixtures.hpp"
@@ -34,12 +34,13 @@ TEST_CASE("memory plan: each owner's bytes_for is what it allocates, and the fix
   REQUIRE(spec.mlps.size() == 2);
   size_t networks = 0;
   for (const auto& network_config : spec.mlps) {
-    const mlp::Mlp network(ctx, network_config);
-    CHECK(mlp::Mlp::bytes_for(network_config) == network.params().bytes() + network.grads().bytes());
+    const auto network_owner = mlp::make_network(ctx, network_config, gemm::GemmBackend::automatic);
+    const mlp::Network& network = *network_owner;
+    CHECK(mlp::Network::bytes_for(network_config) == network.params().bytes() + network.grads().bytes());
     const size_t n = network.parameter_count();
     // Two moments, plus the norm reduction's partial sums and non-finite counts (at most 1024 slices each).
     CHECK(mlp::Adam::bytes_for(n) == 2 * n * sizeof(float) + 1024 * (sizeof(float) + sizeof(cl_uint)));
-    networks += mlp::Mlp::bytes_for(network_config) + mlp::Adam::bytes_for(n);
+    networks += mlp::Network::bytes_for(network_config) + mlp::Adam::bytes_for(n);
   }
   CHECK(mlp::Adam::bytes_for(10) == 2 * 10 * sizeof(float) + 10 * (sizeof(float) + sizeof(cl_uint)));
   const train::FixedBytes fixed = train::training_fixed_bytes(split, spec, batch_rays);

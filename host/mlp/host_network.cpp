@@ -1,0 +1,114 @@
+// The host network: the whole MLP fused on the host CPU (host_mlp.hpp) over the device's buffers, mapped.
+#include "mlp/host_network.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "gemm/mapped_buffers.hpp"
+
+namespace mipnerf::mlp {
+
+HostMlpOptions default_host_options(const ocl::Context& ctx) {
+  HostMlpOptions o;
+  o.threads = std::max<size_t>(1, ctx.device_info().compute_units);
+  return o;
+}
+
+HostNetwork::HostNetwork(ocl::Context& ctx, const MlpConfig& config, const HostMlpOptions& options)
+    : Network(ctx, config), host_(config, options) {}
+
+namespace {
+
+// A call's thread times as stage times: its wall time split in the proportions of its threads' time, each product
+// kind under "gemm <kind>" with its FLOPs, the rest under the caller's stage.
+void profile_host_call(ocl::Context& ctx, const HostMlpTimes& t, double wall_seconds) {
+  ocl::StageProfiler* profiler = ctx.recording_profiler();
+  if (profiler == nullptr) return;
+  const double scale = t.total() > 0 ? wall_seconds / t.total() : 0.0;
+  auto add = [&](const char* stage, double seconds, double flops) {
+    if (seconds <= 0 && flops <= 0) return;
+    ocl::StageScope scope(ctx, stage);
+    profiler->add_host_seconds(seconds * scale);
+    profiler->add_flops(flops);
+  };
+  add("gemm forward", t.gemm_forward, t.flops_forward);
+  add("gemm backward_data", t.gemm_backward_data, t.flops_backward_data);
+  add("gemm backward_weights", t.gemm_backward_weights, t.flops_backward_weights);
+  if (t.elementwise > 0) profiler->add_host_seconds(t.elementwise * scale);
+}
+
+}  // namespace
+
+// What a host forward reads and keeps: the parameters, the inputs and (training) the saved activations. `write`:
+// the activations are written (forward) or only read (backward).
+void HostNetwork::need_host_buffers(gemm::MappedBuffers& mapped, const MlpInputs& in, const Workspace& ws,
+                                    bool activations, bool write) const {
+  mapped.need(&params_, false);
+  mapped.need(in.features, false);
+  mapped.need(in.view_encoding, false);
+  if (!activations) return;
+  for (const auto& a : ws.activations_) mapped.need(&a, write);
+  if (config_.view_dependence) {
+    mapped.need(&ws.bottleneck_, write);
+    mapped.need(&ws.view_hidden_, write);
+  }
+}
+
+HostForwardBuffers HostNetwork::host_buffers(const gemm::MappedBuffers& mapped, const MlpInputs& in,
+                                             const Workspace& ws, bool activations) const {
+  HostForwardBuffers b;
+  b.params = mapped.at(&params_);
+  b.features = mapped.at(in.features);
+  b.features_ld = in.features.ld;
+  b.view_encoding = config_.view_dependence ? mapped.at(in.view_encoding) : nullptr;
+  b.view_ld = in.view_encoding.ld;
+  if (activations) {
+    for (const auto& a : ws.activations_) b.trunk.push_back(mapped.at(&a));
+    if (config_.view_dependence) {
+      b.bottleneck = mapped.at(&ws.bottleneck_);
+      b.view_hidden = mapped.at(&ws.view_hidden_);
+    }
+  }
+  b.n_rays = in.n_rays;
+  b.samples_per_ray = in.samples_per_ray;
+  return b;
+}
+
+// Maps what the forward reads and writes (blocking: the kernels that wrote the features have finished), runs it on
+// the host, and unmaps (the kernels enqueued next see the outputs). See mapped_buffers.hpp.
+void HostNetwork::forward_impl(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) {
+  gemm::MappedBuffers mapped(*ctx_, "the host MLP's forward");
+  need_host_buffers(mapped, in, ws, save, true);
+  mapped.need(out.raw_density, true);
+  mapped.need(out.raw_rgb, true);
+  mapped.map();
+  const auto start = std::chrono::steady_clock::now();
+  HostForwardBuffers b = host_buffers(mapped, in, ws, save);
+  b.density = mapped.at(out.raw_density);
+  b.density_ld = out.raw_density.ld;
+  b.rgb = mapped.at(out.raw_rgb);
+  b.rgb_ld = out.raw_rgb.ld;
+  const HostMlpTimes times = host_.forward(b, ctx_->recording_profiler() != nullptr);
+  profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
+void HostNetwork::backward_impl(Workspace& ws, const MlpOutputGradients& d_out) {
+  gemm::MappedBuffers mapped(*ctx_, "the host MLP's backward");
+  need_host_buffers(mapped, ws.inputs_, ws, true, false);
+  mapped.need(&grads_, true);
+  mapped.need(d_out.d_raw_density, false);
+  mapped.need(d_out.d_raw_rgb, false);
+  mapped.map();
+  const auto start = std::chrono::steady_clock::now();
+  HostBackwardBuffers b;
+  b.saved = host_buffers(mapped, ws.inputs_, ws, true);
+  b.d_density = mapped.at(d_out.d_raw_density);
+  b.d_density_ld = d_out.d_raw_density.ld;
+  b.d_rgb = mapped.at(d_out.d_raw_rgb);
+  b.d_rgb_ld = d_out.d_raw_rgb.ld;
+  b.grads = mapped.at(&grads_);
+  const HostMlpTimes times = host_.backward(b, ctx_->recording_profiler() != nullptr);
+  profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
+}  // namespace mipnerf::mlp

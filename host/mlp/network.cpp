@@ -1,0 +1,186 @@
+// The network interface's shared part: parameters, gradients, workspaces, the checks of every call, and the factory
+// that picks a backend.
+#include "mlp/network.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "core/error.hpp"
+#include "mlp/device_network.hpp"
+#include "mlp/host_network.hpp"
+#include "ops/mlp.hpp"
+
+namespace mipnerf::mlp {
+namespace {
+
+size_t widest_hidden(const MlpConfig& c) {
+  size_t w = c.width;
+  if (c.view_dependence) w = std::max({w, c.bottleneck_width, c.view_branch_width});
+  return w;
+}
+
+// Partials rows: blocks of kRowsPerBlock rows for bias gradients, or one per ray for the view branch.
+size_t partial_rows(const MlpConfig& c, size_t max_rows, size_t max_rays) {
+  const size_t blocks = ops::MlpKernels::blocks_for(max_rows, ops::MlpKernels::kRowsPerBlock);
+  return c.view_dependence ? std::max(blocks, max_rays) : blocks;
+}
+
+size_t partial_cols(const MlpConfig& c) { return std::max({widest_hidden(c), c.density_outputs, c.rgb_outputs}); }
+
+}  // namespace
+
+// ---- Workspace ----
+
+Workspace::Workspace(ocl::Context& ctx, const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode,
+                     bool device_backward)
+    : config_(config), mode_(mode), max_rows_(max_rows), max_rays_(max_rays), max_cols_(widest_hidden(config)) {
+  config.validate();
+  if (max_rows == 0 || max_rays == 0) throw Error("MLP workspace: max_rows and max_rays must be positive");
+  if (mode == WorkspaceMode::training) {
+    for (size_t i = 0; i < config.depth; ++i) {
+      activations_.emplace_back(ctx, max_rows * config.width,
+                                "mlp activation of trunk " + std::to_string(i) + " [rows][width]");
+    }
+    if (config.view_dependence) {
+      bottleneck_ = ocl::DeviceArray<float>(ctx, max_rows * config.bottleneck_width, "mlp bottleneck [rows][width]");
+      view_hidden_ = ocl::DeviceArray<float>(ctx, max_rows * config.view_branch_width,
+                                             "mlp view-branch activation [rows][view_branch_width]");
+    }
+    // The device network's backward buffers; the host network keeps activation gradients in per-thread scratch.
+    device_backward_ = device_backward;
+    if (device_backward_) {
+      grad_a_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer A [rows][width]");
+      grad_b_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer B [rows][width]");
+      partials_ = ocl::DeviceArray<float>(ctx, partial_rows(config, max_rows, max_rays) * partial_cols(config),
+                                          "mlp column-sum partials [blocks][width]");
+    }
+  } else {
+    for (int i = 0; i < 2; ++i) {
+      activations_.emplace_back(ctx, max_rows * max_cols_,
+                                "mlp inference buffer " + std::to_string(i) + " [rows][width]");
+    }
+  }
+  if (config.view_dependence) {
+    ray_term_ = ocl::DeviceArray<float>(ctx, max_rays * config.view_branch_width,
+                                        "mlp per-ray view product [rays][view_branch_width]");
+  }
+}
+
+size_t Workspace::bytes_for(const MlpConfig& c, size_t max_rows, size_t max_rays, WorkspaceMode mode) {
+  const size_t cols = widest_hidden(c);
+  size_t floats = c.view_dependence ? max_rays * c.view_branch_width : 0;
+  if (mode == WorkspaceMode::training) {
+    floats +=
+        c.depth * max_rows * c.width + 2 * max_rows * cols + partial_rows(c, max_rows, max_rays) * partial_cols(c);
+    if (c.view_dependence) floats += max_rows * (c.bottleneck_width + c.view_branch_width);
+  } else {
+    floats += 2 * max_rows * cols;
+  }
+  return floats * sizeof(float);
+}
+
+// ---- Network ----
+
+Network::Network(ocl::Context& ctx, const MlpConfig& config)
+    : ctx_(&ctx),
+      config_(config),
+      layout_(parameter_layout(config)),
+      params_(ctx, layout_.total, "mlp parameters [flat]"),
+      grads_(ctx, layout_.total, "mlp gradients [flat]") {
+  params_.upload(ctx, glorot_uniform_init(config));
+  zero_grad();
+}
+
+Network::~Network() = default;
+
+size_t Network::bytes_for(const MlpConfig& config) { return 2 * parameter_layout(config).total * sizeof(float); }
+
+std::vector<float> Network::download_params() const { return params_.download(*ctx_); }
+
+void Network::upload_params(const std::vector<float>& values) {
+  if (values.size() != layout_.total) {
+    throw Error("MLP: " + std::to_string(values.size()) + " parameter values given, the network (" + describe(config_) +
+                ") has " + std::to_string(layout_.total));
+  }
+  params_.upload(*ctx_, values);
+}
+
+std::vector<float> Network::download_grads() const { return grads_.download(*ctx_); }
+
+void Network::zero_grad() { grads_.fill(*ctx_, 0.0f); }
+
+Workspace Network::make_workspace(size_t max_rows, size_t max_rays, WorkspaceMode mode) const {
+  return Workspace(*ctx_, config_, max_rows, max_rays, mode, device_backward_buffers());
+}
+
+void Network::check_inputs(const MlpInputs& in, const Workspace& ws, const char* where) const {
+  const std::string w = std::string("MLP ") + where;
+  const MlpConfig& c = ws.config_;
+  if (c.input_width != config_.input_width || c.depth != config_.depth || c.width != config_.width ||
+      c.view_dependence != config_.view_dependence || c.view_width != config_.view_width ||
+      c.view_branch_width != config_.view_branch_width || c.bottleneck_width != config_.bottleneck_width) {
+    throw Error(w + ": the workspace was made for another MLP configuration (" + describe(c) + ")");
+  }
+  if (in.n_rays == 0 || in.samples_per_ray == 0) throw Error(w + ": empty chunk (0 rays or 0 samples per ray)");
+  if (in.rows() > ws.max_rows_ || in.n_rays > ws.max_rays_) {
+    throw Error(w + ": chunk of " + std::to_string(in.n_rays) + " rays × " + std::to_string(in.samples_per_ray) +
+                " samples exceeds the workspace (" + std::to_string(ws.max_rays_) + " rays, " +
+                std::to_string(ws.max_rows_) + " rows); use smaller chunks or a bigger workspace");
+  }
+  if (in.features.array == nullptr) throw Error(w + ": no features buffer");
+  if (config_.view_dependence && in.view_encoding.array == nullptr) {
+    throw Error(w + ": the MLP is view-dependent but no view encoding [rays][" + std::to_string(config_.view_width) +
+                "] was given");
+  }
+  // Both backends read these directly (the host one through mapped pointers): sizes are checked here, once.
+  ocl::require_matrix(in.features, in.rows(), config_.input_width, "features", w);
+  if (config_.view_dependence) ocl::require_matrix(in.view_encoding, in.n_rays, config_.view_width, "view_encoding", w);
+}
+
+void Network::forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws) {
+  check_inputs(in, ws, "forward");
+  ocl::require_matrix(out.raw_density, in.rows(), config_.density_outputs, "raw_density", "MLP forward");
+  ocl::require_matrix(out.raw_rgb, in.rows(), config_.rgb_outputs, "raw_rgb", "MLP forward");
+  const bool save = ws.mode_ == WorkspaceMode::training;
+  ws.has_forward_ = false;
+  forward_impl(in, out, ws, save);
+  if (save) {
+    ws.inputs_ = in;
+    ws.has_forward_ = true;
+  }
+}
+
+void Network::backward(Workspace& ws, const MlpOutputGradients& d_out) {
+  if (ws.mode_ != WorkspaceMode::training) {
+    throw Error(
+        "MLP backward: the workspace is an inference workspace (it keeps no activations); make it with "
+        "WorkspaceMode::training");
+  }
+  if (!ws.has_forward_) throw Error("MLP backward: no forward has been run through this workspace");
+  check_inputs(ws.inputs_, ws, "backward");
+  ocl::require_matrix(d_out.d_raw_density, ws.inputs_.rows(), config_.density_outputs, "d_raw_density", "MLP backward");
+  ocl::require_matrix(d_out.d_raw_rgb, ws.inputs_.rows(), config_.rgb_outputs, "d_raw_rgb", "MLP backward");
+  if (device_backward_buffers() && !ws.device_backward_) {
+    throw Error(
+        "MLP backward: the workspace was made by a network on the host backend (it has no device backward "
+        "buffers); make each network's workspaces with its own make_workspace");
+  }
+  backward_impl(ws, d_out);
+}
+
+std::unique_ptr<Network> make_network(ocl::Context& ctx, const MlpConfig& config, gemm::GemmBackend backend,
+                                      const HostMlpOptions* host_options) {
+  const gemm::GemmBackend chosen = gemm::choose_gemm_backend(ctx, backend);
+  if (chosen == gemm::GemmBackend::host) {
+    return std::make_unique<HostNetwork>(ctx, config, host_options ? *host_options : default_host_options(ctx));
+  }
+  return std::make_unique<DeviceNetwork>(ctx, config);
+}
+
+std::vector<Network*> network_pointers(const std::vector<std::unique_ptr<Network>>& networks) {
+  std::vector<Network*> out;
+  for (const auto& n : networks) out.push_back(n.get());
+  return out;
+}
+
+}  // namespace mipnerf::mlp
