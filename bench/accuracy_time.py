@@ -18,6 +18,10 @@ Example (the committed results were made with this):
   python3 bench/accuracy_time.py --build build --work /tmp/study --results bench/results \
       --steps 400 --lego-views 2 --lego ../shared/data/nerf_synthetic/lego      (about 95 minutes on 2 CPU cores)
   python3 bench/accuracy_time.py --results bench/results --plot-only                 (the plot again, seconds)
+  python3 bench/accuracy_time.py --results bench/results --report-only               (the .md again from the JSON)
+
+The .md is generated from the JSON (write_markdown); hand-written notes go under "## Notes (by hand)" at its end,
+which regeneration keeps.
 """
 
 import argparse
@@ -27,7 +31,9 @@ import os
 import sys
 import time
 
-from study_common import device_line, procedural_scene, read_json, run
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import report_md  # noqa: E402
+from study_common import device_line, procedural_scene, read_json, run  # noqa: E402
 
 # (key, label, variant, settings, supersample at evaluation)
 CONFIGS = [
@@ -177,7 +183,12 @@ def main():
     parser.add_argument("--set", action="append", default=[], help="extra setting for every run, name=value")
     parser.add_argument("--plot-only", action="store_true",
                         help="only redraw accuracy_time.svg from accuracy_time.json in --results (no runs)")
+    parser.add_argument("--report-only", action="store_true",
+                        help="only regenerate accuracy_time.md from accuracy_time.json in --results (no runs; its "
+                             "'## Notes (by hand)' section is kept)")
     args = parser.parse_args()
+    if args.report_only:
+        return report_only(args.results)
     if args.plot_only:
         return plot_only(args.results)
     import_pyplot()  # before the runs: a missing matplotlib should not be found after an hour and a half
@@ -199,27 +210,47 @@ def main():
 
     device = next(iter(results.values()))[0]["device"]
     date = datetime.date.today().isoformat()
-    meta = (f"Device: {device_line(device)}; {date}. "
-            f"Preset `{args.preset}` with {args.steps} steps of {args.batch_size} rays for every setting"
-            + (f", plus {', '.join(f'{k}={v}' for k, v in args.base_settings.items())}" if args.base_settings else "")
+    record = {"date": date, "device": device, "preset": args.preset, "steps": args.steps,
+              "batch_size": args.batch_size, "settings": args.base_settings, "scenes": results,
+              "study_seconds": time.time() - started}
+    with open(os.path.join(args.results, "accuracy_time.json"), "w") as f:
+        json.dump(record, f, indent=2)
+    print(write_report(record, args.results))
+    plot(plot_title(device, date), results, os.path.join(args.results, "accuracy_time.svg"))
+
+
+def write_markdown(record):
+    """accuracy_time.md, generated from accuracy_time.json alone."""
+    device = record["device"]
+    meta = (f"Device: {device_line(device)}; {record['date']}. "
+            f"Preset `{record['preset']}` with {record['steps']} steps of {record['batch_size']} rays for every setting"
+            + (f", plus {', '.join(f'{k}={v}' for k, v in record['settings'].items())}" if record["settings"] else "")
             + ". Train s: wall time of `mipnerf-cl train` (GEMM tuning file loaded). Render s/MP: `mipnerf-cl eval`, "
               "after its warm-up. PSNR per scale: mean over the evaluated views of that scale.")
     text = ("# What accuracy costs in time\n\n"
+            + report_md.generated_banner("bench/accuracy_time.py", "accuracy_time.json") + "\n\n"
             "Made by `bench/accuracy_time.py` (see its header for the command). mip-NeRF is trained with the area loss "
             "on all scales; the NeRF baseline is the paper's: point samples, PE, two MLPs, no area loss. NeRF + 4x "
             "supersampling trains on rays through random points of their pixels and averages 4 jittered rays per "
             "pixel when evaluated. Every setting has the same step budget.\n\n")
-    for scene, rows in results.items():
+    for scene, rows in record["scenes"].items():
         split, views = rows[0]["eval_split"], rows[0]["eval_views"]
         text += markdown(scene, rows, meta + f" Evaluated on {views} {split} views at every scale.")
-    text += f"Study wall time: {time.time() - started:.0f} s (runs reused from an earlier invocation count as 0).\n"
-    with open(os.path.join(args.results, "accuracy_time.md"), "w") as f:
-        f.write(text)
-    with open(os.path.join(args.results, "accuracy_time.json"), "w") as f:
-        json.dump({"date": date, "device": device, "preset": args.preset, "steps": args.steps,
-                   "batch_size": args.batch_size, "settings": args.base_settings, "scenes": results}, f, indent=2)
-    plot(plot_title(device, date), results, os.path.join(args.results, "accuracy_time.svg"))
-    print(text)
+    if record.get("study_seconds") is not None:
+        text += (f"Study wall time: {record['study_seconds']:.0f} s (runs reused from an earlier invocation count "
+                 "as 0).\n")
+    return text
+
+
+def write_report(record, results):
+    return report_md.write_report(os.path.join(results, "accuracy_time.md"), write_markdown(record),
+                                  f"python3 bench/accuracy_time.py --results {results} --report-only")
+
+
+def report_only(results_folder):
+    """Regenerates accuracy_time.md from the committed results (accuracy_time.json) without running the study."""
+    write_report(read_json(os.path.join(results_folder, "accuracy_time.json")), results_folder)
+    print(f"accuracy_time: wrote {results_folder}/accuracy_time.md from accuracy_time.json")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,8 @@ run is a curve of val PSNR against training seconds; `mipnerf-cl plot` draws the
 Writes bench/results/accuracy_time_curves.{md,json,svg} (+ accuracy_time_curves_multiscale.svg) and
 bench/results/table3_concat_pe.md. Budget: --steps-scale multiplies every preset's steps (1 = each preset's own
 schedule); --presets chooses which presets run. Resumable (finished runs are reused, interrupted ones resumed).
+The .md reports are generated from the .json (write_markdown, table3_markdown); `--report-only` regenerates them
+without training; hand-written notes go under "## Notes (by hand)" at the end of each .md, which regeneration keeps.
 
   python3 bench/accuracy_time_curves.py --lego ../shared/data/nerf_synthetic/lego [--presets tiny,quick,small]
       [--steps-scale 1] [--points 10] [--val-views 2] [--work /tmp/mipnerf-curves] [--report-only]
@@ -28,6 +30,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import report_md  # noqa: E402
 from study_common import commit_of, read_json, read_val_log, train_resumable  # noqa: E402
 
 PRESET_STEPS = {"tiny": 300, "quick": 600, "small": 2000}  # host/train/config.cpp presets()
@@ -75,9 +78,12 @@ def plot(exe, runs, scene, path, title):
     subprocess.run([exe, "plot", *dirs, "--out", path, "--title", title, "--log-x"], check=True)
 
 
-def curves_markdown(record):
+def write_markdown(record):
+    """accuracy_time_curves.md, generated from accuracy_time_curves.json alone."""
     lines = [
         "# Accuracy against time as curves: presets and variants on lego",
+        "",
+        report_md.generated_banner("bench/accuracy_time_curves.py", "accuracy_time_curves.json"),
         "",
         f"Device: {record['device']}. Date {record['date']}, commit {record['commit']}. Lego (400x400 in ../shared) "
         f"box-downsampled by {record['factor']} (100x100) and its multiscale copy ({record['scales']} scales, "
@@ -90,7 +96,7 @@ def curves_markdown(record):
         "Few val views make each point noisy (a few tenths of a dB); the machine is shared, so seconds carry that "
         "noise too.",
     ]
-    for note in record.get("notes", []):  # the runs' circumstances and what they show (added to the JSON by hand)
+    for note in record.get("notes", []):  # notes recorded in the JSON (new ones go in the .md's hand section)
         lines += ["", note]
     lines += [
         "",
@@ -112,11 +118,14 @@ def curves_markdown(record):
 
 
 def table3_markdown(record):
+    """table3_concat_pe.md, generated from accuracy_time_curves.json alone."""
     runs = [r for r in record["runs"] if r["scene"] == "multiscale"]
     names = {0: "full", 1: "1/2", 2: "1/4", 3: "1/8"}
     levels = sorted({s["scale_level"] for r in runs for s in r["scales"]})
     lines = [
         "# Table 3's NeRF rows and supplement §7's concatenated PE, at equal steps on multiscale lego",
+        "",
+        report_md.generated_banner("bench/accuracy_time_curves.py", "accuracy_time_curves.json"),
         "",
         f"Device: {record['device']}. Date {record['date']}, commit {record['commit']}. Lego box-downsampled by "
         f"{record['factor']} with its multiscale copy ({record['scales']} scales), preset `{record['preset']}` "
@@ -158,7 +167,9 @@ def main():
     parser.add_argument("--scales", type=int, default=3)
     parser.add_argument("--work", default="/tmp/mipnerf-curves")
     parser.add_argument("--results", default="bench/results")
-    parser.add_argument("--report-only", action="store_true", help="tables and plots again from the JSON and runs")
+    parser.add_argument("--report-only", action="store_true",
+                        help="the .md reports again from the JSON (their '## Notes (by hand)' sections kept), and the "
+                             "plots when the runs' folders still exist; no training")
     args = parser.parse_args()
     args.presets = args.presets.split(",")
     exe = os.path.abspath(args.exe)
@@ -176,15 +187,23 @@ def main():
         with open(record_path, "w") as f:
             json.dump(record, f, indent=2)
             f.write("\n")
-    plot(exe, record["runs"], "lego", os.path.join(args.results, "accuracy_time_curves.svg"),
-         f"lego x{record['factor']}: presets and variants")
-    plot(exe, record["runs"], "multiscale", os.path.join(args.results, "accuracy_time_curves_multiscale.svg"),
-         f"multiscale lego x{record['factor']}, {record['scales']} scales: {record['preset']} preset")
-    with open(os.path.join(args.results, "accuracy_time_curves.md"), "w") as f:
-        f.write(curves_markdown(record))
-    with open(os.path.join(args.results, "table3_concat_pe.md"), "w") as f:
-        f.write(table3_markdown(record))
-    print(f"curves: wrote {args.results}/accuracy_time_curves.md, .json, .svg and table3_concat_pe.md")
+    runs_present = all(os.path.isdir(r["run_dir"]) for r in record["runs"])
+    if runs_present:
+        plot(exe, record["runs"], "lego", os.path.join(args.results, "accuracy_time_curves.svg"),
+             f"lego x{record['factor']}: presets and variants")
+        plot(exe, record["runs"], "multiscale", os.path.join(args.results, "accuracy_time_curves_multiscale.svg"),
+             f"multiscale lego x{record['factor']}, {record['scales']} scales: {record['preset']} preset")
+    else:
+        print("curves: the runs' folders are gone, so the plots were not redrawn (mipnerf-cl plot reads them)")
+    write_reports(record, args.results)
+    print(f"curves: wrote {args.results}/accuracy_time_curves.md and table3_concat_pe.md"
+          + (" and the plots" if runs_present else ""))
+
+
+def write_reports(record, results):
+    regen = f"python3 bench/accuracy_time_curves.py --report-only --results {results}"
+    report_md.write_report(os.path.join(results, "accuracy_time_curves.md"), write_markdown(record), regen)
+    report_md.write_report(os.path.join(results, "table3_concat_pe.md"), table3_markdown(record), regen)
 
 
 if __name__ == "__main__":

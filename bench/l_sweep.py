@@ -13,7 +13,9 @@ resolve). Writes bench/results/l_sweep.{md,json,svg}: val PSNR against L, with t
 
 Resumable: runs whose summary.json is complete are reused, interrupted ones continue (train --resume). Needs
 matplotlib for the plot (bench/setup.sh). Every run goes through the real CLI; the record names device, date,
-commit and every command.
+commit and every command. The .md is generated from the .json (write_markdown): `--report-only` regenerates it
+alone, `--plot-only` the .md and the plot; hand-written notes go under "## Notes (by hand)" at the end of the .md,
+which regeneration keeps.
 """
 
 import argparse
@@ -23,6 +25,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import report_md  # noqa: E402
 from study_common import commit_of, train_resumable  # noqa: E402
 
 MODELS = [("nerf", "NeRF (PE of points)"), ("mipnerf", "mip-NeRF (IPE of frustums)")]
@@ -50,11 +53,14 @@ def measure(args):
             "scene": "lego (nerf_synthetic, 400x400 in ../shared) box-downsampled by the factor", "runs": runs}
 
 
-def write_markdown(record, path):
+def write_markdown(record):
+    """The report, generated from l_sweep.json alone."""
     by = {(r["variant"], r["L"]): r for r in record["runs"]}
     device = record["runs"][0]["device"] if record["runs"] else "?"
     lines = [
         "# L sweep: NeRF's PE against mip-NeRF's IPE as the highest frequency grows (supplement §2, Figure 1)",
+        "",
+        report_md.generated_banner("bench/l_sweep.py", "l_sweep.json"),
         "",
         f"Device: {device}. Date {record['date']}, commit {record['commit']}. Scene: {record['scene']} "
         f"(factor {record['factor']}); val PSNR/SSIM on the first {record['val_views']} val views. Preset "
@@ -72,11 +78,16 @@ def write_markdown(record, path):
         lines.append(f"| {degree} | {n['psnr']:.2f} | {n['ssim']:.4f} | {n['train_seconds']:.0f} | {m['psnr']:.2f} | "
                      f"{m['ssim']:.4f} | {m['train_seconds']:.0f} | {n['render_s_per_mp']:.0f} / "
                      f"{m['render_s_per_mp']:.0f} |")
-    for note in record.get("notes", []):  # what the runs' circumstances were (added to the JSON by hand)
+    for note in record.get("notes", []):  # notes recorded in the JSON (new ones go in the .md's hand section)
         lines += ["", note]
     lines += ["", "![val PSNR against L](l_sweep.svg)", ""]
-    with open(path, "w") as f:
-        f.write("\n".join(lines))
+    return "\n".join(lines)
+
+
+def write_report(record, results):
+    path = os.path.join(results, "l_sweep.md")
+    report_md.write_report(path, write_markdown(record),
+                           f"python3 bench/l_sweep.py --report-only --results {results}")
 
 
 def write_plot(record, path):
@@ -109,9 +120,17 @@ def main():
     parser.add_argument("--work", default="/tmp/mipnerf-l-sweep")
     parser.add_argument("--results", default="bench/results")
     parser.add_argument("--plot-only", action="store_true", help="redraw the table and plot from l_sweep.json")
+    parser.add_argument("--report-only", action="store_true",
+                        help="regenerate l_sweep.md from l_sweep.json (no runs, no plot; its '## Notes (by hand)' "
+                             "section is kept)")
     args = parser.parse_args()
     args.degrees = [int(d) for d in args.degrees.split(",")]
     record_path = os.path.join(args.results, "l_sweep.json")
+    if args.report_only:
+        with open(record_path) as f:
+            write_report(json.load(f), args.results)
+        print(f"l_sweep: wrote {args.results}/l_sweep.md from l_sweep.json")
+        return
     if args.plot_only:
         with open(record_path) as f:
             record = json.load(f)
@@ -123,7 +142,7 @@ def main():
         with open(record_path, "w") as f:
             json.dump(record, f, indent=2)
             f.write("\n")
-    write_markdown(record, os.path.join(args.results, "l_sweep.md"))
+    write_report(record, args.results)
     write_plot(record, os.path.join(args.results, "l_sweep.svg"))
     print(f"l_sweep: wrote {args.results}/l_sweep.md, .json, .svg")
 

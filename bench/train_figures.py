@@ -9,16 +9,23 @@ command-line tool, as a user would run it; finished runs and evaluations are reu
 Example (the committed results were made with this):
   python3 bench/train_figures.py --build build --work /tmp/figures --results bench/results \
       --steps 600 --every 200 --views 4 --lego ../shared/data/nerf_synthetic/lego      (about 22 minutes)
+
+Writes bench/results/train_figures.json (every row) and train_figures.md generated from it (write_markdown);
+`--report-only` regenerates the .md from the .json; hand-written notes go under "## Notes (by hand)" at the end of
+the .md, which regeneration keeps. (The committed train_figures.md predates the .json: it has no raw data.)
 """
 
 import argparse
 import csv
 import datetime
 import glob
+import json
 import os
 import sys
 
-from study_common import device_line, procedural_scene, read_json, run
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import report_md  # noqa: E402
+from study_common import device_line, procedural_scene, read_json, run  # noqa: E402
 
 
 def checkpoints(run_dir):
@@ -43,7 +50,17 @@ def main():
     parser.add_argument("--steps", type=int, default=1000)
     parser.add_argument("--every", type=int, default=250, help="steps between evaluated checkpoints")
     parser.add_argument("--views", type=int, default=4, help="val views evaluated per checkpoint")
+    parser.add_argument("--report-only", action="store_true",
+                        help="only regenerate train_figures.md from train_figures.json in --results (no runs; its "
+                             "'## Notes (by hand)' section is kept)")
     args = parser.parse_args()
+    if args.report_only:
+        path = os.path.join(args.results, "train_figures.json")
+        if not os.path.exists(path):
+            sys.exit(f"train_figures: no {path}: results made before 2026-11-26 have no .json; run the study again")
+        write_report(read_json(path), args.results)
+        print(f"train_figures: wrote {args.results}/train_figures.md from train_figures.json")
+        return
     exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
     work = os.path.abspath(args.work)
     os.makedirs(work, exist_ok=True)
@@ -82,21 +99,34 @@ def main():
                              "val_psnr": m["mean"]["psnr"], "val_ssim": m["mean"]["ssim"],
                              "render_seconds_per_megapixel": m["render"]["seconds_per_megapixel"]})
 
-    date = datetime.date.today().isoformat()
+    record = {"date": datetime.date.today().isoformat(), "device": device, "preset": args.preset,
+              "steps": args.steps, "every": args.every, "views": args.views, "rows": rows}
+    with open(os.path.join(args.results, "train_figures.json"), "w") as f:
+        json.dump(record, f, indent=2)
+        f.write("\n")
+    print(write_report(record, args.results))
+
+
+def write_markdown(record):
+    """train_figures.md, generated from train_figures.json alone."""
     text = ("# Training figures\n\n"
-            f"Made by `bench/train_figures.py` on {device_line(device)}, {date}. Preset `{args.preset}` "
-            f"(batch and network in README, Presets), {args.steps} steps, evaluated every {args.every} steps on "
-            f"{args.views} val views. Wall s: training time up to that step (`train_log.csv`, compile time included); "
-            "rays/s: over the last logging window.\n\n"
+            + report_md.generated_banner("bench/train_figures.py", "train_figures.json") + "\n\n"
+            f"Made by `bench/train_figures.py` on {device_line(record['device'])}, {record['date']}. Preset "
+            f"`{record['preset']}` (batch and network in README, Presets), {record['steps']} steps, evaluated every "
+            f"{record['every']} steps on {record['views']} val views. Wall s: training time up to that step "
+            "(`train_log.csv`, compile time included); rays/s: over the last logging window.\n\n"
             "| scene | variant | step | wall s | rays/s | val PSNR | val SSIM | render s/MP | parameters |\n"
             "|---|---|---:|---:|---:|---:|---:|---:|---:|\n")
-    for r in rows:
+    for r in record["rows"]:
         text += (f"| {r['scene']} | {r['variant']} | {r['step']} | {r['wall_seconds']:.0f} | {r['rays_per_second']:.0f} "
                  f"| {r['val_psnr']:.2f} | {r['val_ssim']:.4f} | {r['render_seconds_per_megapixel']:.1f} | "
                  f"{r['parameters']} |\n")
-    with open(os.path.join(args.results, "train_figures.md"), "w") as f:
-        f.write(text)
-    print(text)
+    return text
+
+
+def write_report(record, results):
+    return report_md.write_report(os.path.join(results, "train_figures.md"), write_markdown(record),
+                                  f"python3 bench/train_figures.py --results {results} --report-only")
 
 
 if __name__ == "__main__":
