@@ -6,6 +6,7 @@
 #define DOCTEST_CONFIG_IMPLEMENT
 #include <doctest/doctest.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -13,11 +14,9 @@
 #include <iostream>
 #include <string>
 
-#include <CLI/CLI.hpp>
-
 #include "cl/context.hpp"
-#include "cross_device.hpp"
 #include "core/error.hpp"
+#include "cross_device.hpp"
 #include "reporter.hpp"
 #include "support/test_context.hpp"
 
@@ -31,8 +30,7 @@ using mipnerf::selftest::CheckResult;
 // ray-math stage, the MLP's element-wise kernels, Adam and the small networks (the training step and CLBlast's larger
 // products take minutes there).
 const char* kFullFilter = "*";
-const char* kQuickFilter =
-    "specialisations:*,mlp kernels:*,adam: device steps*,mlp device: small network*";
+const char* kQuickFilter = "specialisations:*,mlp kernels:*,adam: device steps*,mlp device: small network*";
 
 std::string ratio_text(const CheckResult& r) {
   if (r.worst_what.empty()) return "-";
@@ -59,11 +57,20 @@ std::string xml_escape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -98,15 +105,18 @@ void write_junit(const std::string& path, const std::vector<CheckResult>& result
 
 int main(int argc, char** argv) {
   using namespace mipnerf;
-  CLI::App app{"mipnerf-selftest: checks every kernel stage, the MLP and training steps on an OpenCL device against "
-               "the double-precision CPU reference, at the test suite's bounds"};
+  CLI::App app{
+      "mipnerf-selftest: checks every kernel stage, the MLP and training steps on an OpenCL device against "
+      "the double-precision CPU reference, at the test suite's bounds"};
   std::string device, expect_platform, junit, injected_option;
   bool quick = false;
-  app.add_option("--device", device, "OpenCL device, as mipnerf-cl --device takes it (default: $MIPNERF_DEVICE, "
-                                      "else the first GPU, else the first CPU)")
+  app.add_option("--device", device,
+                 "OpenCL device, as mipnerf-cl --device takes it (default: $MIPNERF_DEVICE, "
+                 "else the first GPU, else the first CPU)")
       ->envname("MIPNERF_DEVICE");
-  app.add_flag("--quick", quick, "Only the checks that fit a slow device or simulator (every specialisation of every "
-                                 "stage, the MLP kernels, Adam, small networks)");
+  app.add_flag("--quick", quick,
+               "Only the checks that fit a slow device or simulator (every specialisation of every "
+               "stage, the MLP kernels, Adam, small networks)");
   app.add_option("--expect-platform", expect_platform,
                  "Fail unless the device is on this OpenCL platform (the test command's stages)");
   app.add_option("--junit", junit, "Also write the results as a JUnit file");
@@ -132,7 +142,8 @@ int main(int argc, char** argv) {
         fault.flag(injected_option);
       }
       ctx.add_base_options(fault);
-      std::cout << "selftest: every kernel built with " << fault.str() << " (--inject-build-option): checks must fail\n";
+      std::cout << "selftest: every kernel built with " << fault.str()
+                << " (--inject-build-option): checks must fail\n";
     }
     const auto& d = ctx.device_info();
     std::cout << "selftest: device [" << d.index << "] " << d.name << " (" << d.type_name() << "), platform '"

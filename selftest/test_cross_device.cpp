@@ -8,12 +8,12 @@
 #include <vector>
 
 #include "cl/context.hpp"
+#include "cross_device.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "support/train_fixtures.hpp"
 #include "train/config.hpp"
 #include "train/trainer.hpp"
-#include "cross_device.hpp"
 
 using namespace mipnerf;
 
@@ -21,9 +21,12 @@ namespace {
 
 // The batch losses of `steps` tiny-preset steps on `ctx`, from the same seed and data as every other call.
 std::vector<double> losses_of(ocl::Context& ctx, const std::string& scene, const std::string& name, int steps) {
-  const auto config = train::resolve_config(
-      "tiny", "mipnerf", {{"steps", std::to_string(steps)}, {"batch_size", "256"}, {"log_every", "1"},
-                          {"checkpoint_every", "1000"}, {"val_views", "1"}});
+  const auto config = train::resolve_config("tiny", "mipnerf",
+                                            {{"steps", std::to_string(steps)},
+                                             {"batch_size", "256"},
+                                             {"log_every", "1"},
+                                             {"checkpoint_every", "1000"},
+                                             {"val_views", "1"}});
   const std::string out = test::fresh_run_dir(name);
   train::Trainer trainer(ctx, config, scene, out, false);
   std::vector<double> losses;

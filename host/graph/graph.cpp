@@ -81,7 +81,7 @@ size_t Graph::bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_
   return bytes;
 }
 
-Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> networks, GraphMode mode,
+Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*> networks, GraphMode mode,
              size_t max_chunk_rays, size_t max_batch_rays)
     : ctx_(&ctx),
       spec_(spec),
@@ -228,7 +228,7 @@ void Graph::encode_level(size_t l, size_t n_rays) {
 void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws) {
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& buffers = levels_[l];
-  mlp::Mlp& network = *networks_[level.mlp_index];
+  mlp::Network& network = *networks_[level.mlp_index];
   const size_t feature_width = network.config().input_width;
   mlp::MlpInputs in;
   in.features = mlp::view(features_, feature_width);

@@ -15,7 +15,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "graph/graph_spec.hpp"
-#include "mlp/mlp.hpp"
+#include "mlp/network.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
 #include "ops/loss.hpp"
@@ -72,7 +72,7 @@ class Graph {
  public:
   // `networks[i]` evaluates the levels with mlp_index i; they outlive the graph. Buffers are sized for
   // chunks of up to max_chunk_rays and (training) batches of up to max_batch_rays.
-  Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Mlp*> networks, GraphMode mode,
+  Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*> networks, GraphMode mode,
         size_t max_chunk_rays, size_t max_batch_rays = 0);
   ~Graph();
 
@@ -115,7 +115,7 @@ class Graph {
 
   ocl::Context* ctx_;
   GraphSpec spec_;
-  std::vector<mlp::Mlp*> networks_;
+  std::vector<mlp::Network*> networks_;
   GraphMode mode_;
   size_t max_chunk_rays_;
   size_t max_batch_rays_;
