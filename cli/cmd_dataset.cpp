@@ -10,8 +10,9 @@
 #include "common.hpp"
 #include "core/error.hpp"
 #include "core/stage_options.hpp"
-#include "data/colmap_import.hpp"
+#include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
+#include "data/formats/formats.hpp"
 #include "data/inspect.hpp"
 #include "train/config.hpp"
 
@@ -21,7 +22,9 @@ namespace {
 struct InspectArgs {
   std::string path;
   int scales = 1;
-  std::string background = enum_name(Background::white);  // parsed in run_inspect by its name table
+  int factor = 1;
+  std::string background;  // empty: what train would choose for the scene; else parsed by its name table
+  std::optional<bool> spherify;  // unset: what train would choose
   double near = 0.0, far = 0.0;
   std::vector<std::string> splits;
 };
@@ -39,7 +42,7 @@ std::string range(double low, double high, int precision = 4) {
 }
 
 // Fixed decimals, so a look-at point at the origin reads (0.000, 0.000, 0.000) and not 1e-17s.
-std::string vec(const data::Vec3& v) {
+std::string vec(const Vec3& v) {
   auto unsigned_zero = [](double x) { return std::abs(x) < 5e-4 ? 0.0 : x; };  // no "-0.000"
   char text[96];
   std::snprintf(text, sizeof(text), "(%.3f, %.3f, %.3f)", unsigned_zero(v[0]), unsigned_zero(v[1]),
@@ -90,18 +93,38 @@ Background parse_background_flag(const std::string& value) {
   return *parsed;
 }
 
-void run_inspect(const InspectArgs& args) {
+// The load options `train` would use for the dataset: the effects its scene calls for (data/formats), and any
+// explicit flag instead. `scene_line` becomes train's "scene: …" line.
+data::LoadOptions train_like_options(const InspectArgs& args, std::string& scene_line) {
   data::LoadOptions options;
+  options.factor = static_cast<uint32_t>(args.factor);
+  const data::SceneEffects effects = data::scene_effects(args.path, options);
+  auto effect = [&effects](const char* name, const char* otherwise) {
+    const auto found = effects.settings.find(name);
+    return found == effects.settings.end() ? std::string(otherwise) : found->second;
+  };
+  options.background = parse_background_flag(args.background.empty() ? effect("background", "white") : args.background);
+  options.llff.spherify = args.spherify ? *args.spherify : effect("spherify", "false") == "true";
+  options.llff.ndc = effect("ray_shape", "cone") == "cylinder";
+  scene_line = "scene: " + effects.summary;
+  if (!args.background.empty() || args.spherify) scene_line += " (flags given here win)";
+  return options;
+}
+
+void run_inspect(const InspectArgs& args) {
+  std::string scene_line;
+  data::LoadOptions options = train_like_options(args, scene_line);
   options.scales = args.scales;
-  options.background = parse_background_flag(args.background);
   if (args.near > 0.0) options.near = args.near;
   if (args.far > 0.0) options.far = args.far;
   options.splits = args.splits;
   options.log = print_log;
   const data::Dataset dataset = data::load_dataset(args.path, options);
   std::cout << "dataset " << dataset.path << "\n"
-            << "format " << data::format_name(dataset.format) << ", background " << args.background
-            << (args.scales > 1 ? ", " + std::to_string(args.scales) + " scales built on the fly" : "") << "\n";
+            << "format " << data::format_name(dataset.format) << ", background " << enum_name(options.background)
+            << (args.factor > 1 ? ", factor " + std::to_string(args.factor) : "")
+            << (args.scales > 1 ? ", " + std::to_string(args.scales) + " scales built on the fly" : "") << "\n"
+            << scene_line << "\n";
   for (const auto& split : dataset.splits) {
     const data::SplitSummary summary = data::summarize(split);
     // An LLFF capture's near 0, far 1 are NDC bounds, not depths the look-at centre could be compared with.
@@ -148,7 +171,12 @@ void register_dataset(CLI::App& app) {
   inspect->add_option("--scales", args->scales, "Build this many scales on the fly (the paper's multiscale: 4)")
       ->check(CLI::Range(1, 8));
   // The training setting's help: the dataset composites its images exactly as training does.
-  inspect->add_option("--background", args->background, train::find_setting("background").help);
+  inspect->add_option("--background", args->background,
+                      "white | black | none; default: what train would choose for the scene (its effects)");
+  inspect->add_option("--factor", args->factor, "Downsample by this power of two (LLFF: images_<factor>/ when present)")
+      ->check(CLI::PositiveNumber);
+  inspect->add_option("--spherify", args->spherify,
+                      "LLFF: true re-poses a 360° capture around its centre; default: what train would choose");
   inspect->add_option("--near", args->near, "Override near (depth along the optical axis)")
       ->check(CLI::PositiveNumber);
   inspect->add_option("--far", args->far, "Override far")->check(CLI::PositiveNumber);

@@ -6,10 +6,11 @@
 #include <memory>
 
 #include "core/error.hpp"
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 #include "common.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
+#include "eval/render_job.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "io/atomic_file.hpp"
@@ -52,70 +53,27 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   const data::Dataset dataset =
       data::load_dataset(data_path, train::load_options(model.config, data_path, {args.split}, args.scales));
   const data::Split& split = dataset.split(args.split);
-  const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
   const std::string out =
       args.out.empty() ? (fs::path(eval::run_folder_of(found)) / ("eval_" + args.split)).string() : args.out;
-  const fs::path images = fs::path(out) / "images";
-  const std::vector<std::string> stems = eval::split_image_stems(split);
-
-  prepare_gemm_for_rendering(*ctx);
-  eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), split.cameras,
-                               eval::RenderSettings{chunk, args.supersample, args.seed});
-  const double warm_up = renderer.warm_up();
-
-  eval::EvaluateOptions options;
-  options.max_views = args.views;
-  size_t total_rays = 0;
-  for (size_t i : eval::select_views(split, args.views)) {
-    total_rays += static_cast<size_t>(split.cameras[i].width_px) * split.cameras[i].height_px * args.supersample;
-  }
-  Progress progress("eval " + args.split, static_cast<int64_t>(total_rays));
-  progress.update(0);  // the rate (and ETA) counts from here, not from the first chunk
-  size_t images_done = 0, images_total = eval::select_views(split, args.views).size();
-  options.ray_progress = [&](size_t done, size_t) {
-    progress.update(static_cast<int64_t>(done), "image " + std::to_string(std::min(images_done + 1, images_total)) +
-                                                    "/" + std::to_string(images_total));
+  Progress progress("eval " + args.split, 0);
+  eval::RenderJob job;
+  job.model = &model;
+  job.checkpoint = checkpoint;
+  job.chunk_rays = args.chunk;
+  job.supersample = args.supersample;
+  job.seed = args.seed;
+  job.progress = [&](size_t done, size_t total, const std::string& detail) {
+    progress.set_total(static_cast<int64_t>(total));
+    progress.update(static_cast<int64_t>(done), detail);
   };
-  options.progress = [&](size_t done, size_t) { images_done = done; };
-  if (!args.no_images && dist::world().is_root()) {  // under mpirun, rank 0 writes
-    options.on_image = [&](const eval::ImageScore& score, const eval::RenderedImage& image, const float* truth) {
-      const std::string stem = (images / stems[score.index]).string();
-      eval::write_rendered_image(stem, image, {true, args.exr});
-      io::write_png(stem + "_gt.png", image.width, image.height, 3, truth);
-      const auto error =
-          eval::error_image(image.rgb.data(), truth, static_cast<size_t>(image.width) * image.height, args.error_gain);
-      io::write_png(stem + "_error.png", image.width, image.height, 3, error.data());
-    };
-  }
-  const eval::SplitScores scores = eval::evaluate_split(renderer, split, options);
+  eval::ScoreOptions options;
+  options.views = args.views;
+  options.images = !args.no_images;
+  options.exr = args.exr;
+  options.error_gain = args.error_gain;
+  const eval::SplitScores scores = eval::score_split(*ctx, job, split, data_path, out, options);
   progress.finish();
-  if (!dist::world().is_root()) return;  // every rank scored the gathered images alike; rank 0 reports
-
-  eval::EvalRecord record;
-  record.checkpoint = checkpoint;
-  record.step = model.step;
-  record.train_seconds = model.train_seconds;
-  record.trained_on = model.trained_on;
-  record.data = fs::absolute(data_path).lexically_normal().string();
-  record.split = args.split;
-  record.date = eval::utc_timestamp();
-  record.device = eval::device_record(ctx->device_info());
-  record.model = {{"variant", enum_name(model.config.variant)},
-                  {"parameters", eval::parameter_count(model)},
-                  {"config", train::config_json(model.config)}};
-  record.supersample = args.supersample;
-  record.chunk_rays = chunk;
-  record.warm_up_seconds = warm_up;
-  record.image_folder = args.no_images ? "" : "images";
-  record.image_stems = stems;
-  auto metrics = eval::metrics_json(scores, record);
-  if (!args.no_images) {
-    char gain[32];
-    std::snprintf(gain, sizeof(gain), "%g", args.error_gain);
-    metrics["error_images"] = std::string("mean |render - ground truth| over RGB, times ") + gain + ", clamped to 1";
-  }
-  io::write_bytes_atomically((fs::path(out) / "metrics.json").string(), metrics.dump(2) + "\n");
-  io::write_bytes_atomically((fs::path(out) / "metrics.md").string(), eval::metrics_markdown(scores, record));
+  if (!parallel::world().is_root()) return;
 
   std::printf("%s split of %s, step %lld, on %s:\n%s", args.split.c_str(), data_path.c_str(),
               static_cast<long long>(model.step), ctx->device_info().name.c_str(),

@@ -8,11 +8,12 @@
 #include <optional>
 
 #include "core/error.hpp"
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 #include "common.hpp"
 #include "data/camera_path.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
+#include "eval/render_job.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "eval/view_cameras.hpp"
@@ -154,59 +155,28 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
   eval::ViewFrames frames = frames_of(args, cmd, model, checkpoint, resolution);
   eval::apply_depth_range(frames.cameras, if_given(cmd, "--near", args.near), if_given(cmd, "--far", args.far));
-  const size_t chunk = eval::render_chunk_rays(model, ctx->device_info(), args.chunk);
   const std::string out =
       args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
-  const std::string device = ctx->device_info().name;
-
-  prepare_gemm_for_rendering(*ctx);
-  eval::ImageRenderer renderer(*ctx, model.spec, model.network_pointers(), frames.cameras,
-                               eval::RenderSettings{chunk, args.supersample, args.seed});
-  const double warm_up = renderer.warm_up();
-
-  size_t total_rays = 0;
-  for (const auto& c : frames.cameras) total_rays += static_cast<size_t>(c.width_px) * c.height_px * args.supersample;
-  Progress progress("render", static_cast<int64_t>(total_rays));
-  progress.update(0);  // the rate (and ETA) counts from here, not from the first chunk
-  size_t rays_before = 0;
-  double seconds = 0.0, megapixels = 0.0;
-  std::vector<std::string> file_paths;
-  const std::map<std::string, std::string> attributes = {{"mipnerf:checkpoint", checkpoint},
-                                                         {"mipnerf:step", std::to_string(model.step)}};
-  for (size_t i = 0; i < frames.cameras.size(); ++i) {
-    const std::string detail = "frame " + std::to_string(i + 1) + "/" + std::to_string(frames.cameras.size());
-    const eval::RenderedImage image = renderer.render(
-        i, [&](size_t done, size_t) { progress.update(static_cast<int64_t>(rays_before + done), detail); });
-    rays_before += static_cast<size_t>(image.width) * image.height * args.supersample;
-    seconds += image.seconds;
-    megapixels += image.megapixels();
-    if (!dist::world().is_root()) continue;  // under mpirun, every rank holds the image; rank 0 writes it
-    const auto written =
-        eval::write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
-    file_paths.push_back(fs::path(written.front()).filename().string());
-  }
+  Progress progress("render", 0);
+  eval::RenderJob job;
+  job.model = &model;
+  job.checkpoint = checkpoint;
+  job.chunk_rays = args.chunk;
+  job.supersample = args.supersample;
+  job.seed = args.seed;
+  job.progress = [&](size_t done, size_t total, const std::string& detail) {
+    progress.set_total(static_cast<int64_t>(total));
+    progress.update(static_cast<int64_t>(done), detail);
+  };
+  const eval::RenderedFrames rendered = eval::render_frames(*ctx, job, frames, out, formats);
   progress.finish();
-  if (!dist::world().is_root()) return;
+  if (!parallel::world().is_root()) return;
 
-  data::write_camera_path((fs::path(out) / "transforms.json").string(), frames.cameras, file_paths);
-  eval::RenderRecord record;
-  record.checkpoint = checkpoint;
-  record.step = model.step;
-  record.source = frames.details;
-  record.date = eval::utc_timestamp();
-  record.device = eval::device_record(ctx->device_info());
-  record.frames = frames.cameras.size();
-  record.formats = formats;
-  record.rays_per_pixel = args.supersample;
-  record.chunk_rays = chunk;
-  record.warm_up_seconds = warm_up;
-  record.render_seconds = seconds;
-  record.megapixels = megapixels;
-  eval::write_render_record(out, record);
-
+  const double seconds = rendered.seconds, megapixels = rendered.megapixels;
+  const std::string device = ctx->device_info().name;
   const auto& first = frames.cameras.front();
   const std::string ranks =
-      dist::world().distributed() ? " (" + std::to_string(dist::world().size()) + " ranks, rank 0's)" : "";
+      parallel::world().distributed() ? " (" + std::to_string(parallel::world().size()) + " ranks, rank 0's)" : "";
   std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s%s; images in %s\n",
               frames.cameras.size(), frames.source.c_str(), first.width_px, first.height_px,
               args.supersample > 1 ? (", " + std::to_string(args.supersample) + " rays per pixel").c_str() : "",

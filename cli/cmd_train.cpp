@@ -11,7 +11,7 @@
 
 #include "bench/stage_report.hpp"
 #include "core/error.hpp"
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 #include "common.hpp"
 #include "data/procedural.hpp"
 #include "eval/report.hpp"
@@ -62,7 +62,7 @@ std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI:
 // The quick start's scene: made once inside the output folder, reused afterwards.
 std::string default_scene(const std::string& out_dir) {
   const fs::path scene = fs::path(out_dir) / "scene";
-  const dist::World& world = dist::world();
+  const parallel::World& world = parallel::world();
   if (!world.is_root()) {  // under mpirun, rank 0 makes it, the others wait for it
     world.barrier();
     return scene.string();
@@ -129,14 +129,15 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   std::optional<Progress> train_progress, val_progress;
   void (*previous_handler)(int) = SIG_DFL;
   void (*previous_term_handler)(int) = SIG_DFL;
-  const bool root = dist::world().is_root();  // under mpirun, rank 0 alone prints and writes
+  const bool root = parallel::world().is_root();  // under mpirun, rank 0 alone prints and writes
   eval::TrainAndEvaluateOptions run;
   run.data_path = data_path;
   run.out_dir = args.out;
   run.resume = args.resume;
   run.val_image_folder = (fs::path(args.out) / "val").string();
   run.on_setup = [&](train::Trainer& trainer) {
-    gemm::load_gemm_tuning(*ctx);  // after the inputs are checked, before the first product
+    // After the inputs are checked, before the first product; only where CLBlast runs the networks' products.
+    if (trainer.networks().front()->backend() == gemm::GemmBackend::clblast) gemm::load_gemm_tuning(*ctx);
     if (root) print_setup(trainer, *ctx, args.preset);
     g_stop_requested = false;
     previous_handler = std::signal(SIGINT, on_interrupt);

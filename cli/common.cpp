@@ -5,9 +5,7 @@
 #include <iostream>
 
 #include "core/error.hpp"
-#include "dist/world.hpp"
-#include "gemm/gemm_backend.hpp"
-#include "gemm/gemm_tuning.hpp"
+#include "parallel/world.hpp"
 
 namespace mipnerf::cli {
 
@@ -20,7 +18,7 @@ namespace {
 
 // "mipnerf-cl: ", or "mipnerf-cl (rank 1): " on ranks other than 0 under mpirun.
 std::string line_prefix() {
-  const dist::World& w = dist::world();
+  const parallel::World& w = parallel::world();
   return w.is_root() ? "mipnerf-cl: " : "mipnerf-cl (rank " + std::to_string(w.rank()) + "): ";
 }
 
@@ -36,11 +34,11 @@ std::string device_of_this_rank(const std::string& selector) {
   // Every rank reads the same list: what is wrong with the list itself, all of them find (a collective error).
   for (const auto& entry : entries) {
     if (entry.empty()) {
-      throw dist::CollectiveError("--device '" + selector + "': an empty entry in the list; give one device per "
+      throw parallel::CollectiveError("--device '" + selector + "': an empty entry in the list; give one device per "
                                   "local rank, e.g. --device 0,1");
     }
   }
-  const dist::World& w = dist::world();
+  const parallel::World& w = parallel::world();
   if (!w.distributed()) {
     throw Error("--device '" + selector + "' lists several devices, one per rank under mpirun; this process runs "
                 "alone: give one device");
@@ -57,9 +55,9 @@ std::string device_of_this_rank(const std::string& selector) {
 }  // namespace
 
 void report_error(const std::exception& e) {
-  const bool collective = dynamic_cast<const dist::CollectiveError*>(&e) != nullptr;
+  const bool collective = dynamic_cast<const parallel::CollectiveError*>(&e) != nullptr;
   // Every rank has it; rank 0 says it once (also among the copies mpirun started of a build without MPI).
-  if (collective && !(dist::world().is_root() && dist::launcher_rank() == 0)) return;
+  if (collective && !(parallel::world().is_root() && parallel::launcher_rank() == 0)) return;
   std::cerr << line_prefix() << "error: " << e.what() << "\n";
   const auto* error = dynamic_cast<const Error*>(&e);
   if (error != nullptr && global_options().verbose && !error->details().empty()) std::cerr << error->details() << "\n";
@@ -68,7 +66,7 @@ void report_error(const std::exception& e) {
 void print_log(LogLevel level, const std::string& message) {
   if (level == LogLevel::debug && !global_options().verbose) return;
   // Under mpirun the ranks do the same work: rank 0 tells it, the others only warn.
-  if (level == LogLevel::info && !dist::world().is_root()) return;
+  if (level == LogLevel::info && !parallel::world().is_root()) return;
   const char* prefix = level == LogLevel::warning ? "warning: " : level == LogLevel::debug ? "debug: " : "";
   std::cerr << line_prefix() << prefix << message << "\n";
 }
@@ -101,14 +99,6 @@ std::map<std::string, std::string> parse_set_assignments(const std::vector<std::
     out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
   }
   return out;
-}
-
-void prepare_gemm_for_rendering(ocl::Context& ctx) {
-  // CLBlast's parameters matter only where CLBlast runs the networks' products (gemm_backend=auto's choice for the
-  // device): on a CPU device that uses the host BLAS, nothing is loaded and no tune is suggested.
-  if (gemm::choose_gemm_backend(ctx, gemm::GemmBackend::automatic) == gemm::GemmBackend::clblast) {
-    gemm::load_gemm_tuning(ctx);
-  }
 }
 
 }  // namespace mipnerf::cli

@@ -27,11 +27,6 @@ GlobalOptions& global_options();
 // Commands that run GEMMs then call gemm::load_gemm_tuning once their inputs are checked.
 std::unique_ptr<ocl::Context> open_context(bool profiling = false);
 
-// For commands that render a trained model (render, eval): installs ctx's GEMM tuning and picks the GEMM backend for
-// this device (gemm_backend=auto), not the checkpoint's setting: that one chose for the training device, and a model
-// trained on a CPU with the host BLAS must still render on a GPU.
-void prepare_gemm_for_rendering(ocl::Context& ctx);
-
 // The view selection and sampling options that render and eval share (--views, --scales, --supersample):
 // throws mipnerf::Error naming the flag when one is out of range. --views and --scales are checked only when given.
 void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t supersample);
@@ -41,7 +36,7 @@ void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t 
 std::map<std::string, std::string> parse_set_assignments(const std::vector<std::string>& assignments,
                                                          const std::string& example);
 
-// Prints an error as one line ("mipnerf-cl: error: …", with the rank under mpirun); a dist::CollectiveError, which
+// Prints an error as one line ("mipnerf-cl: error: …", with the rank under mpirun); a parallel::CollectiveError, which
 // every rank raises alike, is printed by rank 0 alone. Details follow with --verbose.
 void report_error(const std::exception& e);
 

@@ -5,7 +5,7 @@
 
 #include "core/error.hpp"
 #include "common.hpp"
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 #include "planted_fault.hpp"
 
 namespace mipnerf::cli {
@@ -55,16 +55,16 @@ int main(int argc, char** argv) {
     const std::string name = sub->get_name();
     if (name == "train" || name == "render" || name == "eval") continue;
     sub->preparse_callback([name](size_t) {
-      if (dist::world().distributed()) {
-        throw dist::CollectiveError("mipnerf-cl " + name + " runs as one process: start it without mpirun (train, "
+      if (parallel::world().distributed()) {
+        throw parallel::CollectiveError("mipnerf-cl " + name + " runs as one process: start it without mpirun (train, "
                                     "render and eval run under mpirun)");
       }
     });
   }
 
   try {
-    // First: under mpirun this process is one rank of several (host/dist); the session ends MPI on every return.
-    dist::Session session(&argc, &argv);
+    // First: under mpirun this process is one rank of several (host/parallel); the session ends MPI on every return.
+    parallel::Session session(&argc, &argv);
     try {
       app.parse(argc, argv);
     } catch (const CLI::Error&) {
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
       cli::report_error(e);
       // An error of this rank alone leaves the others waiting in the next collective: stop them all.
-      if (dynamic_cast<const dist::CollectiveError*>(&e) == nullptr) dist::Session::abort_all(1);
+      if (dynamic_cast<const parallel::CollectiveError*>(&e) == nullptr) parallel::Session::abort_all(1);
       return 1;
     }
   } catch (const CLI::CallForHelp& e) {

@@ -1,7 +1,7 @@
 // The progress line of long-running commands.
 #include "progress.hpp"
 
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 
 #include <unistd.h>
 
@@ -36,12 +36,12 @@ void Progress::finish(const std::string& detail) { finish_at(total_, detail); }
 void Progress::finish_at(int64_t done, const std::string& detail) {
   if (finished_) return;
   draw(done, detail, true);
-  if (tty_ && dist::world().is_root()) std::cerr << "\n";
+  if (tty_ && parallel::world().is_root()) std::cerr << "\n";
   finished_ = true;
 }
 
 void Progress::draw(int64_t done, const std::string& detail, bool force) {
-  if (!dist::world().is_root()) return;  // under mpirun the ranks progress together: rank 0 shows it
+  if (!parallel::world().is_root()) return;  // under mpirun the ranks progress together: rank 0 shows it
   const auto now = std::chrono::steady_clock::now();
   // A terminal is redrawn ~5 times a second; a log file gets a line every 10 seconds.
   const auto interval = tty_ ? std::chrono::milliseconds(200) : std::chrono::milliseconds(10000);

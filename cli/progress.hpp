@@ -24,6 +24,8 @@ class Progress {
   void finish_at(int64_t done, const std::string& detail = {});
 
   double elapsed_seconds() const;
+  // Sets the number of units when it is known only once the work starts (a job that counts its own rays).
+  void set_total(int64_t total) { total_ = total; }
 
  private:
   void draw(int64_t done, const std::string& detail, bool force);

@@ -43,12 +43,19 @@ find_package(JPEG QUIET)
 mipnerf_require(JPEG_FOUND "libjpeg" "libjpeg-dev")
 
 # PLplot draws `mipnerf-cl plot`'s curves (io/line_plot): SVG with its built-in driver, PNG with its cairo driver
-# (plplot-driver-cairo, checked when a PNG is asked for).
+# (plplot-driver-cairo, checked when a PNG is asked for). Optional (MIPNERF_PLPLOT=AUTO, the default: when found):
+# without it everything but `plot` builds and runs, and `plot` says what to install.
+set(MIPNERF_PLPLOT AUTO CACHE STRING "Build `plot` with PLplot: AUTO (when found), ON (required) or OFF")
 find_package(PkgConfig QUIET)
-if(PkgConfig_FOUND)
+if(PkgConfig_FOUND AND NOT MIPNERF_PLPLOT STREQUAL "OFF")
   pkg_check_modules(PLPLOT QUIET IMPORTED_TARGET plplot)
 endif()
-mipnerf_require(PLPLOT_FOUND "PLplot" "libplplot-dev")
+if(MIPNERF_PLPLOT STREQUAL "ON")
+  mipnerf_require(PLPLOT_FOUND "PLplot" "libplplot-dev")
+endif()
+if(NOT PLPLOT_FOUND)
+  message(STATUS "PLplot left out: `mipnerf-cl plot` will say to install libplplot-dev and rebuild")
+endif()
 
 if(MIPNERF_BUILD_TESTS)
   find_package(doctest CONFIG QUIET)

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Configures and builds mipnerf-cl (Release) into ${BUILD_DIR:-build}.
+# Configures and builds mipnerf-cl (Release) into ${BUILD_DIR:-build}: every target, or only the targets named
+# (scripts/quickstart.sh builds the executable alone).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir="${BUILD_DIR:-build}"
@@ -7,4 +8,8 @@ jobs="${JOBS:-$(nproc)}"
 # ccache, when installed, keeps rebuilds after a checkout switch short (scripts/test-sanitize.sh does the same).
 export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v ccache || true)}"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release
-cmake --build "$build_dir" -j "$jobs"
+if [ $# -gt 0 ]; then
+  cmake --build "$build_dir" -j "$jobs" --target "$@"
+else
+  cmake --build "$build_dir" -j "$jobs"
+fi

@@ -1,21 +1,30 @@
 #!/usr/bin/env bash
-# Installs every Debian package mipnerf-cl needs to build, test and benchmark, plus any package named as an
-# argument (bench/setup.sh adds what the studies need: scripts/install-deps.sh python3-matplotlib).
+# Installs the Debian packages mipnerf-cl needs: to build and run it (the quick start), and with --for-tests also
+# what the test command's stages need (oclgrind, clang with its sanitizer runtimes, Open MPI), plus any package named
+# as an argument (bench/setup.sh adds what the studies need: scripts/install-deps.sh python3-matplotlib).
 # Idempotent and non-interactive: packages already installed are skipped; uses sudo when not root.
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config python3 python3-venv
+  build-essential cmake pkg-config python3 python3-venv ccache
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
-  oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev libjpeg-dev zlib1g-dev
   libplplot-dev plplot-driver-cairo  # `mipnerf-cl plot`: curves as SVG, and as PNG through PLplot's cairo driver
-  libopenblas-dev   # the GEMM benchmark's CPU BLAS only
+  libopenblas-dev   # the host GEMM backend (the MLP fused on the host BLAS on CPU devices)
+)
+test_packages=(
+  oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
   libopenmpi-dev openmpi-bin  # mpirun: data-parallel training and sharded rendering (optional at build time)
-  "$@"
 )
+for argument in "$@"; do
+  if [ "$argument" = "--for-tests" ]; then
+    packages+=("${test_packages[@]}")
+  else
+    packages+=("$argument")
+  fi
+done
 
 missing=()
 for package in "${packages[@]}"; do

@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-./scripts/build.sh
+./scripts/build.sh mipnerf-cl  # the executable alone; the test suites build with the test command
 build_dir="${BUILD_DIR:-build}"
 runs="${RUNS_DIR:-runs}"
 "$build_dir/mipnerf-cl" make-scene "$runs/scene"

@@ -24,7 +24,7 @@ if [ "$ci" = true ] && [ "$skip_list" != ",," ]; then
   echo "test: MIPNERF_SKIP='$MIPNERF_SKIP' with CI=true: in CI every stage must run" >&2
   exit 2
 fi
-./scripts/install-deps.sh || exit 1
+./scripts/install-deps.sh --for-tests || exit 1
 ./scripts/build.sh || exit 1
 build_dir="${BUILD_DIR:-build}"
 sanitize_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"

@@ -9,10 +9,7 @@
 
 namespace mipnerf::bench {
 
-// The reference's version of each kernel the benchmark times, looked up by the kernel's name (e.g. "render_fwd").
+// The reference's version of each kernel the benchmark times, by the stage list's kernel id.
 ReferenceStages reference_stages();
-
-// The kernels reference_stages() knows, sorted (for the test that it and the stage list name the same kernels).
-std::vector<std::string> reference_kernels();
 
 }  // namespace mipnerf::bench

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <functional>
-#include <map>
 #include <optional>
 #include <random>
 
@@ -35,52 +34,43 @@ struct Stages {
 };
 
 using Options = ops::RayMathOptions;
-using Builder = std::function<void(ocl::Context&, const Options&, Stages&)>;
 
-// How to build each stage of ops::ray_math_stages(), by its name.
-const std::map<std::string, Builder>& builders() {
-  static const std::map<std::string, Builder> table = {
-      {"rays", [](ocl::Context& ctx, const Options& o, Stages& s) { s.rays.emplace(ctx, o.rays); }},
-      {"sample", [](ocl::Context& ctx, const Options& o, Stages& s) { s.sample.emplace(ctx, o.sample); }},
-      {"gaussian", [](ocl::Context& ctx, const Options& o, Stages& s) { s.gaussian.emplace(ctx, o.gaussian); }},
-      {"encode", [](ocl::Context& ctx, const Options& o, Stages& s) { s.encode.emplace(ctx, o.gaussian); }},
-      {"activations", [](ocl::Context& ctx, const Options& o, Stages& s) { s.activations.emplace(ctx, o.activation); }},
-      {"render", [](ocl::Context& ctx, const Options& o, Stages& s) { s.render.emplace(ctx, o.render, o.activation); }},
-      {"resample", [](ocl::Context& ctx, const Options&, Stages& s) { s.resample.emplace(ctx); }},
-  };
-  return table;
-}
-
-// Looks `name` up in `table`, or throws naming the benchmark's gap (a listed stage or kernel it cannot run).
-template <typename Table>
-const typename Table::mapped_type& find_in(const Table& table, const std::string& name, const char* what) {
-  const auto found = table.find(name);
-  if (found == table.end()) {
-    throw Error("kernel benchmark: no " + std::string(what) + " '" + name +
-                "' of the stage list (host/ops/stage_list.cpp) in host/bench/kernel_bench.cpp");
+// Builds one stage of ops::ray_math_stages() (a missing case is a compile error: -Werror=switch).
+void build_stage(ops::StageId id, ocl::Context& ctx, const Options& o, Stages& s) {
+  switch (id) {
+    case ops::StageId::rays:
+      s.rays.emplace(ctx, o.rays);
+      return;
+    case ops::StageId::sample:
+      s.sample.emplace(ctx, o.sample);
+      return;
+    case ops::StageId::gaussian:
+      s.gaussian.emplace(ctx, o.gaussian);
+      return;
+    case ops::StageId::encode:
+      s.encode.emplace(ctx, o.gaussian);
+      return;
+    case ops::StageId::activations:
+      s.activations.emplace(ctx, o.activation);
+      return;
+    case ops::StageId::render:
+      s.render.emplace(ctx, o.render, o.activation);
+      return;
+    case ops::StageId::resample:
+      s.resample.emplace(ctx);
+      return;
   }
-  return found->second;
-}
-
-// Throws unless the benchmark's table holds exactly the `used` names, so neither side can keep an extra one.
-template <typename Table>
-void require_all_used(const Table& table, size_t used, const char* what) {
-  if (used != table.size()) {
-    throw Error("kernel benchmark: host/bench/kernel_bench.cpp knows " + std::to_string(table.size()) + " " + what +
-                "s, the stage list (host/ops/stage_list.cpp) names " + std::to_string(used));
-  }
+  throw Error("kernel benchmark: stage id " + std::to_string(static_cast<int>(id)) + " is not in the stage list");
 }
 
 // Builds every listed stage with the benchmark's options, each first build timed.
 Stages build_stages(ocl::Context& ctx, const ops::RayMathOptions& o, std::vector<ProgramBuild>& builds) {
   Stages stages;
   for (const auto& stage : ops::ray_math_stages()) {
-    const Builder& build = find_in(builders(), stage.name, "stage");
     const auto start = Clock::now();
-    build(ctx, o, stages);
+    build_stage(stage.id, ctx, o, stages);
     builds.push_back({stage.program, seconds_since(start)});
   }
-  require_all_used(builders(), builds.size(), "stage");
   return stages;
 }
 
@@ -136,63 +126,48 @@ std::vector<double> download_double(ocl::Context& ctx, const ocl::DeviceArray<fl
 
 using DeviceCall = std::function<void()>;
 
-// Every listed kernel on the device, by name, over the benchmark's buffers (R rays × N samples).
-std::map<std::string, DeviceCall> device_calls(Stages& s, DeviceBuffers& b, const ops::RayMathOptions& o, size_t R,
-                                               size_t N, const RngKey& key) {
+// One listed kernel on the device over the benchmark's buffers (R rays × N samples); a missing case is a compile
+// error (-Werror=switch).
+DeviceCall device_call(ops::KernelId id, Stages& s, DeviceBuffers& b, const ops::RayMathOptions& o, size_t R, size_t N,
+                       const RngKey& key) {
   const size_t rows = R * N;
   const ops::RaysInputs rays_in{b.cameras, b.camera_ids, b.pixel_ids, R};
   const ops::GaussianInputs gaussian_in{b.rays, b.t_edges, R, N};
   const ops::ActivationInputs act_in{b.raw_density, b.raw_rgb, rows};
   const ops::RenderInputs render_in{b.rgb, b.density, b.t_edges, b.rays, R, N};
   const ops::RenderInputs render_raw_in{b.raw_rgb, b.raw_density, b.t_edges, b.rays, R, N};
-  return {
-      {"rays_fwd", [&s, &b, rays_in, key] { s.rays->fwd(rays_in, b.rays, key); }},
-      {"sample_stratified_fwd",
-       [&s, &b, R, N, key] {
-         s.sample->stratified({b.rays, R, N}, b.t_edges, key);
-       }},
-      {"gaussian_fwd",
-       [&s, &b, gaussian_in] {
-         s.gaussian->fwd(gaussian_in, {b.means, b.covs});
-       }},
-      {"ipe_fwd",
-       [&s, &b, &o, rows] {
-         s.encode->ipe(o.ipe, {b.means, b.covs, rows}, b.features);
-       }},
-      {"gaussian_ipe_fwd", [&s, &b, &o, gaussian_in] { s.encode->gaussian_ipe(o.ipe, gaussian_in, b.features); }},
-      {"pe_fwd",
-       [&s, &b, &o, R] {
-         s.encode->pe(o.view, {b.rays.viewdirs, R}, b.view_features);
-       }},
-      {"activations_fwd",
-       [&s, &b, act_in] {
-         s.activations->fwd(act_in, {b.density, b.rgb});
-       }},
-      {"activations_bwd",
-       [&s, &b, act_in] {
-         s.activations->bwd(act_in, {b.density, b.rgb}, {b.d_raw_density, b.d_raw_rgb});
-       }},
-      {"render_fwd",
-       [&s, &b, render_in] {
-         s.render->fwd(render_in, {b.comp, b.acc, b.distance, b.weights});
-       }},
-      {"render_bwd",
-       [&s, &b, render_in] {
-         s.render->bwd(render_in, b.weights, {b.d_comp, nullptr}, {b.d_rgb, b.d_density});
-       }},
-      {"render_raw_fwd",
-       [&s, &b, render_raw_in] {
-         s.render->raw_fwd(render_raw_in, {b.comp, b.acc, b.distance, b.weights});
-       }},
-      {"render_raw_bwd",
-       [&s, &b, render_raw_in] {
-         s.render->raw_bwd(render_raw_in, b.weights, {b.d_comp, nullptr}, {b.d_raw_rgb, b.d_raw_density});
-       }},
-      {"resample_fwd",
-       [&s, &b, &o, R, N, key] {
-         s.resample->fwd(o.resample, {b.t_edges, b.weights, R, N, N}, b.t_fine, key);
-       }},
-  };
+  using K = ops::KernelId;
+  switch (id) {
+    case K::rays_fwd:
+      return [&s, &b, rays_in, key] { s.rays->fwd(rays_in, b.rays, key); };
+    case K::sample_stratified_fwd:
+      return [&s, &b, R, N, key] { s.sample->stratified({b.rays, R, N}, b.t_edges, key); };
+    case K::gaussian_fwd:
+      return [&s, &b, gaussian_in] { s.gaussian->fwd(gaussian_in, {b.means, b.covs}); };
+    case K::ipe_fwd:
+      return [&s, &b, &o, rows] { s.encode->ipe(o.ipe, {b.means, b.covs, rows}, b.features); };
+    case K::gaussian_ipe_fwd:
+      return [&s, &b, &o, gaussian_in] { s.encode->gaussian_ipe(o.ipe, gaussian_in, b.features); };
+    case K::pe_fwd:
+      return [&s, &b, &o, R] { s.encode->pe(o.view, {b.rays.viewdirs, R}, b.view_features); };
+    case K::activations_fwd:
+      return [&s, &b, act_in] { s.activations->fwd(act_in, {b.density, b.rgb}); };
+    case K::activations_bwd:
+      return [&s, &b, act_in] { s.activations->bwd(act_in, {b.density, b.rgb}, {b.d_raw_density, b.d_raw_rgb}); };
+    case K::render_fwd:
+      return [&s, &b, render_in] { s.render->fwd(render_in, {b.comp, b.acc, b.distance, b.weights}); };
+    case K::render_bwd:
+      return [&s, &b, render_in] { s.render->bwd(render_in, b.weights, {b.d_comp, nullptr}, {b.d_rgb, b.d_density}); };
+    case K::render_raw_fwd:
+      return [&s, &b, render_raw_in] { s.render->raw_fwd(render_raw_in, {b.comp, b.acc, b.distance, b.weights}); };
+    case K::render_raw_bwd:
+      return [&s, &b, render_raw_in] {
+        s.render->raw_bwd(render_raw_in, b.weights, {b.d_comp, nullptr}, {b.d_raw_rgb, b.d_raw_density});
+      };
+    case K::resample_fwd:
+      return [&s, &b, &o, R, N, key] { s.resample->fwd(o.resample, {b.t_edges, b.weights, R, N, N}, b.t_fine, key); };
+  }
+  throw Error("kernel benchmark: kernel id " + std::to_string(static_cast<int>(id)) + " is not in the stage list");
 }
 
 // One row of the benchmark: a listed kernel and how to run it.
@@ -202,12 +177,12 @@ struct Row {
 };
 
 // The listed kernels in the list's order, each with its device call.
-std::vector<Row> rows(const std::map<std::string, DeviceCall>& calls) {
+std::vector<Row> rows(Stages& s, DeviceBuffers& b, const ops::RayMathOptions& o, size_t R, size_t N,
+                      const RngKey& key) {
   std::vector<Row> list;
   for (const auto& stage : ops::ray_math_stages()) {
-    for (const auto& kernel : stage.kernels) list.push_back({&kernel, find_in(calls, kernel.kernel, "kernel")});
+    for (const auto& kernel : stage.kernels) list.push_back({&kernel, device_call(kernel.id, s, b, o, R, N, key)});
   }
-  require_all_used(calls, list.size(), "kernel");
   return list;
 }
 
@@ -299,12 +274,11 @@ KernelBenchResult run_kernel_bench(ocl::Context& ctx, const KernelBenchOptions& 
   DeviceBuffers buffers(ctx, R, N, stage_options);
   const RngKey key{20200823, 1, 0};
   KernelBenchInputs inputs = make_inputs(ctx, stages, buffers, R, N, key);
-  const auto calls = device_calls(stages, buffers, stage_options, R, N, key);
-  const std::vector<Row> list = rows(calls);
+  const std::vector<Row> list = rows(stages, buffers, stage_options, R, N, key);
   for (size_t i = 0; i < list.size(); ++i) {
     if (progress) progress(list[i].kernel->row(), i, list.size());
     const std::function<void()> on_cpu = reference && result.options.reference_reps > 0
-                                             ? reference(list[i].kernel->kernel, stage_options, inputs, R, N, key)
+                                             ? reference(list[i].kernel->id, stage_options, inputs, R, N, key)
                                              : std::function<void()>{};
     result.stages.push_back(time_stage(ctx, list[i], on_cpu, result.options));
   }

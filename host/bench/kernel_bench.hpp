@@ -38,11 +38,11 @@ struct KernelBenchInputs {
   std::vector<double> o1, o2, o3, o4, o5, o6, o7;
 };
 
-// Given a kernel's name (ops::StageKernel::kernel, e.g. "render_fwd"), the call that runs it on the CPU over
-// `inputs` (R rays × N samples) with `options` (the benchmark's: the default ops::RayMathOptions); it throws
-// mipnerf::Error for a kernel it does not know, so it cannot drift from the stage list unnoticed.
+// Given a listed kernel (ops::StageKernel::id), the call that runs it on the CPU over `inputs` (R rays × N samples)
+// with `options` (the benchmark's: the default ops::RayMathOptions). Implementations map every id with a switch, so
+// a kernel added to the stage list without its reference does not compile.
 using ReferenceStages =
-    std::function<std::function<void()>(const std::string& kernel, const ops::RayMathOptions& options,
+    std::function<std::function<void()>(ops::KernelId kernel, const ops::RayMathOptions& options,
                                         KernelBenchInputs& inputs, size_t R, size_t N, const RngKey& key)>;
 
 // One program's first clBuildProgram in this context (PoCL's on-disk cache may serve it: POCL_KERNEL_CACHE=0 gives

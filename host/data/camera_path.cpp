@@ -15,20 +15,12 @@ namespace {
 constexpr double kDegree = M_PI / 180.0;
 constexpr double kSnapDegrees = 20.0;  // orbit_around: an estimated up this close to a world axis is that axis
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double length(const Vec3& v) { return std::sqrt(dot(v, v)); }
-Vec3 scaled(const Vec3& v, double s) { return {v[0] * s, v[1] * s, v[2] * s}; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 
 std::string number_text(double v) {
   char text[32];
   std::snprintf(text, sizeof(text), "%g", v);
   return text;
 }
-
-bool finite(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
 void check_intrinsics(const Camera& c, const std::string& what) {
   if (c.width_px == 0 || c.height_px == 0) throw Error(what + ": the image size must be at least 1x1");
@@ -68,8 +60,8 @@ uint32_t size_value(const std::optional<double>& declared, uint32_t fallback, co
 }  // namespace
 
 void validate(const OrbitOptions& o) {
-  if (!finite(o.target)) throw Error("orbit: the target must be finite");
-  if (!finite(o.up) || !(length(o.up) > 0.0)) throw Error("orbit: the up vector must be finite and non-zero");
+  if (!is_finite(o.target)) throw Error("orbit: the target must be finite");
+  if (!is_finite(o.up) || !(length(o.up) > 0.0)) throw Error("orbit: the up vector must be finite and non-zero");
   if (!(o.radius > 0.0) || !std::isfinite(o.radius)) {
     throw Error("orbit: the radius must be positive, got " + number_text(o.radius));
   }
@@ -84,13 +76,13 @@ void validate(const OrbitOptions& o) {
 
 std::vector<Camera> orbit_cameras(const OrbitOptions& o) {
   validate(o);
-  const Vec3 up = scaled(o.up, 1.0 / length(o.up));
+  const Vec3 up = scale(o.up, 1.0 / length(o.up));
   // Azimuth 0: world x projected onto the orbit's plane (y when up is nearly along x).
   Vec3 reference{1.0, 0.0, 0.0};
   if (std::abs(dot(reference, up)) > 0.9) reference = {0.0, 1.0, 0.0};
   Vec3 e1{reference[0] - dot(reference, up) * up[0], reference[1] - dot(reference, up) * up[1],
           reference[2] - dot(reference, up) * up[2]};
-  e1 = scaled(e1, 1.0 / length(e1));
+  e1 = scale(e1, 1.0 / length(e1));
   const Vec3 e2 = cross(up, e1);
   const double elevation = o.elevation_deg * kDegree;
   std::vector<Camera> cameras;
@@ -123,7 +115,7 @@ OrbitOptions orbit_around(const std::vector<Camera>& cameras) {
   // only roughly for a few random views. Captures are nearly always axis-aligned (Blender: +z up, LLFF: +y), so a
   // mean within kSnapDegrees of a world axis is taken to be that axis: the orbit then stays level.
   if (length(up) > 1e-6 * static_cast<double>(cameras.size())) {
-    o.up = scaled(up, 1.0 / length(up));
+    o.up = scale(up, 1.0 / length(up));
     for (int axis = 0; axis < 3; ++axis) {
       if (std::abs(o.up[axis]) >= std::cos(kSnapDegrees * kDegree)) {
         Vec3 snapped{0.0, 0.0, 0.0};

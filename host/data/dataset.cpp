@@ -7,23 +7,13 @@
 #include <filesystem>
 
 #include "core/error.hpp"
+#include "data/formats/formats.hpp"
 #include "data/frames.hpp"
 
 namespace mipnerf::data {
 namespace fs = std::filesystem;
 
-const char* format_name(DatasetFormat format) {
-  switch (format) {
-    case DatasetFormat::blender:
-      return "Blender (transforms_<split>.json)";
-    case DatasetFormat::multiscale_blender:
-      return "multiscale Blender (metadata.json)";
-    case DatasetFormat::llff:
-      return "LLFF (poses_bounds.npy)";
-    default:
-      return "transforms.json";
-  }
-}
+const char* format_name(DatasetFormat format) { return format_reader(format).name; }
 
 int Split::num_scales() const {
   uint32_t top = 0;
@@ -51,29 +41,7 @@ const Split& Dataset::split(const std::string& name) const {
   throw Error(path + ": no split '" + name + "' (this dataset has: " + split_names() + ")");
 }
 
-DatasetFormat detect_format(const std::string& path) {
-  std::error_code ec;
-  const auto status = fs::status(path, ec);
-  if (!fs::exists(status)) {
-    throw Error(path + ": no such file or folder (create a scene with `mipnerf-cl make-scene " + path + "`)");
-  }
-  if (fs::is_regular_file(status)) {
-    const auto name = fs::path(path).filename().string();
-    if (name == "metadata.json") return DatasetFormat::multiscale_blender;
-    if (fs::path(path).extension() == ".json") return DatasetFormat::transforms_json;
-    throw Error(path + ": not a dataset file: give a folder, a transforms.json or a metadata.json");
-  }
-  auto has = [&path](const char* name) { return fs::is_regular_file(fs::path(path) / name); };
-  if (has("metadata.json")) return DatasetFormat::multiscale_blender;
-  if (has("transforms_train.json") || has("transforms_val.json") || has("transforms_test.json")) {
-    return DatasetFormat::blender;
-  }
-  if (has("transforms.json")) return DatasetFormat::transforms_json;
-  if (has("poses_bounds.npy")) return DatasetFormat::llff;
-  throw Error(path + ": no dataset here: expected transforms_train.json (Blender), metadata.json (multiscale "
-                     "Blender), transforms.json or poses_bounds.npy (LLFF); `mipnerf-cl make-scene DIR` writes a "
-                     "procedural scene");
-}
+DatasetFormat detect_format(const std::string& path) { return detect_reader(path).format; }
 
 Camera scale_camera(const Camera& camera, uint32_t factor) {
   if (factor == 1) return camera;
@@ -184,33 +152,12 @@ Dataset load_dataset(const std::string& path, const LoadOptions& options) {
   if (options.factor < 1 || (options.factor & (options.factor - 1)) != 0 || options.factor > 64) {
     throw Error("the downsampling factor must be a power of two from 1 to 64, got " + std::to_string(options.factor));
   }
+  const FormatReader& reader = detect_reader(path);
   Dataset dataset;
   dataset.path = path;
-  dataset.format = detect_format(path);
+  dataset.format = reader.format;
   dataset.background = options.background;
-  std::vector<detail::SplitSpec> specs;
-  switch (dataset.format) {
-    case DatasetFormat::blender:
-      specs = detail::parse_blender(path, options);
-      break;
-    case DatasetFormat::multiscale_blender: {
-      if (options.scales > 1) {
-        throw Error(path + ": is already multiscale (metadata.json); load it with 1 scale, or build scales on the "
-                           "fly from the full-resolution Blender folder");
-      }
-      const bool is_file = fs::is_regular_file(path);
-      specs = detail::parse_multiscale_metadata(is_file ? path : detail::join_path(path, "metadata.json"), options);
-      break;
-    }
-    case DatasetFormat::llff:
-      specs = detail::parse_llff(path, options);
-      break;
-    case DatasetFormat::transforms_json: {
-      const bool is_file = fs::is_regular_file(path);
-      specs = detail::parse_transforms_json(is_file ? path : detail::join_path(path, "transforms.json"), options);
-      break;
-    }
-  }
+  const std::vector<detail::SplitSpec> specs = reader.parse(path, options);
   if (specs.empty()) throw Error(path + ": the dataset has none of the requested splits");
   for (const auto& spec : specs) dataset.splits.push_back(load_split(spec, options));
   return dataset;

@@ -1,6 +1,5 @@
-// Datasets on the host: the Blender format (transforms_{train,val,test}.json + RGBA PNGs), the official
-// multiscale Blender format (metadata.json), and the single-file transforms.json with fl_x/fl_y/cx/cy/w/h
-// intrinsics. Each split holds its cameras and its composited pixels, all images (and scales) together.
+// Datasets on the host: each split's cameras and composited pixels, all images (and scales) together, loaded from
+// any format of the table in data/formats (Blender, multiscale Blender, transforms.json, LLFF).
 #pragma once
 
 #include <cstdint>
@@ -14,13 +13,21 @@
 
 namespace mipnerf::data {
 
+// The formats; each has its row in data/formats (detection, parsing, traits, effects, render path).
 enum class DatasetFormat {
   blender,             // DIR/transforms_<split>.json, frames with file_path + transform_matrix, camera_angle_x
   multiscale_blender,  // DIR/metadata.json as written by mip-NeRF's convert_blender_data.py (or make-multiscale)
   transforms_json,     // one transforms.json with every frame; intrinsics fl_x, fl_y, cx, cy, w, h
-  llff                 // DIR/poses_bounds.npy + DIR/images[_<factor>]/ (forward-facing captures; data/llff.hpp)
+  llff,                // DIR/poses_bounds.npy + DIR/images[_<factor>]/ (forward-facing captures; data/llff.hpp)
+  count                // not a format: the number of them (data/formats checks every one has its row)
 };
 const char* format_name(DatasetFormat format);
+
+// Options only LLFF captures read.
+struct LlffOptions {
+  bool spherify = false;  // re-pose a 360° capture around its centre (world rays, cones)
+  bool ndc = true;        // not spherified: near 0, far 1 in NDC (cylinder rays); false: world depths from bounds
+};
 
 struct LoadOptions {
   Background background = Background::white;  // composite RGBA onto it (the paper: white for Blender)
@@ -34,10 +41,11 @@ struct LoadOptions {
   uint32_t factor = 1;
   std::optional<double> near, far;  // override the files' values (default: the file's, else 2 and 6)
   std::vector<std::string> splits;  // splits to load ("train", "val", "test"); empty = every split present
-  int holdout_every = 8;  // transforms.json: every n-th frame (0, n, 2n …) becomes "test", the rest "train"; 0 = none
-  bool spherify = false;  // LLFF: re-pose a 360° capture around its centre (world rays, cones)
-  bool llff_ndc = true;   // LLFF, not spherified: near 0, far 1 in NDC (cylinder rays); false: world depths from bounds
-  LogFn log;              // notes and warnings (defaults taken, splits skipped)
+  // transforms.json and LLFF (the formats that hold out views themselves): every n-th frame (0, n, 2n …) becomes
+  // "test" (and "val"), the rest "train"; 0 = none.
+  int holdout_every = 8;
+  LlffOptions llff;  // LLFF captures only
+  LogFn log;         // notes and warnings (defaults taken, splits skipped)
 };
 
 // One split: images of possibly different sizes (scales), each with its own camera, pixels packed together.

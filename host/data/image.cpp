@@ -1,6 +1,7 @@
 // Host images: loading, the ×2 box filter and compositing.
 #include "data/image.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 
@@ -10,21 +11,44 @@
 #include "io/png.hpp"
 
 namespace mipnerf::data {
+namespace {
+
+// Whether a file is read as a JPEG: by its first bytes (the JPEG or the PNG signature), so a PNG named .jpg is the PNG
+// it is; a file with neither signature goes to the decoder its extension claims, which then names the problem.
+bool read_as_jpeg(const unsigned char* bytes, size_t size, const std::string& path) {
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (io::looks_like_jpeg(bytes, size)) return true;
+  if (size >= 8 && std::equal(kPngSignature, kPngSignature + 8, bytes)) return false;
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".jpg" || extension == ".jpeg";
+}
+
+}  // namespace
 
 RgbaImage load_rgba_image(const std::string& path) {
   const std::vector<unsigned char> bytes = io::read_file_bytes(path);
-  std::string extension = std::filesystem::path(path).extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (io::looks_like_jpeg(bytes.data(), bytes.size()) || extension == ".jpg" || extension == ".jpeg") {
+  if (read_as_jpeg(bytes.data(), bytes.size(), path)) {
     const io::JpegImage jpeg = io::decode_jpeg(bytes.data(), bytes.size(), path);
-    RgbaImage image{jpeg.width, jpeg.height, std::vector<float>(static_cast<size_t>(jpeg.width) * jpeg.height * 4, 1.0f)};
+    RgbaImage image{jpeg.width, jpeg.height, std::vector<float>(static_cast<size_t>(jpeg.width) * jpeg.height * 4, 1.0f),
+                    false, 8};
     for (size_t p = 0; p < jpeg.rgb.size() / 3; ++p) {
       for (int c = 0; c < 3; ++c) image.rgba[4 * p + c] = jpeg.rgb[3 * p + c];
     }
     return image;
   }
   io::PngImage png = io::decode_png(bytes.data(), bytes.size(), path);
-  return RgbaImage{png.width, png.height, std::move(png.rgba)};
+  return RgbaImage{png.width, png.height, std::move(png.rgba), png.has_alpha, png.bit_depth};
+}
+
+ImageSize read_image_size(const std::string& path) {
+  const std::vector<unsigned char> head = io::read_file_prefix(path, 8);
+  if (read_as_jpeg(head.data(), head.size(), path)) {
+    const io::JpegSize size = io::read_jpeg_size(path);
+    return {size.width, size.height};
+  }
+  const io::PngSize size = io::read_png_size(path);
+  return {size.width, size.height};
 }
 
 RgbaImage downsample2(const RgbaImage& image) {

@@ -17,11 +17,19 @@ struct RgbaImage {
   uint32_t width = 0;
   uint32_t height = 0;
   std::vector<float> rgba;
+  bool has_alpha = false;  // the file had an alpha channel (rendered objects); RGB files and JPEGs do not
+  int bit_depth = 8;       // the file's bits per channel (PNG 8 or 16; JPEG 8): what a copy of it is written with
 };
 
-// Reads a PNG or a JPEG (told apart by their first bytes) as RGBA (RGB files and JPEGs get alpha 1). Errors name
-// the file.
+// Reads a PNG or a JPEG (told apart by their first bytes) as RGBA (RGB files and JPEGs get alpha 1). The one image
+// reader of the datasets: every place that reads a dataset's image goes through it. Errors name the file.
 RgbaImage load_rgba_image(const std::string& path);
+
+// Width and height from the file's header, PNG or JPEG told apart by their first bytes. Errors name the file.
+struct ImageSize {
+  uint32_t width = 0, height = 0;
+};
+ImageSize read_image_size(const std::string& path);
 
 // One ×2 step of the multiscale pyramid, as the official mip-NeRF script (scripts/convert_blender_data.py,
 // `down2`) builds it: every output pixel is the plain mean of a 2×2 block of the straight RGBA values,

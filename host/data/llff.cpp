@@ -13,53 +13,6 @@ namespace mipnerf::data {
 namespace fs = std::filesystem;
 namespace {
 
-// ---- Small rigid-transform algebra (3×4 row-major, as Camera) ----
-
-Vec3 add(Vec3 a, Vec3 b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 sub(Vec3 a, Vec3 b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 scale(Vec3 a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(Vec3 a, Vec3 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(Vec3 a, Vec3 b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-Vec3 normalize(Vec3 a) { return scale(a, 1.0 / std::sqrt(dot(a, a))); }
-
-Vec3 column(const Matrix34& m, int c) { return {m[c], m[4 + c], m[8 + c]}; }
-Matrix34 from_columns(Vec3 c0, Vec3 c1, Vec3 c2, Vec3 position) {
-  return {c0[0], c1[0], c2[0], position[0], c0[1], c1[1], c2[1], position[1], c0[2], c1[2], c2[2], position[2]};
-}
-
-// The official viewmatrix: a frame whose z is `z`, x ⟂ (up, z), at `position`.
-Matrix34 view_matrix(Vec3 z, Vec3 up, Vec3 position) {
-  const Vec3 z_axis = normalize(z);
-  const Vec3 x_axis = normalize(cross(up, z_axis));
-  const Vec3 y_axis = normalize(cross(z_axis, x_axis));
-  return from_columns(x_axis, y_axis, z_axis, position);
-}
-
-// inverse(a) · b for a rigid `a` (orthonormal rotation): [Rᵀ | −Rᵀt] · b.
-Matrix34 inverse_times(const Matrix34& a, const Matrix34& b) {
-  Matrix34 out{};
-  const Vec3 t = column(a, 3);
-  for (int r = 0; r < 3; ++r) {
-    const Vec3 row = column(a, r);  // row r of Rᵀ is column r of R
-    for (int c = 0; c < 4; ++c) {
-      const Vec3 bc = column(b, c);
-      out[4 * r + c] = dot(row, c == 3 ? sub(bc, t) : bc);
-    }
-  }
-  return out;
-}
-
-// The official poses_avg: centre = mean position, z = normalised sum of z axes, up = sum of y axes.
-Matrix34 average_pose(const std::vector<Matrix34>& poses) {
-  Vec3 center{0, 0, 0}, z{0, 0, 0}, up{0, 0, 0};
-  for (const auto& p : poses) {
-    center = add(center, column(p, 3));
-    z = add(z, column(p, 2));
-    up = add(up, column(p, 1));
-  }
-  return view_matrix(z, up, scale(center, 1.0 / static_cast<double>(poses.size())));
-}
-
 // The official _generate_spherical_poses, the re-posing part: centre on the point nearest every optical axis, z
 // up along the mean offset of the cameras from it, unit mean distance. Bounds scale with the poses.
 void spherify(std::vector<Matrix34>& poses, std::vector<std::array<double, 2>>& bounds, const std::string& where) {
@@ -201,15 +154,12 @@ LlffCapture read_llff(const std::string& dir, const LoadOptions& options) {
   double nearest = capture.bounds[0][0];
   for (const auto& b : capture.bounds) nearest = std::min(nearest, b[0]);
   const double s = 1.0 / (nearest * 0.75);
-  for (auto& pose : capture.camera_to_world) {
-    for (int r = 0; r < 3; ++r) pose[4 * r + 3] *= s;
-  }
+  scale_positions(capture.camera_to_world, s);
   for (auto& b : capture.bounds) b = {b[0] * s, b[1] * s};
   check_scene_extent(capture, file);
 
-  const Matrix34 average = average_pose(capture.camera_to_world);
-  for (auto& pose : capture.camera_to_world) pose = inverse_times(average, pose);
-  capture.spherify = options.spherify;
+  recentre(capture.camera_to_world);
+  capture.spherify = options.llff.spherify;
   if (capture.spherify) spherify(capture.camera_to_world, capture.bounds, file);
   return capture;
 }
@@ -232,7 +182,7 @@ std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& opt
   const LlffCapture capture = read_llff(dir, options);
   const std::string source = (fs::path(dir) / "poses_bounds.npy").string();
   double near = 0.0, far = 1.0;  // NDC: the near plane to infinity
-  if (capture.spherify || !options.llff_ndc) {
+  if (capture.spherify || !options.llff.ndc) {
     // World rays between the scene's bounds (the original NeRF's choice for LLFF without NDC).
     near = capture.bounds[0][0];
     far = capture.bounds[0][1];

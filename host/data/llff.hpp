@@ -31,7 +31,7 @@ struct LlffCapture {
 bool is_llff_folder(const std::string& dir);
 
 // Reads DIR/poses_bounds.npy and lists the images; options.factor picks DIR/images_<factor> when it exists;
-// options.spherify re-poses a 360° capture. Throws mipnerf::Error naming the file for a malformed array (not N×17,
+// options.llff.spherify re-poses a 360° capture. Throws mipnerf::Error naming the file for a malformed array (not N×17,
 // non-finite, non-positive bounds, a non-rigid pose) and for an image count that differs from N.
 LlffCapture read_llff(const std::string& dir, const LoadOptions& options);
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
+#include "data/formats/formats.hpp"
 #include "data/frames.hpp"
 #include "io/file.hpp"
 #include "io/png.hpp"
@@ -133,9 +134,13 @@ void write_level_png(const std::string& path, const RgbaImage& image, int bit_de
 
 void write_multiscale(const std::string& in_path, const std::string& out_dir, int scales, const LogFn& log) {
   if (scales < 1 || scales > 8) throw Error("make-multiscale: --scales must be 1 to 8, got " + std::to_string(scales));
-  const DatasetFormat format = detect_format(in_path);
-  if (format == DatasetFormat::multiscale_blender) {
+  const FormatReader& reader = detect_reader(in_path);
+  if (reader.format == DatasetFormat::multiscale_blender) {
     throw Error(in_path + ": is already a multiscale dataset (metadata.json); give the full-resolution Blender folder");
+  }
+  if (reader.format != DatasetFormat::blender && reader.format != DatasetFormat::transforms_json) {
+    throw Error(in_path + ": is an " + reader.name + " dataset; make-multiscale builds the paper's pyramid from a "
+                "Blender folder or a transforms.json (train builds it on the fly for any format: --set multiscale=true)");
   }
   std::error_code ec;
   if (fs::exists(out_dir) && fs::equivalent(fs::path(in_path), fs::path(out_dir), ec)) {
@@ -143,8 +148,7 @@ void write_multiscale(const std::string& in_path, const std::string& out_dir, in
   }
   LoadOptions options;
   options.log = log;
-  const auto splits = format == DatasetFormat::blender ? detail::parse_blender(in_path, options)
-                                                       : detail::parse_transforms_json(in_path, options);
+  const auto splits = reader.parse(in_path, options);
   io::make_directories(out_dir);
   const uint32_t divisor = 1u << (scales - 1);
   io::Json metadata = io::Json::object();
@@ -157,26 +161,27 @@ void write_multiscale(const std::string& in_path, const std::string& out_dir, in
     detail::SizeCheck sizes;
     for (size_t i = 0; i < split.frames.size(); ++i) {
       const auto& frame = split.frames[i];
-      io::PngImage png = io::read_png(frame.image_path);
-      if (split.uniform_size) sizes.check(png.width, png.height, frame.image_path);
-      if (png.width % divisor != 0 || png.height % divisor != 0) {
-        throw Error(frame.image_path + ": " + std::to_string(png.width) + "x" + std::to_string(png.height) +
+      RgbaImage image = load_rgba_image(frame.image_path);  // PNG or JPEG
+      if (split.uniform_size) sizes.check(image.width, image.height, frame.image_path);
+      if (image.width % divisor != 0 || image.height % divisor != 0) {
+        throw Error(frame.image_path + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                     " is not divisible by " + std::to_string(divisor) + " for " + std::to_string(scales) +
                     " scales; crop the images or use fewer --scales");
       }
       Camera camera;
       camera.camera_to_world = frame.camera_to_world;
-      resolve_intrinsics(frame.intrinsics, png.width, png.height, camera, frame.where);
+      resolve_intrinsics(frame.intrinsics, image.width, image.height, camera, frame.where);
       camera.near = frame.near;
       camera.far = frame.far;
-      RgbaImage level_image{png.width, png.height, std::move(png.rgba)};
+      const int bit_depth = image.bit_depth;
+      RgbaImage level_image = std::move(image);
       for (int j = 0; j < scales; ++j) {
         if (j > 0) level_image = downsample2(level_image);
         const Camera level_camera = scale_camera(camera, 1u << j);
         char name[64];
         std::snprintf(name, sizeof(name), "%03zu_d%d.png", i, j);
         const std::string relative = image_dir + "/" + name;
-        write_level_png(detail::join_path(out_dir, relative), level_image, png.bit_depth);
+        write_level_png(detail::join_path(out_dir, relative), level_image, bit_depth);
         file_path.push_back(relative);
         cam2world.push_back(pose_to_json(level_camera.camera_to_world));
         width.push_back(level_camera.width_px);

@@ -16,16 +16,58 @@ std::string number_text(double v) {
   return text;
 }
 
-Vec3 normalized(const Vec3& v) {
-  const double length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  return {v[0] / length, v[1] / length, v[2] / length};
-}
-
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
 }  // namespace
+
+Matrix34 from_columns(const Vec3& x, const Vec3& y, const Vec3& z, const Vec3& position) {
+  return {x[0], y[0], z[0], position[0], x[1], y[1], z[1], position[1], x[2], y[2], z[2], position[2]};
+}
+
+Matrix34 view_matrix(const Vec3& z, const Vec3& up, const Vec3& position) {
+  const Vec3 z_axis = normalize(z);
+  const Vec3 x_axis = normalize(cross(up, z_axis));
+  const Vec3 y_axis = normalize(cross(z_axis, x_axis));
+  return from_columns(x_axis, y_axis, z_axis, position);
+}
+
+Matrix34 inverse_times(const Matrix34& a, const Matrix34& b) {
+  Matrix34 out{};
+  const Vec3 t = column(a, 3);
+  for (int r = 0; r < 3; ++r) {
+    const Vec3 row = column(a, r);  // row r of Rᵀ is column r of R
+    for (int c = 0; c < 4; ++c) {
+      const Vec3 bc = column(b, c);
+      out[4 * r + c] = dot(row, c == 3 ? sub(bc, t) : bc);
+    }
+  }
+  return out;
+}
+
+Matrix34 average_pose(const std::vector<Matrix34>& poses) {
+  Vec3 center{0, 0, 0}, z{0, 0, 0}, up{0, 0, 0};
+  for (const auto& p : poses) {
+    center = add(center, column(p, 3));
+    z = add(z, column(p, 2));
+    up = add(up, column(p, 1));
+  }
+  return view_matrix(z, up, scale(center, 1.0 / static_cast<double>(poses.size())));
+}
+
+void recentre(std::vector<Matrix34>& poses) {
+  const Matrix34 average = average_pose(poses);
+  for (auto& pose : poses) pose = inverse_times(average, pose);
+}
+
+void scale_positions(std::vector<Matrix34>& poses, double s) {
+  for (auto& pose : poses) {
+    for (int r = 0; r < 3; ++r) pose[4 * r + 3] *= s;
+  }
+}
+
+void centre_and_scale(std::vector<Matrix34>& poses, const Vec3& centre, double s) {
+  for (auto& pose : poses) {
+    for (int r = 0; r < 3; ++r) pose[4 * r + 3] = s * (pose[4 * r + 3] - centre[r]);
+  }
+}
 
 Matrix34 pose_from_json(const io::Json& value, const std::string& where) {
   const std::string shape_error = where + ": the pose must be a 4x4 (or 3x4) array of rows of numbers";
@@ -93,8 +135,8 @@ void check_rigid_pose(const Matrix34& m, const std::string& where) {
 }
 
 Matrix34 look_at_pose(const Vec3& eye, const Vec3& target, const Vec3& up) {
-  const Vec3 forward = normalized({target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]});
-  const Vec3 right = normalized(cross(forward, up));
+  const Vec3 forward = normalize({target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]});
+  const Vec3 right = normalize(cross(forward, up));
   const Vec3 up_camera = cross(right, forward);
   // Columns: x_camera = right, y_camera = up, z_camera = −forward (the camera looks down −z).
   return {right[0], up_camera[0], -forward[0], eye[0],  //
@@ -109,7 +151,7 @@ Vec3 camera_center(const Camera& camera) {
 
 Vec3 optical_axis(const Camera& camera) {
   const auto& m = camera.camera_to_world;
-  return normalized({-m[2], -m[6], -m[10]});
+  return normalize({-m[2], -m[6], -m[10]});
 }
 
 std::optional<Vec3> closest_point_to_axes(const std::vector<Camera>& cameras) {

@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/vec3.hpp"
 #include "io/json.hpp"
 
 namespace mipnerf::data {
 
-using Vec3 = std::array<double, 3>;
 using Matrix34 = std::array<double, 12>;  // row-major 3×4, as Camera::camera_to_world
 
 // Rotation tolerance of check_rigid_pose: max |RᵀR − I| and |det R − 1|. Poses exported as float32 (Blender's
@@ -28,6 +28,25 @@ io::Json pose_to_json(const Matrix34& camera_to_world);
 // Throws unless every entry is finite and the rotation is orthonormal with determinant +1 (within
 // kRigidTolerance); the message gives the deviation and what it likely means.
 void check_rigid_pose(const Matrix34& camera_to_world, const std::string& where);
+
+// ---- Rigid 3×4 poses (the one home of pose conventions: the LLFF loader, the COLMAP import and the camera paths
+// all recentre, rescale and look at through these) ----
+
+// Column c of the pose: 0..2 the camera's x, y, z axes in world, 3 its position.
+inline Vec3 column(const Matrix34& m, int c) { return {m[c], m[4 + c], m[8 + c]}; }
+Matrix34 from_columns(const Vec3& x, const Vec3& y, const Vec3& z, const Vec3& position);
+// The official viewmatrix: a frame whose z is `z` normalised, x ⟂ (up, z), at `position`.
+Matrix34 view_matrix(const Vec3& z, const Vec3& up, const Vec3& position);
+// inverse(a) · b for a rigid `a` (orthonormal rotation): [Rᵀ | −Rᵀt] · b.
+Matrix34 inverse_times(const Matrix34& a, const Matrix34& b);
+// The official poses_avg: centre = mean position, z = normalised sum of z axes, up = sum of y axes.
+Matrix34 average_pose(const std::vector<Matrix34>& poses);
+// Every pose expressed in the frame of their average_pose (the official recenter_poses).
+void recentre(std::vector<Matrix34>& poses);
+// Positions scaled by s (rotations unchanged): a change of the world's unit.
+void scale_positions(std::vector<Matrix34>& poses, double s);
+// Positions mapped x → s·(x − centre) (rotations unchanged): the world's origin moved to `centre`, then rescaled.
+void centre_and_scale(std::vector<Matrix34>& poses, const Vec3& centre, double s);
 
 // A camera at `eye` looking at `target` with world `up` roughly up in the image (OpenGL axes: −z forward).
 Matrix34 look_at_pose(const Vec3& eye, const Vec3& target, const Vec3& up);

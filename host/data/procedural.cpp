@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "core/error.hpp"
+#include "core/vec3.hpp"
 #include "data/multiscale.hpp"
 #include "data/pose.hpp"
 #include "io/file.hpp"
@@ -26,30 +27,24 @@ namespace {
 constexpr uint32_t kStreamCameras = 0x5CE0u;
 constexpr uint32_t kStreamJitter = 0x5CE1u;
 
-using V3 = std::array<double, 3>;
-V3 add(V3 a, V3 b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-V3 sub(V3 a, V3 b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-V3 mul(V3 a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(V3 a, V3 b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 unit(V3 a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
 
 // Two-colour patterns: index 0 or 1 of a periodic function of position.
 int parity(double value) { return static_cast<int>(std::floor(value)) & 1; }
 
 struct Sphere {
-  V3 center;
+  Vec3 center;
   double radius;
-  V3 colors[2];
+  Vec3 colors[2];
   int sectors, bands;  // checker cells in longitude and latitude
 };
 
 // A box rotated about the world z axis, with stripes (or checkers) in its local frame.
 struct Box {
-  V3 center;
-  V3 half_extent;
+  Vec3 center;
+  Vec3 half_extent;
   double yaw;          // radians about z
-  V3 colors[2];
-  V3 stripe_normal;    // local direction along which the pattern alternates
+  Vec3 colors[2];
+  Vec3 stripe_normal;    // local direction along which the pattern alternates
   double period;       // of one stripe
   bool checker;        // checkers on the local x/y/z grid instead of stripes
 };
@@ -64,17 +59,17 @@ const Box kBoxes[] = {
     // A thin checkered slab under everything.
     {{0.0, 0.0, -0.6}, {1.0, 1.0, 0.04}, 0.2, {{0.15, 0.55, 0.2}, {0.8, 0.8, 0.75}}, {0, 0, 0}, 0.125, true},
 };
-const V3 kLightDir = unit({0.45, 0.3, 0.85});
+const Vec3 kLightDir = normalize({0.45, 0.3, 0.85});
 constexpr double kAmbient = 0.35, kDiffuse = 0.65;
 
-V3 shade(V3 albedo, V3 normal) {
+Vec3 shade(Vec3 albedo, Vec3 normal) {
   const double light = kAmbient + kDiffuse * std::max(0.0, dot(normal, kLightDir));
   return {albedo[0] * light, albedo[1] * light, albedo[2] * light};
 }
 
-bool hit_sphere(const Ray& ray, double& t_hit, V3& rgb) {
-  const V3 o = sub(ray.origin_world, kSphere.center);
-  const V3& d = ray.direction_world;
+bool hit_sphere(const Ray& ray, double& t_hit, Vec3& rgb) {
+  const Vec3 o = sub(ray.origin_world, kSphere.center);
+  const Vec3& d = ray.direction_world;
   const double a = dot(d, d), half_b = dot(o, d), c = dot(o, o) - kSphere.radius * kSphere.radius;
   const double disc = half_b * half_b - a * c;
   if (disc < 0) return false;
@@ -82,7 +77,7 @@ bool hit_sphere(const Ray& ray, double& t_hit, V3& rgb) {
   double t = (-half_b - root) / a;
   if (t <= 1e-9) t = (-half_b + root) / a;
   if (t <= 1e-9 || t >= t_hit) return false;
-  const V3 n = unit(add(o, mul(d, t)));
+  const Vec3 n = normalize(add(o, scale(d, t)));
   const double longitude = std::atan2(n[1], n[0]) / (2.0 * M_PI) + 0.5;      // 0..1
   const double latitude = std::acos(std::clamp(n[2], -1.0, 1.0)) / M_PI;  // 0..1
   const int cell = parity(longitude * kSphere.sectors) ^ parity(latitude * kSphere.bands);
@@ -91,11 +86,11 @@ bool hit_sphere(const Ray& ray, double& t_hit, V3& rgb) {
   return true;
 }
 
-bool hit_box(const Box& box, const Ray& ray, double& t_hit, V3& rgb) {
+bool hit_box(const Box& box, const Ray& ray, double& t_hit, Vec3& rgb) {
   const double c = std::cos(box.yaw), s = std::sin(box.yaw);
-  auto to_local = [c, s](V3 v) { return V3{c * v[0] + s * v[1], -s * v[0] + c * v[1], v[2]}; };
-  const V3 o = to_local(sub(ray.origin_world, box.center));
-  const V3 d = to_local(ray.direction_world);
+  auto to_local = [c, s](Vec3 v) { return Vec3{c * v[0] + s * v[1], -s * v[0] + c * v[1], v[2]}; };
+  const Vec3 o = to_local(sub(ray.origin_world, box.center));
+  const Vec3 d = to_local(ray.direction_world);
   double t_enter = -1e300, t_exit = 1e300;
   int enter_axis = 0;
   double enter_sign = 1.0;
@@ -118,22 +113,22 @@ bool hit_box(const Box& box, const Ray& ray, double& t_hit, V3& rgb) {
     t_exit = std::min(t_exit, t1);
   }
   if (t_enter > t_exit || t_enter <= 1e-9 || t_enter >= t_hit) return false;  // cameras are outside every box
-  const V3 p = add(o, mul(d, t_enter));
+  const Vec3 p = add(o, scale(d, t_enter));
   int cell;
   if (box.checker) {
     cell = parity(p[0] / box.period) ^ parity(p[1] / box.period) ^ parity(p[2] / box.period);
   } else {
     cell = parity(dot(p, box.stripe_normal) / box.period);
   }
-  V3 n_local{0, 0, 0};
+  Vec3 n_local{0, 0, 0};
   n_local[enter_axis] = enter_sign;
-  const V3 n{c * n_local[0] - s * n_local[1], s * n_local[0] + c * n_local[1], n_local[2]};
+  const Vec3 n{c * n_local[0] - s * n_local[1], s * n_local[0] + c * n_local[1], n_local[2]};
   t_hit = t_enter;
   rgb = shade(box.colors[cell], n);
   return true;
 }
 
-Camera camera_at(const V3& eye, const SceneOptions& options) {
+Camera camera_at(const Vec3& eye, const SceneOptions& options) {
   Camera camera;
   camera.camera_to_world = look_at_pose(eye, {0, 0, 0}, {0, 0, 1});
   camera.width_px = camera.height_px = options.size_px;
@@ -144,7 +139,7 @@ Camera camera_at(const V3& eye, const SceneOptions& options) {
   return camera;
 }
 
-V3 on_sphere(double radius, double elevation, double azimuth) {
+Vec3 on_sphere(double radius, double elevation, double azimuth) {
   return {radius * std::cos(elevation) * std::cos(azimuth), radius * std::cos(elevation) * std::sin(azimuth),
           radius * std::sin(elevation)};
 }
@@ -223,7 +218,7 @@ std::vector<Camera> procedural_cameras(const std::string& split, const SceneOpti
 SceneHit trace_procedural(const Ray& ray) {
   SceneHit hit;
   hit.t = 1e300;
-  V3 rgb{0, 0, 0};
+  Vec3 rgb{0, 0, 0};
   if (hit_sphere(ray, hit.t, rgb)) hit.hit = true;
   for (const auto& box : kBoxes) {
     if (hit_box(box, ray, hit.t, rgb)) hit.hit = true;
@@ -246,7 +241,7 @@ RgbaImage render_traced(const Camera& camera, const SceneOptions& options, uint3
   for (uint32_t y = 0; y < image.height; ++y) {
     for (uint32_t x = 0; x < image.width; ++x) {
       const uint32_t pixel = y * image.width + x;
-      V3 sum{0, 0, 0};
+      Vec3 sum{0, 0, 0};
       int hits = 0;
       for (uint32_t k = 0; k < s * s; k += 2) {
         // Two jittered samples per Philox call: stratum k and k + 1 of the s × s grid.

@@ -5,7 +5,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 
 namespace mipnerf::eval {
 namespace {
@@ -82,8 +82,8 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
   const uint64_t seed = camera_seed(settings_.seed, index);
   // Under mpirun each rank renders a contiguous share of the image's chunks (whole chunks, so every pixel is
   // computed as in a single-process render), then the shares are gathered; one rank renders them all.
-  const dist::World& world = dist::world();
-  std::vector<size_t> pixel_shares = dist::share_offsets((n_pixels + chunk_rays - 1) / chunk_rays, world.size());
+  const parallel::World& world = parallel::world();
+  std::vector<size_t> pixel_shares = parallel::share_offsets((n_pixels + chunk_rays - 1) / chunk_rays, world.size());
   for (size_t& offset : pixel_shares) offset = std::min(n_pixels, offset * chunk_rays);  // chunks → pixels
   const size_t my_begin = pixel_shares[static_cast<size_t>(world.rank())];
   const size_t my_end = pixel_shares[static_cast<size_t>(world.rank()) + 1];
@@ -129,7 +129,7 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
 void ImageRenderer::gather_shares(RenderedImage& image, const std::vector<size_t>& pixel_shares) {
   std::vector<size_t> rgb_shares = pixel_shares;
   for (size_t& offset : rgb_shares) offset *= 3;
-  const dist::World& world = dist::world();
+  const parallel::World& world = parallel::world();
   world.all_gather_segments(image.rgb.data(), rgb_shares);
   world.all_gather_segments(image.depth.data(), pixel_shares);
   world.all_gather_segments(image.acc.data(), pixel_shares);

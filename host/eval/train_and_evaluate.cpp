@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "core/error.hpp"
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "io/png.hpp"
@@ -43,7 +43,7 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
   EvaluateOptions evaluate;
   evaluate.max_views = static_cast<size_t>(c.val_views);
   evaluate.progress = options.val_progress;
-  if (!options.val_image_folder.empty() && dist::world().is_root()) {  // under mpirun, rank 0 writes
+  if (!options.val_image_folder.empty() && parallel::world().is_root()) {  // under mpirun, rank 0 writes
     evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float*) {
       write_val_png(options.val_image_folder, score, image);
     };

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "data/llff.hpp"
+#include "data/formats/formats.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
 #include "eval/render_setup.hpp"
@@ -108,20 +108,21 @@ ViewFrames orbit_views(const train::TrainedModel& model, const OrbitRequest& req
 ViewFrames spiral_views(const train::TrainedModel& model, const std::string& checkpoint, const std::string& data,
                         uint32_t frames, const data::ResolutionRequest& resolution) {
   const std::string data_path = resolve_data_path(data, model, checkpoint);
-  if (data::detect_format(data_path) != data::DatasetFormat::llff) {
-    throw Error(data_path + ": --path spiral follows an LLFF capture's cameras (poses_bounds.npy); use --path orbit");
+  const data::FormatReader& reader = data::detect_reader(data_path);
+  if (reader.render_path == nullptr) {
+    throw Error(data_path + ": --path spiral follows an LLFF capture's cameras (poses_bounds.npy); this is a " +
+                reader.name + " dataset: use --path orbit");
   }
   const data::LoadOptions options = train::load_options(model.config, data_path, {"train"}, 1);
-  const data::LlffCapture capture = data::read_llff(data_path, options);
+  const data::FormatRenderPath path = reader.render_path(data_path, options, static_cast<int>(frames));
   ViewFrames views;
-  views.source = capture.spherify ? "the spherical path of " + data_path : "the spiral of " + data_path;
+  views.source = path.description;
   views.default_folder = "render_spiral";
-  for (const Camera& camera : data::llff_render_path(capture, options, static_cast<int>(frames))) {
+  for (const Camera& camera : path.cameras) {
     views.cameras.push_back(data::resize_camera(camera, resolution));
     views.stems.push_back(frame_stem(views.stems.size()));
   }
-  views.details = {{"kind", capture.spherify ? "llff spherical path" : "llff spiral"}, {"data", data_path},
-                   {"frames", frames}};
+  views.details = {{"kind", path.kind}, {"data", data_path}, {"frames", frames}};
   return views;
 }
 

@@ -23,6 +23,20 @@ std::vector<unsigned char> read_file_bytes(const std::string& path) {
   return bytes;
 }
 
+std::vector<unsigned char> read_file_prefix(const std::string& path, size_t count) {
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) throw Error(path + ": no such file");
+  if (fs::is_directory(status)) throw Error(path + ": is a directory, expected a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open for reading (" + std::strerror(errno) + ")");
+  std::vector<unsigned char> bytes(count);
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(count));
+  if (in.bad()) throw Error(path + ": read error");
+  bytes.resize(static_cast<size_t>(in.gcount()));
+  return bytes;
+}
+
 std::string read_file_text(const std::string& path) {
   const auto bytes = read_file_bytes(path);
   return std::string(bytes.begin(), bytes.end());

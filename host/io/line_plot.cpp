@@ -1,7 +1,9 @@
 // PLplot behind io::write_line_plot: one plot stream per call, made, drawn and ended here.
 #include "io/line_plot.hpp"
 
+#ifdef MIPNERF_HAVE_PLPLOT
 #include <plplot.h>
+#endif
 
 #include <algorithm>
 #include <cctype>
@@ -36,6 +38,21 @@ const char* driver_for(const std::string& path) {
   throw Error(path + ": a plot is written as .svg or .png; '" + ext + "' is neither");
 }
 
+void check_series(const PlotSeries& s, bool log_x) {
+  const std::string where = "plot series '" + s.label + "'";
+  if (s.x.empty() || s.x.size() != s.y.size()) {
+    throw Error(where + ": " + std::to_string(s.x.size()) + " x and " + std::to_string(s.y.size()) +
+                " y values; need the same number, at least one");
+  }
+  for (size_t i = 0; i < s.x.size(); ++i) {
+    if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+      throw Error(where + ": point " + std::to_string(i) + " is not finite");
+    }
+    if (log_x && !(s.x[i] > 0)) throw Error(where + ": x = " + std::to_string(s.x[i]) + " on a logarithmic axis");
+  }
+}
+
+#ifdef MIPNERF_HAVE_PLPLOT
 bool has_driver(const char* name) {
   // PLplot fills the caller's arrays, `count` long on the way in, the drivers' count on the way out.
   const char* menu_storage[64];
@@ -50,19 +67,6 @@ bool has_driver(const char* name) {
   return false;
 }
 
-void check_series(const PlotSeries& s, bool log_x) {
-  const std::string where = "plot series '" + s.label + "'";
-  if (s.x.empty() || s.x.size() != s.y.size()) {
-    throw Error(where + ": " + std::to_string(s.x.size()) + " x and " + std::to_string(s.y.size()) +
-                " y values; need the same number, at least one");
-  }
-  for (size_t i = 0; i < s.x.size(); ++i) {
-    if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
-      throw Error(where + ": point " + std::to_string(i) + " is not finite");
-    }
-    if (log_x && !(s.x[i] > 0)) throw Error(where + ": x = " + std::to_string(s.x[i]) + " on a logarithmic axis");
-  }
-}
 
 void draw(const LinePlot& plot, const PlotRanges& r, const char* driver, const std::string& file) {
   plsdev(driver);
@@ -116,6 +120,8 @@ void draw(const LinePlot& plot, const PlotRanges& r, const char* driver, const s
   plend();
 }
 
+#endif  // MIPNERF_HAVE_PLPLOT
+
 }  // namespace
 
 PlotRanges plot_ranges(const LinePlot& plot) {
@@ -144,6 +150,12 @@ void write_line_plot(const std::string& path, const LinePlot& plot) {
   const char* driver = driver_for(path);
   const bool png = std::string(driver) == "pngcairo";
   const PlotRanges ranges = plot_ranges(plot);
+#ifndef MIPNERF_HAVE_PLPLOT
+  (void)png;
+  (void)ranges;
+  throw Error(path + ": this mipnerf-cl was built without PLplot, which draws plots: install the Debian packages "
+                     "'libplplot-dev' and 'plplot-driver-cairo', then rebuild (scripts/build.sh)");
+#else
   // PLplot keeps its state in globals: one plot at a time.
   static std::mutex plplot_mutex;
   std::lock_guard<std::mutex> lock(plplot_mutex);
@@ -152,6 +164,7 @@ void write_line_plot(const std::string& path, const LinePlot& plot) {
                 (png ? "'plplot-driver-cairo' (or write .svg)" : "'libplplot-dev'"));
   }
   write_atomically(path, [&](const std::string& temporary) { draw(plot, ranges, driver, temporary); });
+#endif
 }
 
 }  // namespace mipnerf::io

@@ -41,8 +41,29 @@ enum class ItemUnit {
 const char* unit_name(ItemUnit unit);  // "rays", "edges", "intervals", "samples"
 size_t items(ItemUnit unit, size_t n_rays, size_t n_samples);
 
+// The stages and the kernels of the list, as ids: every reader of the list (the specialisation test, the kernel
+// benchmark, the benchmark's CPU reference) maps an id to what it does with a switch without a default, and the
+// build's -Werror=switch makes a stage or kernel added here without its case in every reader a compile error.
+enum class StageId { rays, sample, gaussian, encode, activations, render, resample };
+enum class KernelId {
+  rays_fwd,
+  sample_stratified_fwd,
+  gaussian_fwd,
+  ipe_fwd,
+  gaussian_ipe_fwd,
+  pe_fwd,
+  activations_fwd,
+  activations_bwd,
+  render_fwd,
+  render_bwd,
+  render_raw_fwd,
+  render_raw_bwd,
+  resample_fwd
+};
+
 // A kernel of a stage as the benchmark times it, with the default RayMathOptions.
 struct StageKernel {
+  KernelId id;
   std::string kernel;   // its name in the kernel file, e.g. "render_fwd"
   ItemUnit unit;        // what one work item is
   std::string setting;  // what the default options make of it, e.g. "white"; empty when nothing to say
@@ -57,6 +78,7 @@ struct StageVariant {
 };
 
 struct StageDescription {
+  StageId id;
   std::string name;                    // the host/ops class in lower case: "rays", "encode", …
   std::string program;                 // its kernel files after common.cl, e.g. "gaussian.cl + encode.cl"
   std::vector<StageKernel> kernels;    // the kernels the benchmark times, in this order

@@ -101,8 +101,8 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? config.multiscale_scales : 1;
   if (config.near > 0) options.near = config.near;
   if (config.far > 0) options.far = config.far;
-  options.spherify = config.spherify;
-  options.llff_ndc = config.ray_shape == RayShape::cylinder;  // the ray kernel's cylinders are NDC rays
+  options.llff.spherify = config.spherify;
+  options.llff.ndc = config.ray_shape == RayShape::cylinder;  // the ray kernel's cylinders are NDC rays
   options.splits = std::move(splits);
   return options;
 }

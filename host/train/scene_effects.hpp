@@ -8,14 +8,13 @@
 #include <map>
 #include <string>
 
+#include "data/formats/formats.hpp"
 #include "train/config.hpp"
 
 namespace mipnerf::train {
 
-struct SceneEffects {
-  std::map<std::string, std::string> settings;  // setting name → value the data calls for
-  std::string summary;                          // "forward-facing LLFF → NDC rays, cylinders, black background"
-};
+// The effects themselves are the dataset format's (data/formats: each row has its rule).
+using data::SceneEffects;
 
 // What the dataset at `data_path` calls for (`factor` picks an LLFF capture's images_<factor>/).
 SceneEffects scene_effects(const std::string& data_path, int factor);

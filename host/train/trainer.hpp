@@ -16,6 +16,8 @@
 #include "ops/loss.hpp"
 #include "train/config.hpp"
 #include "train/memory_plan.hpp"
+#include "train/run_log.hpp"
+#include "train/train_step.hpp"
 
 namespace mipnerf::train {
 
@@ -33,9 +35,6 @@ struct StepReport {
 
 class Trainer;
 
-// The columns of out_dir/val_log.csv (config.val_every), its first line: train_seconds is the training clock at the
-// score (val time excluded), val_seconds what the scoring itself took. Written here, read by eval/run_curves.
-inline constexpr const char* kValLogColumns = "step,train_seconds,val_psnr,val_ssim,val_images,val_seconds";
 
 // A val score taken during training (config.val_every): one row of out_dir/val_log.csv.
 struct ValScore {
@@ -51,7 +50,7 @@ struct TrainHooks {
   // logged beside the score and kept out of the training seconds (StepReport, TrainResult, checkpoints).
   std::function<ValScore(Trainer&)> score_val;
   // Tests: called after the backward of every step, before the gradients are checked (e.g. to inject a NaN).
-  std::function<void(int64_t step, std::vector<std::unique_ptr<mlp::Network>>& networks)> after_backward;
+  AfterBackward after_backward;
 };
 
 struct TrainResult {
@@ -92,6 +91,15 @@ class Trainer {
 
  private:
   struct Impl;
+  struct RunTiming;
+  // run()'s pieces: the step and the periodic actions around it.
+  StepParts step_parts();
+  StepOutcome profiled_step(StepParts& parts, int64_t step, const TrainHooks& hooks);
+  void note_skipped_step(int64_t step, int consecutive_bad, TrainResult& result);  // throws after max_bad_steps
+  StepReport report_of(const StepOutcome& outcome, RunTiming& timing) const;
+  void log_step(const StepReport& report, RunTiming& timing);
+  void score_val_if_due(const TrainHooks& hooks, RunTiming& timing);
+  std::string checkpoint_now(const RunTiming& timing);
   void restore(const std::string& path);
   // Rank 0's housekeeping of out_dir before the first step: stale temporaries removed, and the checkpoint a
   // --resume continues from ("" = step 0), or in `refusal` why this folder cannot be trained into.

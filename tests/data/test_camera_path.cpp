@@ -97,7 +97,7 @@ TEST_CASE("render: an orbit fitted to a capture finds its centre, up direction a
   // Random views of the upper hemisphere: the mean up vector is only roughly +z; it is snapped to the axis.
   scene.train_views = 10;
   const auto random_views = data::orbit_around(data::procedural_cameras("train", scene));
-  CHECK(random_views.up == data::Vec3{0.0, 0.0, 1.0});
+  CHECK(random_views.up == Vec3{0.0, 0.0, 1.0});
   CHECK(random_views.radius == doctest::Approx(3.0).epsilon(1e-9));
   CHECK_THROWS_WITH_AS(data::orbit_around({}), doctest::Contains("no cameras"), Error);
   data::OrbitOptions bad = orbit;

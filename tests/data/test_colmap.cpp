@@ -8,11 +8,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <random>
 
-#include "data/colmap.hpp"
-#include "data/colmap_import.hpp"
+#include "data/import/colmap_model.hpp"
+#include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
 #include "data/inspect.hpp"
 #include "support/colmap_writer.hpp"
@@ -30,17 +31,17 @@ constexpr double kPi = 3.14159265358979323846;
 // 0..3 use camera 1 (PINHOLE 8×6, off-centre principal point), the rest camera 2 (SIMPLE_PINHOLE 6×4). Points: a
 // 5×5×5 grid of half-width `half` around the target, each seen by every image.
 struct KnownCapture {
-  data::Vec3 target;
+  Vec3 target;
   double radius;
   double half = 0.5;
   std::vector<data::Matrix34> poses;  // OpenGL camera-to-world, by image
   test::ColmapTestModel model;
 
-  KnownCapture(const data::Vec3& target_, double radius_, int count = 6) : target(target_), radius(radius_) {
+  KnownCapture(const Vec3& target_, double radius_, int count = 6) : target(target_), radius(radius_) {
     model.cameras = {{1, "PINHOLE", 1, 8, 6, {7.0, 7.5, 4.25, 2.75}}, {2, "SIMPLE_PINHOLE", 0, 6, 4, {5.0, 3.0, 2.0}}};
     for (int k = 0; k < count; ++k) {
       const double angle = 2 * kPi * k / count + 0.3;
-      const data::Vec3 eye{target[0] + radius * std::cos(angle), target[1] + radius * std::sin(angle),
+      const Vec3 eye{target[0] + radius * std::cos(angle), target[1] + radius * std::sin(angle),
                            target[2] + 0.4 * radius};
       poses.push_back(data::look_at_pose(eye, target, {0, 0, 1}));
       // Ids deliberately not in name order: frames follow the names.
@@ -101,7 +102,7 @@ TEST_CASE("colmap: the pose convention on hand-checked cameras (x_cam = R x_worl
   for (int i = 0; i < 12; ++i) CHECK(identity[i] == expected[i]);
   Camera camera;
   camera.camera_to_world = identity;
-  CHECK(data::optical_axis(camera) == data::Vec3{0, 0, 1});
+  CHECK(data::optical_axis(camera) == Vec3{0, 0, 1});
   data::ColmapImage image;
   image.tvec = {0, 0, 5};
   CHECK(data::colmap_depth(image, {0, 0, 0}) == 5.0);
@@ -122,7 +123,7 @@ TEST_CASE("colmap: the pose convention on hand-checked cameras (x_cam = R x_worl
   std::mt19937 rng(7);
   std::normal_distribution<double> normal;
   for (int trial = 0; trial < 50; ++trial) {
-    const data::Vec3 eye{normal(rng), normal(rng), normal(rng)}, at{normal(rng), normal(rng), normal(rng)};
+    const Vec3 eye{normal(rng), normal(rng), normal(rng)}, at{normal(rng), normal(rng), normal(rng)};
     const auto pose = data::look_at_pose(eye, at, {normal(rng), normal(rng), normal(rng)});
     const auto colmap = test::colmap_image(1, 1, "x.png", pose);
     const auto back = data::colmap_camera_to_world(colmap.q, colmap.t);
@@ -155,7 +156,7 @@ TEST_CASE("colmap: near/far are per-image depth percentiles with a margin, robus
 
 TEST_CASE("colmap: known cameras far from the origin import (text and binary alike) and load as they were made") {
   test::TempDir dir;
-  const data::Vec3 target{1000.0, -2000.0, 500.0};
+  const Vec3 target{1000.0, -2000.0, 500.0};
   const double radius = 3.0;
   KnownCapture capture(target, radius);
   capture.write_images(dir / "images");
@@ -241,7 +242,7 @@ TEST_CASE("colmap: known cameras far from the origin import (text and binary ali
     // Where COLMAP projects a point (u = fx x/z + cx, v = fy y/z + cy, pixel centres at +0.5), our ray through that
     // image position passes through the point (scaled like the world).
     for (size_t p = 0; p < capture.model.points.size(); p += 17) {
-      const data::Vec3 c = test::to_colmap_camera(capture.model.images[k], capture.model.points[p].xyz);
+      const Vec3 c = test::to_colmap_camera(capture.model.images[k], capture.model.points[p].xyz);
       const double u = camera.focal_x_px * c[0] / c[2] + camera.center_x_px;
       const double v = camera.focal_y_px * c[1] / c[2] + camera.center_y_px;
       const Ray ray = camera_ray(camera, u, v);
@@ -269,7 +270,7 @@ TEST_CASE("colmap: a forward-facing capture is centred on the median of its poin
   KnownCapture capture({0, 0, 0}, 1.0, 0);
   // Four parallel cameras 10 units before a wall of points, looking along -y (OpenGL: -z is forward).
   for (int k = 0; k < 4; ++k) {
-    const data::Vec3 eye{-1.5 + k, 10.0, 0.0};
+    const Vec3 eye{-1.5 + k, 10.0, 0.0};
     capture.poses.push_back(data::look_at_pose(eye, {eye[0], 0.0, 0.0}, {0, 0, 1}));
     capture.model.images.push_back(test::colmap_image(k + 1, 1, "img_" + std::to_string(k) + ".png", capture.poses[k]));
   }
@@ -281,7 +282,7 @@ TEST_CASE("colmap: a forward-facing capture is centred on the median of its poin
   test::write_colmap_model(dir / "sparse", capture.model, true);
   const auto imported = data::import_colmap(dir / "sparse", dir / "images", dir / "out");
   CHECK(imported.centre_rule == "points");
-  CHECK(imported.centre == data::Vec3{0.0, -2.0, 0.0});
+  CHECK(imported.centre == Vec3{0.0, -2.0, 0.0});
   // Camera distances from (0, -2, 0): sqrt(12² + 0.5²) twice, sqrt(12² + 1.5²) twice; the median is between.
   CHECK(imported.scale == doctest::Approx(4.0 / (0.5 * (std::sqrt(144.25) + std::sqrt(146.25)))).epsilon(1e-12));
   CHECK(imported.near < 11.5 * imported.scale);
@@ -353,9 +354,17 @@ TEST_CASE("colmap: images missing, not PNG, or of another size than their camera
   }
   CHECK_NOTHROW(data::import_colmap(dir / "sparse", dir / "images", dir / "out"));
   CHECK(io::read_json(dir / "out/transforms.json")["frames"][2]["file_path"] == "../images/img_2.jpg");
+  // Images are told apart by their content, as the loader reads them: a PNG named .jpg is the PNG it is, and a
+  // file that is neither, named .jpg, is refused as a JPEG, naming it.
   std::filesystem::remove(dir / "images/img_2.jpg");
   std::filesystem::rename(dir / "images/img_2.png", dir / "images/img_2.jpg");
+  CHECK_NOTHROW(data::import_colmap(dir / "sparse", dir / "images", dir / "out"));
+  CHECK(data::read_image_size(dir / "images/img_2.jpg").width == capture.model.cameras[0].width);
+  CHECK(data::load_rgba_image(dir / "images/img_2.jpg").width == capture.model.cameras[0].width);
+  std::filesystem::copy_file(dir / "images/img_2.jpg", dir / "images/img_2.keep");
+  std::ofstream(dir / "images/img_2.jpg", std::ios::binary) << "neither a PNG nor a JPEG";
   CHECK(contains(import_error(dir / "sparse", dir / "images", dir / "out"), "img_2.jpg: not a JPEG file"));
+  std::filesystem::rename(dir / "images/img_2.keep", dir / "images/img_2.jpg");
   std::filesystem::rename(dir / "images/img_2.jpg", dir / "images/img_2.tif");
   capture.model.images[2].name = "img_2.tif";
   test::write_colmap_model(dir / "sparse", capture.model, false);

@@ -11,7 +11,7 @@
 #include "data/dataset.hpp"
 #include "data/forward_facing.hpp"
 #include "data/llff.hpp"
-#include "data/scene_traits.hpp"
+#include "data/formats/formats.hpp"
 #include "io/npy.hpp"
 #include "support/jpeg_writer.hpp"
 #include "support/temp_scene.hpp"
@@ -170,7 +170,7 @@ TEST_CASE(
   CHECK(halved.split("train").cameras[0].focal_x_px == doctest::Approx(full.focal_px / 2).epsilon(1e-12));
 
   // World rays (cones) instead of NDC: the rescaled bounds.
-  options.llff_ndc = false;
+  options.llff.ndc = false;
   const data::Dataset world = data::load_dataset(capture_dir(), options);
   CHECK(world.split("train").cameras[0].near > 1.0);
   CHECK(world.split("train").cameras[0].far > world.split("train").cameras[0].near);
@@ -254,7 +254,7 @@ TEST_CASE("llff: a capture looking inward from all around is 360 degrees, spheri
   CHECK(effects.settings.at("spherify") == "true");
   CHECK(effects.settings.at("ray_shape") == "cone");
   data::LoadOptions options;
-  options.spherify = true;
+  options.llff.spherify = true;
   const data::LlffCapture capture = data::read_llff(dir.string(), options);
   double mean_square = 0;
   for (const auto& pose : capture.camera_to_world) {

@@ -1,4 +1,4 @@
-// Fuzz target: the COLMAP sparse-model readers (data/colmap.hpp), then the importer (data/colmap_import.hpp) and the
+// Fuzz target: the COLMAP sparse-model readers (data/import/colmap_model.hpp), then the importer (data/import/colmap_import.hpp) and the
 // loader of what it wrote. The input's first byte picks the file it stands for (its value mod 6: cameras.txt,
 // images.txt, points3D.txt, cameras.bin, images.bin, points3D.bin); the other two files of the model are the
 // committed test fixture's (tests/data/fixtures/colmap/sparse or sparse_bin: three 8x6 PINHOLE views of 27
@@ -12,8 +12,8 @@
 #include <cmath>
 #include <string>
 
-#include "data/colmap.hpp"
-#include "data/colmap_import.hpp"
+#include "data/import/colmap_model.hpp"
+#include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
 #include "fuzz_support.hpp"
 #include "io/file.hpp"

@@ -26,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::write_input(dir / "poses_bounds.npy", data, size);
   data::LoadOptions options;
   options.factor = size % 2 == 1 ? 2 : 1;
-  options.spherify = size % 3 == 0;
+  options.llff.spherify = size % 3 == 0;
   fuzz::expect_only_errors(dir.string(), [&] {
     const data::Dataset dataset = data::load_dataset(dir.string(), options);
     for (const auto& split : dataset.splits) {

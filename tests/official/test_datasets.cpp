@@ -203,7 +203,7 @@ LlffCase load_llff_case(const test::TempDir& dir, const std::string& which) {
   LlffCase c;
   c.outputs = fx.at(which).at("outputs");
   write_llff_capture(fx.at(which).at("inputs"), dir.path(), c.height, c.width);
-  c.options.spherify = which == "spherify";
+  c.options.llff.spherify = which == "spherify";
   c.options.holdout_every = 8;  // the official llffhold
   c.capture = data::read_llff(dir.path(), c.options);
   c.dataset = data::load_dataset(dir.path(), c.options);

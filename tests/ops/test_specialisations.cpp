@@ -1,12 +1,12 @@
 // Every compile-time specialisation of the ray-math kernels is built and run against the reference: ray shape
 // (cone/cylinder), background (none/black/white), view dependence (on/off), sub-pixel jitter, disparity sampling,
 // and the density activations. The registry is the stage list (host/ops/stage_list.cpp), which the kernel benchmark
-// walks too: a new stage or option value is added there, and each stage has its check here (checkers()).
+// walks too: a new stage or option value is added there, and each stage has its check here (check_stage, whose switch
+// over StageId makes a missing check a compile error).
 #include <doctest/doctest.h>
 
-#include <functional>
-#include <map>
 #include <set>
+#include <string>
 
 #include "core/camera.hpp"
 #include "kernel_checks.hpp"
@@ -238,20 +238,19 @@ void run_render(const RenderOptions& options, const ActivationOptions& activatio
   check_matches("d_raw_density", d_raw_density.download(ctx), rgd);
 }
 
-// How to check one specialisation of each stage of the list against the reference, by the stage's name.
-using Checker = std::function<void(const ops::RayMathOptions&)>;
-
-const std::map<std::string, Checker>& checkers() {
-  static const std::map<std::string, Checker> table = {
-      {"rays", [](const ops::RayMathOptions& o) { run_rays(o.rays); }},
-      {"sample", [](const ops::RayMathOptions& o) { run_sample(o.sample); }},
-      {"gaussian", [](const ops::RayMathOptions& o) { run_gaussian(o.gaussian); }},
-      {"encode", [](const ops::RayMathOptions& o) { run_encode(o.gaussian); }},
-      {"activations", [](const ops::RayMathOptions& o) { run_activations(o.activation); }},
-      {"render", [](const ops::RayMathOptions& o) { run_render(o.render, o.activation); }},
-      {"resample", [](const ops::RayMathOptions& o) { run_resample(o.resample); }},
-  };
-  return table;
+// Checks one specialisation of a stage of the list against the reference; a stage without its case does not compile
+// (-Werror=switch).
+void check_stage(ops::StageId id, const ops::RayMathOptions& o) {
+  switch (id) {
+    case ops::StageId::rays: return run_rays(o.rays);
+    case ops::StageId::sample: return run_sample(o.sample);
+    case ops::StageId::gaussian: return run_gaussian(o.gaussian);
+    case ops::StageId::encode: return run_encode(o.gaussian);
+    case ops::StageId::activations: return run_activations(o.activation);
+    case ops::StageId::render: return run_render(o.render, o.activation);
+    case ops::StageId::resample: return run_resample(o.resample);
+  }
+  FAIL("stage id " << static_cast<int>(id) << " has no check");
 }
 
 }  // namespace
@@ -259,11 +258,9 @@ const std::map<std::string, Checker>& checkers() {
 TEST_CASE("specialisations: every ray shape, background, view dependence and activation builds and runs") {
   size_t count = 0;
   for (const auto& stage : ops::ray_math_stages()) {
-    const auto checker = checkers().find(stage.name);
-    REQUIRE_MESSAGE(checker != checkers().end(), "no check for stage " << stage.name);
     for (const auto& variant : stage.variants) {
       INFO("specialisation: " << stage.name << " " << variant.name);
-      checker->second(variant.options);
+      check_stage(stage.id, variant.options);
       ++count;
     }
   }
@@ -272,13 +269,13 @@ TEST_CASE("specialisations: every ray shape, background, view dependence and act
   CHECK(count == 8 + 4 + 2 + 2 + 2 + 6 + 2);
 }
 
-TEST_CASE("specialisations: the stage list and the checks name the same stages, each with a specialisation") {
-  std::set<std::string> listed;
+TEST_CASE("specialisations: the stage list's stages have unique names and ids, each with a specialisation") {
+  std::set<std::string> names;
+  std::set<int> ids;
   for (const auto& stage : ops::ray_math_stages()) {
     INFO("stage " << stage.name);
-    CHECK(listed.insert(stage.name).second);  // names are unique
-    CHECK(checkers().count(stage.name) == 1);
+    CHECK(names.insert(stage.name).second);
+    CHECK(ids.insert(static_cast<int>(stage.id)).second);
     CHECK_FALSE(stage.variants.empty());
   }
-  for (const auto& entry : checkers()) CHECK_MESSAGE(listed.count(entry.first) == 1, "not listed: " << entry.first);
 }

@@ -56,9 +56,10 @@ TEST_CASE("stage list: seven stages, thirteen kernels, unique names, each with a
 }
 
 TEST_CASE("stage list: rows, units and item counts") {
-  const ops::StageKernel render{"render_fwd", ops::ItemUnit::samples, "white"};
+  const ops::StageKernel render{ops::KernelId::render_fwd, "render_fwd", ops::ItemUnit::samples, "white"};
   CHECK(render.row() == "render_fwd (white)");
-  CHECK(ops::StageKernel{"activations_fwd", ops::ItemUnit::samples, ""}.row() == "activations_fwd");
+  CHECK(ops::StageKernel{ops::KernelId::activations_fwd, "activations_fwd", ops::ItemUnit::samples, ""}.row() ==
+        "activations_fwd");
   // R = 5 rays × N = 3 intervals: 4 edges a ray.
   CHECK(ops::items(ops::ItemUnit::rays, 5, 3) == 5);
   CHECK(ops::items(ops::ItemUnit::edges, 5, 3) == 20);

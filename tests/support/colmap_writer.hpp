@@ -37,7 +37,7 @@ struct ColmapTestImage {
 
 struct ColmapTestPoint {
   uint64_t id;
-  data::Vec3 xyz;
+  Vec3 xyz;
   std::vector<uint32_t> image_ids;
 };
 
@@ -88,8 +88,8 @@ inline ColmapTestImage colmap_image(uint32_t id, uint32_t camera_id, const std::
 }
 
 // x_camera = R x + t (OpenCV axes): z is the depth.
-inline data::Vec3 to_colmap_camera(const ColmapTestImage& image, const data::Vec3& x) {
-  data::Vec3 c{};
+inline Vec3 to_colmap_camera(const ColmapTestImage& image, const Vec3& x) {
+  Vec3 c{};
   for (int row = 0; row < 3; ++row) {
     c[row] = image.t[row];
     for (int k = 0; k < 3; ++k) c[row] += image.world_to_camera[row * 3 + k] * x[k];

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "data/colmap_import.hpp"
+#include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
 #include "data/procedural.hpp"
 #include "support/colmap_writer.hpp"
@@ -21,24 +21,24 @@ namespace {
 
 // world' = kScale · Rz(kTurn) · world + kShift: a COLMAP world with its own origin, orientation and unit.
 constexpr double kScale = 2.5, kTurn = 0.7;
-constexpr data::Vec3 kShift{300.0, -120.0, 45.0};
+constexpr Vec3 kShift{300.0, -120.0, 45.0};
 
-data::Vec3 turn(const data::Vec3& v) {
+Vec3 turn(const Vec3& v) {
   return {std::cos(kTurn) * v[0] - std::sin(kTurn) * v[1], std::sin(kTurn) * v[0] + std::cos(kTurn) * v[1], v[2]};
 }
 
-data::Vec3 to_colmap_world(const data::Vec3& x) {
-  const data::Vec3 r = turn(x);
+Vec3 to_colmap_world(const Vec3& x) {
+  const Vec3 r = turn(x);
   return {kScale * r[0] + kShift[0], kScale * r[1] + kShift[1], kScale * r[2] + kShift[2]};
 }
 
 data::Matrix34 to_colmap_world(const data::Matrix34& pose) {
   data::Matrix34 moved{};
   for (int col = 0; col < 3; ++col) {
-    const data::Vec3 axis = turn({pose[col], pose[4 + col], pose[8 + col]});
+    const Vec3 axis = turn({pose[col], pose[4 + col], pose[8 + col]});
     for (int row = 0; row < 3; ++row) moved[row * 4 + col] = axis[row];
   }
-  const data::Vec3 centre = to_colmap_world(data::Vec3{pose[3], pose[7], pose[11]});
+  const Vec3 centre = to_colmap_world(Vec3{pose[3], pose[7], pose[11]});
   for (int row = 0; row < 3; ++row) moved[row * 4 + 3] = centre[row];
   return moved;
 }
@@ -73,11 +73,11 @@ TEST_CASE("train: a COLMAP model of the procedural scene in a moved, turned, sca
         const Ray ray = camera_ray(blender.cameras[k], x + 0.5, y + 0.5);
         const data::SceneHit hit = data::trace_procedural(ray);
         if (!hit.hit) continue;
-        data::Vec3 point{};
+        Vec3 point{};
         for (int a = 0; a < 3; ++a) point[a] = ray.origin_world[a] + hit.t * ray.direction_world[a];
         test::ColmapTestPoint colmap_point{model.points.size() + 1, to_colmap_world(point), {}};
         for (const auto& image : model.images) {
-          const data::Vec3 c = test::to_colmap_camera(image, colmap_point.xyz);
+          const Vec3 c = test::to_colmap_camera(image, colmap_point.xyz);
           const double u = first.focal_x_px * c[0] / c[2] + first.center_x_px;
           const double v = first.focal_y_px * c[1] / c[2] + first.center_y_px;
           if (c[2] <= 0 || u < 0 || v < 0 || u > first.width_px || v > first.height_px) continue;
@@ -117,7 +117,7 @@ TEST_CASE("train: a COLMAP model of the procedural scene in a moved, turned, sca
     CAPTURE(split.files[i]);
     const auto& m = split.cameras[i].camera_to_world;
     for (int col = 0; col < 4; ++col) {
-      const data::Vec3 column =
+      const Vec3 column =
           turn({expected.camera_to_world[col], expected.camera_to_world[4 + col], expected.camera_to_world[8 + col]});
       for (int row = 0; row < 3; ++row)
         CHECK(m[row * 4 + col] == doctest::Approx(column[row]).scale(1.0).epsilon(1e-9));

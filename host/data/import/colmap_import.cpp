@@ -1,5 +1,5 @@
 // COLMAP import: a sparse model and its images → OUT/transforms.json.
-#include "data/colmap_import.hpp"
+#include "data/import/colmap_import.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -10,10 +10,9 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "data/image.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
-#include "io/jpeg.hpp"
-#include "io/png.hpp"
 
 namespace mipnerf::data {
 namespace fs = std::filesystem;
@@ -91,16 +90,6 @@ ImageFile find_image(const fs::path& given, fs::path& image) {
   return fs::is_regular_file(given, ec) ? ImageFile::other_type : ImageFile::missing;
 }
 
-// Width and height from the file's header (PNG or JPEG, told apart by the extension).
-std::pair<uint32_t, uint32_t> image_size(const fs::path& path) {
-  if (lower(path.extension().string()) == ".png") {
-    const io::PngSize size = io::read_png_size(path.string());
-    return {size.width, size.height};
-  }
-  const io::JpegSize size = io::read_jpeg_size(path.string());
-  return {size.width, size.height};
-}
-
 // "a.png, b.png, c.png and 4 more".
 std::string name_list(const std::vector<std::string>& names) {
   std::string text;
@@ -170,30 +159,46 @@ std::optional<DepthRange> near_far_from_depths(std::vector<std::vector<double>>&
   return range;
 }
 
-ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
-                           const ColmapImportOptions& options) {
-  const ColmapModel model = read_colmap_model(sparse_dir);
-  std::unordered_map<uint32_t, const ColmapCamera*> cameras;
-  for (const auto& camera : model.cameras) cameras[camera.id] = &camera;
+namespace {
+
+// ---- The import's steps, in order ----
+
+// The model's images in name order (the loader holds out every 8th of them as test).
+std::vector<const ColmapImage*> images_by_name(const ColmapModel& model) {
   std::vector<const ColmapImage*> images;
   for (const auto& image : model.images) images.push_back(&image);
   std::sort(images.begin(), images.end(), [](const auto* a, const auto* b) { return a->name < b->name; });
+  return images;
+}
 
-  // Intrinsics of the cameras the images use (in camera-id order); distortion is refused here.
+const ColmapCamera& camera_of(const ColmapModel& model, uint32_t id) {
+  for (const auto& camera : model.cameras) {
+    if (camera.id == id) return camera;
+  }
+  throw Error(model.file("images") + ": an image uses camera " + std::to_string(id) + ", which " +
+              model.file("cameras") + " does not list");
+}
+
+// The intrinsics of the cameras the images use, by camera id; distortion is refused here.
+std::map<uint32_t, Intrinsics> used_intrinsics(const ColmapModel& model, const std::vector<const ColmapImage*>& images) {
   std::map<uint32_t, Intrinsics> intrinsics;
   for (const auto* image : images) {
     if (!intrinsics.count(image->camera_id)) {
-      intrinsics.emplace(image->camera_id, pinhole_intrinsics(model, *cameras.at(image->camera_id)));
+      intrinsics.emplace(image->camera_id, pinhole_intrinsics(model, camera_of(model, image->camera_id)));
     }
   }
+  return intrinsics;
+}
 
-  // Every image, PNG or JPEG, of its camera's size, before anything is written.
+// Every image's file in images_dir, PNG or JPEG, of its camera's size, checked before anything is written.
+std::vector<fs::path> image_files(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
+                                  const std::string& images_dir, const std::map<uint32_t, Intrinsics>& intrinsics) {
   std::error_code ec;
   if (!fs::is_directory(images_dir, ec)) throw Error(images_dir + ": no such folder (expected the model's images)");
   std::vector<std::string> missing, other_type;
-  std::vector<fs::path> image_paths(images.size());
+  std::vector<fs::path> paths(images.size());
   for (size_t i = 0; i < images.size(); ++i) {
-    const ImageFile found = find_image(fs::path(images_dir) / images[i]->name, image_paths[i]);
+    const ImageFile found = find_image(fs::path(images_dir) / images[i]->name, paths[i]);
     if (found == ImageFile::missing) missing.push_back(images[i]->name);
     if (found == ImageFile::other_type) other_type.push_back(images[i]->name);
   }
@@ -207,25 +212,37 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
                 "that folder) and import again");
   }
   for (size_t i = 0; i < images.size(); ++i) {
-    const auto [width, height] = image_size(image_paths[i]);
+    const auto [width, height] = read_image_size(paths[i].string());
     const Intrinsics& in = intrinsics.at(images[i]->camera_id);
     if (width != in.width || height != in.height) {
-      throw Error(image_paths[i].string() + ": the image is " + std::to_string(width) + "x" +
-                  std::to_string(height) + " but its camera " + std::to_string(images[i]->camera_id) + " in " +
-                  model.file("cameras") + " is " + std::to_string(in.width) + "x" + std::to_string(in.height) +
+      throw Error(paths[i].string() + ": the image is " + std::to_string(width) + "x" + std::to_string(height) +
+                  " but its camera " + std::to_string(images[i]->camera_id) + " in " + model.file("cameras") +
+                  " is " + std::to_string(in.width) + "x" + std::to_string(in.height) +
                   ": give the images the model was made from (after image_undistorter: its images folder)");
     }
   }
+  return paths;
+}
 
-  // Depths of the points in the images that see them, in COLMAP units.
+// Each image's camera-to-world pose (OpenGL axes), in COLMAP's world.
+std::vector<Matrix34> camera_poses(const std::vector<const ColmapImage*>& images) {
+  std::vector<Matrix34> poses;
+  for (const auto* image : images) poses.push_back(colmap_camera_to_world(image->qvec, image->tvec));
+  return poses;
+}
+
+std::vector<Camera> cameras_at(const std::vector<Matrix34>& poses) {
+  std::vector<Camera> cameras(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) cameras[i].camera_to_world = poses[i];
+  return cameras;
+}
+
+// The near/far range of the points' depths (near_far_from_depths), in COLMAP units; refused when there is none and
+// the options do not give both.
+std::optional<DepthRange> point_depth_range(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
+                                            const ColmapImportOptions& options) {
   std::unordered_map<uint32_t, size_t> index_of;
   for (size_t i = 0; i < images.size(); ++i) index_of[images[i]->id] = i;
-  std::vector<Matrix34> camera_to_world(images.size());
-  std::vector<Camera> axes(images.size());  // for closest_point_to_axes
-  for (size_t i = 0; i < images.size(); ++i) {
-    camera_to_world[i] = colmap_camera_to_world(images[i]->qvec, images[i]->tvec);
-    axes[i].camera_to_world = camera_to_world[i];
-  }
   std::vector<std::vector<double>> depths(images.size());
   for (const auto& point : model.points) {
     for (uint32_t image_id : point.image_ids) {
@@ -240,14 +257,19 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
                 ": no point lies in front of an image that sees it, so near/far cannot be "
                 "chosen from the points: give both (--near, --far)");
   }
+  return range;
+}
 
-  // The scene centre and scale (see the header for why).
-  ColmapImport result;
-  const std::optional<Vec3> look_at = closest_point_to_axes(axes);
+// The scene's origin and unit (see the header for why): the look-at point when it lies in front of every camera
+// within near..far, else the points' per-axis median, else the mean camera centre; the median camera then sits
+// kImportedCameraDistance from it. Fills result.centre, centre_rule and scale.
+void choose_world_frame(const ColmapModel& model, const std::vector<Matrix34>& poses,
+                        const std::optional<DepthRange>& range, ColmapImport& result) {
+  const std::vector<Camera> cameras = cameras_at(poses);
+  const std::optional<Vec3> look_at = closest_point_to_axes(cameras);
   bool look_at_inside = look_at.has_value();
-  for (size_t i = 0; look_at && i < images.size(); ++i) {
-    const Vec3 o = camera_center(axes[i]), d = optical_axis(axes[i]);
-    const double depth = ((*look_at)[0] - o[0]) * d[0] + ((*look_at)[1] - o[1]) * d[1] + ((*look_at)[2] - o[2]) * d[2];
+  for (size_t i = 0; look_at && i < cameras.size(); ++i) {
+    const double depth = dot(sub(*look_at, camera_center(cameras[i])), optical_axis(cameras[i]));
     const bool in_range = range ? depth >= range->near && depth <= range->far : depth > 0.0;
     look_at_inside = look_at_inside && in_range;
   }
@@ -262,19 +284,22 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
     }
     result.centre_rule = "points";
   } else {
-    for (const auto& camera : axes) {
-      for (int k = 0; k < 3; ++k) result.centre[k] += camera_center(camera)[k] / static_cast<double>(axes.size());
+    result.centre = {0, 0, 0};
+    for (const auto& camera : cameras) {
+      result.centre = add(result.centre, scale(camera_center(camera), 1.0 / static_cast<double>(cameras.size())));
     }
     result.centre_rule = "cameras";
   }
   std::vector<double> distances;
-  for (const auto& camera : axes) {
-    const Vec3 o = camera_center(camera);
-    distances.push_back(std::hypot(o[0] - result.centre[0], o[1] - result.centre[1], o[2] - result.centre[2]));
-  }
+  for (const auto& camera : cameras) distances.push_back(length(sub(camera_center(camera), result.centre)));
   const double median_distance = median(distances);
   result.scale = median_distance > 0.0 ? kImportedCameraDistance / median_distance : 1.0;
+}
 
+// near/far in scene units: the options', else the points' range scaled. Fills result.near, far and
+// near_far_from_points.
+void choose_near_far(const std::optional<DepthRange>& range, const ColmapImportOptions& options,
+                     ColmapImport& result) {
   result.near_far_from_points = !(options.near && options.far);
   result.near = options.near ? *options.near : range->near * result.scale;
   result.far = options.far ? *options.far : range->far * result.scale;
@@ -283,26 +308,11 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
                 (range ? num(range->near * result.scale) + " .. " + num(range->far * result.scale) : "none") +
                 "): need 0 <= near < far");
   }
+}
 
-  // transforms.json.
-  io::make_directories(out_dir);
-  const fs::path out = fs::absolute(fs::path(out_dir), ec).lexically_normal();
-  io::Json root = io::Json::object();
-  if (intrinsics.size() == 1) root.update(intrinsics_json(intrinsics.begin()->second));
-  root["near"] = result.near;
-  root["far"] = result.far;
-  io::Json frames = io::Json::array();
-  for (size_t i = 0; i < images.size(); ++i) {
-    Matrix34 pose = camera_to_world[i];
-    for (int row = 0; row < 3; ++row) pose[row * 4 + 3] = result.scale * (pose[row * 4 + 3] - result.centre[row]);
-    io::Json frame = {{"file_path", relative_path(image_paths[i], out)},
-                      {"transform_matrix", pose_to_json(pose)},
-                      {"colmap_image_id", images[i]->id},
-                      {"colmap_camera_id", images[i]->camera_id}};
-    if (intrinsics.size() > 1) frame.update(intrinsics_json(intrinsics.at(images[i]->camera_id)));
-    frames.push_back(std::move(frame));
-  }
-  root["frames"] = std::move(frames);
+// The file's `colmap` entry: where the model came from and how its world became the scene's.
+io::Json provenance_json(const ColmapModel& model, const std::string& images_dir, const fs::path& out,
+                         const std::optional<DepthRange>& range, const ColmapImport& result) {
   io::Json near_far = {
       {"rule",
        "per image, the 1st and 99th percentiles of the depths of the sparse points it sees (in front of it); "
@@ -312,38 +322,86 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
       {"margins", {kNearMargin, kFarMargin}},
       {"images_with_points", range ? range->images : 0}};
   if (range) near_far["from_points_scene_units"] = {range->near * result.scale, range->far * result.scale};
-  root["colmap"] = {{"sparse_dir", relative_path(model.dir, out)},
-                    {"format", model.binary ? "binary" : "text"},
-                    {"images_dir", relative_path(images_dir, out)},
-                    {"points", model.points.size()},
-                    {"world",
-                     {{"transform",
-                       "x_scene = scale * (x_colmap - centre); rotations unchanged; camera axes OpenCV -> "
-                       "OpenGL (y and z negated)"},
-                      {"centre", {result.centre[0], result.centre[1], result.centre[2]}},
-                      {"centre_rule", result.centre_rule == "look-at"  ? "the point closest to every optical axis"
-                                      : result.centre_rule == "points" ? "the per-axis median of the sparse points"
-                                                                       : "the mean camera centre"},
-                      {"scale", result.scale},
-                      {"median_camera_distance", kImportedCameraDistance}}},
-                    {"near_far", near_far}};
+  return {{"sparse_dir", relative_path(model.dir, out)},
+          {"format", model.binary ? "binary" : "text"},
+          {"images_dir", relative_path(images_dir, out)},
+          {"points", model.points.size()},
+          {"world",
+           {{"transform",
+             "x_scene = scale * (x_colmap - centre); rotations unchanged; camera axes OpenCV -> OpenGL (y and z "
+             "negated)"},
+            {"centre", {result.centre[0], result.centre[1], result.centre[2]}},
+            {"centre_rule", result.centre_rule == "look-at"  ? "the point closest to every optical axis"
+                            : result.centre_rule == "points" ? "the per-axis median of the sparse points"
+                                                             : "the mean camera centre"},
+            {"scale", result.scale},
+            {"median_camera_distance", kImportedCameraDistance}}},
+          {"near_far", near_far}};
+}
+
+// OUT/transforms.json: the intrinsics (global when one camera, else per frame), near/far, each frame's image path
+// (relative to OUT) and pose in scene units, and the provenance.
+void write_transforms(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
+                      const std::vector<fs::path>& image_paths, std::vector<Matrix34> poses,
+                      const std::map<uint32_t, Intrinsics>& intrinsics, const std::string& images_dir,
+                      const std::string& out_dir, const std::optional<DepthRange>& range, ColmapImport& result) {
+  std::error_code ec;
+  io::make_directories(out_dir);
+  const fs::path out = fs::absolute(fs::path(out_dir), ec).lexically_normal();
+  centre_and_scale(poses, result.centre, result.scale);
+  io::Json root = io::Json::object();
+  if (intrinsics.size() == 1) root.update(intrinsics_json(intrinsics.begin()->second));
+  root["near"] = result.near;
+  root["far"] = result.far;
+  io::Json frames = io::Json::array();
+  for (size_t i = 0; i < images.size(); ++i) {
+    io::Json frame = {{"file_path", relative_path(image_paths[i], out)},
+                      {"transform_matrix", pose_to_json(poses[i])},
+                      {"colmap_image_id", images[i]->id},
+                      {"colmap_camera_id", images[i]->camera_id}};
+    if (intrinsics.size() > 1) frame.update(intrinsics_json(intrinsics.at(images[i]->camera_id)));
+    frames.push_back(std::move(frame));
+  }
+  root["frames"] = std::move(frames);
+  root["colmap"] = provenance_json(model, images_dir, out, range, result);
   result.transforms_path = (out / "transforms.json").string();
   try {
     io::write_json(result.transforms_path, root);
   } catch (const io::Json::exception& e) {  // a folder name that is not UTF-8
     throw Error(result.transforms_path + ": cannot write it: " + e.what());
   }
+}
 
+// What the import used, for its report: the model's format and counts, and the cameras' models.
+void describe_model(const ColmapModel& model, size_t images, const std::map<uint32_t, Intrinsics>& intrinsics,
+                    ColmapImport& result) {
   result.binary = model.binary;
-  result.images = images.size();
+  result.images = images;
   result.cameras = intrinsics.size();
   result.points = model.points.size();
-  for (const auto& [id, in] : intrinsics) {
-    const std::string name = cameras.at(id)->model->name;
+  for (const auto& entry : intrinsics) {
+    const std::string name = camera_of(model, entry.first).model->name;
     if (std::find(result.camera_models.begin(), result.camera_models.end(), name) == result.camera_models.end()) {
       result.camera_models.push_back(name);
     }
   }
+}
+
+}  // namespace
+
+ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
+                           const ColmapImportOptions& options) {
+  const ColmapModel model = read_colmap_model(sparse_dir);
+  const std::vector<const ColmapImage*> images = images_by_name(model);
+  const std::map<uint32_t, Intrinsics> intrinsics = used_intrinsics(model, images);
+  const std::vector<fs::path> image_paths = image_files(model, images, images_dir, intrinsics);
+  const std::vector<Matrix34> poses = camera_poses(images);
+  const std::optional<DepthRange> range = point_depth_range(model, images, options);
+  ColmapImport result;
+  choose_world_frame(model, poses, range, result);
+  choose_near_far(range, options, result);
+  write_transforms(model, images, image_paths, poses, intrinsics, images_dir, out_dir, range, result);
+  describe_model(model, images.size(), intrinsics, result);
   return result;
 }
 

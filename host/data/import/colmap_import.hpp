@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "data/colmap.hpp"
+#include "data/import/colmap_model.hpp"
 #include "data/pose.hpp"
 
 namespace mipnerf::data {

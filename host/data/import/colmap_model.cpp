@@ -1,6 +1,6 @@
 // COLMAP sparse models: the text and binary parsers of cameras, images and points3D, and the model's cross-file
 // checks. Every failure is a one-line mipnerf::Error naming the file (and line); no other exception leaves here.
-#include "data/colmap.hpp"
+#include "data/import/colmap_model.hpp"
 
 #include <charconv>
 #include <cmath>

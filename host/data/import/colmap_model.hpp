@@ -2,7 +2,7 @@
 // format (.txt) and the binary format (.bin, little-endian). Each file's parser takes the file's contents in
 // memory and a name for messages, so a fuzzer can call it directly; every malformed input is a one-line
 // mipnerf::Error naming the file (and the line, for text) and what is wrong. The parsers read what the files say;
-// what mipnerf-cl can use of it (pinhole cameras only) is decided by the importer (data/colmap_import.hpp).
+// what mipnerf-cl can use of it (pinhole cameras only) is decided by the importer (data/import/colmap_import.hpp).
 #pragma once
 
 #include <array>

@@ -1,5 +1,5 @@
 // The process's world of ranks: MPI when built in and launched by mpirun, else one rank.
-#include "dist/world.hpp"
+#include "parallel/world.hpp"
 
 #include <cstdlib>
 
@@ -7,7 +7,7 @@
 #include <mpi.h>
 #endif
 
-namespace mipnerf::dist {
+namespace mipnerf::parallel {
 namespace {
 
 World g_world;
@@ -169,4 +169,4 @@ void Session::abort_all(int) {}
 
 #endif
 
-}  // namespace mipnerf::dist
+}  // namespace mipnerf::parallel

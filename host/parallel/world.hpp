@@ -13,7 +13,7 @@
 
 #include "core/error.hpp"
 
-namespace mipnerf::dist {
+namespace mipnerf::parallel {
 
 // An error every rank raises at the same point (a collective check that failed): each rank stops cleanly, and
 // only rank 0 prints it, so the user reads it once.
@@ -86,4 +86,4 @@ uint64_t fnv1a(const void* data, size_t bytes, uint64_t hash = 14695981039346656
 // that differ, followed by `advice`.
 void require_same_on_every_rank(uint64_t value, const std::string& what, const std::string& advice);
 
-}  // namespace mipnerf::dist
+}  // namespace mipnerf::parallel

@@ -1,0 +1,91 @@
+// The table of dataset formats, its lookups, and what a scene is and calls for.
+#include "data/formats/formats.hpp"
+
+#include <array>
+
+#include "core/error.hpp"
+#include "data/image.hpp"
+
+namespace mipnerf::data {
+namespace fs = std::filesystem;
+namespace {
+
+template <typename... Rows>
+constexpr std::array<const FormatReader*, sizeof...(Rows)> rows(const Rows*... row) {
+  return {row...};
+}
+
+// One row per DatasetFormat, in the enum's order (format_reader checks the order, tests/data walks every value).
+constexpr auto kRows = rows(&kBlenderFormat, &kMultiscaleBlenderFormat, &kTransformsJsonFormat, &kLlffFormat);
+static_assert(kRows.size() == static_cast<size_t>(DatasetFormat::count),
+              "every DatasetFormat needs its row in kRows (host/data/formats)");
+
+}  // namespace
+
+const std::vector<const FormatReader*>& format_readers() {
+  // A folder holding metadata.json is multiscale even when transforms files sit beside it; Blender's per-split files
+  // win over a lone transforms.json.
+  static const std::vector<const FormatReader*> order = {&kMultiscaleBlenderFormat, &kBlenderFormat,
+                                                         &kTransformsJsonFormat, &kLlffFormat};
+  return order;
+}
+
+const FormatReader& format_reader(DatasetFormat format) {
+  const size_t index = static_cast<size_t>(format);
+  if (index >= kRows.size() || kRows[index]->format != format) {
+    throw Error("internal error: dataset format " + std::to_string(index) + " has no row in host/data/formats");
+  }
+  return *kRows[index];
+}
+
+const FormatReader& detect_reader(const std::string& path) {
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) {
+    throw Error(path + ": no such file or folder (create a scene with `mipnerf-cl make-scene " + path + "`)");
+  }
+  const bool is_file = fs::is_regular_file(status);
+  for (const FormatReader* reader : format_readers()) {
+    if (reader->detect(fs::path(path), is_file)) return *reader;
+  }
+  if (is_file) throw Error(path + ": not a dataset file: give a folder, a transforms.json or a metadata.json");
+  throw Error(path +
+              ": no dataset here: expected transforms_train.json (Blender), metadata.json (multiscale "
+              "Blender), transforms.json or poses_bounds.npy (LLFF); `mipnerf-cl make-scene DIR` writes a "
+              "procedural scene");
+}
+
+std::string format_file(const std::string& path, const char* file_name) {
+  return fs::is_regular_file(path) ? path : detail::join_path(path, file_name);
+}
+
+SceneTraits scene_traits(const std::string& path, const LoadOptions& options) {
+  const FormatReader& reader = detect_reader(path);
+  SceneTraits traits;
+  traits.format = reader.format;
+  LoadOptions one_split = options;
+  one_split.splits = {"train"};
+  reader.add_traits(path, one_split, traits);
+  const auto specs = reader.parse(path, one_split);
+  // Read through the one image reader that tells PNG from JPEG by content.
+  if (!specs.empty() && !specs[0].frames.empty())
+    traits.has_alpha = load_rgba_image(specs[0].frames[0].image_path).has_alpha;
+  return traits;
+}
+
+SceneEffects scene_effects(const std::string& path, const LoadOptions& options) {
+  const SceneTraits traits = scene_traits(path, options);
+  SceneEffects effects = format_reader(traits.format).effects(traits);
+  if (traits.multiscale) effects.summary += "; multiscale data → area-weighted loss";
+  return effects;
+}
+
+SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::string& kind) {
+  SceneEffects effects;
+  effects.settings = {{"ray_shape", "cone"}, {"background", traits.has_alpha ? "white" : "black"}};
+  effects.summary = kind + (traits.has_alpha ? " with alpha → cones, white background"
+                                             : " without alpha (photos) → cones, black background");
+  return effects;
+}
+
+}  // namespace mipnerf::data

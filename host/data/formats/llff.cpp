@@ -1,0 +1,43 @@
+// LLFF captures (forward-facing photos; 360° captures spherified): DIR/poses_bounds.npy and DIR/images[_<factor>]/,
+// read with the official conventions (data/llff.hpp), and their official render paths.
+#include "data/llff.hpp"
+
+#include "data/formats/formats.hpp"
+
+namespace mipnerf::data {
+namespace {
+
+bool detect(const std::filesystem::path& path, bool is_file) {
+  return !is_file && std::filesystem::is_regular_file(path / "poses_bounds.npy");
+}
+
+void add_traits(const std::string& path, const LoadOptions& options, SceneTraits& traits) {
+  LoadOptions as_taken = options;
+  as_taken.llff.spherify = false;  // the capture as it was taken
+  traits.llff_360 = looks_360(read_llff(path, as_taken));
+}
+
+SceneEffects effects(const SceneTraits& traits) {
+  if (traits.llff_360) {
+    return {{{"ray_shape", "cone"}, {"spherify", "true"}, {"background", "black"}},
+            "360° LLFF capture → spherified poses, world rays, cones, black background"};
+  }
+  return {{{"ray_shape", "cylinder"}, {"spherify", "false"}, {"background", "black"}},
+          "forward-facing LLFF → NDC rays, cylinders, black background"};
+}
+
+FormatRenderPath render_path(const std::string& path, const LoadOptions& options, int frames) {
+  const LlffCapture capture = read_llff(path, options);
+  FormatRenderPath out;
+  out.cameras = llff_render_path(capture, options, frames);
+  out.description = (capture.spherify ? "the spherical path of " : "the spiral of ") + path;
+  out.kind = capture.spherify ? "llff spherical path" : "llff spiral";
+  return out;
+}
+
+}  // namespace
+
+const FormatReader kLlffFormat = {
+    DatasetFormat::llff, "LLFF (poses_bounds.npy)", detect, detail::parse_llff, add_traits, effects, render_path};
+
+}  // namespace mipnerf::data

@@ -1,0 +1,26 @@
+// A single transforms.json with every frame (instant-ngp and nerfstudio write them; so does `dataset import-colmap`):
+// intrinsics fl_x, fl_y, cx, cy, w, h globally or per frame; every 8th frame held out (detail::parse_transforms_json).
+#include "data/formats/formats.hpp"
+
+namespace mipnerf::data {
+namespace {
+
+bool detect(const std::filesystem::path& path, bool is_file) {
+  if (is_file) return path.extension() == ".json" && path.filename() != "metadata.json";
+  return std::filesystem::is_regular_file(path / "transforms.json");
+}
+
+std::vector<detail::SplitSpec> parse(const std::string& path, const LoadOptions& options) {
+  return detail::parse_transforms_json(format_file(path, "transforms.json"), options);
+}
+
+void add_traits(const std::string&, const LoadOptions&, SceneTraits&) {}
+
+SceneEffects effects(const SceneTraits& traits) { return object_or_photo_effects(traits, "transforms.json"); }
+
+}  // namespace
+
+const FormatReader kTransformsJsonFormat = {
+    DatasetFormat::transforms_json, "transforms.json", detect, parse, add_traits, effects, nullptr};
+
+}  // namespace mipnerf::data

@@ -1,0 +1,148 @@
+// Rendering and scoring a checkpoint's views into a folder.
+#include "eval/render_job.hpp"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "data/camera_path.hpp"
+#include "eval/image_renderer.hpp"
+#include "eval/render_setup.hpp"
+#include "eval/report.hpp"
+#include "gemm/gemm_backend.hpp"
+#include "gemm/gemm_tuning.hpp"
+#include "io/atomic_file.hpp"
+#include "io/png.hpp"
+#include "parallel/world.hpp"
+#include "train/config.hpp"
+
+namespace mipnerf::eval {
+namespace fs = std::filesystem;
+namespace {
+
+size_t rays_of(const std::vector<Camera>& cameras, uint32_t supersample) {
+  size_t rays = 0;
+  for (const auto& c : cameras) rays += static_cast<size_t>(c.width_px) * c.height_px * supersample;
+  return rays;
+}
+
+}  // namespace
+
+void prepare_for_rendering(ocl::Context& ctx) {
+  if (gemm::choose_gemm_backend(ctx, gemm::GemmBackend::automatic) == gemm::GemmBackend::clblast) {
+    gemm::load_gemm_tuning(ctx);
+  }
+}
+
+RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const ViewFrames& frames, const std::string& out,
+                             const OutputFormats& formats) {
+  const train::TrainedModel& model = *job.model;
+  RenderedFrames result;
+  result.chunk_rays = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
+  prepare_for_rendering(ctx);
+  ImageRenderer renderer(ctx, model.spec, model.network_pointers(), frames.cameras,
+                         RenderSettings{result.chunk_rays, job.supersample, job.seed});
+  result.warm_up_seconds = renderer.warm_up();
+  const size_t total = rays_of(frames.cameras, job.supersample);
+  if (job.progress) job.progress(0, total, "");  // the rate (and ETA) counts from here, not from the first chunk
+  const std::map<std::string, std::string> attributes = {{"mipnerf:checkpoint", job.checkpoint},
+                                                         {"mipnerf:step", std::to_string(model.step)}};
+  const bool root = parallel::world().is_root();  // under mpirun every rank holds each image; rank 0 writes it
+  size_t before = 0;
+  for (size_t i = 0; i < frames.cameras.size(); ++i) {
+    const std::string detail = "frame " + std::to_string(i + 1) + "/" + std::to_string(frames.cameras.size());
+    const RenderedImage image = renderer.render(i, [&](size_t done, size_t) {
+      if (job.progress) job.progress(before + done, total, detail);
+    });
+    before += static_cast<size_t>(image.width) * image.height * job.supersample;
+    result.seconds += image.seconds;
+    result.megapixels += image.megapixels();
+    if (!root) continue;
+    const auto written = write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
+    result.files.push_back(fs::path(written.front()).filename().string());
+  }
+  if (!root) return result;
+  data::write_camera_path((fs::path(out) / "transforms.json").string(), frames.cameras, result.files);
+  RenderRecord record;
+  record.checkpoint = job.checkpoint;
+  record.step = model.step;
+  record.source = frames.details;
+  record.date = utc_timestamp();
+  record.device = device_record(ctx.device_info());
+  record.frames = frames.cameras.size();
+  record.formats = formats;
+  record.rays_per_pixel = job.supersample;
+  record.chunk_rays = result.chunk_rays;
+  record.warm_up_seconds = result.warm_up_seconds;
+  record.render_seconds = result.seconds;
+  record.megapixels = result.megapixels;
+  write_render_record(out, record);
+  return result;
+}
+
+SplitScores score_split(ocl::Context& ctx, const RenderJob& job, const data::Split& split, const std::string& data_path,
+                        const std::string& out, const ScoreOptions& options) {
+  const train::TrainedModel& model = *job.model;
+  const size_t chunk = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
+  prepare_for_rendering(ctx);
+  ImageRenderer renderer(ctx, model.spec, model.network_pointers(), split.cameras,
+                         RenderSettings{chunk, job.supersample, job.seed});
+  const double warm_up = renderer.warm_up();
+  const std::vector<size_t> views = select_views(split, options.views);
+  std::vector<Camera> scored;
+  for (size_t i : views) scored.push_back(split.cameras[i]);
+  const size_t total = rays_of(scored, job.supersample);
+  if (job.progress) job.progress(0, total, "");
+  const std::vector<std::string> stems = split_image_stems(split);
+  const fs::path images = fs::path(out) / "images";
+  EvaluateOptions evaluate;
+  evaluate.max_views = options.views;
+  size_t images_done = 0;
+  evaluate.ray_progress = [&](size_t done, size_t) {
+    if (!job.progress) return;
+    job.progress(
+        done, total,
+        "image " + std::to_string(std::min(images_done + 1, views.size())) + "/" + std::to_string(views.size()));
+  };
+  evaluate.progress = [&](size_t done, size_t) { images_done = done; };
+  if (options.images && parallel::world().is_root()) {  // under mpirun, rank 0 writes
+    evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float* truth) {
+      const std::string stem = (images / stems[score.index]).string();
+      write_rendered_image(stem, image, {true, options.exr});
+      io::write_png(stem + "_gt.png", image.width, image.height, 3, truth);
+      const auto error =
+          error_image(image.rgb.data(), truth, static_cast<size_t>(image.width) * image.height, options.error_gain);
+      io::write_png(stem + "_error.png", image.width, image.height, 3, error.data());
+    };
+  }
+  const SplitScores scores = evaluate_split(renderer, split, evaluate);
+  if (!parallel::world().is_root()) return scores;  // every rank scored the gathered images alike; rank 0 records
+
+  EvalRecord record;
+  record.checkpoint = job.checkpoint;
+  record.step = model.step;
+  record.train_seconds = model.train_seconds;
+  record.trained_on = model.trained_on;
+  record.data = fs::absolute(data_path).lexically_normal().string();
+  record.split = split.name;
+  record.date = utc_timestamp();
+  record.device = device_record(ctx.device_info());
+  record.model = {{"variant", enum_name(model.config.variant)},
+                  {"parameters", parameter_count(model)},
+                  {"config", train::config_json(model.config)}};
+  record.supersample = job.supersample;
+  record.chunk_rays = chunk;
+  record.warm_up_seconds = warm_up;
+  record.image_folder = options.images ? "images" : "";
+  record.image_stems = stems;
+  auto metrics = metrics_json(scores, record);
+  if (options.images) {
+    char gain[32];
+    std::snprintf(gain, sizeof(gain), "%g", options.error_gain);
+    metrics["error_images"] = std::string("mean |render - ground truth| over RGB, times ") + gain + ", clamped to 1";
+  }
+  io::write_bytes_atomically((fs::path(out) / "metrics.json").string(), metrics.dump(2) + "\n");
+  io::write_bytes_atomically((fs::path(out) / "metrics.md").string(), metrics_markdown(scores, record));
+  return scores;
+}
+
+}  // namespace mipnerf::eval
