@@ -14,6 +14,7 @@
 #include "data/dataset.hpp"
 #include "data/formats/formats.hpp"
 #include "data/inspect.hpp"
+#include "dataset_import.hpp"
 #include "train/config.hpp"
 
 namespace mipnerf::cli {
@@ -135,27 +136,51 @@ void run_inspect(const InspectArgs& args) {
 struct ImportColmapArgs {
   std::string sparse_dir, images_dir, out;
   double near = 0.0, far = 0.0;
+  std::string layout = "auto";
 };
+
+}  // namespace
+
+data::ImportLayout parse_import_layout(const std::string& value) {
+  if (value == "auto") return data::ImportLayout::automatic;
+  if (value == "llff") return data::ImportLayout::llff;
+  if (value == "transforms") return data::ImportLayout::transforms_json;
+  throw Error("--layout '" + value + "': expected auto, llff or transforms");
+}
+
+void print_import(const data::ColmapImport& imported, const std::string& sparse_dir) {
+  std::string models;
+  for (const auto& name : imported.camera_models) models += (models.empty() ? "" : ", ") + name;
+  const bool llff = imported.layout == data::ImportLayout::llff;
+  std::cout << "imported " << imported.images << " images (" << imported.cameras
+            << (imported.cameras == 1 ? " camera: " : " cameras: ") << models << ") and " << imported.points
+            << " points from " << sparse_dir << " (" << (imported.binary ? "binary" : "text") << ") into "
+            << (llff ? imported.dataset_path + " (LLFF: poses_bounds.npy, images/)" : imported.transforms_path) << "\n";
+  std::cout << "layout: " << (llff ? "LLFF" : "transforms.json") << ", " << imported.layout_reason << "\n";
+  if (llff) {
+    std::cout << "bounds per image from its points' depths (0.1th and 99.9th percentile): " << num(imported.near, 4)
+              << " .. " << num(imported.far, 4) << " (COLMAP units; the LLFF loader rescales them)\n";
+  } else {
+    const char* rule = imported.centre_rule == "look-at"  ? "the point closest to every optical axis"
+                       : imported.centre_rule == "points" ? "the median of the sparse points"
+                                                          : "the mean camera centre";
+    std::cout << "world: COLMAP's " << vec(imported.centre) << " (" << rule << ") is the origin, scaled by "
+              << num(imported.scale, 4) << " (the median camera " << num(data::kImportedCameraDistance)
+              << " from it)\n";
+    std::cout << "near " << num(imported.near, 4) << ", far " << num(imported.far, 4)
+              << (imported.near_far_from_points ? " (from the points' depths)" : " (as given)") << "\n";
+  }
+  std::cout << "train on it: mipnerf-cl train --data " << imported.dataset_path << " --out runs/NAME\n";
+}
+
+namespace {
 
 void run_import_colmap(const ImportColmapArgs& args) {
   data::ColmapImportOptions options;
   if (args.near > 0.0) options.near = args.near;
   if (args.far > 0.0) options.far = args.far;
-  const data::ColmapImport imported = data::import_colmap(args.sparse_dir, args.images_dir, args.out, options);
-  std::string models;
-  for (const auto& name : imported.camera_models) models += (models.empty() ? "" : ", ") + name;
-  std::cout << "imported " << imported.images << " images (" << imported.cameras
-            << (imported.cameras == 1 ? " camera: " : " cameras: ") << models << ") and " << imported.points
-            << " points from " << args.sparse_dir << " (" << (imported.binary ? "binary" : "text") << ") into "
-            << imported.transforms_path << "\n";
-  const char* rule = imported.centre_rule == "look-at"  ? "the point closest to every optical axis"
-                     : imported.centre_rule == "points" ? "the median of the sparse points"
-                                                        : "the mean camera centre";
-  std::cout << "world: COLMAP's " << vec(imported.centre) << " (" << rule << ") is the origin, scaled by "
-            << num(imported.scale, 4) << " (the median camera " << num(data::kImportedCameraDistance) << " from it)\n";
-  std::cout << "near " << num(imported.near, 4) << ", far " << num(imported.far, 4)
-            << (imported.near_far_from_points ? " (from the points' depths)" : " (as given)") << "\n";
-  std::cout << "train on it: mipnerf-cl train --data " << imported.transforms_path << " --out runs/NAME\n";
+  options.layout = parse_import_layout(args.layout);
+  print_import(data::import_colmap(args.sparse_dir, args.images_dir, args.out, options), args.sparse_dir);
 }
 
 }  // namespace
@@ -187,18 +212,24 @@ void register_dataset(CLI::App& app) {
   auto* import = cmd->add_subcommand(
       "import-colmap",
       "Convert a COLMAP sparse model (cameras, images, points3D; .bin or .txt) of PINHOLE or SIMPLE_PINHOLE cameras "
-      "into OUT/transforms.json, which train, render and eval read: poses to OpenGL axes, the world recentred and "
-      "scaled (the median camera 4 units from the scene centre), near/far from the sparse points");
+      "into a dataset train, render and eval read: a forward-facing capture as an LLFF capture (OUT/poses_bounds.npy, "
+      "OUT/images/), anything else as OUT/transforms.json (poses to OpenGL axes, the world recentred and scaled, "
+      "near/far from the sparse points)");
   import->add_option("SPARSE_DIR", import_args->sparse_dir, "The model's folder (e.g. undistorted/sparse)")->required();
   import
       ->add_option("IMAGES_DIR", import_args->images_dir,
-                   "Its images, as PNG (e.g. undistorted/images); referenced, not copied")
+                   "Its images, PNG or JPEG (e.g. undistorted/images); referenced, not copied")
       ->required();
-  import->add_option("OUT", import_args->out, "Output folder for transforms.json (created)")->required();
+  import->add_option("OUT", import_args->out, "Output folder (created)")->required();
+  import->add_option("--layout", import_args->layout,
+                     "auto (LLFF for a forward-facing capture of one pinhole camera, else transforms.json), llff or "
+                     "transforms")
+      ->capture_default_str();
   import->add_option("--near", import_args->near, "Override near (scene units, after scaling)")
       ->check(CLI::PositiveNumber);
   import->add_option("--far", import_args->far, "Override far (scene units)")->check(CLI::PositiveNumber);
   import->callback([import_args] { run_import_colmap(*import_args); });
+  register_from_photos(*cmd);
 }
 
 }  // namespace mipnerf::cli

@@ -38,7 +38,9 @@ void register_make_scene(CLI::App& app) {
                 "layout (poses_bounds.npy, images/, images_<factor>/); --size is then the image width (4:3), "
                 "default 256");
   cmd->add_option("--grid", *grid, "--forward-facing: cameras across x down (e.g. 5x4)")->capture_default_str();
-  cmd->add_option("--factor", forward->factor, "--forward-facing: also write images_<factor>/")->capture_default_str();
+  cmd->add_option("--factor", forward->factor, "--forward-facing: also write images_<factor>/ (1: none)")
+      ->capture_default_str();
+  cmd->add_flag("--jpeg", forward->jpeg, "--forward-facing: write the images as JPEG, as a phone capture holds them");
   cmd->callback([out, options, forward, forward_facing, grid, cmd] {
     if (*forward_facing) {
       for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales"}) {
@@ -56,8 +58,11 @@ void register_make_scene(CLI::App& app) {
       data::write_forward_facing_scene(*out, *forward, print_log);
       std::cout << "wrote " << *out << ": an LLFF capture of " << x * y << " views at " << forward->width_px << "x"
                 << forward->width_px * 3 / 4 << " (images/" << (forward->factor > 1 ? ", images_" + std::to_string(forward->factor) + "/" : "")
-                << ", poses_bounds.npy)\n";
+                << ", poses_bounds.npy" << (forward->jpeg ? "; JPEG" : "") << ")\n";
       return;
+    }
+    for (const char* forward_only : {"--grid", "--factor", "--jpeg"}) {
+      if (cmd->count(forward_only) > 0) throw Error(std::string(forward_only) + " applies to --forward-facing");
     }
     data::write_procedural_scene(*out, *options, print_log);
     std::cout << "wrote " << *out << ": " << options->train_views << " train, " << options->val_views << " val, "

@@ -17,6 +17,7 @@ test_packages=(
   oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
   libopenmpi-dev openmpi-bin  # mpirun: data-parallel training and sharded rendering (optional at build time)
+  colmap            # `dataset from-photos` (CPU SIFT); optional for users: without it that command says what to install
 )
 for argument in "$@"; do
   if [ "$argument" = "--for-tests" ]; then

@@ -12,6 +12,7 @@
 #include "data/procedural.hpp"
 #include "io/file.hpp"
 #include "io/npy.hpp"
+#include "io/jpeg.hpp"
 #include "io/png.hpp"
 
 namespace mipnerf::data {
@@ -45,18 +46,22 @@ SceneHit trace_with_backdrop(const Ray& ray) {
   return hit;
 }
 
-std::string image_name(size_t k) {
+std::string image_name(size_t k, bool jpeg) {
   char name[32];
-  std::snprintf(name, sizeof(name), "image%03zu.png", k);
+  std::snprintf(name, sizeof(name), "image%03zu.%s", k, jpeg ? "jpg" : "png");
   return name;
 }
 
-void write_rgb_png(const std::string& path, const RgbaImage& image) {
+void write_rgb(const std::string& path, const RgbaImage& image, bool jpeg) {
   std::vector<float> rgb(static_cast<size_t>(image.width) * image.height * 3);
   for (size_t p = 0; p < rgb.size() / 3; ++p) {
     for (int c = 0; c < 3; ++c) rgb[3 * p + c] = image.rgba[4 * p + c];
   }
-  io::write_png(path, image.width, image.height, 3, rgb.data(), 8);
+  if (jpeg) {
+    io::write_jpeg(path, image.width, image.height, rgb.data(), 95);
+  } else {
+    io::write_png(path, image.width, image.height, 3, rgb.data(), 8);
+  }
 }
 
 // Nearest and farthest depth the camera sees, over a 32 × 24 grid of rays (depth = t: the camera-frame direction
@@ -130,9 +135,9 @@ void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingO
   auto worker = [&] {
     for (size_t k = next++; k < cameras.size(); k = next++) {
       RgbaImage image = render_traced(cameras[k], render, 0x46460000u + static_cast<uint32_t>(k), trace_with_backdrop);
-      write_rgb_png(full + "/" + image_name(k), image);
+      write_rgb(full + "/" + image_name(k, options.jpeg), image, options.jpeg);
       for (uint32_t f = 1; f < options.factor; f *= 2) image = downsample2(image);
-      if (options.factor > 1) write_rgb_png(reduced + "/" + image_name(k), image);
+      if (options.factor > 1) write_rgb(reduced + "/" + image_name(k, options.jpeg), image, options.jpeg);
     }
   };
   std::vector<std::thread> pool;

@@ -20,13 +20,15 @@ struct ForwardFacingOptions {
   uint32_t samples_per_axis = 4;  // jittered supersampling per pixel
   unsigned threads = 0;           // 0: every hardware thread
   double camera_angle_x = 0.87;   // horizontal field of view, radians (50°)
+  bool jpeg = false;              // write the images as JPEG (quality 95), as a phone capture holds them; else PNG
 };
 
 // Checks sizes and counts; throws mipnerf::Error saying what to change.
 void validate(const ForwardFacingOptions& options);
 // The cameras, full resolution, OpenGL axes, row by row of the grid; near/far = the depths they see.
 std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options);
-// Writes OUT/poses_bounds.npy, OUT/images/image<k>.png and OUT/images_<factor>/image<k>.png (RGB, no alpha).
+// Writes OUT/poses_bounds.npy, OUT/images/image<k>.png and OUT/images_<factor>/image<k>.png (RGB, no alpha; .jpg
+// with options.jpeg).
 void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log = {});
 
 }  // namespace mipnerf::data

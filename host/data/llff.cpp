@@ -164,16 +164,7 @@ LlffCapture read_llff(const std::string& dir, const LoadOptions& options) {
   return capture;
 }
 
-bool looks_360(const LlffCapture& capture) {
-  Vec3 mean{0, 0, 0};
-  for (const auto& p : capture.camera_to_world) mean = add(mean, column(p, 2));
-  if (dot(mean, mean) < 1e-12) return true;
-  const Vec3 axis = normalize(mean);
-  for (const auto& p : capture.camera_to_world) {
-    if (dot(column(p, 2), axis) < std::cos(M_PI / 4)) return true;  // more than 45° off the mean: > 90° spread
-  }
-  return false;
-}
+bool looks_360(const LlffCapture& capture) { return !looks_forward(capture.camera_to_world); }
 
 namespace detail {
 

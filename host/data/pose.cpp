@@ -69,6 +69,17 @@ void centre_and_scale(std::vector<Matrix34>& poses, const Vec3& centre, double s
   }
 }
 
+bool looks_forward(const std::vector<Matrix34>& poses) {
+  Vec3 mean{0, 0, 0};
+  for (const auto& p : poses) mean = add(mean, column(p, 2));
+  if (dot(mean, mean) < 1e-12) return false;
+  const Vec3 axis = normalize(mean);
+  for (const auto& p : poses) {
+    if (dot(column(p, 2), axis) < std::cos(M_PI / 4)) return false;  // more than 45° off the mean: > 90° spread
+  }
+  return true;
+}
+
 Matrix34 pose_from_json(const io::Json& value, const std::string& where) {
   const std::string shape_error = where + ": the pose must be a 4x4 (or 3x4) array of rows of numbers";
   if (!value.is_array() || (value.size() != 4 && value.size() != 3)) throw Error(shape_error);

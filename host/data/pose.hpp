@@ -48,6 +48,11 @@ void scale_positions(std::vector<Matrix34>& poses, double s);
 // Positions mapped x → s·(x − centre) (rotations unchanged): the world's origin moved to `centre`, then rescaled.
 void centre_and_scale(std::vector<Matrix34>& poses, const Vec3& centre, double s);
 
+// Whether the cameras look forward, as a forward-facing capture does (LLFF's, and its imgs2poses from a COLMAP
+// model): every optical axis within 45° of their mean, so they spread over less than 90°. False for a capture that
+// looks inward from all around (360°), and when the axes cancel out.
+bool looks_forward(const std::vector<Matrix34>& camera_to_world);
+
 // A camera at `eye` looking at `target` with world `up` roughly up in the image (OpenGL axes: −z forward).
 Matrix34 look_at_pose(const Vec3& eye, const Vec3& target, const Vec3& up);
 

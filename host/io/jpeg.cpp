@@ -3,11 +3,13 @@
 #include "io/jpeg.hpp"
 
 #include <csetjmp>
+#include <cstdlib>
 #include <cstdio>
 #include <jpeglib.h>
 #include <jerror.h>
 
 #include "core/error.hpp"
+#include "io/atomic_file.hpp"
 #include "io/file.hpp"
 
 namespace mipnerf::io {
@@ -126,6 +128,67 @@ JpegSize read_jpeg_size(const std::string& path) {
 JpegImage read_jpeg(const std::string& path) {
   const std::vector<unsigned char> bytes = read_file_bytes(path);
   return decode_jpeg(bytes.data(), bytes.size(), path);
+}
+
+namespace {
+
+// Only trivially destructible locals between setjmp and a longjmp out of libjpeg (see decode_into).
+bool encode_into(uint32_t width, uint32_t height, const float* rgb, int quality, ErrorManager& manager,
+                 unsigned char*& buffer, unsigned long& size) {
+  jpeg_compress_struct info;
+  info.err = jpeg_std_error(&manager.base);
+  manager.base.error_exit = on_jpeg_error;
+  if (setjmp(manager.jump)) {
+    jpeg_destroy_compress(&info);
+    return false;
+  }
+  jpeg_create_compress(&info);
+  jpeg_mem_dest(&info, &buffer, &size);
+  info.image_width = width;
+  info.image_height = height;
+  info.input_components = 3;
+  info.in_color_space = JCS_RGB;
+  jpeg_set_defaults(&info);
+  jpeg_set_quality(&info, quality, TRUE);
+  jpeg_start_compress(&info, TRUE);
+  unsigned char row[3 * 65536];
+  while (info.next_scanline < height) {
+    const float* in = rgb + static_cast<size_t>(info.next_scanline) * width * 3;
+    for (size_t k = 0; k < static_cast<size_t>(width) * 3; ++k) {
+      const float v = in[k];
+      row[k] = static_cast<unsigned char>(v <= 0.0f ? 0 : v >= 1.0f ? 255 : static_cast<int>(v * 255.0f + 0.5f));
+    }
+    JSAMPROW rows[1] = {row};
+    jpeg_write_scanlines(&info, rows, 1);
+  }
+  jpeg_finish_compress(&info);
+  jpeg_destroy_compress(&info);
+  return true;
+}
+
+}  // namespace
+
+std::vector<unsigned char> encode_jpeg(uint32_t width, uint32_t height, const float* rgb, int quality,
+                                       const std::string& name) {
+  if (width == 0 || height == 0 || width > 65535 || height > 65535) {
+    throw Error(name + ": a JPEG is 1 to 65535 pixels wide and high, not " + std::to_string(width) + "x" +
+                std::to_string(height));
+  }
+  if (quality < 1 || quality > 100) throw Error(name + ": JPEG quality must be 1 to 100");
+  ErrorManager manager{};
+  unsigned char* buffer = nullptr;
+  unsigned long size = 0;
+  const bool ok = encode_into(width, height, rgb, quality, manager, buffer, size);
+  std::vector<unsigned char> bytes;
+  if (ok) bytes.assign(buffer, buffer + size);
+  std::free(buffer);
+  if (!ok) throw Error(name + ": cannot encode as JPEG (" + manager.message + ")");
+  return bytes;
+}
+
+void write_jpeg(const std::string& path, uint32_t width, uint32_t height, const float* rgb, int quality) {
+  const std::vector<unsigned char> bytes = encode_jpeg(width, height, rgb, quality, path);
+  write_bytes_atomically(path, std::string(bytes.begin(), bytes.end()));
 }
 
 }  // namespace mipnerf::io

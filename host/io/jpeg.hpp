@@ -1,4 +1,5 @@
-// JPEG reading through libjpeg(-turbo) (Debian's libjpeg-dev): photos, as captures and COLMAP projects hold them.
+// JPEG reading and writing through libjpeg(-turbo) (Debian's libjpeg-dev): photos, as captures and COLMAP projects
+// hold them.
 #pragma once
 
 #include <cstddef>
@@ -27,5 +28,11 @@ JpegSize read_jpeg_size(const std::string& path);
 
 // The first bytes of a JPEG file (SOI marker FF D8 FF).
 bool looks_like_jpeg(const unsigned char* bytes, size_t size);
+
+// Encodes rgb [height][width][3] (values in [0, 1], clamped, rounded to 8 bits) as a baseline JPEG of `quality`
+// (1..100) and writes it atomically. Throws mipnerf::Error naming the file when libjpeg or the write fails.
+std::vector<unsigned char> encode_jpeg(uint32_t width, uint32_t height, const float* rgb, int quality,
+                                       const std::string& name);
+void write_jpeg(const std::string& path, uint32_t width, uint32_t height, const float* rgb, int quality = 95);
 
 }  // namespace mipnerf::io

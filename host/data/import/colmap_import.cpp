@@ -13,6 +13,7 @@
 #include "data/image.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
+#include "io/npy.hpp"
 
 namespace mipnerf::data {
 namespace fs = std::filesystem;
@@ -387,6 +388,119 @@ void describe_model(const ColmapModel& model, size_t images, const std::map<uint
   }
 }
 
+// ---- The LLFF layout (forward-facing captures) ----
+
+// Why the cameras cannot be written as an LLFF capture (one camera, equal focal lengths, a centred principal point:
+// poses_bounds.npy holds one focal length and the loader centres the principal point), or "" when they can.
+std::string llff_misfit(const std::map<uint32_t, Intrinsics>& intrinsics) {
+  if (intrinsics.size() != 1) return std::to_string(intrinsics.size()) + " cameras (LLFF holds one)";
+  const Intrinsics& in = intrinsics.begin()->second;
+  if (std::abs(in.fx - in.fy) > 1e-6 * in.fx) return "focal lengths fx " + num(in.fx) + " and fy " + num(in.fy) + " differ";
+  if (std::abs(in.cx - 0.5 * in.width) > 0.5 || std::abs(in.cy - 0.5 * in.height) > 0.5) {
+    return "the principal point (" + num(in.cx) + ", " + num(in.cy) + ") is not the image centre";
+  }
+  return "";
+}
+
+// LLFF's bounds per image (its imgs2poses): the 0.1th and 99.9th percentile depth of the points the image sees.
+std::vector<std::array<double, 2>> llff_bounds(const ColmapModel& model, const std::vector<const ColmapImage*>& images) {
+  std::unordered_map<uint32_t, size_t> index_of;
+  for (size_t i = 0; i < images.size(); ++i) index_of[images[i]->id] = i;
+  std::vector<std::vector<double>> depths(images.size());
+  for (const auto& point : model.points) {
+    for (uint32_t image_id : point.image_ids) {
+      const size_t i = index_of.at(image_id);
+      const double depth = colmap_depth(*images[i], point.xyz);
+      if (depth > 0.0) depths[i].push_back(depth);
+    }
+  }
+  std::vector<std::array<double, 2>> bounds;
+  for (size_t i = 0; i < images.size(); ++i) {
+    if (depths[i].size() < 2) {
+      throw Error(model.file("points3D") + ": image " + images[i]->name + " sees " + std::to_string(depths[i].size()) +
+                  " points in front of it; an LLFF capture needs its depth bounds from them (import with "
+                  "--layout transforms and give --near/--far)");
+    }
+    std::sort(depths[i].begin(), depths[i].end());
+    bounds.push_back({quantile(depths[i], 0.001), quantile(depths[i], 0.999)});
+  }
+  return bounds;
+}
+
+// OUT/images/: a link to each registered photo, named so that name order is pose order (the LLFF loader lists the
+// folder sorted); a copy where links are not possible.
+void link_images(const std::vector<fs::path>& image_paths, const fs::path& images_out) {
+  std::error_code ec;
+  fs::remove_all(images_out, ec);
+  io::make_directories(images_out.string());
+  for (size_t i = 0; i < image_paths.size(); ++i) {
+    char prefix[32];
+    std::snprintf(prefix, sizeof(prefix), "%05zu_", i);
+    const fs::path link = images_out / (prefix + image_paths[i].filename().string());
+    const fs::path target = fs::absolute(image_paths[i]).lexically_normal();
+    fs::create_symlink(fs::relative(target, images_out), link, ec);
+    if (ec) fs::copy_file(target, link, fs::copy_options::overwrite_existing);
+  }
+}
+
+// OUT/poses_bounds.npy and OUT/images/ (see the header), poses in COLMAP's world (the LLFF loader recentres and
+// rescales them itself).
+void write_llff(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
+                const std::vector<fs::path>& image_paths, const std::vector<Matrix34>& poses,
+                const Intrinsics& in, const std::string& out_dir, ColmapImport& result) {
+  const auto bounds = llff_bounds(model, images);
+  std::vector<double> rows;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Matrix34& m = poses[i];  // OpenGL axes: x right, y up, z backwards
+    const double hwf[3] = {static_cast<double>(in.height), static_cast<double>(in.width), in.fx};
+    // LLFF's columns: down (−y), right (x), backwards (z), position, (h, w, focal).
+    for (int r = 0; r < 3; ++r) {
+      for (double value : {-m[4 * r + 1], m[4 * r + 0], m[4 * r + 2], m[4 * r + 3], hwf[r]}) rows.push_back(value);
+    }
+    rows.push_back(bounds[i][0]);
+    rows.push_back(bounds[i][1]);
+  }
+  io::make_directories(out_dir);
+  link_images(image_paths, fs::path(out_dir) / "images");
+  io::write_npy((fs::path(out_dir) / "poses_bounds.npy").string(), rows, {poses.size(), 17});
+  result.dataset_path = out_dir;
+  result.near = bounds[0][0];
+  result.far = bounds[0][1];
+  for (const auto& b : bounds) {
+    result.near = std::min(result.near, b[0]);
+    result.far = std::max(result.far, b[1]);
+  }
+  result.near_far_from_points = true;
+}
+
+// The layout the cameras call for, or the one asked for when it fits. Fills result.layout and layout_reason.
+void choose_layout(const ColmapImportOptions& options, const std::vector<Matrix34>& poses,
+                   const std::map<uint32_t, Intrinsics>& intrinsics, ColmapImport& result) {
+  const bool forward = looks_forward(poses);
+  const std::string misfit = llff_misfit(intrinsics);
+  if (options.layout == ImportLayout::llff) {
+    if (!misfit.empty()) throw Error("--layout llff: the cameras do not fit the LLFF layout: " + misfit);
+    if (options.near || options.far) {
+      throw Error("--near/--far apply to the transforms.json layout; an LLFF capture's bounds come from each image's "
+                  "points (use --layout transforms to give them)");
+    }
+    result.layout = ImportLayout::llff;
+    result.layout_reason = "asked for (--layout llff)";
+  } else if (options.layout == ImportLayout::transforms_json) {
+    result.layout = ImportLayout::transforms_json;
+    result.layout_reason = "asked for (--layout transforms)";
+  } else if (forward && misfit.empty() && !options.near && !options.far) {
+    result.layout = ImportLayout::llff;
+    result.layout_reason = "forward-facing cameras (every optical axis within 45 degrees of their mean): an LLFF "
+                           "capture, trained in NDC with cylinders";
+  } else {
+    result.layout = ImportLayout::transforms_json;
+    result.layout_reason = !forward ? "cameras looking from around the scene (a 360-degree capture)"
+                           : !misfit.empty() ? "forward-facing, but " + misfit + ", which LLFF cannot hold"
+                                             : "forward-facing, but --near/--far given (they apply to transforms.json)";
+  }
+}
+
 }  // namespace
 
 ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
@@ -396,11 +510,17 @@ ColmapImport import_colmap(const std::string& sparse_dir, const std::string& ima
   const std::map<uint32_t, Intrinsics> intrinsics = used_intrinsics(model, images);
   const std::vector<fs::path> image_paths = image_files(model, images, images_dir, intrinsics);
   const std::vector<Matrix34> poses = camera_poses(images);
-  const std::optional<DepthRange> range = point_depth_range(model, images, options);
   ColmapImport result;
-  choose_world_frame(model, poses, range, result);
-  choose_near_far(range, options, result);
-  write_transforms(model, images, image_paths, poses, intrinsics, images_dir, out_dir, range, result);
+  choose_layout(options, poses, intrinsics, result);
+  if (result.layout == ImportLayout::llff) {
+    write_llff(model, images, image_paths, poses, intrinsics.begin()->second, out_dir, result);
+  } else {
+    const std::optional<DepthRange> range = point_depth_range(model, images, options);
+    choose_world_frame(model, poses, range, result);
+    choose_near_far(range, options, result);
+    write_transforms(model, images, image_paths, poses, intrinsics, images_dir, out_dir, range, result);
+    result.dataset_path = result.transforms_path;
+  }
   describe_model(model, images.size(), intrinsics, result);
   return result;
 }

@@ -1,6 +1,12 @@
-// COLMAP sparse model → transforms.json (the single-file format load_dataset reads): poses converted from COLMAP's
-// world-to-camera (OpenCV axes) to camera-to-world in OpenGL/Blender axes, the world recentred and rescaled, pinhole
-// intrinsics per camera, near/far from the sparse points' depths, image paths relative to the output folder.
+// COLMAP sparse model → a dataset load_dataset reads, in the layout the cameras call for:
+//  - a forward-facing capture (every optical axis within 45° of their mean, data::looks_forward) of one pinhole camera
+//    becomes an LLFF capture, as LLFF's own imgs2poses makes one from a COLMAP model: OUT/poses_bounds.npy (poses in
+//    LLFF's axes, h, w, focal; per image the 0.1th and 99.9th percentile depth of the points it sees) and OUT/images/
+//    (links to the registered photos, in pose order). It then trains as an LLFF capture does: NDC rays, cylinders,
+//    and every official LLFF convention (data/llff.hpp).
+//  - anything else becomes OUT/transforms.json: poses converted from COLMAP's world-to-camera (OpenCV axes) to
+//    camera-to-world in OpenGL/Blender axes, the world recentred and rescaled, pinhole intrinsics per camera,
+//    near/far from the sparse points' depths, image paths relative to the output folder.
 #pragma once
 
 #include <array>
@@ -41,14 +47,22 @@ struct DepthRange {
 };
 std::optional<DepthRange> near_far_from_depths(std::vector<std::vector<double>>& depths_per_image);
 
+// The layout an import writes: chosen from the cameras (automatic), or forced.
+enum class ImportLayout { automatic, llff, transforms_json };
+
 struct ColmapImportOptions {
   // Override the near/far chosen from the points, in the imported scene's units (after recentring and scaling).
+  // transforms.json only: an LLFF capture's bounds are per image, and its loader rescales them itself.
   std::optional<double> near, far;
+  ImportLayout layout = ImportLayout::automatic;
 };
 
 // What import_colmap wrote.
 struct ColmapImport {
-  std::string transforms_path;                 // OUT/transforms.json
+  ImportLayout layout = ImportLayout::transforms_json;  // what was written (never automatic)
+  std::string layout_reason;                   // why that layout, for people
+  std::string dataset_path;                    // what `train --data` takes: OUT (LLFF) or OUT/transforms.json
+  std::string transforms_path;                 // OUT/transforms.json (transforms.json layout)
   bool binary = true;                          // the model's format
   size_t images = 0, cameras = 0, points = 0;  // cameras: the intrinsics the images use
   std::vector<std::string> camera_models;      // their models, e.g. "PINHOLE"
@@ -73,7 +87,8 @@ struct ColmapImport {
 //
 // Throws mipnerf::Error with one line for: a malformed model (see colmap.hpp), a camera that is not
 // SIMPLE_PINHOLE or PINHOLE (saying to run COLMAP's image_undistorter), images missing from images_dir (named),
-// images that are not PNG, an image whose size differs from its camera's, no points to choose near/far from.
+// images that are neither PNG nor JPEG, an image whose size differs from its camera's, no points to choose near/far
+// from, an LLFF layout asked for cameras that do not fit it (saying why), --near/--far with the LLFF layout.
 ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
                            const ColmapImportOptions& options = {});
 
