@@ -43,11 +43,12 @@ inline void store3(__global float* p, size_t i, float3 v) {
 // Random numbers are a pure function of (seed, counter), so jittered sampling is reproducible across
 // runs, devices and chunkings. Counter = (item, step, slot, stream): `item` is the ray (or pixel),
 // `slot` a sample index within it, `stream` one of the RNG_STREAM_* purposes below, so the uses never
-// share numbers. host/ref/rng.hpp mirrors this bit for bit.
+// share numbers. host/core/rng.hpp mirrors the uniforms bit for bit.
 #define RNG_STREAM_STRATIFIED 0u  /* jitter of stratified interval edges */
 #define RNG_STREAM_RESAMPLE 1u    /* jitter of inverse-CDF resampling */
 #define RNG_STREAM_BATCH 2u       /* choice of training pixels */
 #define RNG_STREAM_SUBPIXEL 3u    /* sub-pixel position of a ray (supersampling) */
+#define RNG_STREAM_DENSITY_NOISE 4u /* noise added to the raw density while training (render.cl) */
 
 inline uint4 philox4x32_10(uint4 counter, uint2 key) {
   for (int round = 0; round < 10; ++round) {
@@ -64,6 +65,17 @@ inline uint4 philox4x32_10(uint4 counter, uint2 key) {
 inline float4 rng_uniform4(ulong seed, uint item, uint step, uint slot, uint stream) {
   const uint4 bits = philox4x32_10((uint4)(item, step, slot, stream), (uint2)((uint)seed, (uint)(seed >> 32)));
   return convert_float4(bits >> 8) * (1.0f / 16777216.0f);
+}
+
+// Four standard normal draws from the four uniforms of rng_uniform4 (same counter), by the Box–Muller transform:
+// (u0, u1) → r0·cos(2π·u1), r0·sin(2π·u1) with r0 = sqrt(−2·log(1 − u0)), and (u2, u3) likewise. Guard: 1 − u is
+// in [2^-24, 1] and exact in float32 (u < 1 has 24 bits), so the log is finite and every draw is within
+// sqrt(48·ln 2) ≈ 5.77 of 0; cospi/sinpi of the exact 2u keep the angle free of a rounded π. host/core/rng.hpp
+// (rng_normal4) is the same formula in double: the two agree to a few float32 ulps of each draw, not bit for bit.
+inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stream) {
+  const float4 u = rng_uniform4(seed, item, step, slot, stream);
+  const float r0 = sqrt(-2.0f * log(1.0f - u.x)), r1 = sqrt(-2.0f * log(1.0f - u.z));
+  return (float4)(r0 * cospi(2.0f * u.y), r0 * sinpi(2.0f * u.y), r1 * cospi(2.0f * u.w), r1 * sinpi(2.0f * u.w));
 }
 
 #endif

@@ -8,7 +8,9 @@
 //    and paper: 0.5, the pixel centre; original NeRF: 0), or with SUBPIXEL_JITTER at (x + ξ0, y + ξ1), ξ uniform
 //    in [0, 1) from rng_uniform4(seed, first_ray + i, step, 0, RNG_STREAM_SUBPIXEL) (supersampling baselines).
 //  - Camera-frame direction ((px − cx)/fx, −(py − cy)/fy, −1): not normalised, so t is depth along the optical
-//    axis and near/far are depths. `viewdirs` is the unit world direction.
+//    axis and near/far are depths. `viewdirs` is the unit world direction (official Blender and spherified LLFF), or
+//    without UNIT_VIEWDIRS the world direction as it is (official forward-facing LLFF, whose loader passes
+//    viewdirs = rays.directions, taken before the NDC conversion): in NDC scenes too, a world direction.
 //  - Cone radius at t = 1 (RAY_SHAPE_CONE): the distance between the directions of horizontally neighbouring
 //    pixels, times 2/√12, so the cone's disc has the per-axis variance r²/4 = w²/12 of the pixel's square
 //    footprint of width w (paper §3.1). Those directions differ by camera_to_world·(1/fx, 0, 0) whatever the
@@ -42,6 +44,9 @@
 #endif
 #ifndef VIEW_DEPENDENCE
 #define VIEW_DEPENDENCE 1
+#endif
+#ifndef UNIT_VIEWDIRS
+#define UNIT_VIEWDIRS 1
 #endif
 #ifndef NDC_NEAR_PLANE
 #define NDC_NEAR_PLANE 1.0f
@@ -151,8 +156,10 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   const float y_from_center = ((float)py - cam[CAMERA_CENTER_Y]) + offset_y;
   const float3 dir = camera_rotate(cam, (float3)(x_from_center / fx, -y_from_center / fy, -1.0f));
   const float3 origin = camera_origin(cam);
-#if VIEW_DEPENDENCE
+#if VIEW_DEPENDENCE && UNIT_VIEWDIRS
   store3(viewdirs, i, dir / sqrt(dot(dir, dir)));
+#elif VIEW_DEPENDENCE
+  store3(viewdirs, i, dir);
 #endif
 #if RAY_SHAPE == RAY_SHAPE_CYLINDER
   const float n = NDC_NEAR_PLANE;

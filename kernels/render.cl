@@ -12,6 +12,13 @@
 // where the caller composites over its own background with acc.
 // One work-item per ray, O(N), no atomics. Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
 // directions [R][3], comp_rgb [R][3], acc [R], distance [R], weights [R][N].
+//
+// Density noise (DENSITY_NOISE, defined only when the noise is on; training only): the fused render_raw_* kernels
+// add DENSITY_NOISE·z_i to raw density i before its activation (official models.py: `raw_density += density_noise *
+// random.normal(...)` when randomized; llff.gin: 1), z_i ~ N(0, 1) keyed by (seed, step, ray index in the batch,
+// level, sample): draw i % 4 of rng_normal4(seed, first_ray + ray, step, level·2^24 + i/4, RNG_STREAM_DENSITY_NOISE).
+// The backward draws the same numbers again, so it differentiates the forward's noisy value; chunking does not
+// change them. The plain render_fwd/bwd take activated densities and never add noise.
 
 #ifndef MIPNERF_RENDER_CL
 #define MIPNERF_RENDER_CL
@@ -23,6 +30,53 @@
 #define BACKGROUND BACKGROUND_WHITE
 #endif
 
+#define DENSITY_NOISE_LEVEL_SHIFT 24 /* slot = level·2^24 + sample/4: 256 levels of up to 2^26 samples */
+
+// The key of one ray's density noise at one level: the counter's item (the ray's index in the batch), step and the
+// level's first slot.
+typedef struct {
+  ulong seed;
+  uint item, step, slot_base;
+} RayNoiseKey;
+
+inline RayNoiseKey ray_noise_key(ulong seed, uint item, uint step, uint level) {
+  RayNoiseKey key;
+  key.seed = seed;
+  key.item = item;
+  key.step = step;
+  key.slot_base = level << DENSITY_NOISE_LEVEL_SHIFT;
+  return key;
+}
+
+// The N(0, 1) draws of the ray's samples 4g..4g + 3 (group g), in order. The loops below draw each group once and
+// take its draws one at a time from the front (`.x`, then rotate `.yzwx`): no component is chosen by a computed index
+// (oclgrind 21.10 mis-evaluates such a selection in these loops). Without DENSITY_NOISE: zeros, never read.
+inline float4 density_noise_group(RayNoiseKey key, uint group) {
+#ifdef DENSITY_NOISE
+  return rng_normal4(key.seed, key.item, key.step, key.slot_base + group, RNG_STREAM_DENSITY_NOISE);
+#else
+  return (float4)(0.0f);
+#endif
+}
+
+// The same group's draws for a loop running backwards from sample i: sample i's draw first (`.x`), then i − 1's, down
+// to the group's first sample.
+inline float4 density_noise_group_reversed(RayNoiseKey key, uint i) {
+  float4 reversed = density_noise_group(key, i / 4).wzyx;  // samples 4g + 3, 4g + 2, 4g + 1, 4g
+  for (uint k = i % 4; k < 3; ++k) reversed = reversed.yzwx;
+  return reversed;
+}
+
+// Raw density `raw` as the activation sees it: raw + DENSITY_NOISE·z (z: the sample's draw) with DENSITY_NOISE, else
+// raw.
+inline float noisy_raw_density(float raw, float z) {
+#ifdef DENSITY_NOISE
+  return raw + DENSITY_NOISE * z;
+#else
+  return raw;
+#endif
+}
+
 // s_i = σ_i·δ_i. An interval of zero length contributes nothing, whatever its density (σ = ∞ would give
 // ∞·0 = NaN otherwise).
 inline float optical_thickness(float density, float t0, float t1, float dir_norm) {
@@ -30,8 +84,9 @@ inline float optical_thickness(float density, float t0, float t1, float dir_norm
   return delta > 0.0f ? density * delta : 0.0f;
 }
 
-inline float render_density(__global const float* density, size_t at, const int from_raw) {
-  return from_raw ? density_activation(density[at]) : density[at];
+// Density `at`: activated from a raw value with its noise draw z, or as given.
+inline float render_density(__global const float* density, size_t at, float z, const int from_raw) {
+  return from_raw ? density_activation(noisy_raw_density(density[at], z)) : density[at];
 }
 
 inline float3 render_rgb(__global const float* rgb, size_t at, const int from_raw) {
@@ -40,20 +95,24 @@ inline float3 render_rgb(__global const float* rgb, size_t at, const int from_ra
 }
 
 // The forward pass of ray `ray`; `from_raw` (a constant at each call site) applies the activations to the
-// inputs first. Writes comp_rgb, acc, distance and weights (what resampling and the backward need).
+// inputs first, with the ray's density noise (`noise`, used only from raw values). Writes comp_rgb, acc, distance
+// and weights (what resampling and the backward need).
 inline void render_ray_fwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
                            __global const float* directions, __global float* comp_rgb, __global float* acc_out,
                            __global float* distance_out, __global float* weights, const size_t ray,
-                           const uint n_samples, const int from_raw) {
+                           const uint n_samples, const RayNoiseKey noise, const int from_raw) {
   const float3 dir = load3(directions, ray);
   const float dir_norm = sqrt(dot(dir, dir));
   __global const float* t = t_edges + ray * (n_samples + 1);
   float optical_depth = 0.0f;  // Σ_{j<i} s_j
   float3 color = (float3)(0.0f);
   float acc = 0.0f, t_weighted = 0.0f;
+  float4 draws = (float4)(0.0f);  // the noise of samples i.. to the end of i's group of 4
   for (uint i = 0; i < n_samples; ++i) {
     const size_t at = ray * n_samples + i;
-    const float s = optical_thickness(render_density(density, at, from_raw), t[i], t[i + 1], dir_norm);
+    if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
+    const float s = optical_thickness(render_density(density, at, draws.x, from_raw), t[i], t[i + 1], dir_norm);
+    draws = draws.yzwx;
     // α = 1 − exp(−s) as −expm1(−s): the same value, without cancellation for small s (official: 1 − exp).
     const float w = -expm1(-s) * exp(-optical_depth);
     weights[at] = w;
@@ -84,7 +143,7 @@ inline void render_ray_bwd(__global const float* rgb, __global const float* dens
                            __global const float* directions, __global const float* weights,
                            __global const float* d_comp_rgb, __global const float* d_acc, const uint has_d_acc,
                            __global float* d_rgb, __global float* d_density, const size_t ray, const uint n_samples,
-                           const int from_raw) {
+                           const RayNoiseKey noise, const int from_raw) {
   const float3 dir = load3(directions, ray);
   const float dir_norm = sqrt(dot(dir, dir));
   __global const float* t = t_edges + ray * (n_samples + 1);
@@ -94,9 +153,12 @@ inline void render_ray_bwd(__global const float* rgb, __global const float* dens
   d_acc_total -= d_comp.x + d_comp.y + d_comp.z;
 #endif
   float optical_depth = 0.0f;
+  float4 draws = (float4)(0.0f);  // the forward's noise, drawn again: samples i.. to the end of i's group
   for (uint i = 0; i < n_samples; ++i) {
-    optical_depth += optical_thickness(render_density(density, ray * n_samples + i, from_raw), t[i], t[i + 1],
-                                       dir_norm);
+    if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
+    optical_depth +=
+        optical_thickness(render_density(density, ray * n_samples + i, draws.x, from_raw), t[i], t[i + 1], dir_norm);
+    draws = draws.yzwx;
   }
   const float trans_last = exp(-optical_depth);  // T_N
   float weight_after = 0.0f;                     // Σ_{k>i} w_k
@@ -104,6 +166,8 @@ inline void render_ray_bwd(__global const float* rgb, __global const float* dens
   for (uint r = 0; r < n_samples; ++r) {
     const uint i = n_samples - 1 - r;
     const size_t at = ray * n_samples + i;
+    // Backwards: samples i, i − 1, .. to the start of i's group, drawn again on entering it.
+    if (from_raw && (r == 0 || i % 4 == 3)) draws = density_noise_group_reversed(noise, i);
     const float w = weights[at];
     const float3 c = render_rgb(rgb, at, from_raw);
     const float g = dot(d_comp, c) + d_acc_total;
@@ -112,7 +176,7 @@ inline void render_ray_bwd(__global const float* rgb, __global const float* dens
     const float d_s = g * (trans_last + weight_after) - grad_weight_after;
     float d_sigma = delta > 0.0f ? delta * d_s : 0.0f;
     if (from_raw) {
-      d_sigma *= density_activation_grad(density[at]);
+      d_sigma *= density_activation_grad(noisy_raw_density(density[at], draws.x));
       const float3 raw = load3(rgb, at);
       store3(d_rgb, at,
              d_c * (float3)(rgb_activation_grad(raw.x), rgb_activation_grad(raw.y), rgb_activation_grad(raw.z)));
@@ -122,6 +186,7 @@ inline void render_ray_bwd(__global const float* rgb, __global const float* dens
     d_density[at] = d_sigma;
     weight_after += w;
     grad_weight_after += g * w;
+    draws = draws.yzwx;
   }
 }
 
@@ -130,7 +195,8 @@ __kernel void render_fwd(__global const float* rgb, __global const float* densit
                          __global float* distance, __global float* weights, const uint n_rays, const uint n_samples) {
   const size_t ray = get_global_id(0);
   if (ray >= n_rays) return;
-  render_ray_fwd(rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples, 0);
+  render_ray_fwd(rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples,
+                 ray_noise_key(0, 0, 0, 0), 0);
 }
 
 // d_acc [R] is read only when has_d_acc != 0 (otherwise any buffer may be passed).
@@ -142,31 +208,35 @@ __kernel void render_bwd(__global const float* rgb, __global const float* densit
   const size_t ray = get_global_id(0);
   if (ray >= n_rays) return;
   render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_rgb, d_density, ray,
-                 n_samples, 0);
+                 n_samples, ray_noise_key(0, 0, 0, 0), 0);
 }
 
 // Fused activations + rendering: the same as activations_fwd then render_fwd, reading the MLP's raw outputs
-// (raw_rgb [R][N][3], raw_density [R][N]) so the activated values never go through memory.
+// (raw_rgb [R][N][3], raw_density [R][N]) so the activated values never go through memory. With DENSITY_NOISE the
+// raw densities get their noise first, keyed by (seed, step, first_ray + ray, level); without, those are unused.
 __kernel void render_raw_fwd(__global const float* raw_rgb, __global const float* raw_density,
                              __global const float* t_edges, __global const float* directions,
                              __global float* comp_rgb, __global float* acc, __global float* distance,
-                             __global float* weights, const uint n_rays, const uint n_samples) {
+                             __global float* weights, const uint n_rays, const uint n_samples, const ulong seed,
+                             const uint step, const uint first_ray, const uint level) {
   const size_t ray = get_global_id(0);
   if (ray >= n_rays) return;
-  render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples, 1);
+  render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples,
+                 ray_noise_key(seed, first_ray + (uint)ray, step, level), 1);
 }
 
 // Fused render_bwd then activations_bwd: gradients with respect to the raw outputs, d_raw_rgb [R][N][3] and
-// d_raw_density [R][N].
+// d_raw_density [R][N]; the key must be the forward's (the same noise, drawn again).
 __kernel void render_raw_bwd(__global const float* raw_rgb, __global const float* raw_density,
                              __global const float* t_edges, __global const float* directions,
                              __global const float* weights, __global const float* d_comp_rgb,
                              __global const float* d_acc, const uint has_d_acc, __global float* d_raw_rgb,
-                             __global float* d_raw_density, const uint n_rays, const uint n_samples) {
+                             __global float* d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
+                             const uint step, const uint first_ray, const uint level) {
   const size_t ray = get_global_id(0);
   if (ray >= n_rays) return;
   render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_raw_rgb,
-                 d_raw_density, ray, n_samples, 1);
+                 d_raw_density, ray, n_samples, ray_noise_key(seed, first_ray + (uint)ray, step, level), 1);
 }
 
 #endif

@@ -27,6 +27,14 @@ __kernel void rng_uniform4_fill(const ulong seed, const uint step, const uint sl
   vstore4(u, i, out);
 }
 
+// out[4i..4i+3] = rng_normal4(seed, i, step, slot, stream): the normal draws (density noise), for tests.
+__kernel void rng_normal4_fill(const ulong seed, const uint step, const uint slot, const uint stream,
+                               __global float* out, const uint n_items) {
+  const uint i = get_global_id(0);
+  if (i >= n_items) return;
+  vstore4(rng_normal4(seed, i, step, slot, stream), i, out);
+}
+
 // Raw Philox words for the known-answer test: out[4i..] = philox4x32_10(counters[i], key).
 __kernel void philox_words(__global const uint* counters, const uint key0, const uint key1, __global uint* out,
                            const uint n_items) {

@@ -54,7 +54,10 @@ struct RaysOptions {
   float pixel_center_offset = 0.5f;     // PIXEL_CENTER_OFFSET: pixel (x, y) is sampled at (x + o, y + o)
   bool jitter_subpixel = false;         // SUBPIXEL_JITTER: a uniform position in the pixel instead (RngKey)
   bool view_dependence = true;          // VIEW_DEPENDENCE: off, viewdirs are not computed
+  bool unit_viewdirs = true;            // UNIT_VIEWDIRS: unit viewdirs; false: the world directions as they are
   float ndc_near_plane = 1.0f;          // NDC_NEAR_PLANE (cylinder only), official 1
+  // unit_viewdirs: the official Blender and spherified LLFF loaders normalise the view directions; the official
+  // forward-facing LLFF loader passes viewdirs = rays.directions (camera-frame z = −1, taken before NDC).
 };
 
 struct SampleOptions {
@@ -91,6 +94,19 @@ struct EncodingOptions {
 
 struct RenderOptions {
   Background background = Background::white;  // BACKGROUND
+  // DENSITY_NOISE: the standard deviation of the N(0, 1) noise the fused render_raw_* kernels add to each raw density
+  // before its activation (official MipNerfModel.density_noise, llff.gin: 1), drawn per (seed, step, ray, level,
+  // sample) (DensityNoiseKey). 0 compiles it out. Training only: the graph builds rendering with 0.
+  float density_noise = 0.0f;
+};
+
+// What the density noise of one launch of render_raw_fwd/bwd is keyed by: the step's key (ray i of the launch is
+// ray first_ray + i of the batch) and the level, so levels draw different numbers and a level's backward the same
+// as its forward. Sample i of a ray takes draw i % 4 of rng_normal4(seed, ray, step, level·2^24 + i/4,
+// RNG_STREAM_DENSITY_NOISE) (levels < 256, samples per ray < 2^26).
+struct DensityNoiseKey {
+  RngKey rng;
+  uint32_t level = 0;
 };
 
 struct ActivationOptions {

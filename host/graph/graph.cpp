@@ -114,7 +114,10 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   ops::EncodeTuning encode_tuning;
   for (const auto& level : spec_.levels) encode_tuning.concat_pe |= level.encoding == Encoding::concat_pe;
   encode_ = std::make_unique<ops::Encode>(ctx, spec_.gaussian, encode_tuning);
-  render_ = std::make_unique<ops::Render>(ctx, spec_.render, spec_.activation);
+  // Density noise regularises training only (official: when randomized); rendering never compiles it in.
+  RenderOptions render_options = spec_.render;
+  if (!training) render_options.density_noise = 0.0f;
+  render_ = std::make_unique<ops::Render>(ctx, render_options, spec_.activation);
   if (training) loss_ = std::make_unique<ops::Loss>(ctx, spec_.loss);
 
   const BufferPlan plan =
@@ -225,7 +228,7 @@ void Graph::encode_level(size_t l, size_t n_rays) {
   }
 }
 
-void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws) {
+void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise) {
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& buffers = levels_[l];
   mlp::Network& network = *networks_[level.mlp_index];
@@ -242,10 +245,11 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws) {
   // The activations are fused into rendering: raw MLP outputs in, composited colour out.
   ocl::StageScope stage(*ctx_, "render");
   render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
-                   {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights});
+                   {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights}, noise);
 }
 
-void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets, ChunkRange chunk) {
+void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
+                           const DensityNoiseKey& noise) {
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& buffers = levels_[l];
   const ops::LossChunk loss_chunk{n_rays, chunk.first, step_groups_};
@@ -256,7 +260,7 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   }
   ocl::StageScope stage(*ctx_, "render backward");
   render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals}, buffers.weights,
-                   {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_});
+                   {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_}, noise);
   ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
   networks_[level.mlp_index]->backward(workspaces_[level.mlp_index],
                                        {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)});
@@ -281,10 +285,12 @@ void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTa
   if (chunk.first + chunk.count > step_batch_rays_) throw Error("graph: chunk outside the step's batch");
   generate_rays(source, chunk, key, static_cast<uint32_t>(chunk.first));
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
+    // The level's density noise (when the spec has it): the same key for its forward and its backward.
+    const DensityNoiseKey noise{{key.seed, key.step, static_cast<uint32_t>(chunk.first)}, static_cast<uint32_t>(l)};
     sample_level(l, chunk.count, key, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count);
-    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index]);
-    backward_level(l, chunk.count, targets, chunk);
+    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], noise);
+    backward_level(l, chunk.count, targets, chunk, noise);
   }
   step_groups_ += loss_->groups_for(chunk.count);
 }
@@ -305,7 +311,7 @@ void Graph::render_chunk(const RaySource& source, ChunkRange chunk, StepKey key,
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count);
-    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index]);
+    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], DensityNoiseKey{});  // no noise compiled in
   }
 }
 

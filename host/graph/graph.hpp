@@ -3,8 +3,9 @@
 //
 // Training, per step:  begin_step(); train_chunk(...) for each chunk of the batch; end_step() → losses.
 // Per chunk and level l: sample (stratified, or resampled from level l−1's weights: a constant, the
-// stop-gradient) → encode → MLP forward → fused activation + render → loss and ∂loss/∂colour → render
-// backward → MLP backward (gradients accumulate over chunks and levels into each network's one buffer).
+// stop-gradient) → encode → MLP forward → fused activation (with the spec's density noise, training only) + render
+// → loss and ∂loss/∂colour → render backward → MLP backward (gradients accumulate over chunks and levels into each
+// network's one buffer).
 // A level's backward runs before the next level's forward: stop-gradient means no gradient crosses levels,
 // so one MLP workspace per network is enough, whatever the number of levels.
 #pragma once
@@ -32,6 +33,9 @@ struct RaySource {
   const ocl::DeviceArray<float>& cameras;        // [C][24] packed
   const ocl::DeviceArray<uint32_t>& camera_ids;  // [B]
   const ocl::DeviceArray<uint32_t>& pixel_ids;   // [B] y·width + x
+  // Per-pixel undistorted directions of lens cameras ([pixels][4], data/lens_tables.hpp); null when every
+  // camera is a pinhole.
+  const ocl::DeviceArray<float>* lens_tables = nullptr;
 };
 
 // Rays first .. first + count − 1 of the source.
@@ -110,8 +114,10 @@ class Graph {
   void generate_rays(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray);
   void sample_level(size_t level, size_t n_rays, StepKey key, uint32_t first_ray);
   void encode_level(size_t level, size_t n_rays);
-  void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws);
-  void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk);
+  // `noise` keys the level's density noise (RenderOptions::density_noise; training graphs only).
+  void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise);
+  void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
+                      const DensityNoiseKey& noise);
 
   ocl::Context* ctx_;
   GraphSpec spec_;

@@ -23,7 +23,8 @@ struct RayBundle {
 
   ocl::DeviceArray<float> origins;     // [R][3] world (NDC for cylinder rays)
   ocl::DeviceArray<float> directions;  // [R][3] unnormalised, camera-frame z = −1 (NDC direction for cylinder)
-  ocl::DeviceArray<float> viewdirs;    // [R][3] unit world direction; not written without view dependence
+  ocl::DeviceArray<float> viewdirs;    // [R][3] world direction, unit unless RaysOptions::unit_viewdirs is off;
+                                       // not written without view dependence
   ocl::DeviceArray<float> radii;       // [R] cone radius at t = 1 (cylinder: radius in NDC)
   ocl::DeviceArray<float> near;        // [R] sampling range in t
   ocl::DeviceArray<float> far;         // [R]

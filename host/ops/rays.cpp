@@ -13,6 +13,7 @@ ocl::BuildOptions rays_build_options(const RaysOptions& options) {
       .define_float("PIXEL_CENTER_OFFSET", options.pixel_center_offset)
       .define("SUBPIXEL_JITTER", options.jitter_subpixel ? 1 : 0)
       .define("VIEW_DEPENDENCE", options.view_dependence ? 1 : 0)
+      .define("UNIT_VIEWDIRS", options.unit_viewdirs ? 1 : 0)
       .define_float("NDC_NEAR_PLANE", options.ndc_near_plane);
 }
 

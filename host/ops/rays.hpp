@@ -12,7 +12,7 @@
 
 namespace mipnerf::ops {
 
-// RAY_SHAPE, PIXEL_CENTER_OFFSET, SUBPIXEL_JITTER, VIEW_DEPENDENCE, NDC_NEAR_PLANE.
+// RAY_SHAPE, PIXEL_CENTER_OFFSET, SUBPIXEL_JITTER, VIEW_DEPENDENCE, UNIT_VIEWDIRS, NDC_NEAR_PLANE.
 ocl::BuildOptions rays_build_options(const RaysOptions& options);
 
 struct RaysInputs {

@@ -1,7 +1,11 @@
 // Host wrapper of kernels/render.cl.
 #include "ops/render.hpp"
 
+#include <cmath>
+#include <string>
+
 #include "cl/launch.hpp"
+#include "core/error.hpp"
 #include "ops/activations.hpp"
 #include "ops/stage_checks.hpp"
 
@@ -16,10 +20,24 @@ void check_inputs(const RenderInputs& in, const std::string& where) {
   detail::to_uint(in.n_rays * in.n_samples, where, "rows");
 }
 
+// The noise's counter slot is level·2^24 + sample/4 (kernels/render.cl): 256 levels of fewer than 2^26 samples.
+void check_noise_key(const DensityNoiseKey& noise, size_t n_samples, const std::string& where) {
+  if (noise.level >= 256 || n_samples >= (size_t{1} << 26)) {
+    throw Error(where + ": density noise keys 256 levels of fewer than 2^26 samples; got level " +
+                std::to_string(noise.level) + " with " + std::to_string(n_samples) + " samples");
+  }
+}
+
 }  // namespace
 
 ocl::BuildOptions render_build_options(const RenderOptions& options, const ActivationOptions& activation) {
-  return activation_build_options(activation).define("BACKGROUND", static_cast<int>(options.background));
+  auto build = activation_build_options(activation).define("BACKGROUND", static_cast<int>(options.background));
+  if (!(options.density_noise >= 0.0f) || !std::isfinite(options.density_noise)) {
+    throw Error("render: density_noise must be finite and >= 0, not " + std::to_string(options.density_noise));
+  }
+  // Only when on: a program without it has no noise code at all.
+  if (options.density_noise > 0.0f) build.define_float("DENSITY_NOISE", options.density_noise);
+  return build;
 }
 
 Render::Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation)
@@ -32,21 +50,30 @@ Render::Render(ocl::Context& ctx, const RenderOptions& options, const Activation
 }
 
 void Render::launch_fwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in,
-                        const RenderOutputs& out) {
+                        const RenderOutputs& out, const DensityNoiseKey* noise) {
   check_inputs(in, where);
   detail::require(out.comp_rgb, 3 * in.n_rays, where);
   detail::require(out.acc, in.n_rays, where);
   detail::require(out.distance, in.n_rays, where);
   detail::require(out.weights, in.n_rays * in.n_samples, where);
-  ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, out.comp_rgb, out.acc, out.distance,
-                out.weights, detail::to_uint(in.n_rays, where, "rays"),
-                detail::to_uint(in.n_samples, where, "samples"));
+  const cl_uint n_rays = detail::to_uint(in.n_rays, where, "rays"),
+                n_samples = detail::to_uint(in.n_samples, where, "samples");
+  if (noise) {
+    check_noise_key(*noise, in.n_samples, where);
+    ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, out.comp_rgb, out.acc,
+                  out.distance, out.weights, n_rays, n_samples, static_cast<cl_ulong>(noise->rng.seed),
+                  static_cast<cl_uint>(noise->rng.step), static_cast<cl_uint>(noise->rng.first_ray),
+                  static_cast<cl_uint>(noise->level));
+  } else {
+    ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, out.comp_rgb, out.acc,
+                  out.distance, out.weights, n_rays, n_samples);
+  }
   ocl::launch_1d(*ctx_, kernel, in.n_rays, where);
 }
 
 void Render::launch_bwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in,
                         const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
-                        const RenderInputGradients& out) {
+                        const RenderInputGradients& out, const DensityNoiseKey* noise) {
   check_inputs(in, where);
   detail::require(weights, in.n_rays * in.n_samples, where);
   detail::require(grads.d_comp_rgb, 3 * in.n_rays, where);
@@ -55,26 +82,38 @@ void Render::launch_bwd(::cl::Kernel& kernel, const std::string& where, const Re
   detail::require(out.d_density, in.n_rays * in.n_samples, where);
   // Without d_acc the kernel never reads that argument; any valid buffer stands in for it.
   const ocl::DeviceArray<float>& d_acc = grads.d_acc ? *grads.d_acc : grads.d_comp_rgb;
-  ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, weights, grads.d_comp_rgb, d_acc,
-                static_cast<cl_uint>(grads.d_acc ? 1 : 0), out.d_rgb, out.d_density,
-                detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
+  const cl_uint has_d_acc = grads.d_acc ? 1 : 0;
+  const cl_uint n_rays = detail::to_uint(in.n_rays, where, "rays"),
+                n_samples = detail::to_uint(in.n_samples, where, "samples");
+  if (noise) {
+    check_noise_key(*noise, in.n_samples, where);
+    ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, weights, grads.d_comp_rgb, d_acc,
+                  has_d_acc, out.d_rgb, out.d_density, n_rays, n_samples, static_cast<cl_ulong>(noise->rng.seed),
+                  static_cast<cl_uint>(noise->rng.step), static_cast<cl_uint>(noise->rng.first_ray),
+                  static_cast<cl_uint>(noise->level));
+  } else {
+    ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, weights, grads.d_comp_rgb, d_acc,
+                  has_d_acc, out.d_rgb, out.d_density, n_rays, n_samples);
+  }
   ocl::launch_1d(*ctx_, kernel, in.n_rays, where);
 }
 
-void Render::fwd(const RenderInputs& in, const RenderOutputs& out) { launch_fwd(*fwd_, "render_fwd", in, out); }
+void Render::fwd(const RenderInputs& in, const RenderOutputs& out) {
+  launch_fwd(*fwd_, "render_fwd", in, out, nullptr);
+}
 
 void Render::bwd(const RenderInputs& in, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
                  const RenderInputGradients& out) {
-  launch_bwd(*bwd_, "render_bwd", in, weights, grads, out);
+  launch_bwd(*bwd_, "render_bwd", in, weights, grads, out, nullptr);
 }
 
-void Render::raw_fwd(const RenderInputs& raw, const RenderOutputs& out) {
-  launch_fwd(*raw_fwd_, "render_raw_fwd", raw, out);
+void Render::raw_fwd(const RenderInputs& raw, const RenderOutputs& out, const DensityNoiseKey& noise) {
+  launch_fwd(*raw_fwd_, "render_raw_fwd", raw, out, &noise);
 }
 
 void Render::raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
-                     const RenderInputGradients& out) {
-  launch_bwd(*raw_bwd_, "render_raw_bwd", raw, weights, grads, out);
+                     const RenderInputGradients& out, const DensityNoiseKey& noise) {
+  launch_bwd(*raw_bwd_, "render_raw_bwd", raw, weights, grads, out, &noise);
 }
 
 }  // namespace mipnerf::ops

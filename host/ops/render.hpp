@@ -11,6 +11,7 @@
 
 namespace mipnerf::ops {
 
+// BACKGROUND, DENSITY_NOISE (defined only when options.density_noise > 0), and the activations' options.
 ocl::BuildOptions render_build_options(const RenderOptions& options, const ActivationOptions& activation);
 
 // For fwd/bwd the activated values; for raw_fwd/raw_bwd the MLP's raw outputs in the same layouts.
@@ -51,17 +52,22 @@ class Render {
   // Enqueues render_bwd. `weights` is the forward's output for these inputs (what the forward saves).
   void bwd(const RenderInputs& in, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
            const RenderInputGradients& out);
-  // The fused activations_fwd + render_fwd, on raw MLP outputs (in.rgb, in.density hold raw values).
-  void raw_fwd(const RenderInputs& raw, const RenderOutputs& out);
-  // The fused render_bwd + activations_bwd: gradients with respect to the raw outputs.
+  // The fused activations_fwd + render_fwd, on raw MLP outputs (in.rgb, in.density hold raw values). With
+  // options().density_noise > 0 each raw density gets its noise first, keyed by `noise` (ray i of the launch is ray
+  // noise.rng.first_ray + i of the batch); without, `noise` is not used.
+  void raw_fwd(const RenderInputs& raw, const RenderOutputs& out, const DensityNoiseKey& noise = {});
+  // The fused render_bwd + activations_bwd: gradients with respect to the raw outputs. `noise` must be the
+  // forward's: the backward draws the same noise again.
   void raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
-               const RenderInputGradients& out);
+               const RenderInputGradients& out, const DensityNoiseKey& noise = {});
 
  private:
-  void launch_fwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in, const RenderOutputs& out);
+  // `noise`: the fused kernels' key (their last four arguments); nullptr for render_fwd/bwd, which have none.
+  void launch_fwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in, const RenderOutputs& out,
+                  const DensityNoiseKey* noise);
   void launch_bwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in,
-                  const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
-                  const RenderInputGradients& out);
+                  const ocl::DeviceArray<float>& weights, const RenderGradients& grads, const RenderInputGradients& out,
+                  const DensityNoiseKey* noise);
   ocl::Context* ctx_;
   RenderOptions options_;
   ::cl::Kernel* fwd_;

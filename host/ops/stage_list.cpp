@@ -25,15 +25,22 @@ std::string words(std::initializer_list<std::string> parts) {
   return out;
 }
 
-// RAY_SHAPE × VIEW_DEPENDENCE × SUBPIXEL_JITTER: 8.
+// RAY_SHAPE × (VIEW_DEPENDENCE with UNIT_VIEWDIRS on or off, or no VIEW_DEPENDENCE, where UNIT_VIEWDIRS has nothing
+// to change) × SUBPIXEL_JITTER: 2 × 3 × 2 = 12.
 std::vector<StageVariant> rays_variants() {
+  struct View {
+    const char* name;
+    bool view_dependence, unit_viewdirs;
+  };
+  const View views[] = {{"view", true, true}, {"view raw-viewdirs", true, false}, {"no-view", false, true}};
   std::vector<StageVariant> list;
   for (auto shape : {RayShape::cone, RayShape::cylinder}) {
-    for (bool view : {true, false}) {
+    for (const View& view : views) {
       for (bool jitter : {false, true}) {
-        StageVariant v{words({shape_name(shape), view ? "view" : "no-view", jitter ? "jitter" : ""}), {}};
+        StageVariant v{words({shape_name(shape), view.name, jitter ? "jitter" : ""}), {}};
         v.options.rays.ray_shape = shape;
-        v.options.rays.view_dependence = view;
+        v.options.rays.view_dependence = view.view_dependence;
+        v.options.rays.unit_viewdirs = view.unit_viewdirs;
         v.options.rays.jitter_subpixel = jitter;
         list.push_back(v);
       }
@@ -73,7 +80,8 @@ std::vector<StageVariant> activation_variants() {
   return list;
 }
 
-// BACKGROUND × the two sets of activations (render.cl includes activations.cl): 6.
+// BACKGROUND × the two sets of activations (render.cl includes activations.cl): 6; and DENSITY_NOISE as forward-facing
+// LLFF scenes train (official llff.gin: black background, softplus, noise 1): 7.
 std::vector<StageVariant> render_variants() {
   std::vector<StageVariant> list;
   for (auto background : {Background::none, Background::black, Background::white}) {
@@ -84,6 +92,10 @@ std::vector<StageVariant> render_variants() {
       list.push_back(v);
     }
   }
+  StageVariant noisy{"background 1 softplus density-noise", {}};
+  noisy.options.render.background = Background::black;
+  noisy.options.render.density_noise = 1.0f;
+  list.push_back(noisy);
   return list;
 }
 

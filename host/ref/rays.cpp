@@ -127,11 +127,13 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
     const double x = px + offset_x, y = py + offset_y;
     const RayOut ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
                                                                     : cone_ray(cam, x, y, px);
-    // viewdirs: the unit world direction (in NDC scenes too, where `directions` holds the NDC direction).
+    // viewdirs: the world direction (in NDC scenes too, where `directions` holds the NDC direction), normalised
+    // unless options.unit_viewdirs is off (official forward-facing LLFF).
     const Ray world = camera_ray(cam, x, y);
-    const double norm = std::sqrt(world.direction_world[0] * world.direction_world[0] +
-                                  world.direction_world[1] * world.direction_world[1] +
-                                  world.direction_world[2] * world.direction_world[2]);
+    const double norm = !options.unit_viewdirs ? 1.0
+                                               : std::sqrt(world.direction_world[0] * world.direction_world[0] +
+                                                           world.direction_world[1] * world.direction_world[1] +
+                                                           world.direction_world[2] * world.direction_world[2]);
     for (int a = 0; a < 3; ++a) {
       origins[3 * i + a] = ray.origin[a];
       directions[3 * i + a] = ray.direction[a];

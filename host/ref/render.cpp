@@ -4,12 +4,24 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/rng.hpp"
 #include "ref/activations.hpp"
 
 namespace mipnerf::ref {
 namespace {
 
 double norm3(const double* v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// The raw densities as the activation sees them: raw + σ·z with σ = options.density_noise (raw itself for σ = 0).
+std::vector<double> noisy_raw_density(const RenderOptions& options, const std::vector<double>& raw_density,
+                                      size_t n_rays, size_t n_samples, const DensityNoiseKey& noise) {
+  std::vector<double> out(raw_density.begin(), raw_density.begin() + n_rays * n_samples);
+  if (options.density_noise > 0) {
+    const auto z = density_noise_draws(noise, n_rays, n_samples);
+    for (size_t k = 0; k < out.size(); ++k) out[k] += static_cast<double>(options.density_noise) * z[k];
+  }
+  return out;
+}
 
 // s_i = σ_i·δ_i, 0 for an empty interval (as the kernel: σ = ∞ with δ = 0 is no NaN).
 double thickness(double density, double t0, double t1, double dir_norm) {
@@ -18,6 +30,20 @@ double thickness(double density, double t0, double t1, double dir_norm) {
 }
 
 }  // namespace
+
+std::vector<double> density_noise_draws(const DensityNoiseKey& noise, size_t n_rays, size_t n_samples) {
+  constexpr uint32_t level_shift = 24;  // DENSITY_NOISE_LEVEL_SHIFT
+  std::vector<double> z(n_rays * n_samples);
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    for (size_t group = 0; 4 * group < n_samples; ++group) {
+      const auto draws =
+          rng_normal4(noise.rng.seed, noise.rng.first_ray + static_cast<uint32_t>(ray), noise.rng.step,
+                      (noise.level << level_shift) + static_cast<uint32_t>(group), rng_stream_density_noise);
+      for (size_t k = 0; k < 4 && 4 * group + k < n_samples; ++k) z[ray * n_samples + 4 * group + k] = draws[k];
+    }
+  }
+  return z;
+}
 
 void render_fwd(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
@@ -88,9 +114,10 @@ void render_raw_fwd(const RenderOptions& options, const ActivationOptions& activ
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
-                    std::vector<double>& weights, size_t n_rays, size_t n_samples) {
+                    std::vector<double>& weights, size_t n_rays, size_t n_samples, const DensityNoiseKey& noise) {
   std::vector<double> density, rgb;
-  activations_fwd(activation, raw_density, raw_rgb, density, rgb, n_rays * n_samples);
+  activations_fwd(activation, noisy_raw_density(options, raw_density, n_rays, n_samples, noise), raw_rgb, density, rgb,
+                  n_rays * n_samples);
   render_fwd(options, rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, n_rays, n_samples);
 }
 
@@ -99,13 +126,14 @@ void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activ
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                     const std::vector<double>* d_acc, std::vector<double>& d_raw_rgb,
-                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples) {
+                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples, const DensityNoiseKey& noise) {
   const size_t rows = n_rays * n_samples;
+  const auto noisy = noisy_raw_density(options, raw_density, n_rays, n_samples, noise);
   std::vector<double> density, rgb, d_rgb, d_density;
-  activations_fwd(activation, raw_density, raw_rgb, density, rgb, rows);
+  activations_fwd(activation, noisy, raw_rgb, density, rgb, rows);
   render_bwd(options, rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, d_rgb, d_density, n_rays,
              n_samples);
-  activations_bwd(activation, raw_density, raw_rgb, d_density, d_rgb, d_raw_density, d_raw_rgb, rows);
+  activations_bwd(activation, noisy, raw_rgb, d_density, d_rgb, d_raw_density, d_raw_rgb, rows);
 }
 
 }  // namespace mipnerf::ref

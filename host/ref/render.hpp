@@ -26,17 +26,25 @@ void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, co
                 const std::vector<double>* d_acc, std::vector<double>& d_rgb, std::vector<double>& d_density,
                 size_t n_rays, size_t n_samples);
 
+// The N(0, 1) draws of the density noise, z [R][N]: sample i of ray r takes draw i % 4 of rng_normal4(seed,
+// first_ray + r, step, level·2^24 + i/4, RNG_STREAM_DENSITY_NOISE) (kernels/render.cl), in double.
+std::vector<double> density_noise_draws(const DensityNoiseKey& noise, size_t n_rays, size_t n_samples);
+
 // Mirrors of the fused kernels: ref::activations_fwd then ref::render_fwd, and render_bwd then activations_bwd.
+// With options.density_noise = σ > 0, the activations read raw_density + σ·z (z: density_noise_draws of `noise`;
+// official models.py adds density_noise·N(0, 1) to the raw density before its activation while training), and the
+// backward differentiates at that noisy value (∂(raw + σ·z)/∂raw = 1).
 void render_raw_fwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
-                    std::vector<double>& weights, size_t n_rays, size_t n_samples);
+                    std::vector<double>& weights, size_t n_rays, size_t n_samples, const DensityNoiseKey& noise = {});
 void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                     const std::vector<double>* d_acc, std::vector<double>& d_raw_rgb,
-                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples);
+                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples,
+                    const DensityNoiseKey& noise = {});
 
 }  // namespace mipnerf::ref

@@ -55,6 +55,11 @@ const std::vector<Entry>& table() {
        &TrainConfig::pixel_center},
       {{"jitter_pixels", "train on rays through random points of their pixels (supersampling)", "scene"},
        &TrainConfig::jitter_pixels},
+      {{"unit_viewdirs",
+        "normalise the view directions (false: the world ray directions as they are, as the official forward-facing "
+        "LLFF loader passes them)",
+        "scene"},
+       &TrainConfig::unit_viewdirs},
       {{"variant", "model family: frustums with IPE, or NeRF's points with PE (--variant sets it)", "model"},
        &TrainConfig::variant},
       {{"num_samples", "intervals per level", "model"}, &TrainConfig::num_samples},
@@ -74,6 +79,11 @@ const std::vector<Entry>& table() {
       {{"view_max_deg", "view-direction encoding degrees end before this", "model"}, &TrainConfig::view_max_deg},
       {{"density_activation", "activation of the raw density", "model"}, &TrainConfig::density_activation},
       {{"density_bias", "added to the raw density before its activation", "model"}, &TrainConfig::density_bias},
+      {{"density_noise",
+        "standard deviation of the normal noise added to the raw density before its activation while training "
+        "(0 = off; official LLFF: 1)",
+        "model"},
+       &TrainConfig::density_noise},
       {{"rgb_padding", "epsilon of the widened colour sigmoid", "model"}, &TrainConfig::rgb_padding},
       {{"resample_padding", "alpha added to the weights before resampling", "model"}, &TrainConfig::resample_padding},
       {{"resample_blur", "blur-pool the weights before resampling", "model"}, &TrainConfig::resample_blur},
@@ -395,6 +405,7 @@ void validate(const TrainConfig& c) {
   require(c.val_views >= 0, "val_views must be >= 0");
   require(c.val_every >= 0, "val_every must be >= 0 (0 = no val scores during training)");
   require(c.resample_padding >= 0 && c.rgb_padding >= 0, "paddings must be >= 0");
+  require(c.density_noise >= 0, "density_noise must be >= 0 (0 = no noise)");
   require(c.pixel_center >= 0 && c.pixel_center < 1, "pixel_center must be in [0, 1)");
   require(c.near >= 0 && c.far >= 0 && (c.far == 0 || c.far > c.near), "need 0 <= near < far (0 = from data)");
 }

@@ -70,6 +70,9 @@ struct TrainConfig {
   ops::Batching batching = ops::Batching::all_images;  // where a batch's rays come from
   double pixel_center = 0.5;         // rays through pixel centres (x + 0.5); original NeRF used 0 (corners)
   bool jitter_pixels = false;        // each training ray through a random point of its pixel (supersampling baselines)
+  // View directions as unit vectors (official Blender, spherified LLFF); false: the world ray directions as they are
+  // (camera-frame z = −1), as the official forward-facing LLFF loader passes them. Render and eval use the run's.
+  bool unit_viewdirs = true;
 
   // --- model ---
   ModelFamily variant = ModelFamily::mipnerf;  // set by --variant's bundle (nerf for the NeRF baseline)
@@ -87,6 +90,9 @@ struct TrainConfig {
   int view_max_deg = 4;
   DensityActivation density_activation = DensityActivation::softplus;
   double density_bias = -1.0;       // added to the raw density before the activation
+  // σ of the N(0, 1) noise added to the raw density before the activation while training, never when rendering
+  // (official density_noise: 0 for Blender, the paper's setup; llff.gin: 1). 0 compiles it out.
+  double density_noise = 0.0;
   double rgb_padding = 0.001;       // ε of the widened sigmoid (1 + 2ε)·sigmoid − ε
   double resample_padding = 0.01;   // α added to the blurred weights before resampling (mip-NeRF; NeRF: 0)
   bool resample_blur = true;        // blur-pool (max of neighbours, mean of pairs) before resampling (NeRF: false)

@@ -69,6 +69,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.rays.pixel_center_offset = static_cast<float>(c.pixel_center);
   spec.rays.jitter_subpixel = c.jitter_pixels;  // training only: rendering decides its own supersampling
   spec.rays.view_dependence = c.view_dependence;
+  spec.rays.unit_viewdirs = c.unit_viewdirs;
   spec.gaussian.ray_shape = spec.rays.ray_shape;
   spec.sample.lindisp = c.lindisp;
   spec.sample.randomized = c.randomized;
@@ -79,6 +80,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.activation.density_bias = static_cast<float>(c.density_bias);
   spec.activation.rgb_padding = static_cast<float>(c.rgb_padding);
   spec.render.background = c.background;
+  spec.render.density_noise = static_cast<float>(c.density_noise);  // the graph adds it while training only
   spec.loss.multiscale = multiscale_data && c.area_loss;
   spec.validate();
   return spec;

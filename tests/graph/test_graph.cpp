@@ -9,6 +9,7 @@
 #include <random>
 
 #include "data/device_dataset.hpp"
+#include "data/forward_facing.hpp"
 #include "graph/graph.hpp"
 #include "ops/batch.hpp"
 #include "ref/encode.hpp"
@@ -19,6 +20,7 @@
 #include "ref/resample.hpp"
 #include "ref/sample.hpp"
 #include "support/gemm_backends.hpp"
+#include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "support/train_fixtures.hpp"
 #include "train/model.hpp"
@@ -152,8 +154,10 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     const auto& mlp_config = spec.mlps[level.mlp_index];
     ref::MlpTape tape;
     ref::mlp_forward(mlp_config, params[level.mlp_index], features, view_features, R, n, raw_density, raw_rgb, &tape);
+    // The level's density noise (training; when the spec has it), keyed as the graph keys it.
+    const DensityNoiseKey noise{key, static_cast<uint32_t>(l)};
     ref::render_raw_fwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, comp, acc, distance, weights,
-                        R, n);
+                        R, n, noise);
     std::vector<double> d_comp(3 * R), partials(2), d_raw_rgb, d_raw_density;
     ref::loss_fwd_bwd(comp.data(), target.data(), spec.loss.multiscale ? lossmult.data() : nullptr, level.loss_weight,
                       1.0 / lossmult_sum, d_comp.data(), partials.data(), 0, 0, R, R);
@@ -161,7 +165,7 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     out.weighted_loss += level.loss_weight * out.level_loss.back();
     out.t_edges.push_back(t);
     ref::render_raw_bwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, weights, d_comp, nullptr,
-                        d_raw_rgb, d_raw_density, R, n);
+                        d_raw_rgb, d_raw_density, R, n, noise);
     ref::mlp_backward(mlp_config, params[level.mlp_index], tape, d_raw_density, d_raw_rgb, out.grads[level.mlp_index]);
     t_prev = t;
     weights_prev = weights;
@@ -374,4 +378,92 @@ TEST_CASE("graph: the concatenated-PE step at mean degrees 0..7 equals the refer
   std::vector<ParameterEntry> entries;
   for (size_t row : {48u, 53u, 60u, 66u, 71u}) entries.push_back({0, first_layer.weight_offset + row * first_layer.out + 3});
   check_step_against_reference("mipnerf-concat-pe", test::small_scene(), {{"pos_max_deg", "8"}}, entries, false);
+}
+
+namespace {
+
+// A small forward-facing LLFF capture (32×24 images, 20 views: poses_bounds.npy and images/), made once per process;
+// loaded with the default options it is NDC data (near 0, far 1), as `train` loads a forward-facing capture.
+const std::string& forward_facing_scene() {
+  static const std::string path = [] {
+    const auto dir = test::fresh_temp_dir("graph-llff");
+    data::ForwardFacingOptions options;
+    options.width_px = 32;
+    options.factor = 1;
+    options.samples_per_axis = 1;
+    options.threads = 2;
+    data::write_forward_facing_scene(dir.string(), options);
+    return dir.string();
+  }();
+  return path;
+}
+
+// The forward-facing LLFF conventions the LLFF row's effects choose (host/data/formats/llff.cpp): NDC rays as
+// cylinders, the world directions as view directions, density noise 1, a black background.
+const train::Bundle kLlffConventions = {
+    {"ray_shape", "cylinder"}, {"unit_viewdirs", "false"}, {"density_noise", "1"}, {"background", "black"}};
+
+}  // namespace
+
+// The official forward-facing LLFF setup (llff.gin; datasets.py): the step with cylinders in NDC, un-normalised view
+// directions and the density noise the reference draws with the graph's keys (seed, step, ray in the batch, level), so
+// the three chunks' draws are the whole batch's. Also against finite differences of the reference's loss with the
+// draws held (keyed, they do not move with the parameters): first-layer weights, as the concatenated-PE test.
+TEST_CASE("graph: a forward-facing LLFF step (cylinders, raw view directions, density noise) equals the reference") {
+  const auto config = train::resolve_config("tiny", "mipnerf", kLlffConventions);
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.rays.ray_shape == RayShape::cylinder);
+  REQUIRE_FALSE(spec.rays.unit_viewdirs);
+  REQUIRE(spec.render.density_noise == 1.0f);
+  const auto dataset = data::load_dataset(forward_facing_scene(), {});
+  REQUIRE(dataset.split("train").cameras.at(0).far == 1.0);  // NDC data
+  const auto first_layer = mlp::parameter_layout(spec.mlps.at(0)).trunk.at(0);
+  std::vector<ParameterEntry> entries;
+  for (size_t row : {0u, 7u, 21u, 33u, 44u}) {
+    entries.push_back({0, first_layer.weight_offset + row * first_layer.out + 3});
+  }
+  check_step_against_reference("mipnerf", forward_facing_scene(), kLlffConventions, entries);
+}
+
+// Density noise regularises training only (official: `if randomized and density_noise > 0`): a rendering graph of a
+// spec with noise renders exactly what the same spec without it renders, while a training step with it differs.
+TEST_CASE("graph: density noise changes a training step and never a render") {
+  auto& ctx = test::test_context();
+  const auto noisy_config = train::resolve_config("tiny", "mipnerf", kLlffConventions);
+  auto quiet_config = noisy_config;
+  quiet_config.density_noise = 0.0;
+  const auto dataset = data::load_dataset(forward_facing_scene(), {});
+  const auto& split = dataset.split("train");
+  data::DeviceDataset device_data(ctx, split);
+  const size_t rays = 64;
+  ops::BatchArrays batch(ctx, rays);
+  ops::batch_sample(ctx, device_data, {noisy_config.seed, ops::Batching::all_images}, 3, batch);
+  const graph::RaySource source{device_data.cameras(), batch.camera_ids, batch.pixel_ids};
+  const auto noisy_spec = train::make_graph_spec(noisy_config, false),
+             quiet_spec = train::make_graph_spec(quiet_config, false);
+  auto network = mlp::make_network(ctx, noisy_spec.mlps.at(0), test::supported_gemm_backends(ctx).front());
+
+  const auto render = [&](const graph::GraphSpec& spec) {
+    graph::Graph graph(ctx, spec, {network.get()}, graph::GraphMode::inference, rays);
+    graph.render_chunk(source, {0, rays});
+    std::vector<std::vector<float>> out;
+    for (size_t l = 0; l < spec.levels.size(); ++l) {
+      out.push_back(graph.level_outputs(l).comp_rgb.download(ctx));
+      out.push_back(graph.level_outputs(l).acc.download(ctx));
+    }
+    return out;
+  };
+  CHECK(render(noisy_spec) == render(quiet_spec));
+
+  const auto train_step = [&](const graph::GraphSpec& spec) {
+    graph::Graph graph(ctx, spec, {network.get()}, graph::GraphMode::training, rays, rays);
+    graph.begin_step(rays, static_cast<double>(rays));
+    graph.train_chunk(source, {0, rays}, {batch.target_rgb, nullptr}, {noisy_config.seed, 3});
+    const auto losses = graph.end_step();
+    return std::make_pair(losses.back().loss(), network->download_grads());
+  };
+  const auto noisy = train_step(noisy_spec), quiet = train_step(quiet_spec);
+  CHECK(noisy.first != quiet.first);
+  CHECK(noisy.second != quiet.second);
+  CHECK(train_step(noisy_spec) == noisy);  // keyed: the same step draws the same noise
 }

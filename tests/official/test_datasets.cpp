@@ -23,6 +23,8 @@
 #include "ops/rays.hpp"
 #include "support/data_fixtures.hpp"
 #include "support/test_context.hpp"
+#include "train/model.hpp"
+#include "train/scene_effects.hpp"
 
 using namespace mipnerf;
 using official::flat;
@@ -188,6 +190,13 @@ void write_llff_capture(const io::Json& inputs, const std::string& dir, size_t& 
     io::write_png8(dir + "/images/" + inputs.at("image_names").at(k).get<std::string>(), static_cast<uint32_t>(width),
                    static_cast<uint32_t>(height), 3, bytes.data());
   }
+}
+
+// The ray options `train` compiles for the capture in `dir`: the LLFF row's scene effects over the paper's defaults.
+RaysOptions rays_options_train_chooses(const std::string& dir) {
+  std::string line;
+  const auto settings = train::with_scene_effects(train::scene_effects(dir, 1), {}, line);
+  return train::make_graph_spec(train::resolve_config("paper", "mipnerf", settings), false).rays;
 }
 
 struct LlffCase {
@@ -422,16 +431,16 @@ TEST_CASE("NDC radii: the last pixel row and column have the official radii") {
   }
 }
 
-// Known difference: the official LLFF loader passes the un-normalised world directions as viewdirs (datasets.py,
-// LLFF._generate_rays: viewdirs=self.rays.directions), while our ray kernel writes unit directions for every
-// dataset. Written against the official behaviour; may fail until ours follows it.
-TEST_CASE("LLFF rays: our view directions of the held-out views are the official ones (un-normalised)" *
-          doctest::may_fail()) {
+// The official LLFF loader passes the un-normalised world directions as viewdirs (datasets.py, LLFF._generate_rays:
+// viewdirs=self.rays.directions, taken before the NDC conversion). Ours follow it with the ray options `train` chooses
+// for the capture (the LLFF row's scene effects: cylinders, unit_viewdirs = false).
+TEST_CASE("LLFF rays: our view directions of the held-out views are the official ones (un-normalised)") {
   test::TempDir dir;
   const auto c = load_llff_case(dir, "forward_facing");
   const auto& test_split = c.dataset.split("test");
-  RaysOptions options;
-  options.ray_shape = RayShape::cylinder;
+  const RaysOptions options = rays_options_train_chooses(dir.path());
+  CHECK(options.ray_shape == RayShape::cylinder);
+  CHECK_FALSE(options.unit_viewdirs);
   const auto rays = run_rays(test_split.cameras, options);
   const auto viewdirs =
       flat(c.outputs.at("test").at("rays").at("viewdirs"), {test_split.num_images(), c.height, c.width, 3});
@@ -452,7 +461,12 @@ TEST_CASE("LLFF loader with spherify: our world rays of the held-out views are t
   const auto c = load_llff_case(dir, "spherify");
   const auto& test_split = c.dataset.split("test");
   const size_t C = test_split.num_images(), h = c.height, w = c.width;
-  const auto rays = run_rays(test_split.cameras, RaysOptions{});
+  // The options train chooses for a 360° capture: world rays, cones and unit view directions (the official spherified
+  // capture goes through the Blender ray generation, which normalises them).
+  const RaysOptions options = rays_options_train_chooses(dir.path());
+  CHECK(options.ray_shape == RayShape::cone);
+  CHECK(options.unit_viewdirs);
+  const auto rays = run_rays(test_split.cameras, options);
   const auto& official_rays = c.outputs.at("test").at("rays");
   const auto origins = flat(official_rays.at("origins"), {C, h, w, 3});
   const auto dirs = flat(official_rays.at("directions"), {C, h, w, 3});

@@ -1,7 +1,7 @@
 // Camera rays (kernels/rays.cl): cone and NDC rays against the reference (which differences neighbouring pixels
 // literally, as the official code), cameras looking exactly along an axis, NDC rays nearly parallel to the near plane
 // or starting on or behind it, pixel-centre offset, sub-pixel jitter and its reproducibility, view dependence off,
-// and invalid ids.
+// raw (un-normalised) view directions, and invalid ids.
 #include <doctest/doctest.h>
 
 #include <array>
@@ -386,6 +386,43 @@ TEST_CASE("rays: jittered positions stay inside their pixel and depend only on s
   tail.pixel_ids.erase(tail.pixel_ids.begin(), tail.pixel_ids.begin() + 1000);
   const auto b = run_device(options, tail, {99, 5, 1000});
   CHECK(std::vector<float>(a.directions.begin() + 3000, a.directions.end()) == b.directions);
+}
+
+TEST_CASE("rays: raw view directions (UNIT_VIEWDIRS off) are the world directions, for cone and NDC rays") {
+  // The official forward-facing LLFF loader passes viewdirs = the world directions before NDC (datasets.py,
+  // LLFF._generate_rays). For cone rays those are `directions` themselves, bit for bit; for NDC rays the world
+  // direction the kernel converts, held to the cone directions' bound against the reference. Nothing else changes.
+  RaysOptions raw;
+  raw.unit_viewdirs = false;
+  const Scene cones = random_scene(20, 5000, 59, false);
+  const auto cone = run_device(raw, cones);
+  CHECK(cone.viewdirs == cone.directions);
+  const auto cone_ref = run_ref(raw, cones);
+  MIPNERF_CHECK_CLOSE("raw viewdirs (cone)", cone.viewdirs, cone_ref.viewdirs, direction_tolerance(cone_ref.viewdirs));
+  const auto cone_unit = run_device({}, cones);
+  CHECK(cone_unit.directions == cone.directions);
+  CHECK(cone_unit.radii == cone.radii);
+
+  raw.ray_shape = RayShape::cylinder;
+  RaysOptions unit_ndc;
+  unit_ndc.ray_shape = RayShape::cylinder;
+  const Scene forward = random_scene(20, 5000, 60, true);
+  const auto ndc = run_device(raw, forward);
+  const auto ndc_ref = run_ref(raw, forward);
+  MIPNERF_CHECK_CLOSE("raw viewdirs (NDC rays)", ndc.viewdirs, ndc_ref.viewdirs, direction_tolerance(ndc_ref.viewdirs));
+  const auto ndc_unit = run_device(unit_ndc, forward);
+  CHECK(ndc_unit.origins == ndc.origins);
+  CHECK(ndc_unit.directions == ndc.directions);
+  CHECK(ndc_unit.radii == ndc.radii);
+  // The camera-frame direction has z = −1, so a raw view direction is at least as long as a unit one: the two
+  // specialisations differ (by the pixel's 1/cos of its angle to the optical axis) and the reference says which.
+  const auto unit_ref = run_ref(unit_ndc, forward);
+  for (size_t i = 0; i < forward.camera_ids.size(); ++i) {
+    const double* v = ndc_ref.viewdirs.data() + 3 * i;
+    const double norm = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    REQUIRE(norm >= 1.0 - 1e-6);  // 1, up to the float32 rounding of the rotation
+    for (int a = 0; a < 3; ++a) REQUIRE(std::abs(v[a] / norm - unit_ref.viewdirs[3 * i + a]) <= 1e-12);
+  }
 }
 
 TEST_CASE("rays: without view dependence the viewdirs buffer is never written") {

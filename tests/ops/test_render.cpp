@@ -1,12 +1,14 @@
 // Volume rendering (kernels/render.cl): forward and backward against the double reference with derived float32
 // bounds, the backward against central finite differences, the hard cases (σ = 0, σ = 1e10, δ = 0, acc = 0, σ·δ
-// overflowing to +∞, t around 1e4), every background, and the fused activation + render kernels against the
-// composition.
+// overflowing to +∞, t around 1e4), every background, the fused activation + render kernels against the
+// composition, and the fused kernels' density noise (its draws, its keys, its backward).
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <limits>
 
+#include "cl/launch.hpp"
+#include "core/rng.hpp"
 #include "kernel_checks.hpp"
 #include "ops/activations.hpp"
 #include "ops/render.hpp"
@@ -56,9 +58,10 @@ struct DeviceResult {
   std::vector<float> comp_rgb, acc, distance, weights, d_rgb, d_density;
 };
 
-// Runs Render::fwd and ::bwd (or the fused raw_* kernels, on raw inputs) for one batch.
+// Runs Render::fwd and ::bwd (or the fused raw_* kernels, on raw inputs, with `noise` keying their density noise)
+// for one batch.
 DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_d_acc, bool raw = false,
-                        const ActivationOptions& activation = {}) {
+                        const ActivationOptions& activation = {}, const DensityNoiseKey& noise = {}) {
   auto& ctx = test::test_context();
   auto rgb = test::upload(ctx, b.rgb, "rgb"), density = test::upload(ctx, b.density, "density");
   auto t_edges = test::upload(ctx, b.t_edges, "t_edges");
@@ -74,8 +77,8 @@ DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_
   const ops::RenderOutputs out{comp, acc, distance, weights};
   const ops::RenderGradients grads{d_comp, with_d_acc ? &d_acc : nullptr};
   if (raw) {
-    render.raw_fwd(in, out);
-    render.raw_bwd(in, weights, grads, {d_rgb, d_density});
+    render.raw_fwd(in, out, noise);
+    render.raw_bwd(in, weights, grads, {d_rgb, d_density}, noise);
   } else {
     render.fwd(in, out);
     render.bwd(in, weights, grads, {d_rgb, d_density});
@@ -501,4 +504,219 @@ TEST_CASE("render: the fused activation and render kernels equal activations the
       CHECK(fused.d_rgb == d_raw_rgb.download(ctx));
     }
   }
+}
+
+// ---- Density noise (DENSITY_NOISE): N(0, 1) draws added to the raw densities by the fused kernels while training ----
+
+namespace {
+
+// rng_normal4 on the device for items 0..n_items − 1 at one counter slot: [n_items][4].
+std::vector<float> device_normal4(ocl::Context& ctx, const RngKey& key, uint32_t slot, size_t n_items) {
+  ocl::DeviceArray<float> out(ctx, 4 * n_items, "normals [n][4]");
+  auto& kernel = ctx.program({"common.cl", "util.cl"}).kernel("rng_normal4_fill");
+  ocl::set_args(kernel, "rng_normal4_fill", cl_ulong{key.seed}, cl_uint{key.step}, cl_uint{slot},
+                cl_uint{rng_stream_density_noise}, out, static_cast<cl_uint>(n_items));
+  ocl::launch_1d(ctx, kernel, n_items, "rng_normal4_fill");
+  return out.download(ctx);
+}
+
+// The device's noise draws of a launch [R][N], picked from rng_normal4_fill as render.cl picks them: sample i of ray r
+// takes draw i % 4 of the counter (first_ray + r, step, level·2^24 + i/4).
+std::vector<float> device_noise_draws(ocl::Context& ctx, const DensityNoiseKey& noise, size_t n_rays, size_t n) {
+  std::vector<float> z(n_rays * n);
+  for (size_t group = 0; 4 * group < n; ++group) {
+    const auto draws = device_normal4(ctx, noise.rng, (noise.level << 24) + static_cast<uint32_t>(group),
+                                      noise.rng.first_ray + n_rays);
+    for (size_t ray = 0; ray < n_rays; ++ray) {
+      for (size_t k = 0; k < 4 && 4 * group + k < n; ++k) {
+        z[ray * n + 4 * group + k] = draws[4 * (noise.rng.first_ray + ray) + k];
+      }
+    }
+  }
+  return z;
+}
+
+// Raw network outputs: N(0, 4²) densities and colours (both signs, saturated tails), as the fused test above.
+Batch raw_batch(size_t n_rays, size_t n_samples, unsigned seed) {
+  Batch raw = random_batch(n_rays, n_samples, seed);
+  std::mt19937 rng(seed + 1);
+  std::normal_distribution<float> normal(0.0f, 4.0f);
+  for (auto& x : raw.density) x = normal(rng);
+  for (auto& x : raw.rgb) x = normal(rng);
+  return raw;
+}
+
+// Rays first.. of a batch, as a launch of their own.
+Batch tail_of(const Batch& b, size_t first) {
+  Batch t = b;
+  const size_t n = b.n_samples;
+  t.n_rays = b.n_rays - first;
+  t.rgb.assign(b.rgb.begin() + 3 * first * n, b.rgb.end());
+  t.density.assign(b.density.begin() + first * n, b.density.end());
+  t.t_edges.assign(b.t_edges.begin() + first * (n + 1), b.t_edges.end());
+  t.directions.assign(b.directions.begin() + 3 * first, b.directions.end());
+  t.d_comp_rgb.assign(b.d_comp_rgb.begin() + 3 * first, b.d_comp_rgb.end());
+  t.d_acc.assign(b.d_acc.begin() + first, b.d_acc.end());
+  return t;
+}
+
+std::vector<float> tail_of(const std::vector<float>& v, size_t first_element) {
+  return std::vector<float>(v.begin() + first_element, v.end());
+}
+
+}  // namespace
+
+TEST_CASE("render: density-noise draws - the kernel's normals are the host mirror's within float32 and are N(0, 1)") {
+  auto& ctx = test::test_context();
+  const size_t n = 20000;
+  const RngKey key{0x5eed5eedULL, 11, 0};
+  const uint32_t slot = (1u << 24) + 3;  // level 1, samples 12..15
+  const auto device = device_normal4(ctx, key, slot, n);
+  // Bound per draw z = r·cos(2πu), r = sqrt(−2·log(1 − u0)), 1 − u0 exact: log ≤ 3 ulp (6u relative), so r is within
+  // 3u, and sqrt adds ≤ 3 ulp (6u); cospi/sinpi of the exact 2u ≤ 4 ulp (8u); the product 1u: 18u·|z|. Twice that;
+  // the host's double evaluation is exact to ~1e-16.
+  std::vector<double> host(4 * n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto z = rng_normal4(key.seed, static_cast<uint32_t>(i), key.step, slot, rng_stream_density_noise);
+    for (int k = 0; k < 4; ++k) host[4 * i + k] = z[k];
+  }
+  MIPNERF_CHECK_CLOSE("normal draws", device, host,
+                      [&](size_t i) { return 2 * 18 * kUnitRoundoff * std::abs(host[i]); });
+  // The host's draws are N(0, 1) (an oracle independent of the transform): 80,000 draws, so the mean's standard
+  // deviation is 0.0035 (bound 0.02, > 5σ) and the variance's sqrt(2/n) = 0.005 (bound 0.03, 6σ); each decile of
+  // Φ(z) expects 8,000 with sd ≈ 85 (bound ±500, > 5σ); |z| ≤ sqrt(−2·log 2^-24) ≈ 5.77 by construction.
+  double sum = 0, sum_sq = 0, max_abs = 0;
+  int deciles[10] = {};
+  for (double z : host) {
+    sum += z;
+    sum_sq += z * z;
+    max_abs = std::max(max_abs, std::abs(z));
+    ++deciles[std::min(9, static_cast<int>(10 * 0.5 * std::erfc(-z / std::sqrt(2.0))))];
+  }
+  const double mean = sum / host.size(), variance = sum_sq / host.size() - mean * mean;
+  CHECK(std::abs(mean) < 0.02);
+  CHECK(std::abs(variance - 1.0) < 0.03);
+  for (int d = 0; d < 10; ++d) CHECK(std::abs(deciles[d] - 8000) < 500);
+  CHECK(max_abs <= std::sqrt(-2.0 * std::log(1.0 / 16777216.0)) + 1e-12);
+  CHECK(max_abs > 3.5);  // the tails are there (P(|z| > 3.5) = 4.7e-4: ~37 expected)
+}
+
+TEST_CASE("render: density noise - the fused kernels add the kernel's own draws, the backward draws them again") {
+  // With DENSITY_NOISE = σ (a power of two, so σ·z is exact and raw + σ·z one rounding, fused or not), the fused
+  // kernels must equal the noiseless fused kernels run on raw + σ·z with the device's draws (rng_normal4_fill), bit for
+  // bit: forward (which draws) and backward (which draws again, and must differentiate at the same noisy value).
+  auto& ctx = test::test_context();
+  const Batch raw = raw_batch(1500, 23, 707);  // 23 samples: a last group of three draws
+  for (const float sigma : {1.0f, 0.5f}) {
+    for (const uint32_t level : {0u, 1u}) {
+      INFO("sigma " << sigma << ", level " << level);
+      const DensityNoiseKey key{{20200823, 11, 0}, level};
+      const auto noisy = run_device({Background::black, sigma}, raw, true, true, {}, key);
+      const auto z = device_noise_draws(ctx, key, raw.n_rays, raw.n_samples);
+      Batch shifted = raw;
+      for (size_t k = 0; k < shifted.density.size(); ++k) shifted.density[k] = raw.density[k] + sigma * z[k];
+      const auto plain = run_device({Background::black}, shifted, true, true);
+      CHECK(noisy.comp_rgb == plain.comp_rgb);
+      CHECK(noisy.acc == plain.acc);
+      CHECK(noisy.distance == plain.distance);
+      CHECK(noisy.weights == plain.weights);
+      CHECK(noisy.d_rgb == plain.d_rgb);
+      CHECK(noisy.d_density == plain.d_density);
+      // And the noise is there: the same key without it gives other weights.
+      CHECK(run_device({Background::black}, raw, true, true, {}, key).weights != noisy.weights);
+    }
+  }
+  // Keyed by (seed, step, ray in the batch, level, sample): another level, step or seed draws other numbers; a launch
+  // of rays 700.. with first_ray = 700 (a chunk) gives exactly those rays' results of the whole launch.
+  const RenderOptions noisy_options{Background::black, 1.0f};
+  const auto whole = run_device(noisy_options, raw, true, true, {}, {{7, 3, 0}, 0});
+  CHECK(run_device(noisy_options, raw, true, true, {}, {{7, 3, 0}, 1}).weights != whole.weights);
+  CHECK(run_device(noisy_options, raw, true, true, {}, {{7, 4, 0}, 0}).weights != whole.weights);
+  CHECK(run_device(noisy_options, raw, true, true, {}, {{8, 3, 0}, 0}).weights != whole.weights);
+  const uint32_t first = 700;
+  const size_t n = raw.n_samples;
+  const auto chunk = run_device(noisy_options, tail_of(raw, first), true, true, {}, {{7, 3, first}, 0});
+  CHECK(chunk.weights == tail_of(whole.weights, first * n));
+  CHECK(chunk.comp_rgb == tail_of(whole.comp_rgb, 3 * first));
+  CHECK(chunk.d_density == tail_of(whole.d_density, first * n));
+  CHECK(chunk.d_rgb == tail_of(whole.d_rgb, 3 * first * n));
+  // The plain kernels (activated inputs) never add noise, whatever the option.
+  const Batch activated = random_batch(500, 16, 708);
+  const auto plain_noisy = run_device(noisy_options, activated, true);
+  const auto plain = run_device({Background::black}, activated, true);
+  CHECK(plain_noisy.weights == plain.weights);
+  CHECK(plain_noisy.d_density == plain.d_density);
+}
+
+TEST_CASE("render: density noise - the reference backward is the derivative of its noisy forward, draws held fixed") {
+  // The reference's fused forward with noise σ = 1 (draws keyed, so a perturbed input keeps them), differenced
+  // centrally in each raw density and colour: L = Σ_c d_comp_c·comp_c + d_acc·acc of each ray. Step
+  // h = 1e-6·max(|x|, 1) on raw values of size ≤ ~15: truncation h²/6·|L'''| (softplus and sigmoid have bounded
+  // derivatives; the weights as in the plain test) and rounding 1e-16/h, both below 1e-9; the reference backward
+  // within 1e-8 + 1e-7 relative.
+  const Batch b = raw_batch(200, 16, 909);
+  const size_t n = b.n_samples;
+  const RenderOptions options{Background::black, 1.0f};
+  const ActivationOptions activation;
+  const DensityNoiseKey key{{99, 5, 0}, 1};
+  const auto rgb = test::to_double(b.rgb), density = test::to_double(b.density);
+  const auto t_edges = test::to_double(b.t_edges), directions = test::to_double(b.directions);
+  const auto d_comp = test::to_double(b.d_comp_rgb), d_acc = test::to_double(b.d_acc);
+  std::vector<double> comp, acc, distance, weights, d_rgb, d_density;
+  ref::render_raw_fwd(options, activation, rgb, density, t_edges, directions, comp, acc, distance, weights, b.n_rays, n,
+                      key);
+  ref::render_raw_bwd(options, activation, rgb, density, t_edges, directions, weights, d_comp, &d_acc, d_rgb, d_density,
+                      b.n_rays, n, key);
+  std::vector<double> fd_rgb(3 * b.n_rays * n), fd_density(b.n_rays * n);
+  for (size_t ray = 0; ray < b.n_rays; ++ray) {
+    std::vector<double> ray_rgb(rgb.begin() + 3 * ray * n, rgb.begin() + 3 * (ray + 1) * n);
+    std::vector<double> ray_density(density.begin() + ray * n, density.begin() + (ray + 1) * n);
+    const std::vector<double> ray_t(t_edges.begin() + ray * (n + 1), t_edges.begin() + (ray + 1) * (n + 1));
+    const std::vector<double> ray_dir(directions.begin() + 3 * ray, directions.begin() + 3 * ray + 3);
+    DensityNoiseKey ray_key = key;
+    ray_key.rng.first_ray = static_cast<uint32_t>(ray);  // this ray's draws, as in the whole batch
+    const auto loss = [&] {
+      std::vector<double> c, a, dist, w;
+      ref::render_raw_fwd(options, activation, ray_rgb, ray_density, ray_t, ray_dir, c, a, dist, w, 1, n, ray_key);
+      return d_acc[ray] * a[0] + d_comp[3 * ray] * c[0] + d_comp[3 * ray + 1] * c[1] + d_comp[3 * ray + 2] * c[2];
+    };
+    const auto difference = [&](double& x) {
+      const double x0 = x, h = 1e-6 * std::max(std::abs(x0), 1.0);
+      x = x0 + h;
+      const double up = loss();
+      x = x0 - h;
+      const double down = loss();
+      x = x0;
+      return (up - down) / (2 * h);
+    };
+    for (size_t i = 0; i < n; ++i) {
+      fd_density[ray * n + i] = difference(ray_density[i]);
+      for (int c = 0; c < 3; ++c) fd_rgb[3 * (ray * n + i) + c] = difference(ray_rgb[3 * i + c]);
+    }
+  }
+  const auto fd_tol = [](const std::vector<double>& fd) {
+    return std::function<double(size_t)>([&fd](size_t i) { return 1e-8 + 1e-7 * std::abs(fd[i]); });
+  };
+  CHECK(count_outside(d_density, fd_density, fd_tol(fd_density)) == 0);
+  CHECK(count_outside(d_rgb, fd_rgb, fd_tol(fd_rgb)) == 0);
+  // The noise matters: the noiseless derivative is another one for most samples.
+  std::vector<double> d_rgb_plain, d_density_plain;
+  ref::render_raw_bwd({Background::black}, activation, rgb, density, t_edges, directions, weights, d_comp, &d_acc,
+                      d_rgb_plain, d_density_plain, b.n_rays, n);
+  CHECK(count_outside(d_density_plain, fd_density, fd_tol(fd_density)) > b.n_rays * n / 4);
+
+  // The device's fused kernels with the same key, as the specialisation test holds every specialisation (its draws
+  // within 36u·|z| of the reference's, then float32 rendering): 1e-4 of the array's largest magnitude. A backward that
+  // missed the noise, or drew other numbers, is off by O(1) of the large gradients (above: most samples move).
+  const auto dev = run_device(options, b, true, true, activation, key);
+  const auto scaled = [](const std::vector<double>& reference) {
+    double scale = 1e-30;
+    for (double v : reference) scale = std::max(scale, std::abs(v));
+    return std::function<double(size_t)>([scale](size_t) { return 1e-4 * scale; });
+  };
+  MIPNERF_CHECK_CLOSE("device d_raw_density with noise vs finite differences", dev.d_density, fd_density,
+                      scaled(fd_density));
+  MIPNERF_CHECK_CLOSE("device d_raw_rgb with noise vs finite differences", dev.d_rgb, fd_rgb, scaled(fd_rgb));
+  MIPNERF_CHECK_CLOSE("device weights with noise vs the reference", dev.weights, weights, scaled(weights));
+  MIPNERF_CHECK_CLOSE("device comp_rgb with noise vs the reference", dev.comp_rgb, comp, scaled(comp));
 }

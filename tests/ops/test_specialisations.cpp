@@ -1,8 +1,8 @@
 // Every compile-time specialisation of the ray-math kernels is built and run against the reference: ray shape
-// (cone/cylinder), background (none/black/white), view dependence (on/off), sub-pixel jitter, disparity sampling,
-// and the density activations. The registry is the stage list (host/ops/stage_list.cpp), which the kernel benchmark
-// walks too: a new stage or option value is added there, and each stage has its check here (check_stage, whose switch
-// over StageId makes a missing check a compile error).
+// (cone/cylinder), background (none/black/white), view dependence (on/off) with unit or raw view directions, sub-pixel
+// jitter, disparity sampling, the density activations and the density noise. The registry is the stage list
+// (host/ops/stage_list.cpp), which the kernel benchmark walks too: a new stage or option value is added there, and
+// each stage has its check here (check_stage, whose switch over StageId makes a missing check a compile error).
 #include <doctest/doctest.h>
 
 #include <set>
@@ -222,15 +222,16 @@ void run_render(const RenderOptions& options, const ActivationOptions& activatio
   ocl::DeviceArray<float> d_raw_rgb(ctx, 3 * rows, "d_raw_rgb"), d_raw_density(ctx, rows, "d_raw_density");
   ops::Render render(ctx, options, activation);
   const ops::RenderInputs in{raw_rgb, raw_density, t, rays, s.n_rays, s.n};
-  render.raw_fwd(in, {comp, acc, distance, weights});
-  render.raw_bwd(in, weights, {d_comp, &d_acc}, {d_raw_rgb, d_raw_density});
+  const DensityNoiseKey noise{{3, 4, 5}, 1};  // read only by the density-noise specialisation
+  render.raw_fwd(in, {comp, acc, distance, weights}, noise);
+  render.raw_bwd(in, weights, {d_comp, &d_acc}, {d_raw_rgb, d_raw_density}, noise);
   std::vector<double> rc, ra, rd, rw, rgr, rgd;
   const auto d_acc_ref = test::to_double(s.d_acc);
   ref::render_raw_fwd(options, activation, test::to_double(s.rgb), test::to_double(s.density),
-                      test::to_double(s.t_edges), test::to_double(s.directions), rc, ra, rd, rw, s.n_rays, s.n);
+                      test::to_double(s.t_edges), test::to_double(s.directions), rc, ra, rd, rw, s.n_rays, s.n, noise);
   ref::render_raw_bwd(options, activation, test::to_double(s.rgb), test::to_double(s.density),
                       test::to_double(s.t_edges), test::to_double(s.directions), rw, test::to_double(s.d_comp),
-                      &d_acc_ref, rgr, rgd, s.n_rays, s.n);
+                      &d_acc_ref, rgr, rgd, s.n_rays, s.n, noise);
   check_matches("comp_rgb", comp.download(ctx), rc);
   check_matches("acc", acc.download(ctx), ra);
   check_matches("distance", distance.download(ctx), rd);
@@ -264,9 +265,9 @@ TEST_CASE("specialisations: every ray shape, background, view dependence and act
       ++count;
     }
   }
-  // rays: shape × view × jitter; sample: lindisp × jitter; gaussian, encode: shape; activations: mip-NeRF, NeRF;
-  // render: background × activations; resample: mip-NeRF, NeRF.
-  CHECK(count == 8 + 4 + 2 + 2 + 2 + 6 + 2);
+  // rays: shape × (view with unit or raw viewdirs, no view) × jitter; sample: lindisp × jitter; gaussian, encode:
+  // shape; activations: mip-NeRF, NeRF; render: background × activations, and density noise; resample: mip-NeRF, NeRF.
+  CHECK(count == 12 + 4 + 2 + 2 + 2 + 7 + 2);
 }
 
 TEST_CASE("specialisations: the stage list's stages have unique names and ids, each with a specialisation") {

@@ -99,6 +99,31 @@ TEST_CASE("config: unknown names and bad values are refused with what is accepte
                        Error);
 }
 
+TEST_CASE("config: unit_viewdirs and density_noise default to the paper's Blender setup, parse and round-trip") {
+  const auto paper = train::resolve_config("paper", "mipnerf", {});
+  CHECK(paper.unit_viewdirs);
+  CHECK(paper.density_noise == 0.0);
+  const auto spec = train::make_graph_spec(paper, false);
+  CHECK(spec.rays.unit_viewdirs);
+  CHECK(spec.render.density_noise == 0.0f);
+  const auto llff = train::resolve_config("tiny", "mipnerf", {{"unit_viewdirs", "false"}, {"density_noise", "1"}});
+  CHECK_FALSE(llff.unit_viewdirs);
+  CHECK(llff.density_noise == 1.0);
+  const auto llff_spec = train::make_graph_spec(llff, false);  // carried into the ray and render options
+  CHECK_FALSE(llff_spec.rays.unit_viewdirs);
+  CHECK(llff_spec.render.density_noise == 1.0f);
+  const auto back = train::from_json(train::to_json(llff), "llff.json");  // what render and eval read back
+  CHECK(train::differences(llff, back).empty());
+  CHECK_FALSE(back.unit_viewdirs);
+  CHECK(back.density_noise == 1.0);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"density_noise", "-0.5"}}),
+                       doctest::Contains("density_noise must be >= 0"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"unit_viewdirs", "maybe"}}),
+                       doctest::Contains("unit_viewdirs"), Error);
+  CHECK(train::find_setting("density_noise").group == "model");
+  CHECK(train::find_setting("unit_viewdirs").group == "scene");
+}
+
 TEST_CASE("config: JSON round trip keeps every setting, and differences are listed") {
   auto c = train::resolve_config("quick", "mipnerf-no-ipe", {{"seed", "18446744073709551615"}, {"near", "0.25"}});
   const auto text = train::to_json(c);
@@ -296,6 +321,14 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("multiscale_scales") == 4);
   CHECK(old.multiscale_scales == 4);
   written.erase("multiscale_scales");
+  // unit_viewdirs and density_noise (the official forward-facing LLFF conventions) too; without them a configuration
+  // loads with what every run before them trained with: unit view directions, no density noise.
+  CHECK(written.at("unit_viewdirs") == true);
+  CHECK(old.unit_viewdirs);
+  written.erase("unit_viewdirs");
+  CHECK(written.at("density_noise") == 0.0);
+  CHECK(old.density_noise == 0.0);
+  written.erase("density_noise");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));

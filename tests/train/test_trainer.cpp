@@ -106,10 +106,13 @@ TEST_CASE("train: a tiny procedural scene learns beyond its mean colour in a few
   fs::remove_all(out);
 }
 
-TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for bit") {
+namespace {
+
+// Runs `config` (8 steps) straight, and again stopped at step 4 and resumed; the two end bit for bit alike.
+void check_resume_bit_exact(const train::TrainConfig& config, const std::string& name) {
   auto& ctx = test::test_context();
-  const auto config = tiny({{"steps", "8"}, {"batch_size", "96"}, {"chunk_rays", "32"}});
-  const std::string straight_dir = test::fresh_run_dir("straight"), resumed_dir = test::fresh_run_dir("resumed");
+  const std::string straight_dir = test::fresh_run_dir(name + "-straight"),
+                    resumed_dir = test::fresh_run_dir(name + "-resumed");
   std::vector<float> straight_params;
   {
     train::Trainer trainer(ctx, config, test::small_scene(), straight_dir, false);
@@ -140,11 +143,40 @@ TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for b
   CHECK(bitwise_equal(a.tensor("network0.adam_v", "a"), b.tensor("network0.adam_v", "b")));
   CHECK(a.header["adam_steps"] == b.header["adam_steps"]);
   // A resume with different learning settings is refused, naming them.
-  CHECK_THROWS_WITH_AS(train::Trainer(ctx, tiny({{"steps", "8"}, {"batch_size", "64"}, {"chunk_rays", "32"}}),
-                                      test::small_scene(), resumed_dir, true),
+  auto other = config;
+  other.batch_size = 64;
+  CHECK_THROWS_WITH_AS(train::Trainer(ctx, other, test::small_scene(), resumed_dir, true),
                        doctest::Contains("batch_size: 96 -> 64"), Error);
   fs::remove_all(straight_dir);
   fs::remove_all(resumed_dir);
+}
+
+}  // namespace
+
+TEST_CASE("train: N steps straight equal N/2 steps, resume, N/2 steps, bit for bit") {
+  check_resume_bit_exact(tiny({{"steps", "8"}, {"batch_size", "96"}, {"chunk_rays", "32"}}), "plain");
+}
+
+// The density noise is drawn from the step's key (seed, step, ray in the batch, level, sample), not from a stream that
+// advances, so a resumed run draws what the straight run drew; raw view directions ride along. A resume that changes
+// the noise is refused like any other learning setting.
+TEST_CASE("train: with density noise and raw view directions, resume is still bit for bit") {
+  const auto config = tiny(
+      {{"steps", "8"}, {"batch_size", "96"}, {"chunk_rays", "32"}, {"density_noise", "1"}, {"unit_viewdirs", "false"}});
+  check_resume_bit_exact(config, "noise");
+  auto& ctx = test::test_context();
+  const std::string out = test::fresh_run_dir("noise-changed");
+  {
+    train::Trainer first(ctx, config, test::small_scene(), out, false);
+    train::TrainHooks hooks;
+    hooks.should_stop = [&first] { return first.step() >= 2; };
+    first.run(hooks);
+  }
+  auto quieter = config;
+  quieter.density_noise = 0.5;
+  CHECK_THROWS_WITH_AS(train::Trainer(ctx, quieter, test::small_scene(), out, true),
+                       doctest::Contains("density_noise: 1 -> 0.5"), Error);
+  fs::remove_all(out);
 }
 
 TEST_CASE("train: --resume skips checkpoints that fail to verify, removes dead writers' temporaries, trims the log") {
@@ -434,10 +466,13 @@ TEST_CASE("train: a forward-facing LLFF capture trains in NDC with cylinders and
   const train::SceneEffects effects = train::scene_effects(scene.string(), 4);
   std::string line;
   auto settings = train::with_scene_effects(effects, {{"factor", "4"}, {"steps", "200"}, {"log_every", "50"}}, line);
-  CHECK(line == "scene: forward-facing LLFF → NDC rays, cylinders, black background");
+  CHECK(line ==
+        "scene: forward-facing LLFF → NDC rays, cylinders, black background, raw view directions, density noise 1");
   auto config = train::resolve_config("tiny", "mipnerf", settings);
   CHECK(config.ray_shape == RayShape::cylinder);
   CHECK(config.background == Background::black);
+  CHECK_FALSE(config.unit_viewdirs);  // the official LLFF loader's viewdirs = rays.directions
+  CHECK(config.density_noise == 1.0);  // llff.gin
   // An explicit setting wins, and the line says so.
   train::with_scene_effects(effects, {{"background", "white"}}, line);
   CHECK(line.find("(given explicitly, kept: background = white)") != std::string::npos);
@@ -445,6 +480,8 @@ TEST_CASE("train: a forward-facing LLFF capture trains in NDC with cylinders and
   const std::string out = test::fresh_run_dir("llff");
   train::Trainer trainer(ctx, config, scene.string(), out, false);
   CHECK(trainer.spec().rays.ray_shape == RayShape::cylinder);  // compiled in: NDC rays, cylinders
+  CHECK_FALSE(trainer.spec().rays.unit_viewdirs);
+  CHECK(trainer.spec().render.density_noise == 1.0f);
   const auto& camera = trainer.dataset().split("train").cameras[0];
   CHECK(camera.near == 0.0);
   CHECK(camera.far == 1.0);

@@ -17,13 +17,24 @@ void add_traits(const std::string& path, const LoadOptions& options, SceneTraits
   traits.llff_360 = looks_360(read_llff(path, as_taken));
 }
 
+// The official LLFF conventions: a forward-facing capture trains on NDC rays (cylinders) with the un-normalised world
+// directions as view directions (datasets.py LLFF._generate_rays: viewdirs = rays.directions) and density noise 1
+// (configs/llff.gin); a spherified 360° capture goes through the Blender ray generation (unit view directions).
 SceneEffects effects(const SceneTraits& traits) {
   if (traits.llff_360) {
-    return {{{"ray_shape", "cone"}, {"spherify", "true"}, {"background", "black"}},
+    return {{{"ray_shape", "cone"},
+             {"spherify", "true"},
+             {"background", "black"},
+             {"unit_viewdirs", "true"},
+             {"density_noise", "0"}},
             "360° LLFF capture → spherified poses, world rays, cones, black background"};
   }
-  return {{{"ray_shape", "cylinder"}, {"spherify", "false"}, {"background", "black"}},
-          "forward-facing LLFF → NDC rays, cylinders, black background"};
+  return {{{"ray_shape", "cylinder"},
+           {"spherify", "false"},
+           {"background", "black"},
+           {"unit_viewdirs", "false"},
+           {"density_noise", "1"}},
+          "forward-facing LLFF → NDC rays, cylinders, black background, raw view directions, density noise 1"};
 }
 
 FormatRenderPath render_path(const std::string& path, const LoadOptions& options, int frames) {
