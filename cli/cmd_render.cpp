@@ -1,5 +1,6 @@
 // `mipnerf-cl render`: images from a checkpoint — a dataset split's cameras, an orbit, or a camera path file —
-// at any resolution (intrinsics scaled, so cone radii follow the pixel size), as PNG and/or OpenEXR.
+// at any resolution (intrinsics scaled, so cone radii follow the pixel size), as PNG and/or OpenEXR, and/or as one
+// H.264 MP4 video (--video).
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "eval/view_cameras.hpp"
+#include "io/video.hpp"
 #include "progress.hpp"
 #include "train/checkpoint.hpp"
 
@@ -31,6 +33,10 @@ struct RenderArgs {
   std::string path;  // "orbit" or a camera path file
   std::string out;
   std::string format = "png";
+  // video
+  std::string video;
+  double fps = 30.0;
+  int crf = 18;
   size_t views = 0;
   int scales = 0;
   // resolution
@@ -52,6 +58,13 @@ struct RenderArgs {
 };
 
 bool given(const CLI::App& cmd, const char* flag) { return cmd.count(flag) > 0; }
+
+// 30 → "30", 29.97 → "29.97".
+std::string format_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", v);
+  return text;
+}
 
 // The flag's value when it was given.
 std::optional<double> if_given(const CLI::App& cmd, const char* flag, double value) {
@@ -80,6 +93,20 @@ data::ResolutionRequest resolution_of(const RenderArgs& args, const CLI::App& cm
   }
   data::validate(request);
   return request;
+}
+
+// --video, --fps, --crf and --format none, before anything is opened (the frames' sizes are checked once they are
+// known, by render_frames).
+void check_video_arguments(const RenderArgs& args, const CLI::App& cmd, const eval::OutputFormats& formats) {
+  if (!given(cmd, "--video")) {
+    for (const char* flag : {"--fps", "--crf"}) {
+      if (given(cmd, flag)) throw Error(std::string(flag) + " applies to --video only");
+    }
+    if (formats.none()) throw Error("--format none writes no images: give --video FILE.mp4 as well");
+    return;
+  }
+  io::check_video_path(args.video);
+  io::check_video_settings(args.video, args.fps, args.crf);
 }
 
 // The checks that need no device, so bad input fails before anything is opened.
@@ -116,8 +143,9 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
       throw Error(args.path + ": no such camera path file (give --path orbit, or a transforms-style JSON file)");
     }
   }
-  eval::parse_output_formats(args.format);
+  const eval::OutputFormats formats = eval::parse_output_formats(args.format);
   resolution_of(args, cmd);
+  check_video_arguments(args, cmd, formats);
 }
 
 // The frames --split, --path orbit or --path FILE asks for, at the requested resolution.
@@ -168,7 +196,11 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
     progress.set_total(static_cast<int64_t>(total));
     progress.update(static_cast<int64_t>(done), detail);
   };
-  const eval::RenderedFrames rendered = eval::render_frames(*ctx, job, frames, out, formats);
+  eval::VideoOutput video;
+  video.path = args.video;
+  video.fps = args.fps;
+  video.crf = args.crf;
+  const eval::RenderedFrames rendered = eval::render_frames(*ctx, job, frames, out, formats, video);
   progress.finish();
   if (!parallel::world().is_root()) return;
 
@@ -177,11 +209,13 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   const auto& first = frames.cameras.front();
   const std::string ranks =
       parallel::world().distributed() ? " (" + std::to_string(parallel::world().size()) + " ranks, rank 0's)" : "";
-  std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s%s; images in %s\n",
+  const std::string video_text =
+      rendered.video.empty() ? "" : "; video in " + rendered.video + " (" + format_number(args.fps) + " fps)";
+  std::printf("rendered %zu frames of %s (%ux%u%s) from step %lld in %.1f s, %.2f s/MP on %s%s; %s %s%s\n",
               frames.cameras.size(), frames.source.c_str(), first.width_px, first.height_px,
               args.supersample > 1 ? (", " + std::to_string(args.supersample) + " rays per pixel").c_str() : "",
               static_cast<long long>(model.step), seconds, megapixels > 0 ? seconds / megapixels : 0.0, device.c_str(),
-              ranks.c_str(), out.c_str());
+              ranks.c_str(), formats.none() ? "records in" : "images in", out.c_str(), video_text.c_str());
 }
 
 }  // namespace
@@ -193,7 +227,13 @@ void register_render(CLI::App& app) {
   cmd->add_option("--checkpoint", args->checkpoint, "A .mnck checkpoint, or a training --out folder (its newest)")
       ->required();
   cmd->add_option("--out", args->out, "Output folder (default: RUN/render_<split|orbit|path name>)");
-  cmd->add_option("--format", args->format, "png (8-bit sRGB), exr (linear RGB, depth Z, accumulation acc) or both")
+  cmd->add_option("--format", args->format,
+                  "png (8-bit sRGB), exr (linear RGB, depth Z, accumulation acc), both, or none (with --video)")
+      ->capture_default_str();
+  cmd->add_option("--video", args->video,
+                  "Write the frames as one H.264 MP4 video too (a .mp4 file; --format none: alone)");
+  cmd->add_option("--fps", args->fps, "Video: frames per second")->capture_default_str();
+  cmd->add_option("--crf", args->crf, "Video: libx264's constant rate factor, 0..51 (lower: better, larger)")
       ->capture_default_str();
   // What to render.
   cmd->add_option("--split", args->split, "Render this split's cameras (train, val, test; default test)");

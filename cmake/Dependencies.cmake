@@ -57,6 +57,21 @@ if(NOT PLPLOT_FOUND)
   message(STATUS "PLplot left out: `mipnerf-cl plot` will say to install libplplot-dev and rebuild")
 endif()
 
+# FFmpeg (libavformat, libavcodec with Debian's libx264 encoder, libswscale, libavutil) writes `render --video`'s
+# H.264 MP4 (io/video). Optional like PLplot (MIPNERF_VIDEO=AUTO, the default: when found): without it everything
+# else builds and runs, and --video says which packages to install.
+set(MIPNERF_VIDEO AUTO CACHE STRING "Build `render --video` with FFmpeg: AUTO (when found), ON (required) or OFF")
+if(PkgConfig_FOUND AND NOT MIPNERF_VIDEO STREQUAL "OFF")
+  pkg_check_modules(FFMPEG QUIET IMPORTED_TARGET libavformat libavcodec libswscale libavutil)
+endif()
+if(MIPNERF_VIDEO STREQUAL "ON")
+  mipnerf_require(FFMPEG_FOUND "FFmpeg's libraries" "libavformat-dev libavcodec-dev libswscale-dev libavutil-dev")
+endif()
+if(NOT FFMPEG_FOUND)
+  message(STATUS "FFmpeg left out: `mipnerf-cl render --video` will say to install libavformat-dev libavcodec-dev "
+    "libswscale-dev libavutil-dev and rebuild")
+endif()
+
 if(MIPNERF_BUILD_TESTS)
   find_package(doctest CONFIG QUIET)
   mipnerf_require(doctest_FOUND "doctest" "doctest-dev")

@@ -11,6 +11,7 @@ packages=(
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev libjpeg-dev zlib1g-dev
   libplplot-dev plplot-driver-cairo  # `mipnerf-cl plot`: curves as SVG, and as PNG through PLplot's cairo driver
+  libavformat-dev libavcodec-dev libswscale-dev libavutil-dev  # `render --video`: H.264 MP4 (Debian's libx264 encoder)
   libopenblas-dev   # the host GEMM backend (the MLP fused on the host BLAS on CPU devices)
 )
 test_packages=(

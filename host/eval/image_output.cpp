@@ -15,7 +15,13 @@ OutputFormats parse_output_formats(const std::string& name) {
   if (name == "png") return {true, false};
   if (name == "exr") return {false, true};
   if (name == "both") return {true, true};
-  throw Error("output format '" + name + "': expected png, exr or both");
+  if (name == "none") return {false, false};
+  throw Error("output format '" + name + "': expected png, exr or both (or none, with a video)");
+}
+
+std::string output_formats_name(const OutputFormats& formats) {
+  if (formats.none()) return "none";
+  return formats.png && formats.exr ? "png, exr" : formats.png ? "png" : "exr";
 }
 
 std::vector<std::string> write_rendered_image(const std::string& stem, const RenderedImage& image,

@@ -16,9 +16,13 @@ namespace mipnerf::eval {
 struct OutputFormats {
   bool png = true;
   bool exr = false;
+  bool none() const { return !png && !exr; }
 };
-// "png" | "exr" | "both"; throws mipnerf::Error naming the accepted values.
+// "png" | "exr" | "both" | "none" (no image files: a render's video alone); throws mipnerf::Error naming the
+// accepted values.
 OutputFormats parse_output_formats(const std::string& name);
+// The formats as a record names them: "png", "exr", "png, exr" or "none".
+std::string output_formats_name(const OutputFormats& formats);
 
 // Writes `stem`.png and/or `stem`.exr (stem: a path without extension); returns the paths written. The EXR's R, G, B
 // are io::srgb_to_linear of the rendered colours, Z the expected depth, acc the accumulation; `attributes` go

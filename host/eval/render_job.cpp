@@ -3,7 +3,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
+#include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
@@ -12,6 +14,7 @@
 #include "gemm/gemm_tuning.hpp"
 #include "io/atomic_file.hpp"
 #include "io/png.hpp"
+#include "io/video.hpp"
 #include "parallel/world.hpp"
 #include "train/config.hpp"
 
@@ -25,7 +28,46 @@ size_t rays_of(const std::vector<Camera>& cameras, uint32_t supersample) {
   return rays;
 }
 
+std::string size_text(const Camera& c) { return std::to_string(c.width_px) + "x" + std::to_string(c.height_px); }
+
+// render.json: the record as report.cpp writes it, with the formats named ("none" too) and the video, when there is
+// one, after them.
+void write_render_json(const std::string& out, const RenderRecord& record, const VideoOutput& video,
+                       const std::string& video_file, const std::vector<Camera>& cameras) {
+  const nlohmann::ordered_json base = render_json(record);
+  nlohmann::ordered_json j;
+  for (const auto& [key, value] : base.items()) {
+    j[key] = key == "formats" ? nlohmann::ordered_json(output_formats_name(record.formats)) : value;
+    if (key == "formats" && !video_file.empty()) {
+      const Camera& first = cameras.front();  // a video has frames, all of this size (check_video_output)
+      j["video"] = {{"file", video_file},
+                    {"format", "MP4, H.264 (libx264), yuv420p"},
+                    {"width", first.width_px},
+                    {"height", first.height_px},
+                    {"frames", record.frames},
+                    {"fps", video.fps},
+                    {"crf", video.crf}};
+    }
+  }
+  io::write_bytes_atomically((fs::path(out) / "render.json").string(), j.dump(2) + "\n");
+}
+
 }  // namespace
+
+void check_video_output(const VideoOutput& video, const ViewFrames& frames) {
+  io::check_video_path(video.path);
+  io::check_video_settings(video.path, video.fps, video.crf);
+  if (frames.cameras.empty()) throw Error(video.path + ": there are no frames to make a video of");
+  const Camera& first = frames.cameras.front();
+  for (size_t i = 1; i < frames.cameras.size(); ++i) {
+    const Camera& c = frames.cameras[i];
+    if (c.width_px != first.width_px || c.height_px != first.height_px) {
+      throw Error(video.path + ": frame " + std::to_string(i + 1) + " is " + size_text(c) + " but frame 1 is " +
+                  size_text(first) + ": a video's frames share one size; render one scale, or give --size WxH");
+    }
+  }
+  io::check_video_frame_size(video.path, first.width_px, first.height_px);
+}
 
 void prepare_for_rendering(ocl::Context& ctx) {
   if (gemm::choose_gemm_backend(ctx, gemm::GemmBackend::automatic) == gemm::GemmBackend::clblast) {
@@ -34,7 +76,8 @@ void prepare_for_rendering(ocl::Context& ctx) {
 }
 
 RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const ViewFrames& frames, const std::string& out,
-                             const OutputFormats& formats) {
+                             const OutputFormats& formats, const VideoOutput& video) {
+  if (video.enabled()) check_video_output(video, frames);  // on every rank, before anything is rendered
   const train::TrainedModel& model = *job.model;
   RenderedFrames result;
   result.chunk_rays = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
@@ -47,6 +90,11 @@ RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const View
   const std::map<std::string, std::string> attributes = {{"mipnerf:checkpoint", job.checkpoint},
                                                          {"mipnerf:step", std::to_string(model.step)}};
   const bool root = parallel::world().is_root();  // under mpirun every rank holds each image; rank 0 writes it
+  std::unique_ptr<io::VideoWriter> writer;  // rank 0 encodes; opened before the first frame, so a failure costs none
+  if (root && video.enabled()) {
+    const Camera& first = frames.cameras.front();
+    writer = std::make_unique<io::VideoWriter>(video.path, first.width_px, first.height_px, video.fps, video.crf);
+  }
   size_t before = 0;
   for (size_t i = 0; i < frames.cameras.size(); ++i) {
     const std::string detail = "frame " + std::to_string(i + 1) + "/" + std::to_string(frames.cameras.size());
@@ -58,9 +106,14 @@ RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const View
     result.megapixels += image.megapixels();
     if (!root) continue;
     const auto written = write_rendered_image((fs::path(out) / frames.stems[i]).string(), image, formats, attributes);
-    result.files.push_back(fs::path(written.front()).filename().string());
+    result.files.push_back(written.empty() ? frames.stems[i] : fs::path(written.front()).filename().string());
+    if (writer) writer->add_frame(image.rgb.data());
   }
   if (!root) return result;
+  if (writer) {
+    writer->finish();
+    result.video = fs::absolute(video.path).lexically_normal().string();
+  }
   data::write_camera_path((fs::path(out) / "transforms.json").string(), frames.cameras, result.files);
   RenderRecord record;
   record.checkpoint = job.checkpoint;
@@ -75,7 +128,7 @@ RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const View
   record.warm_up_seconds = result.warm_up_seconds;
   record.render_seconds = result.seconds;
   record.megapixels = result.megapixels;
-  write_render_record(out, record);
+  write_render_json(out, record, video, result.video, frames.cameras);
   return result;
 }
 

@@ -37,18 +37,33 @@ struct RenderJob {
 // a device where the host BLAS runs them, nothing is loaded and no tune is suggested.
 void prepare_for_rendering(ocl::Context& ctx);
 
+// A render's frames as one video too: an H.264 MP4 (io/video), encoded on rank 0 as the frames arrive.
+struct VideoOutput {
+  std::string path;  // empty: no video
+  double fps = 30.0;
+  int crf = 18;  // libx264's constant rate factor, 0..51 (18: visually lossless)
+  bool enabled() const { return !path.empty(); }
+};
+
+// Throws a one-line mipnerf::Error when `video` cannot be made of `frames`: no FFmpeg in this build, bad settings,
+// a path whose folder cannot be written, frames of differing sizes, or an odd width or height. render_frames checks
+// this on every rank before it renders anything; a caller may check earlier.
+void check_video_output(const VideoOutput& video, const ViewFrames& frames);
+
 struct RenderedFrames {
   size_t chunk_rays = 0;
   double warm_up_seconds = 0.0;
   double seconds = 0.0;            // every frame, warm-up excluded
   double megapixels = 0.0;         // every frame
-  std::vector<std::string> files;  // rank 0: the first file written per frame (in `out`)
+  std::vector<std::string> files;  // rank 0: the first file written per frame (in `out`), its stem when none is
+  std::string video;               // rank 0: the video written (absolute path); empty without one
 };
 
-// Renders every frame of `frames` and writes, on rank 0, OUT/<stem>.png/.exr per frame, OUT/transforms.json (the
-// cameras) and OUT/render.json (the record).
+// Renders every frame of `frames` and writes, on rank 0, OUT/<stem>.png/.exr per frame (none for formats "none"),
+// the video when `video` asks for one, OUT/transforms.json (the cameras) and OUT/render.json (the record, with the
+// video's path and settings).
 RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const ViewFrames& frames, const std::string& out,
-                             const OutputFormats& formats);
+                             const OutputFormats& formats, const VideoOutput& video = {});
 
 struct ScoreOptions {
   size_t views = 0;         // the split's first views (0: all; every scale of each)

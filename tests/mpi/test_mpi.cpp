@@ -22,7 +22,10 @@
 
 #include "core/error.hpp"
 #include "io/checkpoint_file.hpp"
+#include "eval/metrics.hpp"
 #include "io/exr.hpp"
+#include "io/png.hpp"
+#include "io/video.hpp"
 #include "support/child_process.hpp"
 #include "support/run_checks.hpp"
 #include "support/skip.hpp"
@@ -240,6 +243,33 @@ TEST_CASE("sharded render and eval write what one process writes") {
     CHECK(test::read_text(root / "r1" / png) == test::read_text(root / "r2" / png));
   }
   CHECK(frames == 1);
+
+  // --video under mpirun: every rank renders its share of each orbit frame, rank 0 encodes; the MP4 decodes to the
+  // frames' count and each is within 35 dB of the PNG the same two-rank render wrote.
+  if (io::video_supported()) {
+    const fs::path video = root / "v2" / "orbit.mp4";
+    const std::vector<std::string> orbit = {"render", "--checkpoint", model, "--path", "orbit", "--frames", "3",
+                                            "--size", "40x40", "--chunk", "300", "--format", "png",
+                                            "--video", video.string(), "--out", (root / "v2").string()};
+    REQUIRE_MESSAGE(run(two_ranks(orbit), root / "v2.log") == 0, test::read_text(root / "v2.log"));
+    const io::VideoFrames decoded = io::read_video_frames(video.string());
+    REQUIRE(decoded.frames.size() == 3);
+    for (int k = 0; k < 3; ++k) {
+      const io::PngImage png = io::read_png((root / "v2" / ("frame_000" + std::to_string(k) + ".png")).string());
+      std::vector<float> rgb;
+      for (size_t i = 0; i < png.rgba.size(); ++i) {
+        if (i % 4 != 3) rgb.push_back(png.rgba[i]);
+      }
+      const double db = eval::psnr({decoded.frames[k].data(), 40, 40, 3}, {rgb.data(), 40, 40, 3});
+      MESSAGE("mpirun -np 2 --video, frame " << k << ": " << db << " dB against its PNG");
+      CHECK(db >= 35.0);
+    }
+    for (const auto& entry : fs::directory_iterator(root / "v2")) {  // no partial file left beside it
+      CHECK_MESSAGE(entry.path().extension() != ".tmp", entry.path().string());
+    }
+  } else {
+    test::skip_test("this build has no FFmpeg: the MPI video check did not run");
+  }
 
   const std::vector<std::string> eval = {"eval", "--checkpoint", model, "--split", "val", "--no-images",
                                          "--chunk", "300"};
