@@ -85,6 +85,7 @@ void print_split(const data::SplitSummary& s, bool ndc) {
       std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
     }
   }
+  for (const auto& lens : s.lenses) std::cout << "  lens: " << lens << "\n";
   std::cout << "  mean colour " << vec({s.mean_rgb[0], s.mean_rgb[1], s.mean_rgb[2]}) << "\n";
 }
 

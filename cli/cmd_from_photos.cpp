@@ -35,6 +35,7 @@ struct FromPhotosArgs {
   int max_features = 8192;    // SIFT features per image (COLMAP's default)
   std::string layout = "auto";
   std::string colmap = "colmap";
+  std::string camera_model = "SIMPLE_PINHOLE";  // what COLMAP estimates; the import keeps it
 };
 
 bool is_photo(const fs::path& path) {
@@ -144,6 +145,12 @@ void run_from_photos(const FromPhotosArgs& args) {
     throw Error("--matcher '" + args.matcher + "': expected exhaustive (any photos) or sequential (a video or a walk)");
   }
   const data::ImportLayout layout = parse_import_layout(args.layout);
+  static const char* const kModels[] = {"SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV",
+                                        "OPENCV_FISHEYE"};
+  if (std::find(std::begin(kModels), std::end(kModels), args.camera_model) == std::end(kModels)) {
+    throw Error("--camera-model '" + args.camera_model + "': expected SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, "
+                "OPENCV or OPENCV_FISHEYE");
+  }
   const size_t photos = count_photos(args.photos);
   const std::string colmap = find_colmap(args.colmap);
   const fs::path work = fs::path(args.out) / "colmap";
@@ -160,7 +167,7 @@ void run_from_photos(const FromPhotosArgs& args) {
     Progress progress("COLMAP features", static_cast<int64_t>(photos));
     run_step("feature extraction",
              {colmap, "feature_extractor", "--database_path", database.string(), "--image_path", args.photos,
-              "--ImageReader.camera_model", "SIMPLE_PINHOLE", "--ImageReader.single_camera", "1",
+              "--ImageReader.camera_model", args.camera_model, "--ImageReader.single_camera", "1",
               "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_image_size", std::to_string(args.max_size),
               "--SiftExtraction.max_num_features", std::to_string(args.max_features)},
              log, counter(progress, std::regex(R"(Processed file \[(\d+)/(\d+)\])")));
@@ -219,8 +226,8 @@ void register_from_photos(CLI::App& dataset) {
   auto* cmd = dataset.add_subcommand(
       "from-photos",
       "Run COLMAP (CPU SIFT; Debian package 'colmap') on a folder of photos — features, matching, mapping — and import "
-      "its model: a forward-facing capture as an LLFF capture (trained in NDC with cylinders), anything else as a "
-      "transforms.json. One pinhole camera for all photos.");
+      "its model: a forward-facing capture of a pinhole camera as an LLFF capture (trained in NDC with cylinders), "
+      "anything else as a transforms.json (a lens model is kept and trained through). One camera for all photos.");
   cmd->add_option("PHOTOS", args->photos, "Folder of photos (PNG or JPEG) of one camera")->required();
   cmd->add_option("OUT", args->out, "Output folder: the dataset, and COLMAP's work in OUT/colmap")->required();
   cmd->add_option("--matcher", args->matcher, "exhaustive (any photos) or sequential (photos in capture order)")
@@ -234,6 +241,10 @@ void register_from_photos(CLI::App& dataset) {
   cmd->add_option("--layout", args->layout, "auto (LLFF when forward-facing), llff or transforms")
       ->capture_default_str();
   cmd->add_option("--colmap", args->colmap, "The COLMAP executable")->capture_default_str();
+  cmd->add_option("--camera-model", args->camera_model,
+                  "The camera COLMAP estimates and the import keeps: SIMPLE_PINHOLE (an LLFF capture when "
+                  "forward-facing), PINHOLE, or a lens trained as it is: SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE")
+      ->capture_default_str();
   cmd->callback([args] { run_from_photos(*args); });
 }
 

@@ -2,6 +2,7 @@
 // --forward-facing its forward-facing capture in the LLFF layout.
 #include <chrono>
 #include <cstdio>
+#include <cmath>
 #include <iostream>
 #include <memory>
 
@@ -11,6 +12,59 @@
 #include "data/procedural.hpp"
 
 namespace mipnerf::cli {
+
+namespace {
+
+// --lens MODEL:c1,c2,...: the model's coefficients in COLMAP's order (core/lens.hpp).
+Lens parse_lens(const std::string& text) {
+  const auto colon = text.find(':');
+  const std::string model = text.substr(0, colon);
+  std::vector<double> values;
+  if (colon != std::string::npos) {
+    std::string rest = text.substr(colon + 1);
+    for (size_t start = 0; start <= rest.size();) {
+      const size_t comma = std::min(rest.find(',', start), rest.size());
+      try {
+        size_t used = 0;
+        values.push_back(std::stod(rest.substr(start, comma - start), &used));
+        if (used != comma - start) throw std::invalid_argument("trailing text");
+      } catch (const std::exception&) {
+        throw Error("--lens '" + text + "': '" + rest.substr(start, comma - start) + "' is not a number");
+      }
+      start = comma + 1;
+    }
+  }
+  struct Shape {
+    const char* name;
+    LensModel model;
+    size_t count;
+  };
+  static const Shape kShapes[] = {{"SIMPLE_RADIAL", LensModel::simple_radial, 1}, {"RADIAL", LensModel::radial, 2},
+                                  {"OPENCV", LensModel::opencv, 4}, {"OPENCV_FISHEYE", LensModel::opencv_fisheye, 4}};
+  for (const auto& shape : kShapes) {
+    if (model != shape.name) continue;
+    if (values.size() != shape.count) {
+      throw Error("--lens '" + text + "': " + shape.name + " takes " + std::to_string(shape.count) + " coefficients");
+    }
+    Lens lens;
+    lens.model = shape.model;
+    lens.k1 = values[0];
+    if (shape.count > 1) lens.k2 = values[1];
+    if (shape.model == LensModel::opencv) {
+      lens.p1 = values[2];
+      lens.p2 = values[3];
+    }
+    if (shape.model == LensModel::opencv_fisheye) {
+      lens.k3 = values[2];
+      lens.k4 = values[3];
+    }
+    return lens;
+  }
+  throw Error("--lens '" + text + "': expected SIMPLE_RADIAL:k, RADIAL:k1,k2, OPENCV:k1,k2,p1,p2 or "
+              "OPENCV_FISHEYE:k1,k2,k3,k4");
+}
+
+}  // namespace
 
 void register_make_scene(CLI::App& app) {
   auto out = std::make_shared<std::string>();
@@ -30,6 +84,12 @@ void register_make_scene(CLI::App& app) {
   cmd->add_option("--samples", options->samples_per_axis, "Jittered rays per pixel per axis (8: 64 rays per pixel)")
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Render threads (0: all hardware threads)")->capture_default_str();
+  auto lens = std::make_shared<std::string>();
+  auto fov = std::make_shared<double>(0.0);
+  cmd->add_option("--lens", *lens,
+                  "Render through a lens, MODEL:c1,c2,... in COLMAP's order: SIMPLE_RADIAL:k, RADIAL:k1,k2, "
+                  "OPENCV:k1,k2,p1,p2, OPENCV_FISHEYE:k1,k2,k3,k4 (needs --scales 1)");
+  cmd->add_option("--fov", *fov, "Horizontal field of view of the focal length, degrees (default: the Blender scenes' 39.6)");
   auto forward = std::make_shared<data::ForwardFacingOptions>();
   auto forward_facing = std::make_shared<bool>(false);
   auto grid = std::make_shared<std::string>("5x4");
@@ -41,9 +101,14 @@ void register_make_scene(CLI::App& app) {
   cmd->add_option("--factor", forward->factor, "--forward-facing: also write images_<factor>/ (1: none)")
       ->capture_default_str();
   cmd->add_flag("--jpeg", forward->jpeg, "--forward-facing: write the images as JPEG, as a phone capture holds them");
-  cmd->callback([out, options, forward, forward_facing, grid, cmd] {
+  cmd->callback([out, options, forward, forward_facing, grid, cmd, lens, fov] {
+    if (!lens->empty()) options->lens = parse_lens(*lens);
+    if (cmd->count("--fov") > 0) {
+      if (!(*fov > 0.0 && *fov < 170.0)) throw Error("--fov must be between 0 and 170 degrees");
+      options->camera_angle_x = *fov * M_PI / 180.0;
+    }
     if (*forward_facing) {
-      for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales"}) {
+      for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales", "--lens", "--fov"}) {
         if (cmd->count(blender_only) > 0) throw Error(std::string(blender_only) + " applies to the Blender scene, not --forward-facing");
       }
       unsigned x = 0, y = 0;

@@ -37,6 +37,7 @@ inline void store3(__global float* p, size_t i, float3 v) {
 #define CAMERA_NEAR 18
 #define CAMERA_FAR 19
 #define CAMERA_LOSSMULT 20
+#define CAMERA_LENS_TABLE 21 /* bits of a uint: the lens table offset + 1 in float4 elements; 0 = pinhole */
 #define CAMERA_STRIDE 24
 
 // ---- Counter-based RNG: Philox4x32-10 (Salmon et al., SC'11) ----

@@ -25,6 +25,14 @@
 //    Origins on the near plane (t = 0) or behind it (t < 0) convert as officially; a direction parallel to the near
 //    plane (d_z = 0, where the official conversion gives Inf and NaN) converts as if d_z were ±NDC_MIN_DIR_Z
 //    (ndc_direction_z): a finite ray outside the NDC box.
+//  - LENS_TABLES: a camera behind a lens (cam[CAMERA_LENS_TABLE] ≠ 0) takes each pixel centre's undistorted
+//    normalised (u, v) and its cone radius at unit depth from its lens table (host/data/lens_tables.hpp: COLMAP's
+//    models inverted by Newton's method in double precision, once per camera; the radius from the pixel's own
+//    footprint, the mean distance to its undistorted neighbours × 2/√12). The direction is (u, −v, −1) rotated, and
+//    the radius scales by |column 0| as the pinhole's does. A point off the centre (PIXEL_CENTER_OFFSET ≠ 0.5,
+//    SUBPIXEL_JITTER) moves along the table's differences to the next pixel across and down: first order in the
+//    offset, exact at the centre (tests/ops/test_rays_lens.cpp: 0.003 px off for a 0.4 px offset behind an OPENCV
+//    lens, 0.17 px at the rim of a fisheye at 83°). Cone rays only (NDC assumes a pinhole; the host refuses it).
 //  - Invalid input (camera id ≥ n_cameras, pixel id ≥ width·height) gives NaN in every output of that ray, so
 //    it cannot pass unnoticed downstream.
 
@@ -50,6 +58,12 @@
 #endif
 #ifndef NDC_NEAR_PLANE
 #define NDC_NEAR_PLANE 1.0f
+#endif
+#ifndef LENS_TABLES
+#define LENS_TABLES 0
+#endif
+#if LENS_TABLES && RAY_SHAPE != RAY_SHAPE_CONE
+#error "LENS_TABLES needs cone rays (NDC assumes a pinhole camera)"
 #endif
 #ifndef NDC_MIN_DIR_Z
 #define NDC_MIN_DIR_Z 1e-8f
@@ -106,6 +120,28 @@ inline float pair_start_shift(uint p, uint size) {
   return size >= 3 ? -2.0f : -1.0f;
 }
 
+#if LENS_TABLES
+// The normalised (u, v) of image position (pixel + offset) behind a lens, and the pixel's radius at unit depth, from
+// the camera's table (entries [height][width], each u, v, radius, 0). Off the centre, first order in the offset along
+// the differences to the next entry across and down (the previous one in the last column / row).
+inline float3 lens_point(__global const float4* table, uint px, uint py, uint width, uint height, float offset_x,
+                         float offset_y) {
+  const size_t pixel = (size_t)py * width + px;
+  const float4 here = table[pixel];
+  float2 uv = here.xy;
+  const float along_x = offset_x - 0.5f, along_y = offset_y - 0.5f;
+  if (along_x != 0.0f && width > 1) {
+    const float2 across = px + 1 < width ? table[pixel + 1].xy - here.xy : here.xy - table[pixel - 1].xy;
+    uv += along_x * across;
+  }
+  if (along_y != 0.0f && height > 1) {
+    const float2 down = py + 1 < height ? table[pixel + width].xy - here.xy : here.xy - table[pixel - width].xy;
+    uv += along_y * down;
+  }
+  return (float3)(uv, here.z);
+}
+#endif
+
 inline void write_nan_ray(size_t i, __global float* origins, __global float* directions, __global float* viewdirs,
                           __global float* radii, __global float* near, __global float* far,
                           __global float* lossmult) {
@@ -124,7 +160,7 @@ inline void write_nan_ray(size_t i, __global float* origins, __global float* dir
 // One item per ray. cameras [C][CAMERA_STRIDE], camera_ids, pixel_ids [R] → origins, directions, viewdirs [R][3],
 // radii, near, far, lossmult [R]. Without VIEW_DEPENDENCE `viewdirs` is never written (any buffer may be passed).
 __kernel void rays_fwd(__global const float* cameras, __global const uint* camera_ids,
-                       __global const uint* pixel_ids, __global float* origins, __global float* directions,
+                       __global const uint* pixel_ids, __global const float4* lens_tables, __global float* origins, __global float* directions,
                        __global float* viewdirs, __global float* radii, __global float* near, __global float* far,
                        __global float* lossmult, const uint n_rays, const uint n_cameras, const ulong seed,
                        const uint step, const uint first_ray) {
@@ -154,7 +190,19 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   const float fx = cam[CAMERA_FOCAL_X], fy = cam[CAMERA_FOCAL_Y];
   const float x_from_center = ((float)px - cam[CAMERA_CENTER_X]) + offset_x;
   const float y_from_center = ((float)py - cam[CAMERA_CENTER_Y]) + offset_y;
+#if LENS_TABLES
+  const uint lens_table = as_uint(cam[CAMERA_LENS_TABLE]);
+  float3 dir_camera = (float3)(x_from_center / fx, -y_from_center / fy, -1.0f);
+  float lens_radius = 0.0f;  // at unit depth, before the rotation's scale; 0: a pinhole camera
+  if (lens_table != 0) {
+    const float3 lens = lens_point(lens_tables + (lens_table - 1), px, py, width, height, offset_x, offset_y);
+    dir_camera = (float3)(lens.x, -lens.y, -1.0f);
+    lens_radius = lens.z;
+  }
+  const float3 dir = camera_rotate(cam, dir_camera);
+#else
   const float3 dir = camera_rotate(cam, (float3)(x_from_center / fx, -y_from_center / fy, -1.0f));
+#endif
   const float3 origin = camera_origin(cam);
 #if VIEW_DEPENDENCE && UNIT_VIEWDIRS
   store3(viewdirs, i, dir / sqrt(dot(dir, dir)));
@@ -193,7 +241,11 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   store3(directions, i, dir);
   __global const float* m = cam + CAMERA_TO_WORLD;
   const float column0 = sqrt(m[0] * m[0] + m[4] * m[4] + m[8] * m[8]);
+#if LENS_TABLES
+  radii[i] = lens_table != 0 ? column0 * lens_radius : column0 / fx * RADIUS_PER_PIXEL_WIDTH;
+#else
   radii[i] = column0 / fx * RADIUS_PER_PIXEL_WIDTH;
+#endif
 #endif
   near[i] = cam[CAMERA_NEAR];
   far[i] = cam[CAMERA_FAR];

@@ -1,6 +1,8 @@
 // Camera packing and the ray of a pixel (double precision; the ray kernel implements the same math).
 #include "core/camera.hpp"
 
+#include <cmath>
+
 namespace mipnerf {
 
 std::vector<float> pack_cameras(const std::vector<Camera>& cameras) {
@@ -24,8 +26,10 @@ std::vector<float> pack_cameras(const std::vector<Camera>& cameras) {
 }
 
 Ray camera_ray(const Camera& camera, double x_px, double y_px) {
-  const double dir_camera[3] = {(x_px - camera.center_x_px) / camera.focal_x_px,
-                                -(y_px - camera.center_y_px) / camera.focal_y_px, -1.0};
+  // Normalised coordinates in the lens's (OpenCV) frame: y down.
+  Uv uv = {(x_px - camera.center_x_px) / camera.focal_x_px, (y_px - camera.center_y_px) / camera.focal_y_px};
+  if (!camera.lens.is_pinhole() && !undistort(camera.lens, uv, uv)) uv = {NAN, NAN};
+  const double dir_camera[3] = {uv[0], -uv[1], -1.0};
   const auto& m = camera.camera_to_world;
   Ray ray;
   for (int row = 0; row < 3; ++row) {

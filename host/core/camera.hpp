@@ -1,10 +1,13 @@
-// A pinhole camera in the Blender/OpenGL convention, its packed device layout, and the ray of a pixel.
+// A camera in the Blender/OpenGL convention (a pinhole, or a pinhole behind a lens that distorts: core/lens.hpp),
+// its packed device layout, and the ray of a pixel.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#include "core/lens.hpp"
 
 namespace mipnerf {
 
@@ -21,6 +24,7 @@ struct Camera {
   double near = 2.0;          // sampling range along the ray, in units of t (see camera_ray)
   double far = 6.0;
   double lossmult = 1.0;      // per-pixel loss weight: (full-res pixel area ratio), 1, 4, 16, 64 for multiscale
+  Lens lens;                  // distortion on normalised coordinates (pinhole: none); resizing keeps it
 };
 
 // Packed float layout of a camera on the device: kernels/common.cl defines the same offsets
@@ -36,7 +40,10 @@ constexpr int height = 17;
 constexpr int near = 18;
 constexpr int far = 19;
 constexpr int lossmult = 20;
-constexpr int stride = 24;  // floats per camera (21..23 reserved, zero)
+// The camera's lens table (data/lens_tables.hpp) as the bits of a uint, offset + 1 in the tables' float4 elements;
+// 0 (pack_cameras' value): no table, the pinhole formula.
+constexpr int lens_table = 21;
+constexpr int stride = 24;  // floats per camera (22, 23 reserved, zero)
 }  // namespace camera_layout
 
 // cameras [C][camera_layout::stride], as uploaded for the ray kernel.
@@ -50,7 +57,9 @@ struct Ray {
 // The ray through image position (x_px, y_px), measured in pixels from the top-left corner, so the
 // centre of pixel (i, j) is (i + 0.5, j + 0.5). The camera-frame direction is
 // ((x − cx)/fx, −(y − cy)/fy, −1), the official mip-NeRF/NeRF convention: t = 1 is one unit of depth
-// in front of the camera, so near and far are depths along the optical axis.
+// in front of the camera, so near and far are depths along the optical axis. Behind a lens, ((x − cx)/fx,
+// (y − cy)/fy) is first undistorted (core/lens.hpp) to (u, v), and the direction is (u, −v, −1); NaN where the lens
+// cannot be inverted.
 Ray camera_ray(const Camera& camera, double x_px, double y_px);
 
 }  // namespace mipnerf

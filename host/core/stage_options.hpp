@@ -55,6 +55,7 @@ struct RaysOptions {
   bool jitter_subpixel = false;         // SUBPIXEL_JITTER: a uniform position in the pixel instead (RngKey)
   bool view_dependence = true;          // VIEW_DEPENDENCE: off, viewdirs are not computed
   bool unit_viewdirs = true;            // UNIT_VIEWDIRS: unit viewdirs; false: the world directions as they are
+  bool lens_tables = false;             // LENS_TABLES: cameras behind a lens read their rays from lens tables (cone)
   float ndc_near_plane = 1.0f;          // NDC_NEAR_PLANE (cylinder only), official 1
   // unit_viewdirs: the official Blender and spherified LLFF loaders normalise the view directions; the official
   // forward-facing LLFF loader passes viewdirs = rays.directions (camera-frame z = −1, taken before NDC).

@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <set>
 
 #include "core/error.hpp"
 #include "data/formats/formats.hpp"
 #include "data/frames.hpp"
+#include "data/lens_tables.hpp"
 
 namespace mipnerf::data {
 namespace fs = std::filesystem;
@@ -109,17 +111,35 @@ void SizeCheck::check(uint32_t width, uint32_t height, const std::string& file) 
 
 namespace {
 
+// check_lens_over_image once per distinct lens, intrinsics and size (a capture's frames usually share one camera).
+class LensCheck {
+ public:
+  void check(const Camera& camera, const std::string& where) {
+    if (camera.lens.is_pinhole()) return;
+    const Lens& l = camera.lens;
+    const std::vector<double> key = {static_cast<double>(l.model), l.k1, l.k2, l.k3, l.k4, l.p1, l.p2,
+                                     camera.focal_x_px, camera.focal_y_px, camera.center_x_px, camera.center_y_px,
+                                     static_cast<double>(camera.width_px), static_cast<double>(camera.height_px)};
+    if (checked_.insert(key).second) check_lens_over_image(camera, where);
+  }
+
+ private:
+  std::set<std::vector<double>> checked_;
+};
+
 Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
   Split split;
   split.name = spec.name;
   split.source = spec.source;
   detail::SizeCheck sizes;
+  LensCheck lenses;
   for (const auto& frame : spec.frames) {
     RgbaImage image = load_rgba_image(frame.image_path);
     if (spec.uniform_size) sizes.check(image.width, image.height, frame.image_path);
     Camera camera;
     camera.camera_to_world = frame.camera_to_world;
     resolve_intrinsics(frame.intrinsics, image.width, image.height, camera, frame.where);
+    lenses.check(camera, frame.where);
     const uint32_t factor = std::max<uint32_t>(1, options.factor / frame.stored_factor);
     if (factor > 1) {
       if (image.width % factor != 0 || image.height % factor != 0) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "data/lens_tables.hpp"
 
 namespace mipnerf::data {
 
@@ -14,9 +15,17 @@ DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
     throw Error("split '" + split.name + "' has " + std::to_string(num_pixels_) +
                 " pixels; the device indexes pixels with 32 bits: use fewer images or a lower resolution");
   }
-  const auto packed = pack_cameras(split.cameras);
+  auto packed = pack_cameras(split.cameras);
+  // Cameras behind a lens: their rays and radii come from tables made once here (data/lens_tables.hpp).
+  const LensTables tables = build_lens_tables(split.cameras, split.files);
+  set_lens_table_slots(packed, tables);
   cameras_ = ocl::DeviceArray<float>(ctx, packed.size(), "cameras [C][24] of " + split.name);
   cameras_.upload(ctx, packed);
+  if (!tables.empty()) {
+    lens_tables_ = ocl::DeviceArray<float>(ctx, tables.values.size(), "lens tables [pixels][4] of " + split.name);
+    lens_tables_.upload(ctx, tables.values);
+    has_lens_tables_ = true;
+  }
   pixels_rgb_ = ocl::DeviceArray<float>(ctx, split.rgb.size(), "pixels_rgb [pixels][3] of " + split.name);
   pixels_rgb_.upload(ctx, split.rgb);
   std::vector<uint32_t> offsets(split.pixel_offsets.begin(), split.pixel_offsets.end());

@@ -29,6 +29,8 @@ class DeviceDataset {
   const ocl::DeviceArray<float>& cameras() const { return cameras_; }            // [C][24] (pack_cameras)
   const ocl::DeviceArray<float>& pixels_rgb() const { return pixels_rgb_; }      // [pixels][3]
   const ocl::DeviceArray<uint32_t>& pixel_offsets() const { return pixel_offsets_; }  // [C + 1]
+  // The lens tables of the cameras behind a lens (data/lens_tables.hpp), or nullptr when every camera is a pinhole.
+  const ocl::DeviceArray<float>* lens_tables() const { return has_lens_tables_ ? &lens_tables_ : nullptr; }
 
  private:
   std::vector<Camera> host_cameras_;
@@ -36,6 +38,8 @@ class DeviceDataset {
   ocl::DeviceArray<float> cameras_;
   ocl::DeviceArray<float> pixels_rgb_;
   ocl::DeviceArray<uint32_t> pixel_offsets_;
+  ocl::DeviceArray<float> lens_tables_;
+  bool has_lens_tables_ = false;
 };
 
 }  // namespace mipnerf::data

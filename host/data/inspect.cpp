@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
+
+#include "data/lens_tables.hpp"
 
 namespace mipnerf::data {
 namespace {
@@ -12,6 +15,31 @@ template <typename T>
 void widen(T& low, T& high, T value, bool first) {
   low = first ? value : std::min(low, value);
   high = first ? value : std::max(high, value);
+}
+
+std::string number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.4g", v);
+  return text;
+}
+
+// "OPENCV (k1 -0.12, k2 0.01, p1 0.001, p2 0), largest distortion 14.2 px" for each distinct lens of scale 0.
+std::vector<std::string> lens_descriptions(const Split& split) {
+  std::map<std::string, double> largest;  // description → largest distortion, px
+  for (size_t c = 0; c < split.cameras.size(); ++c) {
+    const Camera& cam = split.cameras[c];
+    if (cam.lens.is_pinhole() || split.scale_levels[c] != 0) continue;
+    const Lens& l = cam.lens;
+    std::string text = std::string(lens_model_name(l.model)) + " (k1 " + number(l.k1);
+    if (l.model != LensModel::simple_radial) text += ", k2 " + number(l.k2);
+    if (l.model == LensModel::opencv) text += ", p1 " + number(l.p1) + ", p2 " + number(l.p2);
+    if (l.model == LensModel::opencv_fisheye) text += ", k3 " + number(l.k3) + ", k4 " + number(l.k4);
+    text += ")";
+    largest[text] = std::max(largest[text], largest_distortion_px(cam));
+  }
+  std::vector<std::string> out;
+  for (const auto& [text, px] : largest) out.push_back(text + ", largest distortion " + number(px) + " px");
+  return out;
 }
 
 }  // namespace
@@ -42,6 +70,7 @@ SplitSummary summarize(const Split& split) {
     widen(s.radius_min, s.radius_max, std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]), first_camera);
   }
   for (const auto& [level, summary] : scales) s.scales.push_back(summary);
+  s.lenses = lens_descriptions(split);
 
   s.look_at = closest_point_to_axes(split.cameras);
   if (s.look_at) {

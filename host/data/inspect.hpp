@@ -32,6 +32,9 @@ struct SplitSummary {
   double axis_miss_max = 0;          // largest distance from the look-at point to an optical axis
   double look_at_depth_min = 0, look_at_depth_max = 0;  // depth of the look-at point along each axis
   std::array<double, 3> mean_rgb{};  // mean composited colour
+  // Each distinct lens of the split's full-resolution cameras: its model and coefficients, and the largest
+  // displacement it makes over the image, in pixels (data/lens_tables.hpp). Empty when every camera is a pinhole.
+  std::vector<std::string> lenses;
 };
 
 SplitSummary summarize(const Split& split);

@@ -1,4 +1,4 @@
-// Reading and resolving pinhole intrinsics.
+// Reading and resolving intrinsics: pinhole cameras, and the lenses of core/lens.hpp.
 #include "data/intrinsics.hpp"
 
 #include <cmath>
@@ -20,32 +20,74 @@ void read_center(const io::Json& object, const char* key, std::optional<double>&
   if (value) out = value;
 }
 
-void refuse_distortion(const io::Json& object, const std::string& where) {
-  static const char* const kDistortionKeys[] = {"k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"};
-  for (const char* key : kDistortionKeys) {
-    const auto value = io::optional_number(object, key, where);
-    if (value && *value != 0.0) {
-      throw Error(where + ": lens distortion " + key + " = " + std::to_string(*value) +
-                  " is not supported (pinhole cameras only): undistort the images first (e.g. COLMAP's "
-                  "image_undistorter) and remove the distortion keys");
+// A coefficient of the lens, 0 when absent; must be finite (the JSON reader refuses non-finite numbers).
+double coefficient(const io::Json& object, const char* key, const std::string& where) {
+  return io::optional_number(object, key, where).value_or(0.0);
+}
+
+// The lens a transforms file describes, as nerfstudio writes it ("camera_model": OPENCV, OPENCV_FISHEYE, …, with
+// k1..k4, p1, p2) or instant-ngp ("is_fisheye", or plain k1, k2, p1, p2 meaning OPENCV); nothing when the object
+// says nothing about a lens (the frame then keeps the file's). Throws naming `where` for a model not read here and
+// for coefficients the model does not have.
+std::optional<Lens> read_lens(const io::Json& object, const std::string& where) {
+  static const char* const kKeys[] = {"k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"};
+  bool any_key = object.contains("camera_model") || object.contains("is_fisheye");
+  for (const char* key : kKeys) any_key = any_key || object.contains(key);
+  if (!any_key) return std::nullopt;
+  Lens lens;
+  lens.k1 = coefficient(object, "k1", where);
+  lens.k2 = coefficient(object, "k2", where);
+  lens.k3 = coefficient(object, "k3", where);
+  lens.k4 = coefficient(object, "k4", where);
+  lens.p1 = coefficient(object, "p1", where);
+  lens.p2 = coefficient(object, "p2", where);
+  for (const char* key : {"k5", "k6"}) {
+    if (coefficient(object, key, where) != 0.0) {
+      throw Error(where + ": lens distortion " + key + " is not read (FULL_OPENCV): mipnerf-cl reads PINHOLE, "
+                  "SIMPLE_RADIAL, RADIAL, OPENCV and OPENCV_FISHEYE cameras; undistort the images first");
     }
   }
-  if (object.contains("camera_model") && object.at("camera_model").is_string()) {
-    const std::string model = object.at("camera_model").get<std::string>();
-    if (model.find("FISHEYE") != std::string::npos || model.find("fisheye") != std::string::npos ||
-        model == "EQUIRECTANGULAR") {
-      throw Error(where + ": camera_model '" + model +
-                  "' is not supported (pinhole cameras only): undistort the images to a pinhole camera first");
-    }
+  std::string model;
+  if (object.contains("camera_model")) {
+    if (!object.at("camera_model").is_string()) throw Error(where + ": 'camera_model' must be a string");
+    model = object.at("camera_model").get<std::string>();
+  } else if (object.contains("is_fisheye") && object.at("is_fisheye").is_boolean() && object.at("is_fisheye").get<bool>()) {
+    model = "OPENCV_FISHEYE";
+  } else {
+    model = (lens.k1 || lens.k2 || lens.p1 || lens.p2 || lens.k3 || lens.k4) ? "OPENCV" : "PINHOLE";
   }
+  const bool radial_only = lens.p1 == 0 && lens.p2 == 0 && lens.k3 == 0 && lens.k4 == 0;
+  if (model == "PINHOLE" || model == "SIMPLE_PINHOLE") {
+    if (lens.k1 || lens.k2 || lens.k3 || lens.k4 || lens.p1 || lens.p2) {
+      throw Error(where + ": camera_model " + model + " with distortion coefficients: give the model they belong to "
+                  "(e.g. OPENCV)");
+    }
+    lens.model = LensModel::pinhole;
+  } else if (model == "SIMPLE_RADIAL" && radial_only && lens.k2 == 0) {
+    lens.model = LensModel::simple_radial;
+  } else if (model == "RADIAL" && radial_only) {
+    lens.model = LensModel::radial;
+  } else if (model == "OPENCV" && lens.k3 == 0 && lens.k4 == 0) {
+    lens.model = LensModel::opencv;
+  } else if (model == "OPENCV_FISHEYE" && lens.p1 == 0 && lens.p2 == 0) {
+    lens.model = LensModel::opencv_fisheye;
+  } else if (model == "SIMPLE_RADIAL" || model == "RADIAL" || model == "OPENCV" || model == "OPENCV_FISHEYE") {
+    throw Error(where + ": camera_model " + model + " has coefficients it does not take (SIMPLE_RADIAL: k1; RADIAL: "
+                "k1, k2; OPENCV: k1, k2, p1, p2; OPENCV_FISHEYE: k1..k4)");
+  } else {
+    throw Error(where + ": camera_model '" + model + "' is not read: mipnerf-cl reads PINHOLE, SIMPLE_RADIAL, RADIAL, "
+                "OPENCV and OPENCV_FISHEYE cameras; undistort the images to a pinhole camera first (e.g. COLMAP's "
+                "image_undistorter)");
+  }
+  return lens;
 }
 
 }  // namespace
 
 IntrinsicsSpec read_intrinsics(const io::Json& object, const IntrinsicsSpec& base, const std::string& where) {
   io::require_object(object, where);
-  refuse_distortion(object, where);
   IntrinsicsSpec spec = base;
+  if (auto lens = read_lens(object, where)) spec.lens = *lens;
   read_positive(object, "fl_x", spec.focal_x_px, where);
   read_positive(object, "fl_y", spec.focal_y_px, where);
   read_center(object, "cx", spec.center_x_px, where);
@@ -91,6 +133,7 @@ void resolve_intrinsics(const IntrinsicsSpec& spec, uint32_t width, uint32_t hei
   camera.center_y_px = spec.center_y_px.value_or(0.5 * height);
   camera.width_px = width;
   camera.height_px = height;
+  camera.lens = spec.lens.value_or(Lens{});
 }
 
 }  // namespace mipnerf::data

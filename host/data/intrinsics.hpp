@@ -1,5 +1,6 @@
-// Pinhole intrinsics as transforms files give them: fl_x, fl_y, cx, cy, w, h (global or per frame), or
-// camera_angle_x (and camera_angle_y) as the Blender files do. Lens distortion is refused.
+// Intrinsics as transforms files give them: fl_x, fl_y, cx, cy, w, h (global or per frame), or camera_angle_x (and
+// camera_angle_y) as the Blender files do; and a lens: "camera_model" (PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV,
+// OPENCV_FISHEYE, as nerfstudio writes them) with k1..k4, p1, p2, or instant-ngp's "is_fisheye" and k1, k2, p1, p2.
 #pragma once
 
 #include <optional>
@@ -16,11 +17,12 @@ struct IntrinsicsSpec {
   std::optional<double> center_x_px, center_y_px;  // "cx", "cy": pixels from the left / top edge
   std::optional<double> width_px, height_px;  // "w", "h": the image size the values above refer to
   std::optional<double> camera_angle_x, camera_angle_y;  // full horizontal / vertical field of view, radians
+  std::optional<Lens> lens;  // the lens (core/lens.hpp); none: a pinhole camera
 };
 
 // Reads the keys above from `object` on top of `base` (a frame's values override the file's global ones).
-// Throws mipnerf::Error naming `where` for a non-number or non-positive value, and for lens distortion
-// (non-zero k1…k6, p1, p2, or a fisheye camera_model): mipnerf-cl models pinhole cameras only.
+// Throws mipnerf::Error naming `where` for a non-number or non-positive value, a camera_model not read here
+// (FULL_OPENCV's k5, k6, EQUIRECTANGULAR, …), or coefficients the model does not take.
 IntrinsicsSpec read_intrinsics(const io::Json& object, const IntrinsicsSpec& base, const std::string& where);
 
 // Sets camera's focal lengths, principal point and size for an image of width × height pixels:

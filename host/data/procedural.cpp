@@ -12,6 +12,7 @@
 
 #include "core/error.hpp"
 #include "core/vec3.hpp"
+#include "data/lens_tables.hpp"
 #include "data/multiscale.hpp"
 #include "data/pose.hpp"
 #include "io/file.hpp"
@@ -136,6 +137,7 @@ Camera camera_at(const Vec3& eye, const SceneOptions& options) {
   camera.center_x_px = camera.center_y_px = 0.5 * options.size_px;
   camera.near = options.near;
   camera.far = options.far;
+  camera.lens = options.lens;
   return camera;
 }
 
@@ -189,7 +191,19 @@ void validate(const SceneOptions& o) {
   }
   if (o.samples_per_axis < 1 || o.samples_per_axis > 64) throw Error("make-scene: --samples must be 1 to 64");
   if (!(o.camera_angle_x > 0.0 && o.camera_angle_x < 3.0)) throw Error("make-scene: camera_angle_x must be in (0, 3)");
+  if (!o.lens.is_pinhole() && o.scales > 1) {
+    throw Error("make-scene --lens: the multiscale copy (metadata.json) holds pinhole cameras only; add --scales 1 (train "
+                "builds scales of a lens capture on the fly: --set multiscale=true)");
+  }
   if (!(o.near >= 0.0 && o.far > o.near)) throw Error("make-scene: need 0 <= near < far");
+  // Every pixel must have a ray behind the lens (a fisheye's θ_d = r/f reaches 90° at r = f·π/2 only with its
+  // coefficients' help; --fov sets f as for a pinhole).
+  if (!o.lens.is_pinhole()) {
+    char fov[32];
+    std::snprintf(fov, sizeof fov, "%.4g", o.camera_angle_x * 180 / M_PI);
+    check_lens_over_image(camera_at({0, 0, 4}, o), std::string("make-scene --lens ") + lens_model_name(o.lens.model) +
+                                                        " at --fov " + fov + " (a narrower --fov keeps the image inside the lens)");
+  }
 }
 
 std::vector<Camera> procedural_cameras(const std::string& split, const SceneOptions& options) {
@@ -265,6 +279,19 @@ RgbaImage render_traced(const Camera& camera, const SceneOptions& options, uint3
   return image;
 }
 
+io::Json lens_json(const Lens& lens) {
+  io::Json json = io::Json::object();
+  if (lens.is_pinhole()) return json;
+  json["camera_model"] = lens_model_name(lens.model);
+  json["k1"] = lens.k1;
+  json["k2"] = lens.k2;
+  json["k3"] = lens.k3;
+  json["k4"] = lens.k4;
+  json["p1"] = lens.p1;
+  json["p2"] = lens.p2;
+  return json;
+}
+
 void write_procedural_scene(const std::string& out_dir, const SceneOptions& options, const LogFn& log) {
   validate(options);
   const auto start = std::chrono::steady_clock::now();
@@ -284,7 +311,8 @@ void write_procedural_scene(const std::string& out_dir, const SceneOptions& opti
       io::write_png(out_dir + "/" + split + "/r_" + std::to_string(v) + ".png", image.width, image.height, 4,
                     image.rgba.data(), 8);
     });
-    io::Json transforms = {
+    io::Json transforms = lens_json(options.lens);
+    transforms.update(io::Json{
         {"camera_angle_x", options.camera_angle_x},
         {"near", options.near},
         {"far", options.far},
@@ -293,7 +321,7 @@ void write_procedural_scene(const std::string& out_dir, const SceneOptions& opti
           {"seed", options.seed},
           {"size", options.size_px},
           {"samples_per_pixel", options.samples_per_axis * options.samples_per_axis}}},
-        {"frames", frames}};
+        {"frames", frames}});
     io::write_json(out_dir + "/transforms_" + split + ".json", transforms);
     if (log) log(LogLevel::info, std::string(split) + ": " + std::to_string(cameras.size()) + " views rendered");
   }

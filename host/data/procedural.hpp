@@ -13,6 +13,7 @@
 #include "core/log.hpp"
 #include "core/camera.hpp"
 #include "data/image.hpp"
+#include "io/json.hpp"
 
 namespace mipnerf::data {
 
@@ -28,7 +29,12 @@ struct SceneOptions {
   double camera_angle_x = 0.6911112070083618;  // horizontal field of view (radians), as the Blender scenes'
   double camera_distance = 4.0;   // cameras on a sphere of this radius around the origin, looking at it
   double near = 2.0, far = 6.0;   // the scene lies within 1.5 of the origin: depths 2.5 … 5.5
+  Lens lens;                      // every camera behind this lens (pinhole: none); written into the transforms files
 };
+
+// The transforms-file keys of a lens (nerfstudio's: camera_model, k1.., p1, p2), empty for a pinhole: what
+// data/intrinsics reads back.
+io::Json lens_json(const Lens& lens);
 
 // Checks the options (sizes, counts, scales dividing the size); throws mipnerf::Error saying what to change.
 void validate(const SceneOptions& options);

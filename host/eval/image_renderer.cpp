@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "data/lens_tables.hpp"
 #include "parallel/world.hpp"
 
 namespace mipnerf::eval {
@@ -50,7 +51,15 @@ ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, st
                   " has more than 2^32 - 1 pixels");
     }
   }
-  packed_cameras_.upload(ctx, pack_cameras(cameras_));
+  auto packed = pack_cameras(cameras_);
+  const data::LensTables tables = data::build_lens_tables(cameras_);
+  data::set_lens_table_slots(packed, tables);
+  packed_cameras_.upload(ctx, packed);
+  if (!tables.empty()) {
+    lens_tables_ = ocl::DeviceArray<float>(ctx, tables.values.size(), "render lens tables [pixels][4]");
+    lens_tables_.upload(ctx, tables.values);
+    has_lens_tables_ = true;
+  }
 }
 
 RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_t, size_t)>& progress) {
@@ -77,7 +86,7 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
     depth.resize(chunk_rays);
     acc.resize(chunk_rays);
   }
-  const graph::RaySource source{packed_cameras_, camera_ids_, pixel_ids_};
+  const graph::RaySource source{packed_cameras_, camera_ids_, pixel_ids_, has_lens_tables_ ? &lens_tables_ : nullptr};
   const auto& out = graph_.level_outputs(graph_.spec().levels.size() - 1);
   const uint64_t seed = camera_seed(settings_.seed, index);
   // Under mpirun each rank renders a contiguous share of the image's chunks (whole chunks, so every pixel is
@@ -143,7 +152,8 @@ double ImageRenderer::warm_up() {
   std::iota(ids.begin(), ids.end(), 0u);
   camera_ids_.fill(*ctx_, 0u);
   pixel_ids_.upload(*ctx_, ids.data(), count);
-  graph_.render_chunk({packed_cameras_, camera_ids_, pixel_ids_}, {0, count}, {settings_.seed, 0}, 0);
+  graph_.render_chunk({packed_cameras_, camera_ids_, pixel_ids_, has_lens_tables_ ? &lens_tables_ : nullptr},
+                      {0, count}, {settings_.seed, 0}, 0);
   std::vector<float> acc(count);
   graph_.level_outputs(graph_.spec().levels.size() - 1).acc.download(*ctx_, acc.data(), count);  // waits
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

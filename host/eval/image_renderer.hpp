@@ -66,6 +66,8 @@ class ImageRenderer {
   ocl::DeviceArray<float> packed_cameras_;  // [C][24]
   ocl::DeviceArray<uint32_t> camera_ids_;   // [chunk]
   ocl::DeviceArray<uint32_t> pixel_ids_;    // [chunk]
+  ocl::DeviceArray<float> lens_tables_;     // the cameras behind a lens (data/lens_tables.hpp)
+  bool has_lens_tables_ = false;
 };
 
 }  // namespace mipnerf::eval

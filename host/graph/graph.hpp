@@ -128,6 +128,8 @@ class Graph {
 
   // Stages (each builds its specialisation once).
   std::unique_ptr<ops::Rays> rays_;
+  // The ray stage with LENS_TABLES, built the first time a source brings lens tables: pinhole scenes never pay for it.
+  std::unique_ptr<ops::Rays> lens_rays_;
   std::unique_ptr<ops::Sample> sample_;
   std::unique_ptr<ops::Resample> resample_;
   std::unique_ptr<ops::Gaussian> gaussian_;

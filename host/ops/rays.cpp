@@ -14,10 +14,16 @@ ocl::BuildOptions rays_build_options(const RaysOptions& options) {
       .define("SUBPIXEL_JITTER", options.jitter_subpixel ? 1 : 0)
       .define("VIEW_DEPENDENCE", options.view_dependence ? 1 : 0)
       .define("UNIT_VIEWDIRS", options.unit_viewdirs ? 1 : 0)
+      .define("LENS_TABLES", options.lens_tables ? 1 : 0)
       .define_float("NDC_NEAR_PLANE", options.ndc_near_plane);
 }
 
-Rays::Rays(ocl::Context& ctx, const RaysOptions& options) : ctx_(&ctx), options_(options) {
+Rays::Rays(ocl::Context& ctx, const RaysOptions& options)
+    : ctx_(&ctx), options_(options), no_lens_tables_(ctx, 4, "rays: no lens tables") {
+  if (options_.lens_tables && options_.ray_shape != RayShape::cone) {
+    throw Error("rays: lens cameras need cone rays (NDC, ray_shape = cylinder, assumes a pinhole camera); train a "
+                "capture with distortion as a transforms.json with ray_shape = cone, or undistort it first");
+  }
   fwd_ = &ctx.program({"common.cl", "rays.cl"}, rays_build_options(options_)).kernel("rays_fwd");
 }
 
@@ -38,7 +44,14 @@ void Rays::fwd(const RaysInputs& in, RayBundle& out, const RngKey& key) {
   detail::require(out.near, n, where);
   detail::require(out.far, n, where);
   detail::require(out.lossmult, n, where);
-  ocl::set_args(*fwd_, where, in.cameras, in.camera_ids, in.pixel_ids, out.origins, out.directions, out.viewdirs,
+  if (in.lens_tables && !options_.lens_tables) {
+    throw Error(where + ": lens tables given to a ray stage built without LENS_TABLES (RaysOptions::lens_tables)");
+  }
+  if (options_.lens_tables && (!in.lens_tables || in.lens_tables->size() % 4 != 0)) {
+    throw Error(where + ": a ray stage built with LENS_TABLES needs the cameras' lens tables ([pixels][4] floats)");
+  }
+  const ocl::DeviceArray<float>& lens_tables = in.lens_tables ? *in.lens_tables : no_lens_tables_;
+  ocl::set_args(*fwd_, where, in.cameras, in.camera_ids, in.pixel_ids, lens_tables, out.origins, out.directions, out.viewdirs,
                 out.radii, out.near, out.far, out.lossmult, detail::to_uint(n, where, "rays"),
                 detail::to_uint(in.cameras.size() / stride, where, "cameras"), static_cast<cl_ulong>(key.seed),
                 static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));

@@ -12,7 +12,7 @@
 
 namespace mipnerf::ops {
 
-// RAY_SHAPE, PIXEL_CENTER_OFFSET, SUBPIXEL_JITTER, VIEW_DEPENDENCE, UNIT_VIEWDIRS, NDC_NEAR_PLANE.
+// RAY_SHAPE, PIXEL_CENTER_OFFSET, SUBPIXEL_JITTER, VIEW_DEPENDENCE, UNIT_VIEWDIRS, LENS_TABLES, NDC_NEAR_PLANE.
 ocl::BuildOptions rays_build_options(const RaysOptions& options);
 
 struct RaysInputs {
@@ -20,6 +20,9 @@ struct RaysInputs {
   const ocl::DeviceArray<uint32_t>& camera_ids;  // [R]
   const ocl::DeviceArray<uint32_t>& pixel_ids;   // [R] y·width + x
   size_t n_rays;
+  // The cameras' lens tables ([pixels][4], data/lens_tables.hpp), needed by (and only by) a stage built with
+  // RaysOptions::lens_tables; cameras whose packed lens slot is 0 ignore them.
+  const ocl::DeviceArray<float>* lens_tables = nullptr;
 };
 
 // The ray stage for one specialisation (built on construction).
@@ -36,6 +39,7 @@ class Rays {
  private:
   ocl::Context* ctx_;
   RaysOptions options_;
+  ocl::DeviceArray<float> no_lens_tables_;  // bound in the lens tables' place when there are none
   ::cl::Kernel* fwd_;
 };
 

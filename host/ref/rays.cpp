@@ -2,6 +2,7 @@
 #include "ref/rays.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "core/camera.hpp"
@@ -79,6 +80,50 @@ RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, 
   return out;
 }
 
+// Mirror of the kernel's lens_point: camera `id`'s lens table slot (the bits of the packed float, 0: a pinhole), and
+// behind a lens the normalised (u, v) of (px + offset_x, py + offset_y) and the radius at unit depth, read from the
+// table at the pixel centre and moved first order along the differences to the next entry across and down.
+uint32_t lens_table_slot(const std::vector<double>& cameras, size_t id) {
+  const float packed = static_cast<float>(cameras[id * camera_layout::stride + camera_layout::lens_table]);
+  uint32_t slot;
+  std::memcpy(&slot, &packed, sizeof slot);
+  return slot;
+}
+
+struct LensPoint {
+  double u, v, radius;
+};
+
+LensPoint lens_point(const std::vector<double>& tables, size_t first, const Camera& cam, uint32_t px, uint32_t py,
+                     double offset_x, double offset_y) {
+  const uint32_t w = cam.width_px, h = cam.height_px;
+  auto entry = [&](uint32_t x, uint32_t y, int k) { return tables[4 * (first + static_cast<size_t>(y) * w + x) + k]; };
+  LensPoint p{entry(px, py, 0), entry(px, py, 1), entry(px, py, 2)};
+  for (int k = 0; k < 2; ++k) {
+    const double across = w < 2 ? 0.0
+                          : px + 1 < w ? entry(px + 1, py, k) - entry(px, py, k)
+                                       : entry(px, py, k) - entry(px - 1, py, k);
+    const double down = h < 2 ? 0.0
+                        : py + 1 < h ? entry(px, py + 1, k) - entry(px, py, k)
+                                     : entry(px, py, k) - entry(px, py - 1, k);
+    (k == 0 ? p.u : p.v) += (offset_x - 0.5) * across + (offset_y - 0.5) * down;
+  }
+  return p;
+}
+
+// A cone ray behind a lens: direction camera_to_world·(u, −v, −1), radius |column 0|·(table radius).
+RayOut lens_cone_ray(const Camera& cam, const LensPoint& p) {
+  const auto& m = cam.camera_to_world;
+  const double d_camera[3] = {p.u, -p.v, -1.0};
+  RayOut out;
+  for (int a = 0; a < 3; ++a) {
+    out.origin[a] = m[4 * a + 3];
+    out.direction[a] = m[4 * a] * d_camera[0] + m[4 * a + 1] * d_camera[1] + m[4 * a + 2] * d_camera[2];
+  }
+  out.radius = std::sqrt(m[0] * m[0] + m[4] * m[4] + m[8] * m[8]) * p.radius;
+  return out;
+}
+
 }  // namespace
 
 void convert_to_ndc(const double o[3], const double d[3], double focal_x, double focal_y, double width, double height,
@@ -103,7 +148,8 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
               const std::vector<uint32_t>& camera_ids, const std::vector<uint32_t>& pixel_ids,
               std::vector<double>& origins, std::vector<double>& directions, std::vector<double>& viewdirs,
               std::vector<double>& radii, std::vector<double>& near, std::vector<double>& far,
-              std::vector<double>& lossmult, size_t n_rays, size_t n_cameras, const RngKey& key) {
+              std::vector<double>& lossmult, size_t n_rays, size_t n_cameras, const RngKey& key,
+              const std::vector<double>& lens_tables) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   origins.assign(3 * n_rays, nan);
   directions.assign(3 * n_rays, nan);
@@ -125,6 +171,24 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
       offset_y = xi[1];
     }
     const double x = px + offset_x, y = py + offset_y;
+    const uint32_t lens_slot = options.lens_tables ? lens_table_slot(cameras, camera_ids[i]) : 0;
+    if (lens_slot != 0) {
+      const RayOut ray = lens_cone_ray(cam, lens_point(lens_tables, lens_slot - 1, cam, px, py, offset_x, offset_y));
+      const double norm = !options.unit_viewdirs ? 1.0
+                                                 : std::sqrt(ray.direction[0] * ray.direction[0] +
+                                                             ray.direction[1] * ray.direction[1] +
+                                                             ray.direction[2] * ray.direction[2]);
+      for (int a = 0; a < 3; ++a) {
+        origins[3 * i + a] = ray.origin[a];
+        directions[3 * i + a] = ray.direction[a];
+        viewdirs[3 * i + a] = ray.direction[a] / norm;
+      }
+      radii[i] = ray.radius;
+      near[i] = cam.near;
+      far[i] = cam.far;
+      lossmult[i] = cam.lossmult;
+      continue;
+    }
     const RayOut ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
                                                                     : cone_ray(cam, x, y, px);
     // viewdirs: the world direction (in NDC scenes too, where `directions` holds the NDC direction), normalised

@@ -67,8 +67,8 @@ mipnerf_add_cli_error_test("dataset inspect: truncated PNG" PATTERN "truncated_p
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/truncated_png")
 mipnerf_add_cli_error_test("dataset inspect: images of differing size" PATTERN "differing_sizes/train/r_1.png: the image is 4x2 but .*r_0.png is 4x4"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/differing_sizes")
-mipnerf_add_cli_error_test("dataset inspect: lens distortion" PATTERN "distortion/transforms.json: lens distortion k1 = -0.12.* is not supported"
-  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/distortion")
+mipnerf_add_checked_test("cli: dataset inspect: a lens camera prints its model and largest distortion" EXPECT "lens: OPENCV \\(k1 -0.12.*largest distortion 0\\.12[0-9]* px"
+  COMMAND mipnerf-cl dataset inspect "${MIPNERF_DATA_FIXTURES}/distortion")
 mipnerf_add_cli_error_test("dataset inspect: scales that do not divide the size" PATTERN "r_0.png: 4x4 is not divisible by 8 for 4 scales"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --scales 4)
 mipnerf_add_cli_error_test("dataset inspect: unknown background" PATTERN "--background 'green': expected white \\| black \\| none"
@@ -133,8 +133,10 @@ mipnerf_add_checked_test("cli: train on an imported COLMAP model" EXPECT "traine
   COMMAND mipnerf-cl train --data "${MIPNERF_COLMAP_OUT}/transforms.json"
   --out "${MIPNERF_COLMAP_OUT}-run" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
 set_tests_properties("cli: train on an imported COLMAP model" PROPERTIES FIXTURES_REQUIRED cli_colmap)
-mipnerf_add_cli_error_test("dataset import-colmap: a distortion model" PATTERN "distorted/cameras.txt:4: camera 1 is SIMPLE_RADIAL, not a pinhole camera .*run COLMAP's image_undistorter first"
-  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/distorted" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
+mipnerf_add_checked_test("cli: dataset import-colmap: a SIMPLE_RADIAL camera imports with its lens" EXPECT "imported 3 images \\(1 camera: SIMPLE_RADIAL\\)"
+  COMMAND mipnerf-cl dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/distorted" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-lens")
+mipnerf_add_cli_error_test("dataset import-colmap: a lens model not read" PATTERN "unknown_lens/cameras.txt:4: camera 1 is FULL_OPENCV, a model mipnerf-cl does not read .*run COLMAP's image_undistorter first"
+  ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/unknown_lens" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
 mipnerf_add_cli_error_test("dataset import-colmap: a missing image" PATTERN "colmap/images: 1 of the 4 images of .*missing/images.txt are missing: view_3.png$"
   ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/missing" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
 mipnerf_add_cli_error_test("dataset import-colmap: a malformed camera line" PATTERN "malformed/cameras.txt:4: camera 1: PINHOLE takes 4 parameters, the line has 3$"
@@ -475,3 +477,43 @@ mipnerf_add_cli_error_test("dataset from-photos: unknown matcher" PATTERN "--mat
   ARGS dataset from-photos "${MIPNERF_DATA_FIXTURES}/textureless" "${CMAKE_CURRENT_BINARY_DIR}/cli-photos-bad" --matcher fast)
 mipnerf_add_cli_error_test("dataset import-colmap: unknown layout" PATTERN "--layout 'nerf': expected auto, llff or transforms"
   ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/sparse" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad" --layout nerf)
+
+# Renders as video (io/video, eval/render_job, cli/cmd_render.cpp): an orbit of the model above as an H.264 MP4 beside
+# its PNG frames, and --video's bad input as one line. tests/eval (test_video_render.cpp) decodes such a video and
+# compares every frame with the PNG of the same frame.
+set(MIPNERF_VIDEO_OUT "${CMAKE_CURRENT_BINARY_DIR}/cli-video")
+if(MIPNERF_HAVE_VIDEO)
+  add_test(NAME "cli: render --video: clear its folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_VIDEO_OUT}")
+  set_tests_properties("cli: render --video: clear its folder" PROPERTIES FIXTURES_SETUP cli_video_clean)
+  mipnerf_add_checked_test("cli: render --video writes an orbit as an MP4 beside its PNG frames"
+    EXPECT "rendered 4 frames of an orbit \\(24x24\\) from step 4 [^\n]*; images in [^\n]*cli-video/orbit; video in [^\n]*cli-video/movie/orbit.mp4 \\(24 fps\\)"
+    COMMAND mipnerf-cl render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --frames 4 --size 24x24 --format png
+    --video "${MIPNERF_VIDEO_OUT}/movie/orbit.mp4" --fps 24 --out "${MIPNERF_VIDEO_OUT}/orbit")
+  mipnerf_add_checked_test("cli: render --video --format none writes the video and no image"
+    EXPECT "rendered 4 frames of an orbit \\(24x24\\) [^\n]*; records in [^\n]*cli-video/none; video in [^\n]*cli-video/none.mp4 \\(30 fps\\)"
+    COMMAND mipnerf-cl render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --frames 4 --size 24x24 --format none
+    --video "${MIPNERF_VIDEO_OUT}/none.mp4" --out "${MIPNERF_VIDEO_OUT}/none")
+  mipnerf_add_cli_error_test("render: --video with --fps 0" PATTERN "bad/orbit.mp4: 0 frames per second: the frame rate must lie in \\(0, 1000.$"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --video "${MIPNERF_VIDEO_OUT}/bad/orbit.mp4" --fps 0)
+  mipnerf_add_cli_error_test("render: --video with --crf out of range" PATTERN "orbit.mp4: CRF 52: libx264's constant rate factor lies in 0..51"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --video "${MIPNERF_VIDEO_OUT}/bad/orbit.mp4" --crf 52)
+  mipnerf_add_cli_error_test("render: --video in a folder that cannot be made" PATTERN "not_a_checkpoint.mnck/orbit.mp4: cannot create its folder"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --video "${MIPNERF_RENDER_FIXTURES}/not_a_checkpoint.mnck/orbit.mp4")
+  mipnerf_add_cli_error_test("render: --video that is not an MP4" PATTERN "orbit.avi: a video is written as H.264 in an MP4 file: give a file name ending in .mp4"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --video "${MIPNERF_VIDEO_OUT}/bad/orbit.avi")
+  mipnerf_add_cli_error_test("render: --video of an odd size" PATTERN "orbit.mp4: frames of 25x24 pixels: H.264 video in 4:2:0 \\(yuv420p\\) needs an even width and height; render at an even size, e.g. 26x24"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --frames 2 --size 25x24 --video "${MIPNERF_VIDEO_OUT}/bad/orbit.mp4")
+  mipnerf_add_cli_error_test("render: --video of frames of differing sizes" PATTERN "test.mp4: frame 2 is 8x8 but frame 1 is 16x16: a video's frames share one size"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene/multiscale" --video "${MIPNERF_VIDEO_OUT}/bad/test.mp4")
+  set_tests_properties("cli: render --video writes an orbit as an MP4 beside its PNG frames"
+    "cli: render --video --format none writes the video and no image" PROPERTIES FIXTURES_REQUIRED "cli_render_model;cli_video_clean")
+  set_tests_properties("cli: render: --video of an odd size" "cli: render: --video of frames of differing sizes" PROPERTIES
+    FIXTURES_REQUIRED "cli_render_model;cli_scene")
+else()
+  mipnerf_add_cli_error_test("render: --video without FFmpeg says what to install" PATTERN "orbit.mp4: this mipnerf-cl was built without FFmpeg, which encodes videos: install the Debian packages libavformat-dev libavcodec-dev libswscale-dev libavutil-dev"
+    ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --video "${MIPNERF_VIDEO_OUT}/orbit.mp4")
+endif()
+mipnerf_add_cli_error_test("render: --format none without --video" PATTERN "--format none writes no images: give --video FILE.mp4 as well"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --format none)
+mipnerf_add_cli_error_test("render: --fps without --video" PATTERN "--fps applies to --video only"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --fps 24)

@@ -187,9 +187,10 @@ TEST_CASE("render: every bad camera path file is one error naming the file and t
        "no_size.json: frames[0]: no image size: give 'w' and 'h'"},
       {"zero_width.json", "{\"fl_x\": 10, \"w\": 0, \"h\": 4, \"frames\": [{\"transform_matrix\": " + pose + "}]}",
        "zero_width.json: 'w' must be positive"},
-      {"distortion.json",
-       "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"k1\": 0.1, \"frames\": [{\"transform_matrix\": " + pose + "}]}",
-       "distortion.json: lens distortion k1"},
+      {"unknown_lens.json",
+       "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"camera_model\": \"THIN_PRISM_FISHEYE\", \"frames\": "
+       "[{\"transform_matrix\": " + pose + "}]}",
+       "unknown_lens.json: camera_model 'THIN_PRISM_FISHEYE' is not read"},
       {"bad_range.json",
        "{\"fl_x\": 10, \"w\": 4, \"h\": 4, \"frames\": [{\"transform_matrix\": " + pose +
            ", \"near\": 5, \"far\": 3}]}",

@@ -310,21 +310,44 @@ TEST_CASE("colmap: a forward-facing capture is centred on the median of its poin
   CHECK(given.centre[1] == 10.0);
 }
 
-TEST_CASE("colmap: distortion models are refused naming the camera, with image_undistorter as the way out") {
+TEST_CASE("colmap: lens cameras import with their model; unknown, non-finite and folding lenses are refused") {
   test::TempDir dir;
   KnownCapture capture({0, 0, 0}, 4.0, 2);
   capture.write_images(dir / "images");
   capture.model.cameras[0] = {1, "SIMPLE_RADIAL", 2, 8, 6, {7.0, 4.0, 3.0, -0.02}};
   test::write_colmap_model(dir / "text", capture.model, false);
-  CHECK(import_error(dir / "text", dir / "images", dir / "out") ==
-        dir / "text/cameras.txt" +
-            ":4: camera 1 is SIMPLE_RADIAL, not a pinhole camera (mipnerf-cl models undistorted pinhole cameras "
-            "only): run COLMAP's image_undistorter first and import the sparse model and images it writes (PINHOLE "
-            "cameras)");
+  data::import_colmap(dir / "text", dir / "images", dir / "out_radial", {});
+  const auto radial = data::load_dataset(dir / "out_radial/transforms.json", all_frames()).split("train");
+  REQUIRE(radial.cameras.size() == 2);
+  CHECK(radial.cameras[0].lens.model == LensModel::simple_radial);
+  CHECK(radial.cameras[0].lens.k1 == -0.02);
+
   capture.model.cameras[0] = {1, "OPENCV", 4, 8, 6, {7.0, 7.0, 4.0, 3.0, 0.1, 0.01, 0.001, 0.002}};
   test::write_colmap_model(dir / "binary", capture.model, true);
-  CHECK(contains(import_error(dir / "binary", dir / "images", dir / "out"),
-                 dir / "binary/cameras.bin" + ": camera 1 is OPENCV, not a pinhole camera"));
+  data::import_colmap(dir / "binary", dir / "images", dir / "out_opencv", {});
+  const auto opencv = data::load_dataset(dir / "out_opencv/transforms.json", all_frames()).split("train");
+  CHECK(opencv.cameras[1].lens.model == LensModel::opencv);
+  CHECK(opencv.cameras[1].lens.p2 == 0.002);
+
+  capture.model.cameras[0] = {1, "FOV", 7, 8, 6, {7.0, 7.0, 4.0, 3.0, 0.9}};
+  test::write_colmap_model(dir / "fov", capture.model, false);
+  CHECK(import_error(dir / "fov", dir / "images", dir / "out") ==
+        dir / "fov/cameras.txt" +
+            ":4: camera 1 is FOV, a model mipnerf-cl does not read (it reads SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, "
+            "RADIAL, OPENCV and OPENCV_FISHEYE): run COLMAP's image_undistorter first and import the sparse model and "
+            "images it writes (PINHOLE cameras)");
+  capture.model.cameras[0] = {1, "RADIAL", 3, 8, 6, {7.0, 4.0, 3.0, -0.02, std::numeric_limits<double>::infinity()}};
+  test::write_colmap_model(dir / "infinite", capture.model, true);
+  CHECK(import_error(dir / "infinite", dir / "images", dir / "out") ==
+        dir / "infinite/cameras.bin" + ": camera 1: a RADIAL coefficient is not finite");
+  // k1 = −3 folds at r = 1/3 (normalised); the 8×6 image at focal 3 px reaches r = 1.6 at its corners.
+  capture.model.cameras[0] = {1, "SIMPLE_RADIAL", 2, 8, 6, {3.0, 4.0, 3.0, -3.0}};
+  test::write_colmap_model(dir / "fold", capture.model, false);
+  CHECK(import_error(dir / "fold", dir / "images", dir / "out") ==
+        dir / "fold/cameras.txt" +
+            ":4: camera 1: its SIMPLE_RADIAL lens cannot be inverted at pixel (0, 0): no ray leaves the lens there (the "
+            "distortion folds the image, or the pixel lies beyond the lens's field); check the coefficients (a lens "
+            "COLMAP estimates is invertible over its image)");
   CHECK_FALSE(std::filesystem::exists(dir / "out/transforms.json"));
 }
 

@@ -153,7 +153,7 @@ TEST_CASE("errors: unreadable PNGs and other image types") {
                                       ": frames[1]); convert the images to PNG and update file_path");
 }
 
-TEST_CASE("errors: transforms.json lens distortion, inconsistent w/h, near/far") {
+TEST_CASE("errors: transforms.json lens models, inconsistent w/h, near/far") {
   BrokenSet set;
   const auto frames = set.json()["frames"];
   const std::string file = set.dir / "transforms.json";
@@ -161,14 +161,27 @@ TEST_CASE("errors: transforms.json lens distortion, inconsistent w/h, near/far")
     io::write_json(file, root);
     return error_of([&] { data::load_dataset(file); });
   };
-  CHECK(load({{"fl_x", 5.0}, {"k1", -0.05}, {"frames", frames}}) ==
-        file + ": lens distortion k1 = -0.050000 is not supported (pinhole cameras only): undistort the images first "
-               "(e.g. COLMAP's image_undistorter) and remove the distortion keys");
-  auto with_frame_p2 = io::Json{{"fl_x", 5.0}, {"frames", frames}};
-  with_frame_p2["frames"][1]["p2"] = 0.001;
-  CHECK(contains(load(with_frame_p2), file + ": frames[1]: lens distortion p2 = 0.001000 is not supported"));
-  CHECK(contains(load({{"fl_x", 5.0}, {"camera_model", "OPENCV_FISHEYE"}, {"frames", frames}}),
-                 "camera_model 'OPENCV_FISHEYE' is not supported"));
+  // A lens mipnerf-cl reads loads (its rays go through the lens); the rest are one-line errors naming the camera.
+  CHECK(load({{"fl_x", 5.0}, {"k1", -0.05}, {"frames", frames}}).empty());
+  CHECK(load({{"fl_x", 5.0}, {"camera_model", "OPENCV_FISHEYE"}, {"k1", 0.01}, {"frames", frames}}).empty());
+  CHECK(load({{"fl_x", 5.0}, {"k1", -0.05}, {"k5", 0.01}, {"frames", frames}}) ==
+        file + ": lens distortion k5 is not read (FULL_OPENCV): mipnerf-cl reads PINHOLE, SIMPLE_RADIAL, RADIAL, "
+               "OPENCV and OPENCV_FISHEYE cameras; undistort the images first");
+  auto with_frame_model = io::Json{{"fl_x", 5.0}, {"frames", frames}};
+  with_frame_model["frames"][1]["camera_model"] = "FOV";
+  CHECK(load(with_frame_model) ==
+        file + ": frames[1]: camera_model 'FOV' is not read: mipnerf-cl reads PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV "
+               "and OPENCV_FISHEYE cameras; undistort the images to a pinhole camera first (e.g. COLMAP's "
+               "image_undistorter)");
+  CHECK(load({{"fl_x", 5.0}, {"camera_model", "SIMPLE_RADIAL"}, {"k1", 0.1}, {"p1", 0.01}, {"frames", frames}}) ==
+        file + ": camera_model SIMPLE_RADIAL has coefficients it does not take (SIMPLE_RADIAL: k1; RADIAL: k1, k2; "
+               "OPENCV: k1, k2, p1, p2; OPENCV_FISHEYE: k1..k4)");
+  CHECK(contains(load({{"fl_x", 5.0}, {"k1", "strong"}, {"frames", frames}}), file + ": 'k1'"));
+  // k1 = −2 folds the image at r = 1/√6 = 0.41 (normalised): the 4×4 image at focal 2 px reaches r = 1.06.
+  CHECK(load({{"fl_x", 2.0}, {"camera_model", "SIMPLE_RADIAL"}, {"k1", -2.0}, {"frames", frames}}) ==
+        file + ": frames[1]: its SIMPLE_RADIAL lens cannot be inverted at pixel (0, 0): no ray leaves the lens there "
+               "(the distortion folds the image, or the pixel lies beyond the lens's field); check the coefficients (a "
+               "lens COLMAP estimates is invertible over its image)");
   // Frame 0 is held out for "test", so frames[1] (the first of "train") is read first.
   CHECK(load({{"fl_x", 5.0}, {"w", 8}, {"h", 4}, {"frames", frames}}) ==
         file + ": frames[1]: the image is 4x4 but w/h say 8x4; the intrinsics must describe the image as stored "

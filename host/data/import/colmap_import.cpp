@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "data/lens_tables.hpp"
 #include "data/image.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
@@ -58,21 +59,45 @@ double median(std::vector<double> values) {
 struct Intrinsics {
   double fx, fy, cx, cy;
   uint64_t width, height;
+  Lens lens;
 };
 
-// The pinhole intrinsics of a camera the images use; anything else is refused with what to run.
-Intrinsics pinhole_intrinsics(const ColmapModel& model, const ColmapCamera& camera) {
+// The intrinsics and lens of a camera the images use: SIMPLE_PINHOLE (f, cx, cy), PINHOLE (fx, fy, cx, cy),
+// SIMPLE_RADIAL (f, cx, cy, k), RADIAL (f, cx, cy, k1, k2), OPENCV (fx, fy, cx, cy, k1, k2, p1, p2) and OPENCV_FISHEYE
+// (fx, fy, cx, cy, k1, k2, k3, k4), COLMAP's parameter orders; any other model is refused with what to run.
+Intrinsics camera_intrinsics(const ColmapModel& model, const ColmapCamera& camera) {
   const std::string at = model.where("cameras", camera.line, "camera", camera.id);
-  if (!camera.model->pinhole) {
-    throw Error(at + " is " + camera.model->name +
-                ", not a pinhole camera (mipnerf-cl models undistorted pinhole cameras only): run COLMAP's "
-                "image_undistorter first and import the sparse model and images it writes (PINHOLE cameras)");
-  }
+  const std::string name = camera.model->name;
   const auto& p = camera.params;
-  const bool simple = camera.model->num_params == 3;  // SIMPLE_PINHOLE: f, cx, cy; PINHOLE: fx, fy, cx, cy
-  const Intrinsics in{p[0],         simple ? p[0] : p[1], simple ? p[1] : p[2], simple ? p[2] : p[3],
-                      camera.width, camera.height};
+  Intrinsics in{0, 0, 0, 0, camera.width, camera.height, {}};
+  if (name == "SIMPLE_PINHOLE" || name == "SIMPLE_RADIAL" || name == "RADIAL") {
+    in.fx = in.fy = p[0];
+    in.cx = p[1];
+    in.cy = p[2];
+    if (name == "SIMPLE_RADIAL") in.lens = {LensModel::simple_radial, p[3]};
+    if (name == "RADIAL") in.lens = {LensModel::radial, p[3], p[4]};
+  } else if (name == "PINHOLE" || name == "OPENCV" || name == "OPENCV_FISHEYE") {
+    in.fx = p[0];
+    in.fy = p[1];
+    in.cx = p[2];
+    in.cy = p[3];
+    if (name == "OPENCV") in.lens = {LensModel::opencv, p[4], p[5], 0, 0, p[6], p[7]};
+    if (name == "OPENCV_FISHEYE") in.lens = {LensModel::opencv_fisheye, p[4], p[5], p[6], p[7]};
+  } else {
+    throw Error(at + " is " + name + ", a model mipnerf-cl does not read (it reads SIMPLE_PINHOLE, PINHOLE, "
+                "SIMPLE_RADIAL, RADIAL, OPENCV and OPENCV_FISHEYE): run COLMAP's image_undistorter first and import the "
+                "sparse model and images it writes (PINHOLE cameras)");
+  }
   if (!(in.fx > 0.0) || !(in.fy > 0.0)) throw Error(at + ": the focal length must be positive");
+  Camera as_camera;  // the lens must invert over the whole image, or no ray leaves some pixels
+  as_camera.focal_x_px = in.fx;
+  as_camera.focal_y_px = in.fy;
+  as_camera.center_x_px = in.cx;
+  as_camera.center_y_px = in.cy;
+  as_camera.width_px = static_cast<uint32_t>(in.width);
+  as_camera.height_px = static_cast<uint32_t>(in.height);
+  as_camera.lens = in.lens;
+  check_lens_over_image(as_camera, at);
   return in;
 }
 
@@ -109,8 +134,22 @@ std::string relative_path(const fs::path& path, const fs::path& from_dir) {
   return relative.generic_string();
 }
 
+// The camera as a transforms file holds it (nerfstudio's keys for the lens).
 io::Json intrinsics_json(const Intrinsics& in) {
-  return {{"fl_x", in.fx}, {"fl_y", in.fy}, {"cx", in.cx}, {"cy", in.cy}, {"w", in.width}, {"h", in.height}};
+  io::Json json = {{"fl_x", in.fx}, {"fl_y", in.fy}, {"cx", in.cx}, {"cy", in.cy}, {"w", in.width}, {"h", in.height}};
+  if (in.lens.is_pinhole()) return json;
+  json["camera_model"] = lens_model_name(in.lens.model);
+  json["k1"] = in.lens.k1;
+  json["k2"] = in.lens.k2;
+  if (in.lens.model == LensModel::opencv) {
+    json["p1"] = in.lens.p1;
+    json["p2"] = in.lens.p2;
+  }
+  if (in.lens.model == LensModel::opencv_fisheye) {
+    json["k3"] = in.lens.k3;
+    json["k4"] = in.lens.k4;
+  }
+  return json;
 }
 
 }  // namespace
@@ -180,12 +219,12 @@ const ColmapCamera& camera_of(const ColmapModel& model, uint32_t id) {
               model.file("cameras") + " does not list");
 }
 
-// The intrinsics of the cameras the images use, by camera id; distortion is refused here.
+// The intrinsics and lenses of the cameras the images use, by camera id.
 std::map<uint32_t, Intrinsics> used_intrinsics(const ColmapModel& model, const std::vector<const ColmapImage*>& images) {
   std::map<uint32_t, Intrinsics> intrinsics;
   for (const auto* image : images) {
     if (!intrinsics.count(image->camera_id)) {
-      intrinsics.emplace(image->camera_id, pinhole_intrinsics(model, camera_of(model, image->camera_id)));
+      intrinsics.emplace(image->camera_id, camera_intrinsics(model, camera_of(model, image->camera_id)));
     }
   }
   return intrinsics;
@@ -395,6 +434,7 @@ void describe_model(const ColmapModel& model, size_t images, const std::map<uint
 std::string llff_misfit(const std::map<uint32_t, Intrinsics>& intrinsics) {
   if (intrinsics.size() != 1) return std::to_string(intrinsics.size()) + " cameras (LLFF holds one)";
   const Intrinsics& in = intrinsics.begin()->second;
+  if (!in.lens.is_pinhole()) return std::string("a ") + lens_model_name(in.lens.model) + " lens (LLFF holds a pinhole)";
   if (std::abs(in.fx - in.fy) > 1e-6 * in.fx) return "focal lengths fx " + num(in.fx) + " and fy " + num(in.fy) + " differ";
   if (std::abs(in.cx - 0.5 * in.width) > 0.5 || std::abs(in.cy - 0.5 * in.height) > 0.5) {
     return "the principal point (" + num(in.cx) + ", " + num(in.cy) + ") is not the image centre";
