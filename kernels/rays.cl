@@ -124,21 +124,24 @@ inline float pair_start_shift(uint p, uint size) {
 // The normalised (u, v) of image position (pixel + offset) behind a lens, and the pixel's radius at unit depth, from
 // the camera's table (entries [height][width], each u, v, radius, 0). Off the centre, first order in the offset along
 // the differences to the next entry across and down (the previous one in the last column / row).
-inline float3 lens_point(__global const float4* table, uint px, uint py, uint width, uint height, float offset_x,
+inline float3 lens_point(__global const float* table, uint px, uint py, uint width, uint height, float offset_x,
                          float offset_y) {
   const size_t pixel = (size_t)py * width + px;
-  const float4 here = table[pixel];
-  float2 uv = here.xy;
+  __global const float* here = table + 4 * pixel;
+  float u = here[0], v = here[1];
   const float along_x = offset_x - 0.5f, along_y = offset_y - 0.5f;
   if (along_x != 0.0f && width > 1) {
-    const float2 across = px + 1 < width ? table[pixel + 1].xy - here.xy : here.xy - table[pixel - 1].xy;
-    uv += along_x * across;
+    // The difference to the next entry across (the previous one's to this in the last column).
+    __global const float* a = px + 1 < width ? here : here - 4;
+    u += along_x * (a[4] - a[0]);
+    v += along_x * (a[5] - a[1]);
   }
   if (along_y != 0.0f && height > 1) {
-    const float2 down = py + 1 < height ? table[pixel + width].xy - here.xy : here.xy - table[pixel - width].xy;
-    uv += along_y * down;
+    __global const float* b = py + 1 < height ? here : here - 4 * (size_t)width;
+    u += along_y * (b[4 * (size_t)width] - b[0]);
+    v += along_y * (b[4 * (size_t)width + 1] - b[1]);
   }
-  return (float3)(uv, here.z);
+  return (float3)(u, v, here[2]);
 }
 #endif
 
@@ -160,7 +163,7 @@ inline void write_nan_ray(size_t i, __global float* origins, __global float* dir
 // One item per ray. cameras [C][CAMERA_STRIDE], camera_ids, pixel_ids [R] → origins, directions, viewdirs [R][3],
 // radii, near, far, lossmult [R]. Without VIEW_DEPENDENCE `viewdirs` is never written (any buffer may be passed).
 __kernel void rays_fwd(__global const float* cameras, __global const uint* camera_ids,
-                       __global const uint* pixel_ids, __global const float4* lens_tables, __global float* origins, __global float* directions,
+                       __global const uint* pixel_ids, __global const float* lens_tables, __global float* origins, __global float* directions,
                        __global float* viewdirs, __global float* radii, __global float* near, __global float* far,
                        __global float* lossmult, const uint n_rays, const uint n_cameras, const ulong seed,
                        const uint step, const uint first_ray) {
@@ -195,7 +198,8 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   float3 dir_camera = (float3)(x_from_center / fx, -y_from_center / fy, -1.0f);
   float lens_radius = 0.0f;  // at unit depth, before the rotation's scale; 0: a pinhole camera
   if (lens_table != 0) {
-    const float3 lens = lens_point(lens_tables + (lens_table - 1), px, py, width, height, offset_x, offset_y);
+    const float3 lens =
+        lens_point(lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x, offset_y);
     dir_camera = (float3)(lens.x, -lens.y, -1.0f);
     lens_radius = lens.z;
   }

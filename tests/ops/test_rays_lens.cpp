@@ -119,7 +119,7 @@ double distance(const Ray& a, const Ray& b) {
 
 }  // namespace
 
-TEST_CASE("rays behind a lens: each float32 ray projects back through COLMAP's model to its pixel centre") {
+TEST_CASE("rays: behind a lens, each float32 ray projects back through COLMAP's model to its pixel centre") {
   RaysOptions options;
   options.lens_tables = true;
   const LensBatch b = lens_batch(300);
@@ -158,7 +158,7 @@ TEST_CASE("rays behind a lens: each float32 ray projects back through COLMAP's m
   CHECK(distance(rim, rim_next) > 3 * distance(centre, right));  // at unit depth the rim's footprint is far wider
 }
 
-TEST_CASE("rays behind a lens: the kernel is the reference mirror, at the centre, offset and jittered") {
+TEST_CASE("rays: behind a lens, the kernel is the reference mirror, at the centre, offset and jittered") {
   const LensBatch b = lens_batch(200);
   std::vector<double> tables(b.tables.values.begin(), b.tables.values.end());
   for (bool jitter : {false, true}) {
@@ -188,7 +188,7 @@ TEST_CASE("rays behind a lens: the kernel is the reference mirror, at the centre
   }
 }
 
-TEST_CASE("rays behind a lens: off the pixel centre, first order in the offset, near the exact point") {
+TEST_CASE("rays: behind a lens, off the pixel centre, first order in the offset, near the exact point") {
   // A jittered ray's point is the table's centre moved along the differences to its neighbours: the exact
   // undistortion of (x + ξ, y + ξ) differs by the lens's curvature over half a pixel.
   const LensBatch b = lens_batch(0);
@@ -221,7 +221,7 @@ TEST_CASE("rays behind a lens: off the pixel centre, first order in the offset, 
   CHECK(worst_px[1] < 0.2);
 }
 
-TEST_CASE("rays behind a lens: a stage without LENS_TABLES refuses tables, one with it needs them, NDC refuses") {
+TEST_CASE("rays: behind a lens, a stage without LENS_TABLES refuses tables, one with it needs them, NDC refuses") {
   auto& ctx = test::test_context();
   const LensBatch b = lens_batch(4);
   auto cameras = test::upload(ctx, b.packed, "cameras");
