@@ -77,7 +77,11 @@ void print_split(const data::SplitSummary& s, bool ndc) {
               << s.cameras_facing << "/" << s.images << " cameras at depth "
               << range(s.look_at_depth_min, s.look_at_depth_max) << ", every axis passes within "
               << num(s.axis_miss_max) << " of it\n";
-    if (s.cameras_facing < s.images) {
+    if (s.forward_facing) {
+      // Nearly parallel axes meet far away or behind the cameras: no centre to check the poses against.
+      std::cout << "  (a forward-facing capture: its optical axes are within 45 degrees of their mean and need not "
+                   "meet in front of the cameras)\n";
+    } else if (s.cameras_facing < s.images) {
       std::cout << "  WARNING: " << s.images - s.cameras_facing
                 << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
                    "axes (x right, y up, looking down -z)?\n";

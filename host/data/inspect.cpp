@@ -72,6 +72,9 @@ SplitSummary summarize(const Split& split) {
   for (const auto& [level, summary] : scales) s.scales.push_back(summary);
   s.lenses = lens_descriptions(split);
 
+  std::vector<Matrix34> poses;
+  for (const auto& cam : split.cameras) poses.push_back(cam.camera_to_world);
+  s.forward_facing = looks_forward(poses);
   s.look_at = closest_point_to_axes(split.cameras);
   if (s.look_at) {
     const Vec3& p = *s.look_at;

@@ -27,6 +27,7 @@ struct SplitSummary {
   double near_min = 0, near_max = 0, far_min = 0, far_max = 0;
   Vec3 center_min{}, center_max{};   // bounds of the camera centres (world)
   double radius_min = 0, radius_max = 0;  // camera distance from the origin
+  bool forward_facing = false;       // every optical axis within 45° of their mean (data::looks_forward)
   std::optional<Vec3> look_at;       // least-squares point closest to all optical axes
   size_t cameras_facing = 0;         // cameras for which the look-at point lies in front (axis angle < 90°)
   double axis_miss_max = 0;          // largest distance from the look-at point to an optical axis

@@ -93,6 +93,10 @@ mipnerf_add_checked_test("cli: make-scene --forward-facing writes an LLFF captur
   COMMAND mipnerf-cl make-scene
   "${CMAKE_CURRENT_BINARY_DIR}/cli-llff" --forward-facing --size 64 --samples 1)
 set_tests_properties("cli: make-scene --forward-facing writes an LLFF capture" PROPERTIES FIXTURES_SETUP cli_llff)
+# Nearly parallel optical axes need not meet in front of the cameras: no pose-convention warning for them.
+mipnerf_add_checked_test("cli: dataset inspect of a forward-facing capture says so instead of warning" EXPECT "look-at centre[^\n]*\n  \\(a forward-facing capture: its optical axes are within 45 degrees of their mean[^\n]*\n  mean colour"
+  COMMAND mipnerf-cl dataset inspect "${CMAKE_CURRENT_BINARY_DIR}/cli-llff" --factor 4)
+set_tests_properties("cli: dataset inspect of a forward-facing capture says so instead of warning" PROPERTIES FIXTURES_REQUIRED cli_llff)
 add_test(NAME "cli: train on an LLFF capture: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run")
 set_tests_properties("cli: train on an LLFF capture: clear the run folder" PROPERTIES FIXTURES_SETUP cli_llff_clean)
 mipnerf_add_checked_test("cli: train on an LLFF capture chooses NDC, cylinders, black" EXPECT "scene: forward-facing LLFF → NDC rays, cylinders, black background.*trained 4 steps"
