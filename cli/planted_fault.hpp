@@ -14,11 +14,14 @@ inline void plant_fault_if_asked() {
   const char* fault = std::getenv("MIPNERF_TEST_PLANT_FAULT");
   if (fault == nullptr) return;
   if (std::strcmp(fault, "leak") == 0) {
-    static volatile int* sink;
+    [[maybe_unused]] static int* volatile sink;  // volatile itself: the allocation cannot be elided
     sink = new int[16];  // never freed: LeakSanitizer reports it at exit
     sink = nullptr;
   } else if (std::strcmp(fault, "overflow") == 0) {
-    int* block = new int[4];
+    // Through a volatile pointer, so the compiler can neither elide the allocation (new/delete pairs may be
+    // removed) nor the store: both happen, and AddressSanitizer sees the write.
+    static int* volatile block;
+    block = new int[4];
     volatile size_t past_the_end = 4;
     block[past_the_end] = 1;  // AddressSanitizer: heap-buffer-overflow
     delete[] block;

@@ -170,6 +170,7 @@ void write_camera_path(const std::string& path, const std::vector<Camera>& camer
     frame["near"] = c.near;
     frame["far"] = c.far;
     frame["transform_matrix"] = pose_to_json(c.camera_to_world);
+    frame.update(lens_json(c.lens));  // a camera behind a lens renders through it again
     frames.push_back(std::move(frame));
   }
   io::Json root = io::Json::object();

@@ -136,4 +136,17 @@ void resolve_intrinsics(const IntrinsicsSpec& spec, uint32_t width, uint32_t hei
   camera.lens = spec.lens.value_or(Lens{});
 }
 
+io::Json lens_json(const Lens& lens) {
+  io::Json json = io::Json::object();
+  if (lens.is_pinhole()) return json;
+  json["camera_model"] = lens_model_name(lens.model);
+  json["k1"] = lens.k1;
+  json["k2"] = lens.k2;
+  json["k3"] = lens.k3;
+  json["k4"] = lens.k4;
+  json["p1"] = lens.p1;
+  json["p2"] = lens.p2;
+  return json;
+}
+
 }  // namespace mipnerf::data

@@ -32,4 +32,8 @@ IntrinsicsSpec read_intrinsics(const io::Json& object, const IntrinsicsSpec& bas
 void resolve_intrinsics(const IntrinsicsSpec& spec, uint32_t width, uint32_t height, Camera& camera,
                         const std::string& where);
 
+// The transforms-file keys of a lens (nerfstudio's: camera_model, k1.., p1, p2), empty for a pinhole: what
+// read_intrinsics reads back (make-scene's transforms files, render's camera paths).
+io::Json lens_json(const Lens& lens);
+
 }  // namespace mipnerf::data

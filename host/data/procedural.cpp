@@ -12,6 +12,7 @@
 
 #include "core/error.hpp"
 #include "core/vec3.hpp"
+#include "data/intrinsics.hpp"
 #include "data/lens_tables.hpp"
 #include "data/multiscale.hpp"
 #include "data/pose.hpp"
@@ -277,19 +278,6 @@ RgbaImage render_traced(const Camera& camera, const SceneOptions& options, uint3
     }
   }
   return image;
-}
-
-io::Json lens_json(const Lens& lens) {
-  io::Json json = io::Json::object();
-  if (lens.is_pinhole()) return json;
-  json["camera_model"] = lens_model_name(lens.model);
-  json["k1"] = lens.k1;
-  json["k2"] = lens.k2;
-  json["k3"] = lens.k3;
-  json["k4"] = lens.k4;
-  json["p1"] = lens.p1;
-  json["p2"] = lens.p2;
-  return json;
 }
 
 void write_procedural_scene(const std::string& out_dir, const SceneOptions& options, const LogFn& log) {

@@ -32,10 +32,6 @@ struct SceneOptions {
   Lens lens;                      // every camera behind this lens (pinhole: none); written into the transforms files
 };
 
-// The transforms-file keys of a lens (nerfstudio's: camera_model, k1.., p1, p2), empty for a pinhole: what
-// data/intrinsics reads back.
-io::Json lens_json(const Lens& lens);
-
 // Checks the options (sizes, counts, scales dividing the size); throws mipnerf::Error saying what to change.
 void validate(const SceneOptions& options);
 

@@ -117,7 +117,8 @@ TEST_CASE("render: camera path files give intrinsics, poses and ranges, per fram
     "fl_x": 50, "cx": 20, "cy": 10, "w": 40, "h": 20, "near": 1.5, "far": 7,
     "frames": [
       {"transform_matrix": )") + kPose + R"(},
-      {"transform_matrix": )" + kPose + R"(, "fl_x": 80, "fl_y": 90, "w": 64, "h": 48, "cx": 31, "cy": 25, "far": 9},
+      {"transform_matrix": )" + kPose + R"(, "fl_x": 80, "fl_y": 90, "w": 64, "h": 48, "cx": 31, "cy": 25, "far": 9,
+       "camera_model": "OPENCV", "k1": -0.1, "k2": 0.01, "p1": 0.001, "p2": -0.002},
       {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4]]}
     ]})");
   const auto cameras = data::read_camera_path(file, {});
@@ -137,6 +138,10 @@ TEST_CASE("render: camera path files give intrinsics, poses and ranges, per fram
   CHECK(cameras[1].far == 9.0);
   CHECK(cameras[1].near == 1.5);
   CHECK(cameras[2].camera_to_world[11] == 4.0);  // a 3×4 matrix is accepted
+  CHECK(cameras[0].lens.is_pinhole());             // a lens is per frame
+  CHECK(cameras[1].lens.model == LensModel::opencv);
+  CHECK(cameras[1].lens.k1 == -0.1);
+  CHECK(cameras[1].lens.p2 == -0.002);
   // Blender style: camera_angle_x and no size; the size comes from the defaults.
   const std::string blender = write_text("blender.json", std::string(R"({"camera_angle_x": 0.6911112070083618,
     "frames": [{"transform_matrix": )") + kPose + "}]}");
@@ -161,6 +166,11 @@ TEST_CASE("render: camera path files give intrinsics, poses and ranges, per fram
     CHECK(again[k].height_px == cameras[k].height_px);
     CHECK(again[k].near == cameras[k].near);
     CHECK(again[k].far == cameras[k].far);
+    CHECK(again[k].lens.model == cameras[k].lens.model);  // the lens too: --path OUT/transforms.json renders the same
+    CHECK(again[k].lens.k1 == cameras[k].lens.k1);
+    CHECK(again[k].lens.k2 == cameras[k].lens.k2);
+    CHECK(again[k].lens.p1 == cameras[k].lens.p1);
+    CHECK(again[k].lens.p2 == cameras[k].lens.p2);
   }
 }
 
