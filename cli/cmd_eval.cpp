@@ -62,10 +62,7 @@ void run_eval(const EvalArgs& args, const CLI::App& cmd) {
   job.chunk_rays = args.chunk;
   job.supersample = args.supersample;
   job.seed = args.seed;
-  job.progress = [&](size_t done, size_t total, const std::string& detail) {
-    progress.set_total(static_cast<int64_t>(total));
-    progress.update(static_cast<int64_t>(done), detail);
-  };
+  job.progress = progress.job_callback();
   eval::ScoreOptions options;
   options.views = args.views;
   options.images = !args.no_images;

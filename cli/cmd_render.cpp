@@ -192,10 +192,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   job.chunk_rays = args.chunk;
   job.supersample = args.supersample;
   job.seed = args.seed;
-  job.progress = [&](size_t done, size_t total, const std::string& detail) {
-    progress.set_total(static_cast<int64_t>(total));
-    progress.update(static_cast<int64_t>(done), detail);
-  };
+  job.progress = progress.job_callback();
   eval::VideoOutput video;
   video.path = args.video;
   video.fps = args.fps;

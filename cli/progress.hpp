@@ -3,7 +3,9 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "core/duration.hpp"
@@ -26,6 +28,13 @@ class Progress {
   double elapsed_seconds() const;
   // Sets the number of units when it is known only once the work starts (a job that counts its own rays).
   void set_total(int64_t total) { total_ = total; }
+  // A job's progress callback (eval::RenderJob::progress): each call sets the total and the units done.
+  std::function<void(size_t done, size_t total, const std::string& detail)> job_callback() {
+    return [this](size_t done, size_t total, const std::string& detail) {
+      set_total(static_cast<int64_t>(total));
+      update(static_cast<int64_t>(done), detail);
+    };
+  }
 
  private:
   void draw(int64_t done, const std::string& detail, bool force);

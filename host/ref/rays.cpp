@@ -1,6 +1,7 @@
 // CPU reference of kernels/rays.cl.
 #include "ref/rays.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -172,36 +173,25 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
     }
     const double x = px + offset_x, y = py + offset_y;
     const uint32_t lens_slot = options.lens_tables ? lens_table_slot(cameras, camera_ids[i]) : 0;
+    RayOut ray;
+    std::array<double, 3> world_direction;  // viewdirs: the world direction (in NDC scenes too)
     if (lens_slot != 0) {
-      const RayOut ray = lens_cone_ray(cam, lens_point(lens_tables, lens_slot - 1, cam, px, py, offset_x, offset_y));
-      const double norm = !options.unit_viewdirs ? 1.0
-                                                 : std::sqrt(ray.direction[0] * ray.direction[0] +
-                                                             ray.direction[1] * ray.direction[1] +
-                                                             ray.direction[2] * ray.direction[2]);
-      for (int a = 0; a < 3; ++a) {
-        origins[3 * i + a] = ray.origin[a];
-        directions[3 * i + a] = ray.direction[a];
-        viewdirs[3 * i + a] = ray.direction[a] / norm;
-      }
-      radii[i] = ray.radius;
-      near[i] = cam.near;
-      far[i] = cam.far;
-      lossmult[i] = cam.lossmult;
-      continue;
+      ray = lens_cone_ray(cam, lens_point(lens_tables, lens_slot - 1, cam, px, py, offset_x, offset_y));
+      world_direction = {ray.direction[0], ray.direction[1], ray.direction[2]};
+    } else {
+      ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
+                                                    : cone_ray(cam, x, y, px);
+      world_direction = camera_ray(cam, x, y).direction_world;  // `directions` holds the NDC one for cylinders
     }
-    const RayOut ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
-                                                                    : cone_ray(cam, x, y, px);
-    // viewdirs: the world direction (in NDC scenes too, where `directions` holds the NDC direction), normalised
-    // unless options.unit_viewdirs is off (official forward-facing LLFF).
-    const Ray world = camera_ray(cam, x, y);
+    // Normalised unless options.unit_viewdirs is off (official forward-facing LLFF).
     const double norm = !options.unit_viewdirs ? 1.0
-                                               : std::sqrt(world.direction_world[0] * world.direction_world[0] +
-                                                           world.direction_world[1] * world.direction_world[1] +
-                                                           world.direction_world[2] * world.direction_world[2]);
+                                               : std::sqrt(world_direction[0] * world_direction[0] +
+                                                           world_direction[1] * world_direction[1] +
+                                                           world_direction[2] * world_direction[2]);
     for (int a = 0; a < 3; ++a) {
       origins[3 * i + a] = ray.origin[a];
       directions[3 * i + a] = ray.direction[a];
-      viewdirs[3 * i + a] = world.direction_world[a] / norm;
+      viewdirs[3 * i + a] = world_direction[a] / norm;
     }
     radii[i] = ray.radius;
     near[i] = cam.near;

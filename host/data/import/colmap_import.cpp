@@ -277,10 +277,8 @@ std::vector<Camera> cameras_at(const std::vector<Matrix34>& poses) {
   return cameras;
 }
 
-// The near/far range of the points' depths (near_far_from_depths), in COLMAP units; refused when there is none and
-// the options do not give both.
-std::optional<DepthRange> point_depth_range(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
-                                            const ColmapImportOptions& options) {
+// Per image, the positive depths of the sparse points it sees (COLMAP units), in the order of `images`.
+std::vector<std::vector<double>> point_depths(const ColmapModel& model, const std::vector<const ColmapImage*>& images) {
   std::unordered_map<uint32_t, size_t> index_of;
   for (size_t i = 0; i < images.size(); ++i) index_of[images[i]->id] = i;
   std::vector<std::vector<double>> depths(images.size());
@@ -291,6 +289,14 @@ std::optional<DepthRange> point_depth_range(const ColmapModel& model, const std:
       if (depth > 0.0) depths[i].push_back(depth);
     }
   }
+  return depths;
+}
+
+// The near/far range of the points' depths (near_far_from_depths), in COLMAP units; refused when there is none and
+// the options do not give both.
+std::optional<DepthRange> point_depth_range(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
+                                            const ColmapImportOptions& options) {
+  std::vector<std::vector<double>> depths = point_depths(model, images);  // sorted in place below
   const std::optional<DepthRange> range = near_far_from_depths(depths);
   if (!range && !(options.near && options.far)) {
     throw Error(model.file("points3D") +
@@ -444,16 +450,7 @@ std::string llff_misfit(const std::map<uint32_t, Intrinsics>& intrinsics) {
 
 // LLFF's bounds per image (its imgs2poses): the 0.1th and 99.9th percentile depth of the points the image sees.
 std::vector<std::array<double, 2>> llff_bounds(const ColmapModel& model, const std::vector<const ColmapImage*>& images) {
-  std::unordered_map<uint32_t, size_t> index_of;
-  for (size_t i = 0; i < images.size(); ++i) index_of[images[i]->id] = i;
-  std::vector<std::vector<double>> depths(images.size());
-  for (const auto& point : model.points) {
-    for (uint32_t image_id : point.image_ids) {
-      const size_t i = index_of.at(image_id);
-      const double depth = colmap_depth(*images[i], point.xyz);
-      if (depth > 0.0) depths[i].push_back(depth);
-    }
-  }
+  std::vector<std::vector<double>> depths = point_depths(model, images);  // sorted in place below
   std::vector<std::array<double, 2>> bounds;
   for (size_t i = 0; i < images.size(); ++i) {
     if (depths[i].size() < 2) {
