@@ -124,7 +124,17 @@ def parse_args(argv):
     p.add_argument("--official", help="checkout of github:google/mipnerf (contains train.py and internal/)")
     p.add_argument("--official-commit", help="commit of --official when it is not a git work tree (e.g. a git archive)")
     p.add_argument("--data", default=DEFAULT_DATA, help="Blender scene folder (default: ../shared's lego)")
-    p.add_argument("--factor", type=int, default=4, help="downsample factor of the scene (both sides)")
+    p.add_argument("--factor", type=int, default=None,
+                   help="downsample factor of the scene, both sides (default 4 for Blender, 8 with --llff)")
+    p.add_argument("--llff", metavar="DIR",
+                   help="instead: both sides train the quick network on this forward-facing LLFF capture "
+                        "(poses_bounds.npy, images_<factor>/) and score its held-out views (bench/vs_official_llff.py)")
+    p.add_argument("--llff-steps", default="300,600", help="with --llff: the step counts, each trained from scratch")
+    p.add_argument("--llff-views", type=int, default=0,
+                   help="with --llff: score the first N held-out views only (0: all; N > 0 for a quick try)")
+    p.add_argument("--seeds", type=int, default=3, help="with --llff: trainings per step count and side")
+    p.add_argument("--work", default="/tmp/vs_official_llff",
+                   help="with --llff: runs kept here, so an interrupted bench resumes")
     p.add_argument("--bin", default=os.path.join(REPO, "build", "mipnerf-cl"), help="mipnerf-cl executable")
     p.add_argument("--venv", default=DEFAULT_VENV, help="virtual environment for the official code")
     p.add_argument("--python", default=sys.executable, help="python used to create the venv")
@@ -147,16 +157,30 @@ def parse_args(argv):
                         "measure nothing")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
+    if args.factor is None and not args.llff:
+        args.factor = 4
     if not args.worker and not args.report_only:
         check_inputs(args)
     return args
 
 
-def check_inputs(args):
+def check_inputs_official(args):
     if not args.official:
         fail("pass --official DIR, a checkout of github:google/mipnerf (the folder holding train.py)")
     if not os.path.isfile(os.path.join(args.official, "internal", "models.py")):
         fail(f"--official {args.official}: no internal/models.py there; pass the google/mipnerf checkout")
+    if not os.access(args.bin, os.X_OK):
+        fail(f"--bin {args.bin}: not an executable; build mipnerf-cl first (cmake --build build)")
+
+
+def check_inputs(args):
+    if args.llff:
+        if not os.path.isfile(os.path.join(args.llff, "poses_bounds.npy")):
+            fail(f"--llff {args.llff}: no poses_bounds.npy; pass an LLFF capture folder (e.g. flower)")
+        if args.seeds < 1:
+            fail("--seeds must be at least 1")
+        return
+    check_inputs_official(args)
     if not os.path.isfile(os.path.join(args.data, "transforms_train.json")):
         fail(f"--data {args.data}: no transforms_train.json; pass a Blender scene folder (e.g. lego)")
     if not os.access(args.bin, os.X_OK):
@@ -1039,11 +1063,20 @@ def worker_main(args):
 
 def main(argv):
     args = parse_args(argv)
-    if args.worker:
+    if args.llff:
+        import vs_official_llff  # the LLFF side-by-side: its own orchestrator and worker
+        if args.worker:
+            vs_official_llff.worker_main_llff(args)
+        else:
+            vs_official_llff.orchestrate_llff(args)
+    elif args.worker:
         worker_main(args)
     elif args.report_only:
         with open(args.report_only) as f:
             doc = json.load(f)
+        if "pairs" in doc:  # an --llff result
+            import vs_official_llff
+            return vs_official_llff.report_only(args.report_only)
         md = os.path.splitext(args.report_only)[0] + ".md"
         report_md.write_report(md, write_markdown(doc), regen_command(os.path.abspath(args.report_only)))
         print(f"wrote {md}")
