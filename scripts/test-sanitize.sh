@@ -10,6 +10,8 @@ cd "$(dirname "$0")/.."
 build_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
 jobs="${JOBS:-$(nproc)}"
 export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v ccache || true)}"
+# Paths below the checkout hash as relative ones, so a clean checkout elsewhere reuses the cache.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 start=$(date +%s)
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DMIPNERF_SANITIZE=ON -DMIPNERF_FUZZ=ON \
   -DMIPNERF_MPI=OFF  # MPI is tested in the plain build; here, a build without it (refused under mpirun)

@@ -4,9 +4,14 @@
 #   pocl       the whole suite on PoCL's CPU device (but the stages below)
 #   mpi        the MPI tests (mpirun -np 2) on PoCL
 #   oclgrind   the kernel tests under the oclgrind simulator
-#   sanitizer  the whole suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh)
+#   sanitizer  the suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh), but
+#              the `quality` tests
 #   fuzz       each fuzz target for 20 s, in that build
-#   intel      the whole suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI)
+#   intel      the suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI), but the
+#              `quality` tests
+# The `quality` tests (tests/quality/: a scene trained for hundreds of steps to a PSNR) run on PoCL alone: the code
+# they run is the code the train, eval and graph tests run in every stage, and their minutes there bought nothing
+# the others do not show (a sanitizer report or a runtime's wrong result fails those shorter tests the same way).
 #   selftest   `mipnerf-selftest` on every runtime above (PoCL, oclgrind, Intel's)
 # Every stage runs on a platform it names and checks (MIPNERF_TEST_PLATFORM); a test that cannot run reports skipped.
 # The command fails when a stage fails, runs no test, or could not run. A stage may be left out only by naming it,
@@ -92,7 +97,7 @@ fi
 # the fuzz targets' short runs.
 if wanted sanitizer || wanted fuzz; then
   if ./scripts/test-sanitize.sh --build-only; then
-    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi)$'; fi
+    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi|quality)$'; fi
     if wanted fuzz; then run_ctest fuzz "$pocl_platform" "$sanitize_dir" -L '^fuzz$'; fi
   else
     for stage in sanitizer fuzz; do
@@ -105,7 +110,7 @@ fi
 if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
     eval "$environment"
-    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^oclgrind$'
+    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality)$'
     if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM"; fi
   else
     record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"

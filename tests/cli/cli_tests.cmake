@@ -207,6 +207,12 @@ if(TARGET test_eval)
   target_compile_definitions(test_eval PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
 endif()
 
+# The quality tests (tests/quality) train through the real executable.
+if(TARGET test_quality)
+  add_dependencies(test_quality mipnerf-cl)
+  target_compile_definitions(test_quality PRIVATE MIPNERF_CLI_PATH="$<TARGET_FILE:mipnerf-cl>")
+endif()
+
 # Crash consistency (tests/reliability) kills and limits the real executable.
 if(TARGET test_reliability)
   add_dependencies(test_reliability mipnerf-cl)

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "io/json.hpp"
-#include "render_fixtures.hpp"
+#include "eval/render_fixtures.hpp"
 #include "support/temp_scene.hpp"
 
 using namespace mipnerf;
