@@ -12,7 +12,9 @@
 # The `quality` tests (tests/quality/: a scene trained for hundreds of steps to a PSNR) run on PoCL alone: the code
 # they run is the code the train, eval and graph tests run in every stage, and their minutes there bought nothing
 # the others do not show (a sanitizer report or a runtime's wrong result fails those shorter tests the same way).
-#   selftest   `mipnerf-selftest` on every runtime above (PoCL, oclgrind, Intel's)
+#   selftest   `mipnerf-selftest` on every runtime above: its --quick checks on PoCL and under oclgrind (the full
+#              list on PoCL is the pocl stage's ops, mlp and graph tests again, the same sources), every check on
+#              Intel's runtime, where it also compares training steps with PoCL's device
 # Every stage runs on a platform it names and checks (MIPNERF_TEST_PLATFORM); a test that cannot run reports skipped.
 # The command fails when a stage fails, runs no test, or could not run. A stage may be left out only by naming it,
 # MIPNERF_SKIP=intel,oclgrind; with CI=true nothing may be left out and a skipped test fails the command.
@@ -64,11 +66,11 @@ run_ctest() {
   record "$stage" "$platform: $(device_of "platform=$platform")" "$results/$stage.xml" "" $(( $(date +%s) - started ))
 }
 
-# run_selftest PLATFORM [LAUNCHER...]: mipnerf-selftest on that platform (under oclgrind, its --quick checks).
+# run_selftest PLATFORM full|quick [LAUNCHER...]: mipnerf-selftest on that platform, all its checks or --quick.
 run_selftest() {
-  local platform="$1" started quick=()
-  shift
-  [ $# -gt 0 ] && quick=(--quick)
+  local platform="$1" mode="$2" started quick=()
+  shift 2
+  [ "$mode" = quick ] && quick=(--quick)
   started=$(date +%s)
   echo "test: stage 'selftest' on platform '$platform'"
   "$@" "$build_dir/mipnerf-selftest" "${quick[@]}" --device "platform=$platform" --expect-platform "$platform" \
@@ -81,13 +83,13 @@ for name in ${skip_names//,/ }; do record "$name" "-" "" "left out by request (M
 # PoCL: the suite, then the MPI tests, and the self-test.
 if wanted pocl; then run_ctest pocl "$pocl_platform" "$build_dir" -LE '^(oclgrind|mpi)$'; fi
 if wanted mpi; then run_ctest mpi "$pocl_platform" "$build_dir" -L '^mpi$'; fi
-if wanted selftest; then run_selftest "$pocl_platform"; fi
+if wanted selftest; then run_selftest "$pocl_platform" quick; fi
 
 # oclgrind: the kernel tests under the simulator, and the self-test under it.
 if wanted oclgrind; then
   if command -v oclgrind >/dev/null; then
     run_ctest oclgrind "$oclgrind_platform" "$build_dir" -L '^oclgrind$'
-    if wanted selftest; then run_selftest "$oclgrind_platform" oclgrind; fi
+    if wanted selftest; then run_selftest "$oclgrind_platform" quick oclgrind; fi
   else
     record oclgrind "-" "" "could not run: oclgrind is not installed (Debian package 'oclgrind')"
   fi
@@ -111,7 +113,7 @@ if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
     eval "$environment"
     run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality)$'
-    if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM"; fi
+    if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM" full; fi
   else
     record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"
   fi
