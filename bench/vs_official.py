@@ -1030,9 +1030,12 @@ def load_blender(np, datasets, data, factor, near, far, split="train"):
     return scene.rays, scene.images
 
 
-def worker_main(args):
+def serve_requests(make_official, handlers):
+    """The worker's loop: one JSON request per stdin line, one JSON reply per stdout line; handlers maps a request's
+    cmd to handler(official, request). A failure (importing the official code, or a request) is a reply with
+    "error", its traceback on stderr."""
     try:
-        off = Official(args.official, args.data, args.factor)
+        off = make_official()
     except Exception as e:  # report the first failure to the orchestrator in one line
         import traceback
         traceback.print_exc()
@@ -1042,23 +1045,22 @@ def worker_main(args):
         req = json.loads(line)
         try:
             cmd = req.pop("cmd")
-            if cmd == "versions":
-                reply = off.versions()
-            elif cmd == "setup":
-                reply = off.setup(**req)
-            elif cmd == "steps":
-                reply = {"seconds": off.steps(req["n"])}
-            elif cmd == "render":
-                reply = off.render(req["reps"], req["chunk"])
-            elif cmd == "train":
-                reply = off.train_and_score(**req)
-            else:
-                reply = {"error": f"unknown request {cmd}"}
+            handler = handlers.get(cmd)
+            reply = handler(off, req) if handler else {"error": f"unknown request {cmd}"}
         except Exception as e:
             import traceback
             traceback.print_exc()
             reply = {"error": repr(e)}
         print(json.dumps(reply), flush=True)
+
+
+def worker_main(args):
+    serve_requests(lambda: Official(args.official, args.data, args.factor), {
+        "versions": lambda off, req: off.versions(),
+        "setup": lambda off, req: off.setup(**req),
+        "steps": lambda off, req: {"seconds": off.steps(req["n"])},
+        "render": lambda off, req: off.render(req["reps"], req["chunk"]),
+        "train": lambda off, req: off.train_and_score(**req)})
 
 
 def main(argv):

@@ -25,7 +25,7 @@ import time
 
 import vs_official as vo
 import report_md
-from study_common import read_json, run
+from study_common import read_json, run, train_resumable
 
 NAME = "vs_official_llff"
 
@@ -42,27 +42,16 @@ def llff_factor(args):
 def train_ours(args, factor, steps, seed, log):
     """Our quick preset on the capture: train (resumed if interrupted), the final val = all held-out views."""
     out = os.path.join(args.work, "ours", f"steps{steps}_seed{seed}")
-    summary_path = os.path.join(out, "summary.json")
     settings = {"factor": factor, "steps": steps, "seed": seed, "val_every": 0, "val_views": args.llff_views}
-    command = [args.bin, "train", "--data", args.llff, "--out", out, "--preset", "quick"]
-    for k, v in settings.items():
-        command += ["--set", f"{k}={v}"]
-    done = os.path.exists(summary_path) and read_json(summary_path).get("steps") == steps \
-        and not read_json(summary_path).get("interrupted")
-    phase = None
-    if not done:
-        if os.path.isdir(os.path.join(out, "checkpoints")) and os.listdir(os.path.join(out, "checkpoints")):
-            command.append("--resume")
-        before = time.time()
-        run(command, log)
-        phase = {"wall_seconds": time.time() - before}
-    summary, config = read_json(summary_path), read_json(os.path.join(out, "config.json"))
+    before = time.time()
+    summary, command = train_resumable(args.bin, args.llff, out, "quick", "mipnerf", settings, log)
+    config = read_json(os.path.join(out, "config.json"))
     val = summary["val"]
     return {"steps": summary["steps"], "seed": seed, "train_seconds": summary["train_seconds"],
             "mean_psnr": val["mean_psnr"], "views": val["views"], "mean_ssim": val.get("mean_ssim"),
             "render_s_per_mp": val.get("render_seconds_per_megapixel"), "device": summary.get("device"),
             "parameters": summary.get("parameters"), "scene_effects": config.get("scene_effects"),
-            "command": " ".join(command[1:]), "this_call": phase}, config
+            "command": " ".join(command[1:]), "this_call": {"wall_seconds": time.time() - before}}, config
 
 
 def official_llff_settings(config, steps):
@@ -326,50 +315,22 @@ class OfficialLlff:
                 "mean_psnr": sum(psnrs) / len(psnrs), "views": len(psnrs), "render_seconds": time.time() - t0}
 
     def score(self, net, state, keys, views):
-        """Each held-out view rendered as eval.py does (randomized=False, models.render_image in FLAGS.chunk rays),
-        its PSNR against the loader's image by math.mse_to_psnr."""
-        import functools
+        """Each held-out view rendered as eval.py does (vs_official's Official.render_view: randomized=False,
+        models.render_image in FLAGS.chunk rays), its PSNR against the loader's image by math.mse_to_psnr."""
         import jax
         import numpy as np
         from absl import flags
-        from jax import random
-        cfg = self.config
-
-        def render_eval_fn(variables, _, rays):
-            return jax.lax.all_gather(net.apply(variables, random.PRNGKey(0), rays, randomized=False,
-                                                white_bkgd=cfg.white_bkgd), axis_name="batch")
-
-        pfn = jax.pmap(render_eval_fn, in_axes=(None, None, 0), donate_argnums=(2,), axis_name="batch")
-        variables = jax.tree_util.tree_map(lambda x: x[0], state).optimizer.target
+        self.model, self.state, self.keys, self.render_pfn = net, state, keys, None  # what render_view reads
         psnrs = []
         for i in range(views or self.test_images.shape[0]):
             rays = self.utils.namedtuple_map(lambda r: jax.numpy.asarray(r[i]), self.test_rays)
-            rgb, _, _ = self.models.render_image(functools.partial(pfn, variables), rays, keys[0], chunk=flags.FLAGS.chunk)
+            rgb = vo.Official.render_view(self, rays, flags.FLAGS.chunk)
             mse = float(((np.asarray(rgb) - self.test_images[i]) ** 2).mean())
             psnrs.append(float(self.train.math.mse_to_psnr(mse)))
         return psnrs
 
 
 def worker_main_llff(args):
-    try:
-        off = OfficialLlff(args.official, args.llff, args.factor)
-    except Exception as e:
-        import traceback
-        traceback.print_exc()
-        print(json.dumps({"error": f"importing the official code: {e!r}"}), flush=True)
-        return
-    for line in sys.stdin:
-        req = json.loads(line)
-        try:
-            cmd = req.pop("cmd")
-            if cmd == "versions":
-                reply = off.versions()
-            elif cmd == "train_llff":
-                reply = off.train_llff(**req)
-            else:
-                reply = {"error": f"unknown request {cmd}"}
-        except Exception as e:
-            import traceback
-            traceback.print_exc()
-            reply = {"error": repr(e)}
-        print(json.dumps(reply), flush=True)
+    vo.serve_requests(lambda: OfficialLlff(args.official, args.llff, args.factor), {
+        "versions": lambda off, req: off.versions(),
+        "train_llff": lambda off, req: off.train_llff(**req)})
