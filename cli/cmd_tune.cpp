@@ -36,6 +36,7 @@
 #include "mlp/mlp_products.hpp"
 #include "mlp/network.hpp"
 #include "progress.hpp"
+#include "tune_host_libraries.hpp"
 
 namespace mipnerf::cli {
 namespace {
@@ -49,6 +50,7 @@ struct TuneArgs {
   bool no_view = false;
   std::string output;       // default: the per-device file
   bool if_missing = false;  // do nothing when the per-device file already exists (quick start re-runs)
+  bool host_gemm_only = false;  // only the host step: the CPU GEMM library per product (tune_host_libraries.hpp)
 };
 
 struct StepArgs {
@@ -298,6 +300,10 @@ void run_tune(const TuneArgs& args) {
   const auto devices = ocl::list_devices();
   const ocl::DeviceInfo device = ocl::choose_device(devices, global_options().device);
   const std::string path = args.output.empty() ? gemm::tuning_file_path(device) : args.output;
+  if (args.host_gemm_only) {
+    tune_host_libraries(device, path, tuned_network(args));
+    return;
+  }
   if (args.if_missing && std::filesystem::exists(path)) {
     std::cerr << "mipnerf-cl: tune: " << path << " exists; nothing to do (--if-missing)\n";
     return;
@@ -330,6 +336,7 @@ void run_tune(const TuneArgs& args) {
   print_summary(tuner, device, settings.rows);
   if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + path);
   measure_backends(device, path, args);
+  tune_host_libraries(device, path, tuned_network(args));
 }
 
 }  // namespace
@@ -353,6 +360,9 @@ void register_tune(CLI::App& app) {
   cmd->add_flag("--no-view", args->no_view, "The MLP has no view branch");
   cmd->add_option("--output", args->output, "Write the parameters here instead of the per-device cache file");
   cmd->add_flag("--if-missing", args->if_missing, "Do nothing when the tuning file already exists");
+  cmd->add_flag("--host-gemm", args->host_gemm_only,
+                "Only choose the CPU GEMM library (OpenBLAS, BLIS, oneDNN, libxsmm: those built in) for each of the "
+                "host MLP's products on this CPU device, by timing them (about a minute; no CLBlast search)");
   cmd->callback([args] { run_tune(*args); });
 
   // The child side: one step, started by `tune` itself (hidden from --help).

@@ -13,6 +13,7 @@ packages=(
   libplplot-dev plplot-driver-cairo  # `mipnerf-cl plot`: curves as SVG, and as PNG through PLplot's cairo driver
   libavformat-dev libavcodec-dev libswscale-dev libavutil-dev  # `render --video`: H.264 MP4 (Debian's libx264 encoder)
   libopenblas-dev   # the host GEMM backend (the MLP fused on the host BLAS on CPU devices)
+  libblis-dev libdnnl-dev libxsmm-dev  # further CPU GEMM libraries the host MLP can use per product (tune --host-gemm)
 )
 test_packages=(
   oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)

@@ -1,6 +1,8 @@
 // Per-device CLBlast GEMM parameters: problems, the tuning store, and installing it.
 #include "gemm/gemm_tuning.hpp"
 
+#include <iostream>
+
 #include <clblast.h>
 
 #include <cerrno>
@@ -186,6 +188,11 @@ std::string to_json(const GemmTuning& t) {
     j["backend_measurement"] =
         nlohmann::json::parse(t.backend_measurement_json.empty() ? "{}" : t.backend_measurement_json);
   }
+  if (!t.host_libraries.empty()) {
+    j["host_libraries"] = t.host_libraries;
+    j["host_libraries_measurement"] =
+        nlohmann::json::parse(t.host_libraries_measurement_json.empty() ? "{}" : t.host_libraries_measurement_json);
+  }
   return j.dump(2) + "\n";
 }
 
@@ -225,6 +232,15 @@ GemmTuning tuning_from_json(const std::string& text, const std::string& where) {
       throw Error(where + ": auto_backend '" + name + "' is not clblast or host; run `mipnerf-cl tune` again");
     }
     t.backend_measurement_json = j.value("backend_measurement", nlohmann::json::object()).dump();
+  }
+  if (j.contains("host_libraries")) {
+    const auto& choices = j["host_libraries"];
+    if (!choices.is_object()) throw Error(where + ": host_libraries must be an object (product label → library)");
+    for (const auto& [label, library] : choices.items()) {
+      if (!library.is_string()) throw Error(where + ": host_libraries." + label + " must be a library name");
+      t.host_libraries[label] = library.get<std::string>();
+    }
+    t.host_libraries_measurement_json = j.value("host_libraries_measurement", nlohmann::json::object()).dump();
   }
   return t;
 }
@@ -327,6 +343,34 @@ bool load_gemm_tuning(ocl::Context& ctx) {
                                 "device, which can speed training up several times on a CPU)");
   }
   return false;
+}
+
+}  // namespace mipnerf::gemm
+
+namespace mipnerf::gemm {
+
+HostProductLibraries host_product_libraries_for(const ocl::DeviceInfo& device) {
+  HostProductLibraries choice;
+  const std::string path = tuning_file_path(device);
+  std::optional<GemmTuning> tuning;
+  try {
+    tuning = read_tuning(path);
+  } catch (const Error& e) {
+    std::cerr << "mipnerf-cl: " << e.what() << "; the host MLP uses OpenBLAS for every product\n";
+    return choice;
+  }
+  if (!tuning || !tuning_matches(*tuning, device)) return choice;
+  for (const auto& [label, name] : tuning->host_libraries) {
+    bool built_in = false;
+    for (const auto& library : cpu_sgemm_libraries()) built_in = built_in || library.name == name;
+    if (built_in) {
+      choice.by_product[label] = name;
+    } else {
+      std::cerr << "mipnerf-cl: " << path << " chose " << name << " for " << label
+                << ", which this build does not have; OpenBLAS runs it\n";
+    }
+  }
+  return choice;
 }
 
 }  // namespace mipnerf::gemm

@@ -20,6 +20,7 @@
 
 #include "cl/context.hpp"
 #include "gemm/gemm.hpp"
+#include "gemm/cpu_sgemm.hpp"
 #include "gemm/gemm_backend.hpp"
 
 namespace mipnerf::gemm {
@@ -58,6 +59,10 @@ struct GemmTuning {
   // whole network (forward + backward of one chunk); none: resolve_gemm_backend's rule. With its measurement.
   std::optional<GemmBackend> auto_backend;
   std::string backend_measurement_json = "{}";
+  // The host MLP's CPU GEMM library per product (label → library; cpu_sgemm.hpp), timed by tune in the host MLP's
+  // thread arrangement, with its measurement. Empty: OpenBLAS for every product.
+  std::map<std::string, std::string> host_libraries;
+  std::string host_libraries_measurement_json = "{}";
 };
 
 // $XDG_CACHE_HOME/mipnerf-cl, else $HOME/.cache/mipnerf-cl.
@@ -87,6 +92,11 @@ bool gemm_tuning_installed(const ocl::Context& ctx);
 // exists and matches this device, driver and CLBlast (logging what it loaded); otherwise CLBlast's defaults
 // stay and it logs once per device that `mipnerf-cl tune` would help. Returns whether a file was loaded.
 bool load_gemm_tuning(ocl::Context& ctx);
+
+// The host MLP's library choice for this device from its tuning file (tuning_file_path), empty when there is none
+// or it was made for another device or driver. Choices naming a library this build does not have are dropped with
+// one line on stderr (a rebuild without it must not stop a run).
+HostProductLibraries host_product_libraries_for(const ocl::DeviceInfo& device);
 
 // Called by gemm() before each product: applies the installed set for `kind` if it is not applied yet.
 void select_gemm_kind(ocl::Context& ctx, GemmKind kind);

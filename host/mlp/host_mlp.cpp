@@ -9,10 +9,6 @@
 #include "core/error.hpp"
 #include "gemm/host_gemm.hpp"
 
-#ifdef MIPNERF_HAVE_OPENBLAS
-#include <cblas.h>
-#endif
-
 namespace mipnerf::mlp {
 
 namespace {
@@ -27,6 +23,7 @@ inline float relu_keep_nan(float v) { return v < 0.0f ? 0.0f : v; }
 }  // namespace
 
 struct HostMlp::Worker {
+  const gemm::HostProductTable* products = nullptr;
   bool timed = false;
   HostMlpTimes times;
   std::vector<float> scratch[3];  // [block rows][widest layer] each
@@ -53,14 +50,10 @@ struct HostMlp::Worker {
     if (m == 0 || n == 0) return;
     const double flops = 2.0 * static_cast<double>(m) * n * k;
     const auto start = timed ? Clock::now() : Clock::time_point{};
-#ifdef MIPNERF_HAVE_OPENBLAS
-    cblas_sgemm(CblasRowMajor, trans_a ? CblasTrans : CblasNoTrans, trans_b ? CblasTrans : CblasNoTrans,
-                static_cast<int>(m), static_cast<int>(n), static_cast<int>(k), 1.0f, a, static_cast<int>(lda), b,
-                static_cast<int>(ldb), beta, c, static_cast<int>(ldc));
-#else
-    (void)trans_a, (void)trans_b, (void)a, (void)lda, (void)b, (void)ldb, (void)beta, (void)c, (void)ldc;
-    throw Error("host MLP: this build has no host BLAS");
-#endif
+    const gemm::HostProductShape shape{trans_a, trans_b, m, n, k};
+    products->library_for(shape).sgemm(trans_a, trans_b, static_cast<int>(m), static_cast<int>(n),
+                                       static_cast<int>(k), a, static_cast<int>(lda), b, static_cast<int>(ldb), beta,
+                                       c, static_cast<int>(ldc));
     const double seconds = timed ? std::chrono::duration<double>(Clock::now() - start).count() : 0.0;
     switch (kind) {
       case ProductKind::forward:
@@ -138,7 +131,9 @@ HostMlp::HostMlp(const MlpConfig& config, HostMlpOptions options)
   config_.validate();
   if (options_.threads == 0) options_.threads = 1;
   if (options_.target_block_rows == 0) options_.target_block_rows = 1;
+  products_ = std::make_unique<gemm::HostProductTable>(options_.libraries);
   workers_.resize(options_.threads);
+  for (auto& worker : workers_) worker.products = products_.get();
 }
 
 HostMlp::~HostMlp() = default;
@@ -150,14 +145,16 @@ size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
 namespace {
 
 // Runs work(worker, first_block, end_block) on `threads` threads over n_blocks blocks, contiguous ranges in thread
-// order (the calling thread takes the first). Rethrows the first exception after every thread has ended. Returns how
+// order (the calling thread takes the first), each thread holding the table's libraries to itself first (oneDNN's
+// OpenMP thread count is per calling thread). Rethrows the first exception after every thread has ended. Returns how
 // many threads ran (at least one, at most one per block).
 template <typename Work>
-size_t run_blocks(size_t threads, size_t n_blocks, const Work& work) {
+size_t run_blocks(size_t threads, size_t n_blocks, const gemm::HostProductTable& products, const Work& work) {
   const size_t t_count = std::max<size_t>(1, std::min(threads, n_blocks));
   std::vector<std::exception_ptr> errors(t_count);
   auto range = [&](size_t t) {
     try {
+      for (const gemm::CpuSgemmLibrary* library : products.libraries()) library->set_threads(1);
       work(t, t * n_blocks / t_count, (t + 1) * n_blocks / t_count);
     } catch (...) {
       errors[t] = std::current_exception();
@@ -213,7 +210,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
   const float* P = b.params;
   SingleThreadedBlas one_thread;
 
-  const size_t threads = run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
+  const size_t threads = run_blocks(options_.threads, n_blocks, *products_, [&](size_t t, size_t first, size_t end) {
     Worker& w = workers_[t];
     w.begin_call(timed, rays_per * spr, cols, rays_per, c.view_dependence ? c.view_branch_width : 0);
     for (size_t block = first; block < end; ++block) {
@@ -285,7 +282,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
   const float* P = b.params;
   SingleThreadedBlas one_thread;
 
-  const size_t t_count = run_blocks(options_.threads, n_blocks, [&](size_t t, size_t first, size_t end) {
+  const size_t t_count = run_blocks(options_.threads, n_blocks, *products_, [&](size_t t, size_t first, size_t end) {
     Worker& w = workers_[t];
     w.begin_call(timed, rays_per * spr, cols, rays_per, c.view_dependence ? c.view_branch_width : 0);
     w.grads.assign(layout_.total, 0.0f);

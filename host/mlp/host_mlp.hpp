@@ -21,8 +21,10 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
+#include "gemm/cpu_sgemm.hpp"
 #include "mlp/mlp_config.hpp"
 
 namespace mipnerf::mlp {
@@ -30,6 +32,9 @@ namespace mipnerf::mlp {
 struct HostMlpOptions {
   size_t target_block_rows = 256;  // rows per block ≈ this, rounded to whole rays (at least one ray)
   size_t threads = 1;              // worker threads (the device's compute units)
+  // Which CPU GEMM library runs which product (default: OpenBLAS for all; tune's per-shape choice when the device's
+  // tuning file has one). Each call holds every library to its worker thread: our threads split the rows.
+  gemm::HostProductLibraries libraries;
 };
 
 // Host addresses of one forward's buffers (mapped device buffers). Row-major, leading dimensions given.
@@ -85,6 +90,7 @@ class HostMlp {
   MlpConfig config_;
   ParameterLayout layout_;
   HostMlpOptions options_;
+  std::unique_ptr<gemm::HostProductTable> products_;
   std::vector<Worker> workers_;
 };
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "gemm/gemm_tuning.hpp"
 #include "gemm/mapped_buffers.hpp"
 
 namespace mipnerf::mlp {
@@ -11,6 +12,7 @@ namespace mipnerf::mlp {
 HostMlpOptions default_host_options(const ocl::Context& ctx) {
   HostMlpOptions o;
   o.threads = std::max<size_t>(1, ctx.device_info().compute_units);
+  o.libraries = gemm::host_product_libraries_for(ctx.device_info());  // tune's per-product choice, if any
   return o;
 }
 

@@ -19,7 +19,9 @@
 #include "ref/render.hpp"
 #include "ref/resample.hpp"
 #include "ref/sample.hpp"
+#include "gemm/cpu_sgemm.hpp"
 #include "support/gemm_backends.hpp"
+#include "support/scoped_environment.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "support/train_fixtures.hpp"
@@ -338,6 +340,21 @@ void check_step_against_reference(const std::string& variant, const std::string&
 
 TEST_CASE("graph: a chunked training step equals the CPU reference composed stage by stage") {
   check_step_against_reference("mipnerf", test::small_scene());
+}
+
+TEST_CASE("graph: the host backend's step equals the reference on every CPU GEMM library built in") {
+  // The step above runs the host MLP's products on OpenBLAS (or tune's choice); here on each library forced for
+  // every product (MIPNERF_HOST_GEMM_LIBRARY), same reference, same tolerances.
+  if (test::supported_gemm_backends(test::test_context()).size() < 2) {
+    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
+    return;
+  }
+  for (const auto& library : gemm::cpu_sgemm_libraries()) {
+    if (!library.every_shape) continue;  // libxsmm: tests/mlp checks it on the shapes it runs
+    INFO("CPU GEMM library " << library.name);
+    test::ScopedEnvironment forced("MIPNERF_HOST_GEMM_LIBRARY", library.name);
+    check_step_against_reference_on(gemm::GemmBackend::host, "mipnerf", test::small_scene(), {}, {}, false);
+  }
 }
 
 TEST_CASE("graph: with the area loss on multiscale data and two networks, still the reference") {

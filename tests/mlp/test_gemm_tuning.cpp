@@ -252,3 +252,24 @@ TEST_CASE("gemm tuning: auto_backend round-trips, and gemm_backend=auto follows 
                   .has_value());
   CHECK(warning.find("follows its rule") != std::string::npos);
 }
+
+TEST_CASE("gemm tuning: the host MLP's library per product round-trips, and a library this build lacks is dropped") {
+  ScratchCache cache;
+  auto tuning = tuning_for_this_device();
+  tuning.host_libraries = {{"forward 256x128x128", "openblas"}, {"backward_data 256x128x128", "nosuchlib"}};
+  tuning.host_libraries_measurement_json = R"({"threads": 2})";
+  const ocl::DeviceInfo& device = test::test_context().device_info();
+  gemm::save_tuning(gemm::tuning_file_path(device), tuning);
+  const auto back = gemm::read_tuning(gemm::tuning_file_path(device));
+  REQUIRE(back.has_value());
+  CHECK(back->host_libraries == tuning.host_libraries);
+  CHECK(back->host_libraries_measurement_json.find("threads") != std::string::npos);
+  // What a run takes from it: the choices it can run, never one naming a library it was not built with.
+  const gemm::HostProductLibraries choice = gemm::host_product_libraries_for(device);
+  CHECK(choice.by_product.size() == 1);
+  CHECK(choice.by_product.count("forward 256x128x128") == 1);
+  CHECK(choice.fallback == "openblas");
+  std::ofstream(cache.folder() + "/host.json")
+      << R"({"format": "mipnerf-cl gemm tuning 1", "host_libraries": {"forward 1x1x1": 3}})";
+  CHECK_THROWS_WITH_AS(gemm::read_tuning(cache.folder() + "/host.json"), doctest::Contains("forward 1x1x1"), Error);
+}

@@ -13,6 +13,9 @@
 
 #include "core/error.hpp"
 #include "gemm/clblast_check.hpp"
+#include "gemm/cpu_sgemm.hpp"
+#include "mlp/host_mlp.hpp"
+#include "mlp/mlp_products.hpp"
 #include "mlp/network.hpp"
 #include "mlp_checks.hpp"
 #include "ref/mlp.hpp"
@@ -176,6 +179,14 @@ class GemmRoutineOverride {
   std::unordered_map<std::string, size_t> saved_;
 };
 
+// Host MLP options with these block rows and threads, the rest (the library choice: OpenBLAS) by default.
+mlp::HostMlpOptions host_options(size_t target_block_rows, size_t threads) {
+  mlp::HostMlpOptions options;
+  options.target_block_rows = target_block_rows;
+  options.threads = threads;
+  return options;
+}
+
 }  // namespace
 
 TEST_CASE("mlp device: small network with view dependence matches the reference") {
@@ -212,14 +223,51 @@ TEST_CASE("mlp device: the host path's blocks and threads do not change what it 
   for (const auto& rows_threads : {std::pair<size_t, size_t>{1, 3}, {20, 2}, {40, 7}}) {
     const size_t rows = rows_threads.first, threads = rows_threads.second;  // INFO cannot capture a structured binding
     INFO("target_block_rows " << rows << ", threads " << threads);
-    const mlp::HostMlpOptions options{rows, threads};
+    const mlp::HostMlpOptions options = host_options(rows, threads);
     check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 106, &options);
     check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(false), 4, 7, 3, 107, &options);
   }
   mlp::MlpConfig paper;
   paper.seed = 8;
-  const mlp::HostMlpOptions one_ray_per_block{1, 2};
+  const mlp::HostMlpOptions one_ray_per_block = host_options(1, 2);
   check_against_reference_on(gemm::GemmBackend::host, paper, 3, 16, 8, 108, &one_ray_per_block);
+}
+
+TEST_CASE("mlp device: the host path on every CPU GEMM library built in matches the reference") {
+  // Each library for every product (libxsmm, which cannot run backward-data products, for all the others), two
+  // threads on blocks of a few rays, the small networks and the paper's.
+  const auto backends = test::supported_gemm_backends(test::test_context());
+  if (backends.size() < 2) {
+    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
+    return;
+  }
+  mlp::MlpConfig paper;
+  paper.seed = 9;
+  for (const auto& library : gemm::cpu_sgemm_libraries()) {
+    INFO("CPU GEMM library " << library.name);
+    for (const size_t block_rows : {size_t{20}, size_t{256}}) {
+      mlp::HostMlpOptions options = host_options(block_rows, 2);
+      if (library.every_shape) {
+        options.libraries.fallback = library.name;
+      } else {
+        // By label, as tune stores it: every product of the passes below that the library can run. The blocks are
+        // whole rays (block_rows / samples rays each, the last one ragged), so list the labels of each block size.
+        for (const auto* config : {&paper}) {
+          for (size_t rows = 1; rows <= 256; ++rows) {
+            for (const auto& p : mlp::mlp_gemm_problems(*config, rows)) {
+              if (p.shape.transpose_b) continue;
+              const gemm::HostProductShape shape{p.shape.transpose_a, false, p.shape.m, p.shape.n, p.shape.k};
+              options.libraries.by_product[gemm::host_product_label(shape)] = library.name;
+            }
+          }
+        }
+      }
+      check_against_reference_on(gemm::GemmBackend::host, paper, 3, 16, 8, 109, &options);
+      if (library.every_shape) {
+        check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 110, &options);
+      }
+    }
+  }
 }
 
 TEST_CASE("mlp device: zero_grad clears, and a repeated backward accumulates exactly twice") {
