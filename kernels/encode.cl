@@ -29,12 +29,22 @@
 #ifndef MIPNERF_ENCODE_CL
 #define MIPNERF_ENCODE_CL
 
+// exp(−½·4^l·σ²), the IPE attenuation of degree l (scale = 2^l). Where it is below exp(−87) ≈ 1.6e−38 (about
+// FLT_MIN, so a denormal or 0) it is 0: the features it scales are then within 1.6e−38 of it anyway, and exp's
+// arguments stay ≥ −87. Why: at high degrees most attenuations underflow, and on PoCL's CPU device the exp of such
+// arguments and the denormal products after it made the fused kernel ~2.5x slower than with them cut off
+// (bench/results/kernel_runtimes.md).
+inline float3 attenuation(float3 var, float scale) {
+  const float3 exponent = -0.5f * (var * (scale * scale));
+  return select(exp(fmax(exponent, -87.0f)), (float3)(0.0f), isless(exponent, (float3)(-87.0f)));
+}
+
 // Writes degree `degree`'s 3 sines at sin_out[0..2] and 3 cosines at cos_out[0..2] for mean μ, variance σ².
 // sincos has the same 4-ulp bound as sin and cos.
 inline void encode_degree(float3 mean, float3 var, int degree, __global float* sin_out, __global float* cos_out) {
   const float scale = ldexp(1.0f, degree);  // 2^l, exact
   const float3 y = mean * scale;            // exact: a power-of-two scaling
-  const float3 atten = exp(-0.5f * (var * (scale * scale)));
+  const float3 atten = attenuation(var, scale);
 #ifdef MIPNERF_SEPARATE_SIN_COS
   // Only in the oclgrind runs (tests/oclgrind): its uninitialised-value check cannot follow sincos's private
   // pointer ("Work item needed to access private memory"). sin and cos have the same 4-ulp bound.
@@ -85,9 +95,50 @@ __kernel void pe_fwd(__global const float* x, __global float* features, const ui
 // loops over the degrees (on PoCL's CPU device 2x faster than the alternative, which defeats its vectoriser);
 // 0 = one item per (row, degree), each recomputing its row's Gaussian (a few flops against three sincos) for
 // more, independent items with neighbouring writes (GPUs). The host picks it per device class (ops/encode.cpp).
+//
+// Tunable IPE_SINCOS_EVERY = K (per-row items only): one sincos every K degrees, the K − 1 degrees after it by
+// the double-angle identities, as the complex square z' = z² of z = cos + i·sin:
+//   sin(2y) = 2·sin(y)·cos(y),  cos(2y) = (cos(y) − sin(y))·(cos(y) + sin(y)).
+// Error bound (tests/ops/test_encode.cpp checks it against long double, host mirror ref::encode_degrees too):
+// let E_j be the Euclidean error of the computed (cos, sin) j doublings after a sincos. The sincos is within 4 ulp
+// per component, so E_0 ≤ 8u·|z| = 8u (u = 2⁻²⁴; 4 ulp of x ≤ 4·2⁻²³·|x|). Squaring doubles an error to first
+// order (|d(z²)| = 2|z||dz|) and its rounding adds at most 3u (c − s, c + s and their product: 3 roundings of a
+// value ≤ 1; 2·s·c: one), so E_j ≤ 2^j·8u + (2^j − 1)·3u < 2^j·11u: for K = 4 (j ≤ 3) 88u ≈ 5.2e−6 absolute per
+// feature (times its attenuation ≤ 1), against 4 ulp for a sincos per degree. The attenuations keep one exp per
+// degree (repeated squaring would grow their relative error 4x per degree).
+// K = 1 is a sincos per degree, bit for bit the features of the per-(row, degree) items.
 #ifndef GAUSSIAN_IPE_PER_ROW
 #define GAUSSIAN_IPE_PER_ROW 1
 #endif
+#ifndef IPE_SINCOS_EVERY
+#define IPE_SINCOS_EVERY 1
+#endif
+
+// Degrees l_begin..l_end−1 of one row (indices from min_deg), a sincos every IPE_SINCOS_EVERY degrees.
+inline void encode_degrees(float3 mean, float3 var, int min_deg, uint l_begin, uint l_end, uint n_degrees,
+                           __global float* out) {
+  float3 s = (float3)(0.0f), c = (float3)(1.0f);
+  for (uint l = l_begin; l < l_end; ++l) {
+    const int degree = min_deg + (int)l;
+    const float scale = ldexp(1.0f, degree);  // 2^l, exact
+    if ((l - l_begin) % IPE_SINCOS_EVERY == 0) {
+#ifdef MIPNERF_SEPARATE_SIN_COS
+      c = cos(mean * scale);
+      s = sin(mean * scale);
+#else
+      s = sincos(mean * scale, &c);  // exact argument: a power-of-two scaling
+#endif
+    } else {
+      const float3 doubled_sin = 2.0f * (s * c);
+      c = (c - s) * (c + s);
+      s = doubled_sin;
+    }
+    const float3 atten = attenuation(var, scale);
+    vstore3(atten * s, 0, out + 3 * l);
+    vstore3(atten * c, 0, out + 3 * (n_degrees + l));
+  }
+}
+
 __kernel void gaussian_ipe_fwd(__global const float* origins, __global const float* directions,
                                __global const float* radii, __global const float* t_edges,
                                __global float* features, const uint n_rays, const uint n_samples,
@@ -105,10 +156,7 @@ __kernel void gaussian_ipe_fwd(__global const float* origins, __global const flo
 #endif
   float3 mean, cov;
   row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
-  __global float* out = features + row * 6 * n_degrees;
-  for (uint l = l_begin; l < l_end; ++l) {
-    encode_degree(mean, cov, min_deg + (int)l, out + 3 * l, out + 3 * (n_degrees + l));
-  }
+  encode_degrees(mean, cov, min_deg, l_begin, l_end, n_degrees, features + row * 6 * n_degrees);
 }
 
 #ifdef MIPNERF_CONCAT_PE

@@ -1,6 +1,8 @@
 // Host wrapper of kernels/encode.cl.
 #include "ops/encode.hpp"
 
+#include <cstdlib>
+
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
 
@@ -26,11 +28,35 @@ bool choose_fused_per_row(const ocl::Context& ctx, const EncodeTuning& tuning) {
   }
 }
 
+// A sincos every K degrees (IPE_SINCOS_EVERY; its error bound in encode.cl): K = 4 on CPUs, where the sincos of
+// every degree was ~70 % of the fused kernel (bench/results/kernel_runtimes.md measures K = 1 and 4 on PoCL and
+// Intel's runtime); 1 elsewhere, where nothing has measured it. Only per-row items can double.
+int choose_sincos_every(const ocl::Context& ctx, const EncodeTuning& tuning, bool per_row) {
+  if (!per_row) return 1;
+  if (tuning.sincos_every > 0) return tuning.sincos_every;
+  if (const char* forced = std::getenv("MIPNERF_IPE_SINCOS_EVERY")) {
+    const int k = std::atoi(forced);
+    if (k < 1 || k > 8) {
+      throw Error(std::string("MIPNERF_IPE_SINCOS_EVERY='") + forced + "' is not 1 to 8 (degrees per sincos)");
+    }
+    return k;
+  }
+  return (ctx.device_info().type & CL_DEVICE_TYPE_CPU) != 0 ? 4 : 1;
+}
+
 }  // namespace
 
 Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning)
-    : ctx_(&ctx), gaussian_options_(options), fused_per_row_(choose_fused_per_row(ctx, tuning)) {
-  auto build_options = gaussian_build_options(options).define("GAUSSIAN_IPE_PER_ROW", fused_per_row_ ? 1 : 0);
+    : ctx_(&ctx),
+      gaussian_options_(options),
+      fused_per_row_(choose_fused_per_row(ctx, tuning)),
+      sincos_every_(choose_sincos_every(ctx, tuning, fused_per_row_)) {
+  if (sincos_every_ < 1 || sincos_every_ > 8) {
+    throw Error("Encode: sincos_every = " + std::to_string(sincos_every_) + " is not 1 to 8 (degrees per sincos)");
+  }
+  auto build_options = gaussian_build_options(options)
+                           .define("GAUSSIAN_IPE_PER_ROW", fused_per_row_ ? 1 : 0)
+                           .define("IPE_SINCOS_EVERY", sincos_every_);
   if (tuning.concat_pe) build_options.define("MIPNERF_CONCAT_PE", 1);
   auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"}, build_options);
   ipe_ = &program.kernel("ipe_fwd");

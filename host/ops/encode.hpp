@@ -28,6 +28,10 @@ struct PeInputs {
 struct EncodeTuning {
   enum class FusedItems { device_default, per_row, per_row_and_degree };
   FusedItems fused_items = FusedItems::device_default;  // default: per row on CPUs, per (row, degree) elsewhere
+  // gaussian_ipe_fwd's per-row items: one sincos every this many degrees, the others by angle doubling
+  // (IPE_SINCOS_EVERY of encode.cl, with its error bound). 0: the device's default (encode.cpp); 1: a sincos per
+  // degree. MIPNERF_IPE_SINCOS_EVERY=K overrides the default (benchmarks).
+  int sincos_every = 0;
   // Build the concatenated-PE kernel (MIPNERF_CONCAT_PE) into the program: only a scene that uses it pays for its
   // compilation; without it the program is the one every other scene builds.
   bool concat_pe = false;
@@ -39,6 +43,7 @@ class Encode {
  public:
   Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning = {});
   bool fused_per_row() const { return fused_per_row_; }
+  int sincos_every() const { return sincos_every_; }
 
   // Enqueues ipe_fwd: features [rows][options.ipe_width()].
   void ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features);
@@ -54,6 +59,7 @@ class Encode {
   ocl::Context* ctx_;
   GaussianOptions gaussian_options_;
   bool fused_per_row_;
+  int sincos_every_;
   ::cl::Kernel* ipe_;
   ::cl::Kernel* pe_;
   ::cl::Kernel* gaussian_ipe_;

@@ -25,6 +25,42 @@ void ipe_pair(T mean, T var, int degree, T& sin_feature, T& cos_feature) {
   cos_feature = atten * cos(y);
 }
 
+// Mirror of encode.cl's encode_degrees (gaussian_ipe_fwd's per-row items) for one coordinate: degrees
+// min_deg..min_deg+n−1 into sin_features[l], cos_features[l], a sin/cos every `sincos_every` degrees and the others
+// by the double-angle identities, in the kernel's order of operations. In double it is the exact features to
+// ~1e-15; in float (T = float, std::sin/cos of the same argument) it shows the doubling's own error, which tests
+// hold to the bound derived in encode.cl: < 2^j·11u per feature, j doublings after a sin/cos.
+template <typename T>
+void encode_degrees(T mean, T var, int min_deg, int n, int sincos_every, T* sin_features, T* cos_features) {
+  using std::cos;
+  using std::exp;
+  using std::ldexp;
+  using std::sin;
+  T s = 0, c = 1;
+  for (int l = 0; l < n; ++l) {
+    const int degree = min_deg + l;
+    const T scale = ldexp(T(1), degree);
+    if (l % sincos_every == 0) {
+      s = sin(mean * scale);
+      c = cos(mean * scale);
+    } else {
+      const T doubled_sin = T(2) * (s * c);
+      c = (c - s) * (c + s);
+      s = doubled_sin;
+    }
+    const T atten = exp(T(-0.5) * (var * (scale * scale)));
+    sin_features[l] = atten * s;
+    cos_features[l] = atten * c;
+  }
+}
+
+// The bound of encode.cl on one feature computed j doublings after a sin/cos within 4 ulp, in units of the
+// feature's attenuation: 2^j·8u + (2^j − 1)·3u (u = 2⁻²⁴), 0 doublings: 8u (the sin/cos's 4 ulp, absolute).
+inline double doubling_error_bound(int doublings) {
+  const double u = std::ldexp(1.0, -24), growth = std::ldexp(1.0, doublings);
+  return growth * 8 * u + (growth - 1) * 3 * u;
+}
+
 // Mirror of ipe_fwd: ipe_features [rows][6L] from means, covs [rows][3] (sines then cosines, index l·3 + axis).
 void ipe_fwd(const EncodingOptions& options, const std::vector<double>& means, const std::vector<double>& covs,
              std::vector<double>& features, size_t n_rows);

@@ -42,6 +42,15 @@ std::vector<float> run_pe(const EncodingOptions& options, const std::vector<floa
 // twice that. The absolute floor 1e-37 covers attenuations that underflow (or flush) to 0 near FLT_MIN.
 double feature_tolerance(double reference) { return 32 * kUnitRoundoff * std::abs(reference) + 1e-37; }
 
+// The fused kernel's work spread per row with a sincos every `sincos_every` degrees (1: a sincos per degree, the
+// features of ipe_fwd bit for bit).
+ops::EncodeTuning per_row_every(int sincos_every) {
+  ops::EncodeTuning tuning;
+  tuning.fused_items = ops::EncodeTuning::FusedItems::per_row;
+  tuning.sincos_every = sincos_every;
+  return tuning;
+}
+
 }  // namespace
 
 TEST_CASE("encode: IPE matches the CPU reference on 10,000 rows over degrees 0-15") {
@@ -240,7 +249,7 @@ TEST_CASE("encode: zero radius, axis-aligned and zero directions - IPE is PE of 
     INFO("ray shape " << static_cast<int>(shape));
     ocl::DeviceArray<float> means(ctx, 3 * rows, "means"), covs(ctx, 3 * rows, "covs");
     ops::Gaussian(ctx, {shape}).fwd(in, {means, covs});
-    ops::Encode encode(ctx, {shape});
+    ops::Encode encode(ctx, {shape}, per_row_every(1));  // bit for bit needs a sincos per degree (see below for K > 1)
     auto fused = test::filled(ctx, rows * 96, 7.0f, "fused"), separate = test::filled(ctx, rows * 96, 7.0f, "ipe");
     auto pe = test::filled(ctx, rows * 96, 7.0f, "pe of the means");
     encode.gaussian_ipe(options, in, fused);
@@ -315,13 +324,16 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
     ocl::DeviceArray<float> separate(ctx, rows * 96, "separate"), fused(ctx, rows * 96, "fused");
     const ops::GaussianInputs in{rays, t, n_rays, n_samples};
     ops::Gaussian(ctx, {shape}).fwd(in, {means, covs});
-    ops::Encode encode(ctx, {shape});
+    ops::Encode encode(ctx, {shape}, per_row_every(1));
     encode.ipe(options, {means, covs, rows}, separate);
     encode.gaussian_ipe(options, in, fused);
     // The same inline functions with contraction off (gaussian.cl): bit-identical, with either spread of the work.
     CHECK(fused.download(ctx) == separate.download(ctx));
     for (auto items : {ops::EncodeTuning::FusedItems::per_row, ops::EncodeTuning::FusedItems::per_row_and_degree}) {
-      ops::Encode tuned(ctx, {shape}, {items});
+      ops::EncodeTuning tuning;
+      tuning.fused_items = items;
+      tuning.sincos_every = 1;
+      ops::Encode tuned(ctx, {shape}, tuning);
       CHECK(tuned.fused_per_row() == (items == ops::EncodeTuning::FusedItems::per_row));
       auto other = test::filled(ctx, rows * 96, 7.0f, "fused (tuned)");
       tuned.gaussian_ipe(options, in, other);
@@ -338,14 +350,113 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
     std::vector<double> means_ref, covs_ref;
     ref::gaussian_fwd({shape}, test::to_double(origins), test::to_double(directions), test::to_double(radii),
                       test::to_double(t_edges), means_ref, covs_ref, n_rays, n_samples);
-    MIPNERF_CHECK_CLOSE("gaussian_ipe features", fused_values, features, [&](size_t i) {
-      const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
-      const double scale = std::ldexp(1.0, static_cast<int>(l));
-      const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
-                              12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
-      const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
-      const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
-      return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err);
-    });
+    // With a sincos every K degrees (K = 1 here) the doubling's own bound adds atten·(2^j·8u + (2^j − 1)·3u), j
+    // doublings since the last sincos (encode.cl); K = 1 never doubles.
+    auto tolerance = [&](int sincos_every) {
+      return [&, sincos_every](size_t i) {
+        const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
+        const double scale = std::ldexp(1.0, static_cast<int>(l));
+        const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
+                                12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
+        const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
+        const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
+        const int doublings = static_cast<int>(l) % sincos_every;
+        const double doubling = doublings > 0 ? atten * ref::doubling_error_bound(doublings) : 0.0;
+        return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err) + doubling;
+      };
+    };
+    MIPNERF_CHECK_CLOSE("gaussian_ipe features", fused_values, features, tolerance(1));
+    // Angle doubling (IPE_SINCOS_EVERY = K): the same reference, the derived bound added, never more.
+    for (const int k : {2, 4, 8}) {
+      INFO("a sincos every " << k << " degrees");
+      ops::Encode doubling(ctx, {shape}, per_row_every(k));
+      REQUIRE(doubling.sincos_every() == k);
+      auto doubled = test::filled(ctx, rows * 96, 7.0f, "fused (doubling)");
+      doubling.gaussian_ipe(options, in, doubled);
+      const auto doubled_values = doubled.download(ctx);
+      MIPNERF_CHECK_CLOSE("gaussian_ipe features by angle doubling", doubled_values, features, tolerance(k));
+      size_t differ = 0;  // and it is a different computation: some features are not those of a sincos per degree
+      for (size_t i = 0; i < doubled_values.size(); ++i) differ += doubled_values[i] != fused_values[i];
+      CHECK(differ > 0);
+    }
+  }
+}
+
+TEST_CASE("encode: angle doubling in float stays within its derived bound against long double (host mirror)") {
+  // ref::encode_degrees<float> is the kernel's recurrence in float with glibc's sinf/cosf (< 1 ulp, inside the
+  // 4 ulp the bound assumes); |y| up to 2^15·100, every degree of the paper's L = 16, K = 2, 4, 8.
+  std::mt19937 rng(28);
+  std::uniform_real_distribution<double> magnitude(-2.0, 2.0);
+  for (const int k : {2, 4, 8}) {
+    double worst_ratio = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const float mean = static_cast<float>((i % 2 ? 1 : -1) * std::pow(10.0, magnitude(rng)));
+      float s[16], c[16];
+      ref::encode_degrees<float>(mean, 0.0f, 0, 16, k, s, c);
+      for (int l = 0; l < 16; ++l) {
+        long double want_s, want_c;
+        ref::ipe_pair<long double>(mean, 0.0L, l, want_s, want_c);
+        const double bound = ref::doubling_error_bound(l % k);
+        const double error = static_cast<double>(std::max(std::abs(s[l] - want_s), std::abs(c[l] - want_c)));
+        REQUIRE(std::isfinite(error));
+        worst_ratio = std::max(worst_ratio, error / bound);
+      }
+    }
+    INFO("K = " << k << ": worst error " << worst_ratio << " of the bound");
+    if (std::getenv("MIPNERF_TEST_VERBOSE")) MESSAGE("K = " << k << ": worst error " << worst_ratio << " of the bound");
+    CHECK(worst_ratio <= 1.0);
+    CHECK(worst_ratio > 0.05);  // the bound is not vacuous: errors come within a factor 20 of it
+  }
+}
+
+TEST_CASE("encode: the fused kernel's angle doubling at large arguments (up to 2^15 x 100) against long double") {
+  // Rays along +x with radius 0: the y and z coordinates of every sample are the origin's exactly and their
+  // variance is 0, so those features are bare sin/cos of 2^l·o: the kernel's doubling against long double, for the
+  // device's own choice of K and for K = 4.
+  auto& ctx = test::test_context();
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> magnitude(-2.0, 2.0);
+  const size_t n_rays = 2000, n_samples = 2;
+  std::vector<float> origins, directions, radii(n_rays, 0.0f), t_edges;
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    origins.push_back(0.5f);
+    for (int a = 0; a < 2; ++a) {
+      origins.push_back(static_cast<float>((ray % 2 ? 1 : -1) * std::pow(10.0, magnitude(rng))));
+    }
+    directions.insert(directions.end(), {1.0f, 0.0f, 0.0f});
+    t_edges.insert(t_edges.end(), {1.0f, 1.5f, 2.0f});
+  }
+  ops::RayBundle rays(ctx, n_rays);
+  rays.origins.upload(ctx, origins);
+  rays.directions.upload(ctx, directions);
+  rays.radii.upload(ctx, radii);
+  auto t = test::upload(ctx, t_edges, "t_edges");
+  const ops::GaussianInputs in{rays, t, n_rays, n_samples};
+  const EncodingOptions options;
+  ops::Encode device_default(ctx, {RayShape::cone});
+  for (const int k : {device_default.sincos_every(), 4}) {
+    INFO("a sincos every " << k << " degrees");
+    ops::Encode encode(ctx, {RayShape::cone}, per_row_every(k));
+    auto features = test::filled(ctx, n_rays * n_samples * 96, 7.0f, "features");
+    encode.gaussian_ipe(options, in, features);
+    const auto got = features.download(ctx);
+    size_t failures = 0;
+    double worst_ratio = 0;
+    for (size_t row = 0; row < n_rays * n_samples; ++row) {
+      for (int a = 1; a < 3; ++a) {
+        const float o = origins[3 * (row / n_samples) + a];
+        for (int l = 0; l < 16; ++l) {
+          long double want_s, want_c;
+          ref::ipe_pair<long double>(o, 0.0L, l, want_s, want_c);
+          const double error = static_cast<double>(std::max(std::abs(got[row * 96 + 3 * l + a] - want_s),
+                                                            std::abs(got[row * 96 + 48 + 3 * l + a] - want_c)));
+          const double bound = ref::doubling_error_bound(l % k);
+          worst_ratio = std::max(worst_ratio, error / bound);
+          failures += !(error <= bound);
+        }
+      }
+    }
+    INFO("worst error " << worst_ratio << " of the bound");
+    CHECK(failures == 0);
   }
 }
