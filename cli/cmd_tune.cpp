@@ -51,6 +51,8 @@ struct TuneArgs {
   std::string output;       // default: the per-device file
   bool if_missing = false;  // do nothing when the per-device file already exists (quick start re-runs)
   bool host_gemm_only = false;  // only the host step: the CPU GEMM library per product (tune_host_libraries.hpp)
+  std::vector<std::string> host_gemm_presets{"tiny", "quick", "small", "paper"};  // whose networks' products
+  int host_gemm_rounds = 5;  // timed batches per product and library (the median decides)
 };
 
 struct StepArgs {
@@ -296,12 +298,20 @@ void measure_backends(const ocl::DeviceInfo& device, const std::string& path, co
 }
 
 void run_tune(const TuneArgs& args) {
-  check_args(args);
+  if (!args.host_gemm_only) check_args(args);  // CLBlast's constraints; the host step times any width
   const auto devices = ocl::list_devices();
   const ocl::DeviceInfo device = ocl::choose_device(devices, global_options().device);
   const std::string path = args.output.empty() ? gemm::tuning_file_path(device) : args.output;
   if (args.host_gemm_only) {
-    tune_host_libraries(device, path, tuned_network(args));
+    if (args.if_missing) {
+      const std::optional<gemm::GemmTuning> existing = gemm::read_tuning(path);
+      if (existing && gemm::tuning_matches(*existing, device) && !existing->host_libraries.empty()) {
+        std::cerr << "mipnerf-cl: tune: " << path << " already chooses the host MLP's libraries; nothing to do "
+                  << "(--if-missing)\n";
+        return;
+      }
+    }
+    tune_host_libraries(device, path, tuned_network(args), args.host_gemm_presets, args.host_gemm_rounds);
     return;
   }
   if (args.if_missing && std::filesystem::exists(path)) {
@@ -336,7 +346,7 @@ void run_tune(const TuneArgs& args) {
   print_summary(tuner, device, settings.rows);
   if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + path);
   measure_backends(device, path, args);
-  tune_host_libraries(device, path, tuned_network(args));
+  tune_host_libraries(device, path, tuned_network(args), args.host_gemm_presets, args.host_gemm_rounds);
 }
 
 }  // namespace
@@ -363,6 +373,13 @@ void register_tune(CLI::App& app) {
   cmd->add_flag("--host-gemm", args->host_gemm_only,
                 "Only choose the CPU GEMM library (OpenBLAS, BLIS, oneDNN, libxsmm: those built in) for each of the "
                 "host MLP's products on this CPU device, by timing them (about a minute; no CLBlast search)");
+  cmd->add_option("--host-gemm-presets", args->host_gemm_presets,
+                  "Presets whose networks' products the host step times (besides the network of --width etc.)")
+      ->capture_default_str();
+  cmd->add_option("--host-gemm-rounds", args->host_gemm_rounds,
+                  "Timed batches per product and library in the host step; the median decides")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
   cmd->callback([args] { run_tune(*args); });
 
   // The child side: one step, started by `tune` itself (hidden from --help).

@@ -32,10 +32,11 @@ void add_products(std::map<std::string, gemm::HostProductShape>& shapes, const m
   }
 }
 
-std::map<std::string, gemm::HostProductShape> products_to_time(const mlp::MlpConfig& flags_network) {
+std::map<std::string, gemm::HostProductShape> products_to_time(const mlp::MlpConfig& flags_network,
+                                                                const std::vector<std::string>& presets) {
   std::map<std::string, gemm::HostProductShape> shapes;
   add_products(shapes, flags_network, 64);
-  for (const auto& [preset, bundle] : train::presets()) {
+  for (const auto& preset : presets) {
     const train::TrainConfig config = train::resolve_config(preset, "mipnerf", {});
     const graph::GraphSpec spec = train::make_graph_spec(config, false);
     add_products(shapes, spec.mlps.front(), static_cast<size_t>(config.num_samples));
@@ -55,7 +56,8 @@ gemm::GemmTuning tuning_to_update(const ocl::DeviceInfo& device, const std::stri
 
 }  // namespace
 
-void tune_host_libraries(const ocl::DeviceInfo& device, const std::string& path, const mlp::MlpConfig& flags_network) {
+void tune_host_libraries(const ocl::DeviceInfo& device, const std::string& path, const mlp::MlpConfig& flags_network,
+                         const std::vector<std::string>& presets, int rounds) {
   try {
     gemm::resolve_gemm_backend(gemm::GemmBackend::host, device, gemm::host_blas_available());
   } catch (const Error& e) {
@@ -66,7 +68,8 @@ void tune_host_libraries(const ocl::DeviceInfo& device, const std::string& path,
   for (const auto& line : gemm::cpu_sgemm_libraries_left_out()) std::cerr << "mipnerf-cl: tune: " << line << "\n";
   gemm::HostProductTimingSettings settings;
   settings.threads = static_cast<int>(std::max<cl_uint>(1, device.compute_units));
-  const auto shapes = products_to_time(flags_network);
+  settings.rounds = rounds;
+  const auto shapes = products_to_time(flags_network, presets);
   std::cerr << "mipnerf-cl: tune: the host MLP's products, " << shapes.size() << " shapes x " << libraries.size()
             << " libraries, " << settings.threads << " threads each on its own block (GFLOP/s, median of "
             << settings.rounds << "):\n";

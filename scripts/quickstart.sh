@@ -13,6 +13,9 @@ runs="${RUNS_DIR:-runs}"
 # Where CLBlast runs the MLP (GPUs, or gemm_backend=clblast) its default GEMM parameters are slow: a short,
 # time-boxed tune once per device is worth it. On a CPU device using the host BLAS (auto) it says so and skips.
 "$build_dir/mipnerf-cl" tune --minutes 4 --if-missing
+# On a CPU device the host MLP can run each product on OpenBLAS, BLIS, oneDNN or libxsmm: about a minute, once per
+# device, times them on the presets' products and keeps the fastest per product (docs/training.md).
+"$build_dir/mipnerf-cl" tune --host-gemm --if-missing
 "$build_dir/mipnerf-cl" train --data "$runs/scene" --out "$runs/quick" --preset quick --resume
 "$build_dir/mipnerf-cl" render --checkpoint "$runs/quick" --path orbit --frames 24 --format both
 echo "quickstart: val renders in $runs/quick/val, the orbit in $runs/quick/render_orbit, figures in $runs/quick/summary.json"

@@ -347,7 +347,27 @@ mipnerf_add_checked_test("cli: tune --if-missing skips where the host BLAS runs 
 mipnerf_add_checked_test("cli: tune records which backend gemm_backend=auto takes" EXPECT "gemm_backend=auto on this device: (host|clblast) \\(whole network, 1024 rows, forward \\+ backward: clblast [0-9.]+ s"
   COMMAND ${CMAKE_COMMAND} -E env
   "XDG_CACHE_HOME=${CMAKE_CURRENT_BINARY_DIR}/cli-tune-cache" $<TARGET_FILE:mipnerf-cl> tune --minutes 0.2 --rows 1024
-  --kernel-rows 128 --width 128 --input-width 72 --view-branch-width 64 --output "${CMAKE_CURRENT_BINARY_DIR}/cli-tune-cache/t.json")
+  --kernel-rows 128 --width 128 --input-width 72 --view-branch-width 64 --output "${CMAKE_CURRENT_BINARY_DIR}/cli-tune-cache/t.json"
+  --host-gemm-presets tiny --host-gemm-rounds 1)
+
+# tune --host-gemm: the CPU GEMM library per product of the host MLP (every library built in, timed and checked),
+# into the device's file; then --if-missing leaves a file that has the choice alone.
+add_test(NAME "cli: tune --host-gemm: clear the cache" COMMAND ${CMAKE_COMMAND} -E rm -rf
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-tune-host-cache")
+set_tests_properties("cli: tune --host-gemm: clear the cache" PROPERTIES FIXTURES_SETUP cli_tune_host_clean)
+mipnerf_add_checked_test("cli: tune --host-gemm chooses a CPU GEMM library per product of the host MLP"
+  EXPECT "forward 256x64x60 +openblas [0-9]+ .*-> (openblas|blis|onednn|libxsmm)\n.*library per product is in .*cli-tune-host-cache"
+  COMMAND ${CMAKE_COMMAND} -E env "XDG_CACHE_HOME=${CMAKE_CURRENT_BINARY_DIR}/cli-tune-host-cache"
+  $<TARGET_FILE:mipnerf-cl> tune --host-gemm --width 64 --input-width 60 --view-branch-width 32
+  --host-gemm-presets tiny --host-gemm-rounds 1)
+set_tests_properties("cli: tune --host-gemm chooses a CPU GEMM library per product of the host MLP"
+  PROPERTIES FIXTURES_REQUIRED cli_tune_host_clean FIXTURES_SETUP cli_tune_host)
+mipnerf_add_checked_test("cli: tune --host-gemm --if-missing keeps a file that has the choice"
+  EXPECT "already chooses the host MLP's libraries; nothing to do"
+  COMMAND ${CMAKE_COMMAND} -E env "XDG_CACHE_HOME=${CMAKE_CURRENT_BINARY_DIR}/cli-tune-host-cache"
+  $<TARGET_FILE:mipnerf-cl> tune --host-gemm --if-missing)
+set_tests_properties("cli: tune --host-gemm --if-missing keeps a file that has the choice"
+  PROPERTIES FIXTURES_REQUIRED cli_tune_host)
 
 # Val scores during training and their curves: train --set val_every writes val_log.csv, plot draws it as SVG and PNG.
 add_test(NAME "cli: train with val_every: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf
