@@ -12,9 +12,11 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <thread>
 
 #include "bench/gemm_bench.hpp"
 #include "bench/kernel_bench.hpp"
+#include "bench/machine_probe.hpp"
 #include "bench/preset_bench.hpp"
 #include "bench/report.hpp"
 #include "core/error.hpp"
@@ -287,6 +289,13 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   run.command = command_line(cmd);
   run.quick = a.quick;
   run.host = bench::host_record();
+  {
+    bench::MachineProbeSettings probe;  // a few seconds: the limits the stage profile's rates are held against
+    probe.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    std::cerr << "mipnerf-cl: bench: probing the machine's limits (FMA peak, memory bandwidth, a large sgemm)\n";
+    run.machine = bench::probe_machine(probe);
+    std::cerr << "mipnerf-cl: bench: " << bench::machine_summary(run.machine) << "\n";
+  }
   run.presets.warm_steps = a.steps;
   run.presets.paper_warm_steps = a.paper_steps;
   run.presets.time_box_seconds = a.time_box;

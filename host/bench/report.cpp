@@ -1,6 +1,7 @@
 // bench.json and bench.md of `mipnerf-cl bench` (see report.hpp).
 #include "bench/report.hpp"
 
+#include "bench/machine_probe.hpp"
 #include "bench/stage_report.hpp"
 
 #include <cmath>
@@ -284,12 +285,12 @@ std::string training_markdown(const DeviceBench& d, const PresetBenchSettings& s
   return md.str();
 }
 
-std::string profile_markdown(const DeviceBench& d) {
+std::string profile_markdown(const DeviceBench& d, const io::Json& machine) {
   std::ostringstream md;
   for (const auto& p : d.presets) {
     if (!p.train.profile) continue;
     md << "#### Where a " << p.preset << " step's time goes\n\n"
-       << stage_profile_markdown(*p.train.profile, p.train.batch_rays) << "\n";
+       << stage_profile_markdown(*p.train.profile, p.train.batch_rays, machine) << "\n";
   }
   const std::string tables = md.str();
   if (tables.empty()) return "";
@@ -327,7 +328,7 @@ std::string device_markdown(const DeviceBench& d, const BenchRun& run) {
   md << gemm_markdown(d);
   if (d.kernels) md << kernels_markdown(*d.kernels);
   if (!d.presets.empty())
-    md << training_markdown(d, run.presets) << profile_markdown(d) << render_markdown(d, run.presets);
+    md << training_markdown(d, run.presets) << profile_markdown(d, run.machine) << render_markdown(d, run.presets);
   if (!d.errors.empty()) {
     md << "### Sections that failed\n\n";
     for (const auto& [section, message] : d.errors) md << "- " << section << ": " << message << "\n";
@@ -358,6 +359,7 @@ Ordered bench_json(const BenchRun& run) {
   j["seconds"] = run.seconds;
   j["quick"] = run.quick;
   j["host"] = run.host;
+  j["machine"] = run.machine;
   if (!run.host_at_end.empty()) j["host_at_end"] = run.host_at_end;
   j["definitions"] = {
       {"first_call", "the first call of a measurement in a fresh OpenCL context with CLBlast's compiled programs "
@@ -390,6 +392,8 @@ std::string bench_markdown(const BenchRun& run) {
      << " hardware threads; load average (1, 5, 15 min) at the start " << load_text(run.host);
   if (!run.host_at_end.empty()) md << ", at the end " << load_text(run.host_at_end);
   md << ". PoCL kernel cache: " << json_text(run.host, "pocl_kernel_cache") << ".\n\n";
+  const std::string machine = machine_summary(run.machine);
+  if (!machine.empty()) md << "Machine limits (probed at the start, host/bench/machine_probe.hpp): " << machine << ".\n\n";
   md << "Each section runs in a fresh OpenCL context with CLBlast's compiled programs forgotten, so \"first\" figures "
         "are what a new process pays (PoCL's disk cache aside). Figures are wall times, measured, never asserted.\n\n";
   for (const auto& d : run.devices) md << device_markdown(d, run);

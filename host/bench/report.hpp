@@ -46,6 +46,7 @@ struct BenchRun {
   bool quick = false;
   io::Json host = io::Json::object();         // host_record() when it started
   io::Json host_at_end = io::Json::object();  // host_record() when it ended (load averages), empty until then
+  io::Json machine = io::Json::object();      // probe_machine() at the start: FMA peak, triad, large sgemm
   PresetBenchSettings presets;
   std::vector<DeviceBench> devices;
   double seconds = 0.0;              // wall time of the whole run so far

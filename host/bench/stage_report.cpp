@@ -36,7 +36,7 @@ GemmLimit gemm_limit(const ocl::StageProfile& profile, size_t rays_per_step) {
   return g;
 }
 
-std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step) {
+std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step, const io::Json& machine) {
   std::vector<ocl::StageTime> stages = profile.stages;
   std::stable_sort(stages.begin(), stages.end(),
                    [](const ocl::StageTime& a, const ocl::StageTime& b) { return a.seconds > b.seconds; });
@@ -60,6 +60,16 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
      << format("%.1f", g.gemm_gflops) << " GFLOP/s); the step runs " << format("%.0f", g.rays_per_second)
      << " rays/s = " << format("%.0f", 100.0 * g.fraction()) << " % of it. Per step over " << profile.steps
      << " profiled step(s); device times from OpenCL profiling events, host products from host timers.\n";
+  const double peak = machine.contains("fma_peak_gflops")
+                          ? machine["fma_peak_gflops"].value("all_threads", io::Json::object()).value("best", 0.0)
+                          : 0.0;
+  const double sgemm = machine.contains("large_sgemm_gflops") ? machine["large_sgemm_gflops"].value("best", 0.0) : 0.0;
+  if (peak > 0 && sgemm > 0 && g.gemm_gflops > 0) {
+    md << "\nThe products' " << format("%.1f", g.gemm_gflops) << " GFLOP/s are " << format("%.0f", 100 * g.gemm_gflops / peak)
+       << " % of this machine's FMA peak (" << format("%.1f", peak) << " GFLOP/s) and "
+       << format("%.0f", 100 * g.gemm_gflops / sgemm) << " % of its large-sgemm rate (" << format("%.1f", sgemm)
+       << " GFLOP/s), both probed in this run.\n";
+  }
   return md.str();
 }
 

@@ -7,6 +7,8 @@
 // to the BLAS itself.
 #pragma once
 
+#include "io/json.hpp"
+
 #include <cstddef>
 #include <string>
 
@@ -28,7 +30,10 @@ struct GemmLimit {
 GemmLimit gemm_limit(const ocl::StageProfile& profile, size_t rays_per_step);
 
 // Stages by share of the step (largest first), then "not in a stage", then the GEMM-bound line.
-std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step);
+// With `machine` (probe_machine()), the products' rate is also given as a fraction of the machine's FMA peak and of
+// its large-sgemm rate.
+std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step,
+                                   const io::Json& machine = io::Json::object());
 
 nlohmann::ordered_json stage_profile_json(const ocl::StageProfile& profile, size_t rays_per_step);
 
