@@ -20,6 +20,7 @@
 
 #include "bench/gemm_bench.hpp"
 #include "bench/kernel_bench.hpp"
+#include "bench/machine_probe.hpp"
 #include "kernel_reference.hpp"
 #include "bench/preset_bench.hpp"
 #include "bench/report.hpp"
@@ -507,3 +508,26 @@ TEST_CASE("bench CLI: mipnerf-cl bench --quick on tiny sizes writes bench.json a
   fs::remove(log + ".err");
 }
 #endif
+
+TEST_CASE("bench: the machine probe measures the FMA peak, the triad and a large sgemm, and sums them up in a line") {
+  bench::MachineProbeSettings settings;
+  settings.threads = 2, settings.rounds = 1, settings.batch_seconds = 0.001, settings.triad_floats = 1 << 16;
+  const io::Json probe = bench::probe_machine(settings);
+  CHECK(probe.value("threads", 0) == 2);
+  const auto positive = [](const io::Json& figure) {
+    return figure.contains("skipped") || (figure.value("best", 0.0) > 0 && figure.value("median", 0.0) > 0 &&
+                                          figure.value("best", 0.0) >= figure.value("median", 0.0));
+  };
+  for (const char* part : {"fma_peak_gflops", "triad_gbs"}) {
+    INFO(part);
+    REQUIRE(probe.contains(part));
+    if (probe[part].contains("skipped")) continue;
+    CHECK(positive(probe[part]["one_thread"]));
+    CHECK(positive(probe[part]["all_threads"]));
+  }
+  CHECK(positive(probe["large_sgemm_gflops"]));
+  const std::string line = bench::machine_summary(probe);
+  CHECK(line.find("FMA peak ") == 0);
+  CHECK(line.find("(2 threads), triad ") != std::string::npos);
+  CHECK(bench::machine_summary(io::Json::object()).empty());
+}

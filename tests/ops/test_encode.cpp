@@ -416,7 +416,7 @@ TEST_CASE("encode: the fused kernel's angle doubling at large arguments (up to 2
   auto& ctx = test::test_context();
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> magnitude(-2.0, 2.0);
-  const size_t n_rays = 2000, n_samples = 2;
+  const size_t n_rays = test::batch_for_device(2000), n_samples = 2;
   std::vector<float> origins, directions, radii(n_rays, 0.0f), t_edges;
   for (size_t ray = 0; ray < n_rays; ++ray) {
     origins.push_back(0.5f);

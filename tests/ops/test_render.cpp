@@ -273,7 +273,8 @@ size_t count_outside(const std::vector<double>& a, const std::vector<double>& b,
 }  // namespace
 
 TEST_CASE("render: forward and backward match the CPU reference on 10,000 random rays, every background") {
-  const Batch b = random_batch(10000, 32, 101);
+  // (a tenth of them under the oclgrind simulator: test::batch_for_device)
+  const Batch b = random_batch(test::batch_for_device(10000), 32, 101);
   for (auto background : kBackgrounds) {
     for (bool with_d_acc : {false, true}) {
       INFO("background " << static_cast<int>(background) << ", d_acc " << with_d_acc);
@@ -447,7 +448,7 @@ TEST_CASE("render: sigma times delta overflowing to +inf, and far distances arou
 }
 
 TEST_CASE("render: black and none composite the same, white adds 1 - acc") {
-  const Batch b = random_batch(2000, 24, 404);
+  const Batch b = random_batch(test::batch_for_device(2000), 24, 404);
   const auto none = run_device({Background::none}, b, false);
   const auto black = run_device({Background::black}, b, false);
   const auto white = run_device({Background::white}, b, false);
@@ -465,7 +466,7 @@ TEST_CASE("render: black and none composite the same, white adds 1 - acc") {
 
 TEST_CASE("render: the fused activation and render kernels equal activations then render") {
   auto& ctx = test::test_context();
-  Batch raw = random_batch(3000, 24, 505);
+  Batch raw = random_batch(test::batch_for_device(3000), 24, 505);
   std::mt19937 rng(5);
   std::normal_distribution<float> normal(0.0f, 4.0f);
   for (auto& x : raw.density) x = normal(rng);

@@ -72,3 +72,12 @@ ocl::Context& test_context() {
 void release_test_context() { context_slot().reset(); }
 
 }  // namespace mipnerf::test
+
+namespace mipnerf::test {
+
+size_t batch_for_device(size_t count, size_t minimum) {
+  const bool simulator = test_context().device_info().platform_name.find("Oclgrind") != std::string::npos;
+  return simulator ? std::max(std::min(count, minimum), count / 10) : count;
+}
+
+}  // namespace mipnerf::test

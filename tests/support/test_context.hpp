@@ -1,6 +1,8 @@
 // The device the tests run on: PoCL's CPU device unless MIPNERF_TEST_DEVICE selects another.
 #pragma once
 
+#include <cstddef>
+
 #include "cl/context.hpp"
 
 namespace mipnerf::test {
@@ -14,6 +16,12 @@ ocl::Context& test_context();
 // Throws mipnerf::Error when MIPNERF_TEST_PLATFORM is set and `device`'s platform name is another (case aside): the
 // test stage of scripts/test.sh asked for one implementation and the selector found another.
 void check_test_platform(const ocl::DeviceInfo& device);
+
+// `count` (rays, rows) for a test's batch on the test device: the count itself, but a tenth of it (at least
+// `minimum`) on the oclgrind simulator, which runs every work-item through an interpreter. What the simulator
+// checks (out-of-bounds accesses, races, API misuse) does not depend on how many rays share the kernel's code; the
+// accuracy checks keep their full sizes on the real runtimes (PoCL, Intel's).
+size_t batch_for_device(size_t count, size_t minimum = 64);
 
 // Releases the context (its programs, queue and buffers) if it was made. test_main calls it after the tests, before
 // the process's static destructors run: an OpenCL implementation's own statics may be gone by then (oclgrind's are:
