@@ -289,19 +289,19 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   run.command = command_line(cmd);
   run.quick = a.quick;
   run.host = bench::host_record();
-  {
-    bench::MachineProbeSettings probe;  // a few seconds: the limits the stage profile's rates are held against
-    probe.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    std::cerr << "mipnerf-cl: bench: probing the machine's limits (FMA peak, memory bandwidth, a large sgemm)\n";
-    run.machine = bench::probe_machine(probe);
-    std::cerr << "mipnerf-cl: bench: " << bench::machine_summary(run.machine) << "\n";
-  }
   run.presets.warm_steps = a.steps;
   run.presets.paper_warm_steps = a.paper_steps;
   run.presets.time_box_seconds = a.time_box;
   run.presets.render_reps = a.render_reps;
   run.presets.settings = explicit_settings(a);
   for (const auto& preset : a.presets) train::resolve_config(preset, "mipnerf", run.presets.settings);  // bad --set
+  {  // after every argument is checked: a bad one fails at once
+    bench::MachineProbeSettings probe;  // a few seconds: the limits the stage profile's rates are held against
+    probe.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    std::cerr << "mipnerf-cl: bench: probing the machine's limits (FMA peak, memory bandwidth, a large sgemm)\n";
+    run.machine = bench::probe_machine(probe);
+    std::cerr << "mipnerf-cl: bench: " << bench::machine_summary(run.machine) << "\n";
+  }
 
   io::TemporaryFolder scratch(fs::temp_directory_path(), "mipnerf-cl-bench-");  // scene and runs, removed at the end
   std::string scene = a.data;
