@@ -4,12 +4,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <random>
 #include <thread>
 
 #include "common.hpp"
 #include "core/error.hpp"
 #include "interrupt.hpp"
+#include "train/checkpoint.hpp"
 #include "view/handler.hpp"
 #include "view/http_server.hpp"
 #include "view/view_renderer.hpp"
@@ -39,10 +41,26 @@ std::string random_token() {
   return token;
 }
 
+// The renderer, once the run has a checkpoint that loads (train may still be starting); null until then.
+std::unique_ptr<view::ViewRenderer> try_renderer(ocl::Context& ctx, const view::ViewRendererOptions& options,
+                                                 std::string& last_error) {
+  const fs::path run(options.run_folder);
+  if (train::list_checkpoints((run / "checkpoints").string()).empty() && train::list_checkpoints(run.string()).empty()) {
+    return nullptr;
+  }
+  try {
+    return std::make_unique<view::ViewRenderer>(ctx, options);
+  } catch (const Error& e) {
+    if (last_error != e.what()) std::cerr << "mipnerf-cl: warning: " << e.what() << " (trying again)\n";
+    last_error = e.what();
+    return nullptr;
+  }
+}
+
 void run_view(const ViewArgs& args) {
   std::error_code ec;
-  if (!fs::is_directory(args.run, ec)) {
-    throw Error(args.run + ": no such run folder (give the --out folder of `mipnerf-cl train`)");
+  if (fs::exists(args.run, ec) && !fs::is_directory(args.run, ec)) {
+    throw Error(args.run + ": not a folder (give the --out folder of `mipnerf-cl train`)");
   }
   if (args.port < 0 || args.port > 65535) throw Error("--port must lie in 0..65535 (0: any free port)");
   std::string token = args.token;
@@ -56,24 +74,39 @@ void run_view(const ViewArgs& args) {
   view::ViewRendererOptions render_options;
   render_options.run_folder = args.run;
   render_options.max_waiting = args.max_waiting;
-  view::ViewRenderer renderer(*ctx, render_options);
+  std::string last_error;
+  std::unique_ptr<view::ViewRenderer> renderer = try_renderer(*ctx, render_options, last_error);
   view::HandlerOptions handler_options;
   handler_options.run_folder = args.run;
   handler_options.token = token;
-  const view::Handler handler(handler_options, &renderer);
+  view::Handler handler(handler_options, renderer.get());
   view::ServerOptions server_options;
   server_options.host = args.host;
   server_options.port = args.port;
   view::HttpServer server(handler, server_options);
 
   const std::string shown_host = args.host.find(':') != std::string::npos ? "[" + args.host + "]" : args.host;
-  std::printf("viewing %s (step %lld on %s) at http://%s:%d/%s\nCtrl-C stops\n", args.run.c_str(),
-              static_cast<long long>(renderer.step()), ctx->device_info().name.c_str(), shown_host.c_str(),
-              server.port(), token.empty() ? "" : ("?token=" + token).c_str());
+  const std::string what = renderer ? "step " + std::to_string(renderer->step()) : "no checkpoint yet";
+  std::printf("viewing %s (%s on %s) at http://%s:%d/%s\nCtrl-C stops\n", args.run.c_str(), what.c_str(),
+              ctx->device_info().name.c_str(), shown_host.c_str(), server.port(),
+              token.empty() ? "" : ("?token=" + token).c_str());
   std::fflush(stdout);
   StopOnInterrupt stop;
   std::thread serving([&server] { server.run(); });
-  while (!StopOnInterrupt::requested()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // Until the run's first checkpoint loads, the page shows the run's logs and waits for renders.
+  auto next_try = std::chrono::steady_clock::now();
+  while (!StopOnInterrupt::requested()) {
+    if (!renderer && std::chrono::steady_clock::now() >= next_try) {
+      renderer = try_renderer(*ctx, render_options, last_error);
+      if (renderer) {
+        handler.set_backend(renderer.get());
+        std::printf("rendering step %lld\n", static_cast<long long>(renderer->step()));
+        std::fflush(stdout);
+      }
+      next_try = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
   server.stop();
   serving.join();
   std::printf("stopped\n");

@@ -156,14 +156,17 @@ Response Handler::route(const std::string& method, const std::string& path, cons
     r.headers.emplace_back("Cache-Control", "no-store");
     return r;
   }
+  RenderBackend* backend = backend_.load();
   if (method == "GET" && path == "/api/run") {
-    nlohmann::json state = run_state(run_root_.empty() ? options_.run_folder : run_root_);
-    if (backend_) state["viewer"] = nlohmann::json::parse(backend_->status_json(), nullptr, false);
+    std::error_code ec;
+    const std::string root = run_root_.empty() ? fs::weakly_canonical(options_.run_folder, ec).string() : run_root_;
+    nlohmann::json state = run_state(root);
+    if (backend) state["viewer"] = nlohmann::json::parse(backend->status_json(), nullptr, false);
     return json_response(state.dump());
   }
   if (method == "GET" && path == "/api/cameras") {
-    if (!backend_) return text(503, "no renderer");
-    return json_response(backend_->cameras_json());
+    if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+    return json_response(backend->cameras_json());
   }
   if (method == "GET" && path.rfind("/run/", 0) == 0) return serve_run_file(path.substr(5));
   if (method == "POST" && path == "/api/render") return render(request.body);
@@ -174,10 +177,12 @@ Response Handler::route(const std::string& method, const std::string& path, cons
 }
 
 Response Handler::serve_run_file(const std::string& relative) const {
-  if (run_root_.empty()) return text(404, "the run folder is gone");
-  const std::string file = resolve_inside(run_root_, relative);
-  if (file.empty()) return text(404, "no such file in the run folder");
   std::error_code ec;
+  // The run folder as it was at the start, or (when `view` started before `train` made it) as it is now.
+  const std::string root = run_root_.empty() ? fs::canonical(options_.run_folder, ec).string() : run_root_;
+  if (root.empty()) return text(404, "the run folder does not exist (yet)");
+  const std::string file = resolve_inside(root, relative);
+  if (file.empty()) return text(404, "no such file in the run folder");
   const auto size = fs::file_size(file, ec);
   if (ec || size > options_.max_file_bytes) return text(413, "file too large to serve");
   std::ifstream in(file, std::ios::binary);
@@ -208,8 +213,9 @@ Response Handler::render(const std::string& body) const {
   const auto camera = j.find("camera");
   if (camera == j.end() || !camera->is_object()) return text(400, "'camera' must be a camera path object");
   req.camera_json = camera->dump();
-  if (!backend_) return text(503, "this viewer has no renderer");
-  const RenderReply reply = backend_->render(req);
+  RenderBackend* backend = backend_.load();
+  if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+  const RenderReply reply = backend->render(req);
   switch (reply.status) {
     case RenderReply::Status::ok: {
       Response r;

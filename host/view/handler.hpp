@@ -3,6 +3,7 @@
 // serves. Every request gets a response; nothing a client sends makes it throw.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -67,8 +68,10 @@ struct HandlerOptions {
 
 class Handler {
  public:
-  // `backend` may be null: then render requests answer 503 (the tests of everything else need no device).
+  // `backend` may be null: then render and camera requests answer 503 (the tests of everything else need no device;
+  // `view` serves the run before its first checkpoint exists and sets the backend once one loads).
   Handler(HandlerOptions options, RenderBackend* backend);
+  void set_backend(RenderBackend* backend) { backend_.store(backend); }
   Response handle(const Request& request) const;
   const HandlerOptions& options() const { return options_; }
 
@@ -79,7 +82,7 @@ class Handler {
 
   HandlerOptions options_;
   std::string run_root_;  // canonical run folder
-  RenderBackend* backend_;
+  std::atomic<RenderBackend*> backend_;
 };
 
 // Percent-decodes `text` ('+' stays '+'); false for a malformed escape or a decoded NUL byte.

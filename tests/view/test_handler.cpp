@@ -280,3 +280,27 @@ TEST_CASE("handler: percent-decoding and query values") {
   CHECK(query_value("tokens=1", "token").empty());
   CHECK(query_value("", "token").empty());
 }
+
+TEST_CASE("handler: before the run's first checkpoint, renders wait (503); the renderer set later serves them") {
+  RunFixture f;
+  Handler h(options_for(f), nullptr);
+  CHECK(get(h, "/api/cameras").status == 503);
+  CHECK(post(h, "/api/render", render_body(kCamera, 8, 1)).status == 503);
+  CHECK(get(h, "/api/run").status == 200);  // the logs are shown meanwhile
+  FakeBackend backend;
+  h.set_backend(&backend);
+  CHECK(get(h, "/api/cameras").status == 200);
+  CHECK(post(h, "/api/render", render_body(kCamera, 8, 2)).status == 200);
+  CHECK(backend.calls == 1);
+}
+
+TEST_CASE("handler: a run folder made after the viewer started is served once it exists") {
+  io::TemporaryFolder scratch{fs::temp_directory_path(), "mipnerf-view-test-"};
+  HandlerOptions options;
+  options.run_folder = (fs::path(scratch.path()) / "later").string();
+  const Handler h(options, nullptr);
+  CHECK(get(h, "/run/val/a.png").status == 404);
+  CHECK(get(h, "/api/run").status == 200);
+  write_file(fs::path(options.run_folder) / "val" / "a.png", "A");
+  CHECK(get(h, "/run/val/a.png").body == "A");
+}
