@@ -1,13 +1,10 @@
 // `mipnerf-cl train`: train a scene (the built-in procedural one by default), then render and score the
 // val views, so a run ends with an image, a number, and what it cost.
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <optional>
-#include <unistd.h>
 
 #include "bench/stage_report.hpp"
 #include "core/error.hpp"
@@ -20,6 +17,7 @@
 #include "gemm/gemm_tuning.hpp"
 #include "train/config_file.hpp"
 #include "train/scene_effects.hpp"
+#include "interrupt.hpp"
 #include "progress.hpp"
 
 namespace mipnerf::cli {
@@ -37,12 +35,6 @@ struct TrainArgs {
   std::vector<std::string> sets;          // --set name=value
   std::map<std::string, std::string> flag_values;  // --<setting> value
 };
-
-std::atomic<bool> g_stop_requested{false};
-
-extern "C" void on_interrupt(int) {
-  if (g_stop_requested.exchange(true)) _exit(130);  // a second Ctrl-C stops at once
-}
 
 // The settings given explicitly: the config file, then flags, then --set (later ones win).
 std::map<std::string, std::string> explicit_settings(const TrainArgs& args, CLI::App& cmd) {
@@ -127,8 +119,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   ocl::StageProfiler profiler;
 
   std::optional<Progress> train_progress, val_progress;
-  void (*previous_handler)(int) = SIG_DFL;
-  void (*previous_term_handler)(int) = SIG_DFL;
+  std::optional<StopOnInterrupt> stop_on_interrupt;  // from the setup to the end of training
   const bool root = parallel::world().is_root();  // under mpirun, rank 0 alone prints and writes
   eval::TrainAndEvaluateOptions run;
   run.data_path = data_path;
@@ -139,20 +130,17 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
     // After the inputs are checked, before the first product; only where CLBlast runs the networks' products.
     if (trainer.networks().front()->backend() == gemm::GemmBackend::clblast) gemm::load_gemm_tuning(*ctx);
     if (root) print_setup(trainer, *ctx, args.preset);
-    g_stop_requested = false;
-    previous_handler = std::signal(SIGINT, on_interrupt);
-    // A scheduler's (or mpirun's) SIGTERM: the same clean stop, all ranks after the same step.
-    previous_term_handler = std::signal(SIGTERM, on_interrupt);
+    // Ctrl-C, or a scheduler's (or mpirun's) SIGTERM: a clean stop, all ranks after the same step.
+    stop_on_interrupt.emplace();
     train_progress.emplace("train", config.steps);
   };
-  run.hooks.should_stop = [] { return g_stop_requested.load(); };
+  run.hooks.should_stop = [] { return StopOnInterrupt::requested(); };
   run.hooks.on_step = [&](const train::StepReport& r) {
     train_progress->update(r.step, step_detail(r));
     if (args.profile && ctx->profiler() == nullptr) ctx->set_profiler(&profiler);  // from the second step on
   };
   run.on_trained = [&](train::Trainer&, const train::TrainResult& result) {
-    std::signal(SIGINT, previous_handler);
-    std::signal(SIGTERM, previous_term_handler);
+    stop_on_interrupt.reset();
     train_progress->finish_at(result.last_step);
     ctx->set_profiler(nullptr);
     if (!root) return;

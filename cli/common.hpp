@@ -54,5 +54,6 @@ void register_render(CLI::App& app);
 void register_eval(CLI::App& app);
 void register_bench(CLI::App& app);
 void register_plot(CLI::App& app);
+void register_view(CLI::App& app);
 
 }  // namespace mipnerf::cli

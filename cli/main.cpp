@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   cli::register_eval(app);
   cli::register_bench(app);
   cli::register_plot(app);
+  cli::register_view(app);
   // Under mpirun only train, render and eval share the work between ranks; the other commands would run N times
   // over the same files.
   for (CLI::App* sub : app.get_subcommands({})) {

@@ -72,6 +72,12 @@ if(NOT FFMPEG_FOUND)
     "libswscale-dev libavutil-dev and rebuild")
 endif()
 
+# cpp-httplib (Debian's libcpp-httplib-dev, a compiled library with its header) serves `mipnerf-cl view` (view/http_server).
+if(PkgConfig_FOUND)
+  pkg_check_modules(HTTPLIB QUIET IMPORTED_TARGET cpp-httplib)
+endif()
+mipnerf_require(HTTPLIB_FOUND "cpp-httplib" "libcpp-httplib-dev")
+
 if(MIPNERF_BUILD_TESTS)
   find_package(doctest CONFIG QUIET)
   mipnerf_require(doctest_FOUND "doctest" "doctest-dev")

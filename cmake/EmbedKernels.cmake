@@ -16,3 +16,19 @@ function(mipnerf_embed_kernels out_var kernel_dir)
     VERBATIM)
   set(${out_var} "${generated}" PARENT_SCOPE)
 endfunction()
+
+# Embeds one file (the viewer's page, host/view/viewer.html) as `const std::string& NAMESPACE::FUNCTION()`, declared
+# in HEADER; regenerated whenever the file changes. The page is served from the binary: no file or CDN at run time.
+set(MIPNERF_EMBED_FILE_SCRIPT "${CMAKE_CURRENT_LIST_DIR}/embed_file_script.cmake")
+function(mipnerf_embed_file out_var input header namespace function)
+  get_filename_component(stem "${input}" NAME_WE)
+  set(generated "${CMAKE_CURRENT_BINARY_DIR}/generated/embedded_${stem}.cpp")
+  add_custom_command(
+    OUTPUT "${generated}"
+    COMMAND ${CMAKE_COMMAND} -DINPUT=${input} -DOUTPUT=${generated} -DHEADER=${header} -DNAMESPACE=${namespace}
+            -DFUNCTION=${function} -P "${MIPNERF_EMBED_FILE_SCRIPT}"
+    DEPENDS "${input}" "${MIPNERF_EMBED_FILE_SCRIPT}"
+    COMMENT "Embedding ${input}"
+    VERBATIM)
+  set(${out_var} "${generated}" PARENT_SCOPE)
+endfunction()

@@ -29,7 +29,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(blender transforms_json multiscale llff colmap png jpeg camera_path config checkpoint)
+  targets=(blender transforms_json multiscale llff colmap png jpeg camera_path config checkpoint view)
 fi
 build_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
 root="$PWD"

@@ -14,12 +14,14 @@ packages=(
   libavformat-dev libavcodec-dev libswscale-dev libavutil-dev  # `render --video`: H.264 MP4 (Debian's libx264 encoder)
   libopenblas-dev   # the host GEMM backend (the MLP fused on the host BLAS on CPU devices)
   libblis-dev libdnnl-dev libxsmm-dev  # further CPU GEMM libraries the host MLP can use per product (tune --host-gemm)
+  libcpp-httplib-dev  # `mipnerf-cl view`'s HTTP server
 )
 test_packages=(
   oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
   libopenmpi-dev openmpi-bin  # mpirun: data-parallel training and sharded rendering (optional at build time)
   colmap            # `dataset from-photos` (CPU SIFT); optional for users: without it that command says what to install
+  chromium chromium-driver  # the browser stage: `mipnerf-cl view` in headless Chromium (tests/browser)
 )
 for argument in "$@"; do
   if [ "$argument" = "--for-tests" ]; then

@@ -12,6 +12,8 @@
 # The `quality` tests (tests/quality/: a scene trained for hundreds of steps to a PSNR) run on PoCL alone: the code
 # they run is the code the train, eval and graph tests run in every stage, and their minutes there bought nothing
 # the others do not show (a sanitizer report or a runtime's wrong result fails those shorter tests the same way).
+#   browser    `mipnerf-cl view` in headless Chromium (scripts/test-browser.sh): a tiny run trained, its page loaded, the
+#              camera dragged, the full-size frame compared with `mipnerf-cl render`, Ctrl-C; on PoCL
 #   selftest   `mipnerf-selftest` on every runtime above: its --quick checks on PoCL and under oclgrind (the full
 #              list on PoCL is the pocl stage's ops, mlp and graph tests again, the same sources), every check on
 #              Intel's runtime, where it also compares training steps with PoCL's device
@@ -21,7 +23,7 @@
 # Day to day, the PoCL suite alone: ctest --test-dir build -j2 -LE '^(oclgrind|mpi)$'
 set -uo pipefail
 cd "$(dirname "$0")/.."
-stages="pocl mpi oclgrind sanitizer fuzz intel selftest"
+stages="pocl mpi oclgrind sanitizer fuzz intel selftest browser"
 ci="${CI:-false}"
 skip_names="${MIPNERF_SKIP:-}"
 skip_list=",$skip_names,"
@@ -84,6 +86,22 @@ for name in ${skip_names//,/ }; do record "$name" "-" "" "left out by request (M
 if wanted pocl; then run_ctest pocl "$pocl_platform" "$build_dir" -LE '^(oclgrind|mpi)$'; fi
 if wanted mpi; then run_ctest mpi "$pocl_platform" "$build_dir" -L '^mpi$'; fi
 if wanted selftest; then run_selftest "$pocl_platform" quick; fi
+
+# The browser: `view` on a tiny run in headless Chromium, with selenium from PyPI (a venv in the cache folder). Exit 77
+# means Chromium, its driver or selenium is missing here, which the test command's packages should have installed:
+# the stage could not run.
+if wanted browser; then
+  started=$(date +%s)
+  echo "test: stage 'browser' on platform '$pocl_platform'"
+  MIPNERF_DEVICE="platform=$pocl_platform" BUILD_DIR="$build_dir" ./scripts/test-browser.sh --junit "$results/browser.xml"
+  status=$?
+  if [ $status -eq 77 ]; then
+    record browser "-" "" "could not run: chromium, chromium-driver or selenium is missing (above)"
+  else
+    record browser "$pocl_platform: $(device_of "platform=$pocl_platform")" "$results/browser.xml" "exit $status" \
+      $(( $(date +%s) - started ))
+  fi
+fi
 
 # oclgrind: the kernel tests under the simulator, and the self-test under it.
 if wanted oclgrind; then

@@ -130,7 +130,16 @@ OrbitOptions orbit_around(const std::vector<Camera>& cameras) {
 }
 
 std::vector<Camera> read_camera_path(const std::string& path, const CameraPathDefaults& defaults) {
-  const io::Json root = io::read_json(path);
+  return camera_path_from_json(io::read_json(path), path, defaults);
+}
+
+std::vector<Camera> parse_camera_path(const std::string& text, const std::string& path,
+                                      const CameraPathDefaults& defaults) {
+  return camera_path_from_json(io::parse_json(text, path), path, defaults);
+}
+
+std::vector<Camera> camera_path_from_json(const nlohmann::json& root, const std::string& path,
+                                          const CameraPathDefaults& defaults) {
   io::require_object(root, path);
   const IntrinsicsSpec global = read_intrinsics(root, {}, path);
   const io::Json& frames = io::require_array(root, "frames", path);

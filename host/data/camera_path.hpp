@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,6 +58,12 @@ struct CameraPathDefaults {
 // read: the size is w × h, else the defaults' size. Poses are validated as the datasets' are. Every problem is
 // one mipnerf::Error naming the file and the frame.
 std::vector<Camera> read_camera_path(const std::string& path, const CameraPathDefaults& defaults);
+// The same from the file's text (`path` names it in errors: `mipnerf-cl view` reads a page's camera this way), or from
+// its parsed JSON.
+std::vector<Camera> parse_camera_path(const std::string& text, const std::string& path,
+                                      const CameraPathDefaults& defaults);
+std::vector<Camera> camera_path_from_json(const nlohmann::json& root, const std::string& path,
+                                          const CameraPathDefaults& defaults);
 
 // Writes `cameras` as a camera path read_camera_path accepts (per-frame fl_x, fl_y, cx, cy, w, h, near, far,
 // transform_matrix) with each frame's `file_path` (the image rendered from it), atomically.

@@ -126,8 +126,8 @@ ViewFrames spiral_views(const train::TrainedModel& model, const std::string& che
   return views;
 }
 
-ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
-                      const data::ResolutionRequest& resolution) {
+data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
+                                              const data::ResolutionRequest& resolution) {
   data::CameraPathDefaults defaults;
   // Without w/h in the file, an explicit size is the frames' size.
   if (resolution.scale <= 0.0 && resolution.width && resolution.height) {
@@ -136,6 +136,12 @@ ViewFrames path_views(const train::TrainedModel& model, const std::string& path_
   }
   if (model.config.near > 0) defaults.near = model.config.near;
   if (model.config.far > 0) defaults.far = model.config.far;
+  return defaults;
+}
+
+ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
+                      const data::ResolutionRequest& resolution) {
+  const data::CameraPathDefaults defaults = camera_path_defaults(model, resolution);
   ViewFrames frames;
   frames.source = "the camera path " + path_file;
   frames.default_folder = "render_" + fs::path(path_file).stem().string();

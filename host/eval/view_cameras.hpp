@@ -56,6 +56,11 @@ ViewFrames orbit_views(const train::TrainedModel& model, const OrbitRequest& req
 ViewFrames spiral_views(const train::TrainedModel& model, const std::string& checkpoint, const std::string& data,
                         uint32_t frames, const data::ResolutionRequest& resolution);
 
+// What a camera path may leave out, for this model: its near/far, and the requested size when the path gives none
+// (path_views and `mipnerf-cl view`'s cameras, so both render a page's camera alike).
+data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
+                                              const data::ResolutionRequest& resolution);
+
 // The cameras of a transforms-style camera path file (data::read_camera_path), near/far defaulting to the model's.
 ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
                       const data::ResolutionRequest& resolution);

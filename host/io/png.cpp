@@ -256,6 +256,16 @@ void write_png16(const std::string& path, uint32_t width, uint32_t height, int c
   write_bytes_atomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
+std::vector<uint8_t> quantize_8bit(const float* samples, size_t count) {
+  std::vector<uint8_t> out(count);
+  for (size_t i = 0; i < count; ++i) {
+    // NaN becomes 0 (std::clamp would pass it through and the cast would be undefined).
+    const double unit = std::isnan(samples[i]) ? 0.0 : std::clamp(static_cast<double>(samples[i]), 0.0, 1.0);
+    out[i] = static_cast<uint8_t>(std::lround(unit * 255.0));
+  }
+  return out;
+}
+
 void write_png(const std::string& path, uint32_t width, uint32_t height, int channels, const float* samples,
                int bit_depth) {
   if (bit_depth != 8 && bit_depth != 16) throw Error(path + ": PNG bit depth must be 8 or 16");
@@ -267,9 +277,7 @@ void write_png(const std::string& path, uint32_t width, uint32_t height, int cha
     return std::lround(unit * max_value);
   };
   if (bit_depth == 8) {
-    std::vector<uint8_t> out(count);
-    for (size_t i = 0; i < count; ++i) out[i] = static_cast<uint8_t>(quantize(samples[i]));
-    write_png8(path, width, height, channels, out.data());
+    write_png8(path, width, height, channels, quantize_8bit(samples, count).data());
   } else {
     std::vector<uint16_t> out(count);
     for (size_t i = 0; i < count; ++i) out[i] = static_cast<uint16_t>(quantize(samples[i]));

@@ -38,6 +38,9 @@ void write_png16(const std::string& path, uint32_t width, uint32_t height, int c
 void write_png(const std::string& path, uint32_t width, uint32_t height, int channels, const float* samples,
                int bit_depth = 8);
 
+// Float samples in [0, 1] as write_png stores them at 8 bits (clamped, rounded to nearest, NaN as 0).
+std::vector<uint8_t> quantize_8bit(const float* samples, size_t count);
+
 // Encoders behind the writers (PNG bytes in memory).
 std::vector<unsigned char> encode_png8(uint32_t width, uint32_t height, int channels, const uint8_t* samples);
 std::vector<unsigned char> encode_png16(uint32_t width, uint32_t height, int channels, const uint16_t* samples);

@@ -1,0 +1,238 @@
+// The viewer's route table: the page, the run's state, its files, and renders.
+#include "view/handler.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "view/page.hpp"
+#include "view/run_state.hpp"
+
+namespace mipnerf::view {
+namespace fs = std::filesystem;
+namespace {
+
+Response text(int status, const std::string& message) {
+  Response r;
+  r.status = status;
+  r.body = message + "\n";
+  return r;
+}
+
+Response json_response(const std::string& body) {
+  Response r;
+  r.content_type = "application/json";
+  r.body = body;
+  r.headers.emplace_back("Cache-Control", "no-store");
+  return r;
+}
+
+std::string content_type_of(const fs::path& path) {
+  const std::string ext = path.extension().string();
+  if (ext == ".png") return "image/png";
+  if (ext == ".jpg" || ext == ".jpeg") return "image/jpeg";
+  if (ext == ".svg") return "image/svg+xml";
+  if (ext == ".json") return "application/json";
+  if (ext == ".mp4") return "video/mp4";
+  if (ext == ".csv" || ext == ".md" || ext == ".txt" || ext == ".toml") return "text/plain; charset=utf-8";
+  return "application/octet-stream";
+}
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// The number at `key` of a JSON object when it is an integer in [lo, hi].
+bool integer_in(const nlohmann::json& j, const char* key, int64_t lo, int64_t hi, int64_t& out) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number_integer()) return false;
+  const int64_t v = it->get<int64_t>();
+  if (v < lo || v > hi) return false;
+  out = v;
+  return true;
+}
+
+}  // namespace
+
+bool percent_decode(const std::string& text, std::string& out) {
+  out.clear();
+  out.reserve(text.size());
+  for (size_t i = 0; i < text.size(); ++i) {
+    char c = text[i];
+    if (c == '%') {
+      if (i + 2 >= text.size()) return false;  // "%" or "%4" at the end
+      const int hi = hex_value(text[i + 1]), lo = hex_value(text[i + 2]);
+      if (hi < 0 || lo < 0) return false;
+      c = static_cast<char>(hi * 16 + lo);
+      i += 2;
+    }
+    if (c == '\0') return false;
+    out.push_back(c);
+  }
+  return true;
+}
+
+std::string query_value(const std::string& query, const std::string& key) {
+  size_t start = 0;
+  while (start <= query.size()) {
+    const size_t end = std::min(query.find('&', start), query.size());
+    const std::string pair = query.substr(start, end - start);
+    const size_t eq = pair.find('=');
+    if (eq != std::string::npos && pair.compare(0, eq, key) == 0 && eq == key.size()) {
+      std::string value;
+      return percent_decode(pair.substr(eq + 1), value) ? value : std::string();
+    }
+    start = end + 1;
+  }
+  return {};
+}
+
+std::string resolve_inside(const std::string& root, const std::string& relative) {
+  if (relative.empty() || relative.front() == '/' || relative.find('\0') != std::string::npos) return {};
+  if (relative.find('\\') != std::string::npos) return {};
+  const fs::path rel(relative);
+  if (rel.is_absolute() || rel.has_root_name()) return {};
+  for (const auto& part : rel) {
+    if (part == "..") return {};
+  }
+  std::error_code ec;
+  // canonical: every symlink resolved, so a link inside the run folder that points out of it is caught by the
+  // prefix check below, as is anything `..`-like that slipped past the component check.
+  const fs::path resolved = fs::canonical(fs::path(root) / rel, ec);
+  if (ec) return {};
+  const fs::path base(root);
+  auto r = resolved.begin();
+  for (auto b = base.begin(); b != base.end(); ++b, ++r) {
+    if (r == resolved.end() || *r != *b) return {};
+  }
+  if (!fs::is_regular_file(resolved, ec) || ec) return {};
+  return resolved.string();
+}
+
+bool same_secret(const std::string& a, const std::string& b) {
+  unsigned char diff = a.size() == b.size() ? 0 : 1;
+  const std::string& longer = a.size() >= b.size() ? a : b;
+  for (size_t i = 0; i < longer.size(); ++i) {
+    const unsigned char x = i < a.size() ? a[i] : 0, y = i < b.size() ? b[i] : 0;
+    diff |= static_cast<unsigned char>(x ^ y);
+  }
+  return diff == 0;
+}
+
+Handler::Handler(HandlerOptions options, RenderBackend* backend) : options_(std::move(options)), backend_(backend) {
+  std::error_code ec;
+  run_root_ = fs::canonical(options_.run_folder, ec).string();
+}
+
+Response Handler::handle(const Request& request) const {
+  try {
+    if (request.target.size() > options_.max_target_bytes) return text(414, "request target too long");
+    if (request.body.size() > options_.max_body_bytes) return text(413, "request body too large");
+    if (request.target.empty() || request.target.front() != '/') return text(400, "malformed request target");
+    const size_t q = request.target.find('?');
+    const std::string raw_path = request.target.substr(0, q);
+    const std::string query = q == std::string::npos ? "" : request.target.substr(q + 1);
+    std::string path;
+    if (!percent_decode(raw_path, path)) return text(400, "malformed percent-encoding in the path");
+    if (!options_.token.empty() && !same_secret(query_value(query, "token"), options_.token)) {
+      return text(403, "this viewer needs its token: open the URL `mipnerf-cl view` printed (…?token=…)");
+    }
+    return route(request.method, path, request);
+  } catch (const std::exception& e) {  // a bug, not the client's fault: answer and keep serving
+    return text(500, std::string("internal error: ") + e.what());
+  } catch (...) {
+    return text(500, "internal error");
+  }
+}
+
+Response Handler::route(const std::string& method, const std::string& path, const Request& request) const {
+  if (method == "GET" && (path == "/" || path == "/index.html")) {
+    Response r;
+    r.content_type = "text/html; charset=utf-8";
+    r.body = page_html();
+    r.headers.emplace_back("Cache-Control", "no-store");
+    return r;
+  }
+  RenderBackend* backend = backend_.load();
+  if (method == "GET" && path == "/api/run") {
+    std::error_code ec;
+    const std::string root = run_root_.empty() ? fs::weakly_canonical(options_.run_folder, ec).string() : run_root_;
+    nlohmann::json state = run_state(root);
+    if (backend) state["viewer"] = nlohmann::json::parse(backend->status_json(), nullptr, false);
+    return json_response(state.dump());
+  }
+  if (method == "GET" && path == "/api/cameras") {
+    if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+    return json_response(backend->cameras_json());
+  }
+  if (method == "GET" && path.rfind("/run/", 0) == 0) return serve_run_file(path.substr(5));
+  if (method == "POST" && path == "/api/render") return render(request.body);
+  if (path == "/" || path == "/api/run" || path == "/api/cameras" || path == "/api/render") {
+    return text(405, "method not allowed");
+  }
+  return text(404, "not found: " + path.substr(0, 200));
+}
+
+Response Handler::serve_run_file(const std::string& relative) const {
+  std::error_code ec;
+  // The run folder as it was at the start, or (when `view` started before `train` made it) as it is now.
+  const std::string root = run_root_.empty() ? fs::canonical(options_.run_folder, ec).string() : run_root_;
+  if (root.empty()) return text(404, "the run folder does not exist (yet)");
+  const std::string file = resolve_inside(root, relative);
+  if (file.empty()) return text(404, "no such file in the run folder");
+  const auto size = fs::file_size(file, ec);
+  if (ec || size > options_.max_file_bytes) return text(413, "file too large to serve");
+  std::ifstream in(file, std::ios::binary);
+  Response r;
+  r.body.resize(static_cast<size_t>(size));
+  if (!in.read(r.body.data(), static_cast<std::streamsize>(size))) r.body.resize(static_cast<size_t>(in.gcount()));
+  r.content_type = content_type_of(file);
+  r.headers.emplace_back("Cache-Control", "no-cache");
+  return r;
+}
+
+Response Handler::render(const std::string& body) const {
+  const nlohmann::json j = nlohmann::json::parse(body, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return text(400, "the render request is not a JSON object");
+  RenderRequest req;
+  int64_t divisor = 0, generation = 0;
+  if (!integer_in(j, "divisor", 1, 64, divisor)) return text(400, "'divisor' must be an integer in 1..64");
+  if (!integer_in(j, "generation", 0, INT64_MAX, generation)) return text(400, "'generation' must be an integer >= 0");
+  req.divisor = static_cast<int>(divisor);
+  req.generation = static_cast<uint64_t>(generation);
+  if (j.contains("output")) {
+    if (!j["output"].is_string()) return text(400, "'output' must be rgb, depth or acc");
+    req.output = j["output"].get<std::string>();
+    if (req.output != "rgb" && req.output != "depth" && req.output != "acc") {
+      return text(400, "'output' must be rgb, depth or acc");
+    }
+  }
+  const auto camera = j.find("camera");
+  if (camera == j.end() || !camera->is_object()) return text(400, "'camera' must be a camera path object");
+  req.camera_json = camera->dump();
+  RenderBackend* backend = backend_.load();
+  if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+  const RenderReply reply = backend->render(req);
+  switch (reply.status) {
+    case RenderReply::Status::ok: {
+      Response r;
+      r.content_type = "image/png";
+      r.body = reply.png;
+      r.headers.emplace_back("Cache-Control", "no-store");
+      r.headers.emplace_back("X-Render-Seconds", std::to_string(reply.seconds));
+      r.headers.emplace_back("X-Render-Size", std::to_string(reply.width) + "x" + std::to_string(reply.height));
+      r.headers.emplace_back("X-Render-Step", std::to_string(reply.step));
+      return r;
+    }
+    case RenderReply::Status::superseded: return text(409, "superseded by a newer view");
+    case RenderReply::Status::busy: return text(503, "too many renders waiting");
+    case RenderReply::Status::bad_request: return text(400, reply.message);
+    case RenderReply::Status::failed: return text(500, reply.message);
+  }
+  return text(500, "unknown render status");
+}
+
+}  // namespace mipnerf::view

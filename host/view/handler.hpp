@@ -1,0 +1,101 @@
+// `mipnerf-cl view`'s requests and responses, without sockets: the route table, the token check, the run folder's
+// files, and the renders, so doctest tests and the fuzz target drive exactly what the HTTP server (view/http_server)
+// serves. Every request gets a response; nothing a client sends makes it throw.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mipnerf::view {
+
+// What the HTTP server passes in: the method, the request target as the client sent it (path and query, still
+// percent-encoded: the handler decodes it, once) and the body.
+struct Request {
+  std::string method;  // "GET", "POST", ...
+  std::string target;  // "/run/val/000_scale0.png?token=..."
+  std::string body;
+};
+
+struct Response {
+  int status = 200;
+  std::string content_type = "text/plain; charset=utf-8";
+  std::string body;
+  std::vector<std::pair<std::string, std::string>> headers;  // beside Content-Type and Content-Length
+};
+
+// One image the page asked for, already checked: the camera as a transforms-style camera path text (one frame), the
+// divisor of its size (8, 4, 2 or 1), what to draw, and the page's request counter (newest wins).
+struct RenderRequest {
+  std::string camera_json;  // {"frames": [{transform_matrix, fl_x, fl_y, cx, cy, w, h}]}
+  int divisor = 1;
+  std::string output = "rgb";  // rgb | depth | acc
+  uint64_t generation = 0;
+};
+
+struct RenderReply {
+  enum class Status { ok, superseded, busy, bad_request, failed };
+  Status status = Status::ok;
+  std::string png;  // the image, 8-bit PNG
+  uint32_t width = 0, height = 0;
+  double seconds = 0.0;  // render wall time
+  int64_t step = 0;      // the checkpoint's step
+  std::string message;   // why, when not ok
+};
+
+// What renders the page's cameras: a trained model on a device (view/view_renderer), or a test double.
+class RenderBackend {
+ public:
+  virtual ~RenderBackend() = default;
+  virtual RenderReply render(const RenderRequest& request) = 0;
+  // The cameras to start from, as JSON text: {"train": [frames], "orbit": {...}} (see view_renderer.hpp).
+  virtual std::string cameras_json() = 0;
+  // The device and the checkpoint it renders, as JSON text.
+  virtual std::string status_json() = 0;
+};
+
+struct HandlerOptions {
+  std::string run_folder;       // the run: every file served under /run/ lies inside it
+  std::string token;            // when not empty, every request must carry ?token=<this>
+  size_t max_body_bytes = 1 << 16;   // a render request's camera is < 1 KB
+  size_t max_target_bytes = 4096;    // path and query
+  size_t max_file_bytes = 64 << 20;  // a run folder's image or log
+};
+
+class Handler {
+ public:
+  // `backend` may be null: then render and camera requests answer 503 (the tests of everything else need no device;
+  // `view` serves the run before its first checkpoint exists and sets the backend once one loads).
+  Handler(HandlerOptions options, RenderBackend* backend);
+  void set_backend(RenderBackend* backend) { backend_.store(backend); }
+  Response handle(const Request& request) const;
+  const HandlerOptions& options() const { return options_; }
+
+ private:
+  Response route(const std::string& method, const std::string& path, const Request& request) const;
+  Response serve_run_file(const std::string& relative) const;
+  Response render(const std::string& body) const;
+
+  HandlerOptions options_;
+  std::string run_root_;  // canonical run folder
+  std::atomic<RenderBackend*> backend_;
+};
+
+// Percent-decodes `text` ('+' stays '+'); false for a malformed escape or a decoded NUL byte.
+bool percent_decode(const std::string& text, std::string& out);
+
+// The value of `key` in a query string ("a=1&token=x"), percent-decoded; empty when absent or malformed.
+std::string query_value(const std::string& query, const std::string& key);
+
+// The file `relative` (decoded, '/'-separated) names inside `root` (a canonical folder), or empty when it names
+// nothing inside it: an absolute path, a `..` component, a NUL, or a path whose symlinks resolve outside `root`.
+std::string resolve_inside(const std::string& root, const std::string& relative);
+
+// Compares two strings in time independent of where they differ (the token).
+bool same_secret(const std::string& a, const std::string& b);
+
+}  // namespace mipnerf::view

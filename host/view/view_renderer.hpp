@@ -1,0 +1,61 @@
+// The viewer's renders on the run's device: the newest checkpoint of the run that loads (reloaded when `train` writes
+// a newer one), one image per request at 1/divisor of the page's camera size, each a full mip-NeRF render at that
+// resolution (the cone radii follow the pixel size). Newest request wins: a render checks the page's request counter
+// after every chunk of rays and stops when a newer request has arrived. One render runs at a time on the device;
+// at most `max_waiting` more wait for it, others are answered "busy".
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "cl/context.hpp"
+#include "train/checkpoint.hpp"
+#include "view/handler.hpp"
+
+namespace mipnerf::view {
+
+struct ViewRendererOptions {
+  std::string run_folder;
+  size_t chunk_rays = 0;   // 0: the device's render chunk (eval::render_chunk_rays), as `render` uses
+  size_t max_waiting = 4;  // requests waiting for the device beyond the one rendering
+  uint64_t max_pixels = 4096ull * 4096ull;  // per image
+};
+
+class ViewRenderer : public RenderBackend {
+ public:
+  // Loads the run's newest checkpoint that loads and renders one small image, so kernel builds are done before the
+  // first request. Throws mipnerf::Error when the run has no checkpoint that loads.
+  ViewRenderer(ocl::Context& ctx, ViewRendererOptions options);
+  ~ViewRenderer() override;
+
+  RenderReply render(const RenderRequest& request) override;
+  // {"train": [frames of the training split, camera-path form], "orbit": {"target", "up", "radius",
+  //  "elevation_deg", "frame"}}: where the page's camera starts.
+  std::string cameras_json() override;
+  // {"device", "step", "checkpoint", "warm_up_seconds"}
+  std::string status_json() override;
+
+  int64_t step() const;
+
+ private:
+  void reload_if_newer();  // with device_mutex_ held
+
+  ocl::Context* ctx_;
+  ViewRendererOptions options_;
+  mutable std::mutex device_mutex_;  // the model and the device's queue
+  std::unique_ptr<train::TrainedModel> model_;
+  mutable std::mutex info_mutex_;  // what status_json reports, so it never waits for a render
+  std::string checkpoint_;
+  int64_t step_ = 0;
+  std::string cameras_json_;
+  size_t chunk_rays_ = 0;
+  double warm_up_seconds_ = 0.0;
+  std::atomic<uint64_t> newest_generation_{0};
+  std::atomic<size_t> waiting_{0};
+};
+
+}  // namespace mipnerf::view

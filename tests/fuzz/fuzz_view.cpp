@@ -1,0 +1,88 @@
+// Fuzz target: `mipnerf-cl view`'s request handler (view::Handler), the part of the viewer that reads what a browser,
+// or anyone who can reach the port, sends. The input is one request: its first byte chooses the method (G: GET, P: POST, H: HEAD, else PUT), the bytes up
+// to the first newline are the target (path and query, percent-encoded), the rest is the body. The run folder holds
+// a log, a config and an image, and a symlink to a file outside it. Every request must get a status in 200..599;
+// no response may contain the outside file's text; a render request's camera is read by the camera path reader the
+// real renderer uses (data::parse_camera_path), whose errors must be mipnerf::Error.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "data/camera_path.hpp"
+#include "fuzz_support.hpp"
+#include "view/handler.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace mipnerf;
+
+constexpr const char* kSecret = "FUZZ-SECRET-OUTSIDE-THE-RUN";
+
+struct CameraReadingBackend : view::RenderBackend {
+  view::RenderReply render(const view::RenderRequest& request) override {
+    view::RenderReply reply;
+    try {
+      const auto cameras = data::parse_camera_path(request.camera_json, "the page's camera", {});
+      fuzz::check(!cameras.empty(), "a camera path without cameras was accepted");
+      reply.png = "image";
+    } catch (const Error&) {
+      reply.status = view::RenderReply::Status::bad_request;
+    }
+    return reply;
+  }
+  std::string cameras_json() override { return "{}"; }
+  std::string status_json() override { return "{}"; }
+};
+
+const fs::path& run_folder() {
+  static const fs::path run = [] {
+    const fs::path scratch = fuzz::scratch_folder();
+    const fs::path dir = scratch / "view_run";
+    fs::create_directories(dir / "val");
+    std::ofstream(scratch / "secret.txt") << kSecret;
+    std::ofstream(dir / "config.json") << R"({"steps": 10})";
+    std::ofstream(dir / "train_log.csv") << "step,wall_seconds,loss,psnr\n2,0.5,0.3,9.5\n";
+    std::ofstream(dir / "val" / "000_scale0.png") << "PNG";
+    std::error_code ec;
+    fs::create_symlink(scratch / "secret.txt", dir / "out.txt", ec);
+    return dir;
+  }();
+  return run;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static CameraReadingBackend backend;
+  static const view::Handler handler = [] {
+    view::HandlerOptions options;
+    options.run_folder = run_folder().string();
+    return view::Handler(options, &backend);
+  }();
+  static const view::Handler with_token = [] {
+    view::HandlerOptions options;
+    options.run_folder = run_folder().string();
+    options.token = "abc123";
+    return view::Handler(options, &backend);
+  }();
+  const std::string input(reinterpret_cast<const char*>(data), size);
+  view::Request request;
+  const char first = size == 0 ? 'G' : input[0];
+  request.method = first == 'G' ? "GET" : first == 'P' ? "POST" : first == 'H' ? "HEAD" : "PUT";
+  const std::string rest = size == 0 ? "" : input.substr(1);
+  const size_t newline = rest.find('\n');
+  request.target = rest.substr(0, newline);
+  request.body = newline == std::string::npos ? "" : rest.substr(newline + 1);
+  for (const view::Handler* h : {&handler, &with_token}) {
+    const view::Response response = h->handle(request);
+    fuzz::check(response.status >= 200 && response.status < 600, "a response without a valid status");
+    // (A 404 names the path it was asked for: the text may come back only when the request held it.)
+    fuzz::check(response.body.find(kSecret) == std::string::npos || input.find(kSecret) != std::string::npos,
+                "a file outside the run folder was served");
+    fuzz::check(h == &handler || response.status >= 400 || request.target.find("abc123") != std::string::npos,
+                "a request without the token was answered");
+  }
+  return 0;
+}

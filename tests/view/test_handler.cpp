@@ -1,0 +1,306 @@
+// The viewer's request handler without sockets: the run folder's files and nothing outside it, the token, the request
+// bounds, malformed render requests, and the run's state as the page reads it.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "io/temporary_folder.hpp"
+#include "view/handler.hpp"
+#include "view/run_state.hpp"
+
+namespace fs = std::filesystem;
+using namespace mipnerf;
+using namespace mipnerf::view;
+
+namespace {
+
+void write_file(const fs::path& path, const std::string& text) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// A run folder (logs, config, a val image) inside a scratch folder that also holds a secret beside it.
+struct RunFixture {
+  io::TemporaryFolder scratch{fs::temp_directory_path(), "mipnerf-view-test-"};
+  fs::path run = fs::path(scratch.path()) / "run";
+  fs::path secret = fs::path(scratch.path()) / "secret.txt";
+  RunFixture() {
+    write_file(run / "config.json", R"({"steps": 10, "preset": "tiny"})");
+    write_file(run / "train_log.csv", "step,wall_seconds,loss,psnr\n2,0.5,0.3,9.5\n4,1.0,0.2,11.25\n6,1.5,0.1");
+    write_file(run / "val_log.csv", "step,train_seconds,val_psnr\n4,1.0,10.5\n");
+    write_file(run / "val" / "000_scale0.png", "PNGDATA");
+    write_file(run / "eval" / "images" / "r_0.png", "R");
+    write_file(run / "eval" / "images" / "r_0_gt.png", "G");
+    write_file(run / "eval" / "images" / "r_0_error.png", "E");
+    write_file(secret, "top secret");
+  }
+};
+
+// A renderer that records what it was asked and answers a 1-byte "image".
+struct FakeBackend : RenderBackend {
+  RenderRequest last;
+  int calls = 0;
+  RenderReply render(const RenderRequest& request) override {
+    last = request;
+    ++calls;
+    RenderReply reply;
+    reply.png = "P";
+    reply.width = 8;
+    reply.height = 6;
+    return reply;
+  }
+  std::string cameras_json() override { return R"({"train": []})"; }
+  std::string status_json() override { return R"({"device": "fake", "step": 4})"; }
+};
+
+HandlerOptions options_for(const RunFixture& f) {
+  HandlerOptions options;
+  options.run_folder = f.run.string();
+  return options;
+}
+
+Response get(const Handler& h, const std::string& target) { return h.handle({"GET", target, ""}); }
+Response post(const Handler& h, const std::string& target, const std::string& body) {
+  return h.handle({"POST", target, body});
+}
+
+const char* kCamera = R"({"frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]],
+  "fl_x": 10, "fl_y": 10, "cx": 4, "cy": 3, "w": 8, "h": 6}]})";
+
+std::string render_body(const std::string& camera, int divisor, int generation) {
+  return std::string(R"({"camera": )") + camera + R"(, "divisor": )" + std::to_string(divisor) +
+         R"(, "generation": )" + std::to_string(generation) + "}";
+}
+
+}  // namespace
+
+TEST_CASE("handler: serves the page and the run folder's files") {
+  RunFixture f;
+  const Handler h(options_for(f), nullptr);
+  const Response page = get(h, "/");
+  CHECK(page.status == 200);
+  CHECK(page.content_type.find("text/html") == 0);
+  CHECK(page.body.find("mipnerf-cl view") != std::string::npos);
+  const Response image = get(h, "/run/val/000_scale0.png");
+  CHECK(image.status == 200);
+  CHECK(image.content_type == "image/png");
+  CHECK(image.body == "PNGDATA");
+  CHECK(get(h, "/run/val/%30%30%30_scale0.png").body == "PNGDATA");  // percent-encoded name
+  CHECK(get(h, "/run/val/missing.png").status == 404);
+  CHECK(get(h, "/run/val").status == 404);  // a folder is not a file
+  CHECK(get(h, "/nowhere").status == 404);
+}
+
+TEST_CASE("handler: refuses every path out of the run folder") {
+  RunFixture f;
+  const Handler h(options_for(f), nullptr);
+  for (const char* target : {"/run/../secret.txt", "/run/val/../../secret.txt", "/run/%2e%2e/secret.txt",
+                             "/run/%2E%2E%2Fsecret.txt", "/run/val/%2e%2e/%2e%2e/secret.txt", "/run//etc/passwd",
+                             "/run/%2fetc%2fpasswd", "/run/..%5csecret.txt", "/run/val%00.png", "/run/%zz",
+                             "/run/%", "/run/%4"}) {
+    CAPTURE(target);
+    const Response r = get(h, target);
+    CHECK(r.status >= 400);
+    CHECK(r.body.find("top secret") == std::string::npos);
+  }
+  const std::string absolute = "/run/" + f.secret.string();  // "/run//tmp/.../secret.txt"
+  CHECK(get(h, absolute).status == 404);
+}
+
+TEST_CASE("handler: refuses a symlink that leads out of the run folder, serves one that stays inside") {
+  RunFixture f;
+  fs::create_symlink(f.secret, f.run / "link_out.txt");
+  fs::create_directory_symlink(f.scratch.path(), f.run / "dir_out");
+  fs::create_symlink(f.run / "val" / "000_scale0.png", f.run / "link_in.png");
+  const Handler h(options_for(f), nullptr);
+  CHECK(get(h, "/run/link_out.txt").status == 404);
+  CHECK(get(h, "/run/dir_out/secret.txt").status == 404);
+  const Response inside = get(h, "/run/link_in.png");
+  CHECK(inside.status == 200);
+  CHECK(inside.body == "PNGDATA");
+  // resolve_inside on its own: the same answers.
+  const std::string root = fs::canonical(f.run).string();
+  CHECK(resolve_inside(root, "link_out.txt").empty());
+  CHECK(resolve_inside(root, "../secret.txt").empty());
+  CHECK(resolve_inside(root, f.secret.string()).empty());
+  CHECK(resolve_inside(root, "val/000_scale0.png") == (fs::canonical(f.run) / "val" / "000_scale0.png").string());
+}
+
+TEST_CASE("handler: a folder whose name extends the run folder's is outside it") {
+  RunFixture f;
+  write_file(fs::path(f.scratch.path()) / "run2" / "x.txt", "sibling");
+  fs::create_symlink(fs::path(f.scratch.path()) / "run2" / "x.txt", f.run / "sibling.txt");
+  const Handler h(options_for(f), nullptr);
+  CHECK(get(h, "/run/sibling.txt").status == 404);  // "/…/run2/x.txt" starts with "/…/run" as text, not as a path
+}
+
+TEST_CASE("handler: a token is required when one is set, and compared whole") {
+  RunFixture f;
+  HandlerOptions options = options_for(f);
+  options.token = "0123456789abcdef";
+  const Handler h(options, nullptr);
+  CHECK(get(h, "/").status == 403);
+  CHECK(get(h, "/api/run").status == 403);
+  CHECK(get(h, "/run/val/000_scale0.png").status == 403);
+  CHECK(get(h, "/?token=0123456789abcde").status == 403);
+  CHECK(get(h, "/?token=0123456789abcdef0").status == 403);
+  CHECK(get(h, "/?token=").status == 403);
+  CHECK(get(h, "/?tokenx=0123456789abcdef").status == 403);
+  CHECK(get(h, "/?token=0123456789abcdef").status == 200);
+  CHECK(get(h, "/run/val/000_scale0.png?x=1&token=0123456789abcdef").body == "PNGDATA");
+  CHECK(get(h, "/?token=%30123456789abcdef").status == 200);  // percent-encoded: the same token
+  CHECK(same_secret("abc", "abc"));
+  CHECK_FALSE(same_secret("abc", "abd"));
+  CHECK_FALSE(same_secret("abc", "ab"));
+  CHECK_FALSE(same_secret("", "a"));
+}
+
+TEST_CASE("handler: without a token, loopback serves everything") {
+  RunFixture f;
+  const Handler h(options_for(f), nullptr);
+  CHECK(get(h, "/?token=anything").status == 200);
+}
+
+TEST_CASE("handler: bounds the request size") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const std::string huge(h.options().max_body_bytes + 1, ' ');
+  CHECK(post(h, "/api/render", huge).status == 413);
+  CHECK(get(h, "/" + std::string(h.options().max_target_bytes, 'a')).status == 414);
+  CHECK(backend.calls == 0);
+}
+
+TEST_CASE("handler: malformed render requests are answered 400, never passed on") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  for (const std::string& body :
+       {std::string(""), std::string("{"), std::string("[]"), std::string("null"), std::string("{\"camera\": 1}"),
+        render_body(kCamera, 0, 1), render_body(kCamera, 65, 1), render_body(kCamera, -8, 1),
+        render_body(kCamera, 8, -1), render_body("[1, 2]", 8, 1), std::string(R"({"camera": {}, "divisor": 2.5, "generation": 1})"),
+        std::string(R"({"camera": {}, "divisor": "8", "generation": 1})"),
+        std::string(R"({"camera": {}, "divisor": 8, "generation": 1, "output": "normals"})"),
+        std::string(R"({"camera": {}, "divisor": 8, "generation": 1, "output": 3})"),
+        std::string("{\"camera\": {\"frames\": [}")}) {
+    CAPTURE(body);
+    CHECK(post(h, "/api/render", body).status == 400);
+  }
+  CHECK(backend.calls == 0);
+  CHECK(get(h, "/api/render").status == 405);
+  CHECK(post(h, "/", "").status == 405);
+}
+
+TEST_CASE("handler: a well-formed render request reaches the renderer with its camera, size and counter") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const Response r = post(h, "/api/render", render_body(kCamera, 4, 7));
+  REQUIRE(r.status == 200);
+  CHECK(r.content_type == "image/png");
+  CHECK(r.body == "P");
+  CHECK(backend.last.divisor == 4);
+  CHECK(backend.last.generation == 7);
+  CHECK(backend.last.output == "rgb");
+  CHECK(nlohmann::json::parse(backend.last.camera_json) == nlohmann::json::parse(kCamera));
+  bool size_header = false;
+  for (const auto& [name, value] : r.headers) size_header |= name == "X-Render-Size" && value == "8x6";
+  CHECK(size_header);
+}
+
+TEST_CASE("handler: the renderer's refusals become HTTP statuses") {
+  RunFixture f;
+  struct Refusing : FakeBackend {
+    RenderReply::Status status;
+    RenderReply render(const RenderRequest&) override {
+      RenderReply reply;
+      reply.status = status;
+      reply.message = "the page's camera: frames[0]: focal lengths must be positive and finite";
+      return reply;
+    }
+  } backend;
+  const Handler h(options_for(f), &backend);
+  const std::pair<RenderReply::Status, int> cases[] = {{RenderReply::Status::superseded, 409},
+                                                       {RenderReply::Status::busy, 503},
+                                                       {RenderReply::Status::bad_request, 400},
+                                                       {RenderReply::Status::failed, 500}};
+  for (const auto& [status, http] : cases) {
+    backend.status = status;
+    CHECK(post(h, "/api/render", render_body(kCamera, 1, 1)).status == http);
+  }
+  CHECK(post(h, "/api/render", render_body(kCamera, 1, 1)).body.find("focal lengths") != std::string::npos);
+}
+
+TEST_CASE("handler: the run's state: config, logs as numbers (a row being written left out), images, renderer") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const Response r = get(h, "/api/run");
+  REQUIRE(r.status == 200);
+  const auto state = nlohmann::json::parse(r.body);
+  CHECK(state["config"]["steps"] == 10);
+  CHECK(state["train_log"]["columns"] == nlohmann::json({"step", "wall_seconds", "loss", "psnr"}));
+  REQUIRE(state["train_log"]["rows"].size() == 2);  // "6,1.5,0.1" has no newline yet and a cell too few
+  CHECK(state["train_log"]["rows"][1][3] == 11.25);
+  CHECK(state["val_log"]["rows"][0][2] == 10.5);
+  CHECK(state["viewer"]["device"] == "fake");
+  REQUIRE(state["images"].size() == 2);
+  nlohmann::json eval_image;
+  for (const auto& im : state["images"]) {
+    if (im["folder"] == "eval/images") eval_image = im;
+  }
+  CHECK(eval_image["render"] == "eval/images/r_0.png");
+  CHECK(eval_image["gt"] == "eval/images/r_0_gt.png");
+  CHECK(eval_image["error"] == "eval/images/r_0_error.png");
+}
+
+TEST_CASE("handler: a long log is thinned to the row limit, keeping its last row") {
+  RunFixture f;
+  std::string csv = "step,psnr\n";
+  for (int i = 1; i <= 1000; ++i) csv += std::to_string(i) + "," + std::to_string(i * 0.01) + "\n";
+  write_file(f.run / "long.csv", csv);
+  const auto log = read_csv_log((f.run / "long.csv").string(), 100);
+  CHECK(log["rows"].size() <= 101);
+  CHECK(log["rows"].size() >= 100);
+  CHECK(log["rows"].back()[0] == 1000);
+  CHECK(read_csv_log((f.run / "none.csv").string()).is_null());
+}
+
+TEST_CASE("handler: percent-decoding and query values") {
+  std::string out;
+  CHECK(percent_decode("a%20b%2F", out));
+  CHECK(out == "a b/");
+  CHECK_FALSE(percent_decode("%", out));
+  CHECK_FALSE(percent_decode("%2", out));
+  CHECK_FALSE(percent_decode("%g0", out));
+  CHECK_FALSE(percent_decode("a%00b", out));
+  CHECK(query_value("a=1&token=x%41&b=2", "token") == "xA");
+  CHECK(query_value("tokens=1", "token").empty());
+  CHECK(query_value("", "token").empty());
+}
+
+TEST_CASE("handler: before the run's first checkpoint, renders wait (503); the renderer set later serves them") {
+  RunFixture f;
+  Handler h(options_for(f), nullptr);
+  CHECK(get(h, "/api/cameras").status == 503);
+  CHECK(post(h, "/api/render", render_body(kCamera, 8, 1)).status == 503);
+  CHECK(get(h, "/api/run").status == 200);  // the logs are shown meanwhile
+  FakeBackend backend;
+  h.set_backend(&backend);
+  CHECK(get(h, "/api/cameras").status == 200);
+  CHECK(post(h, "/api/render", render_body(kCamera, 8, 2)).status == 200);
+  CHECK(backend.calls == 1);
+}
+
+TEST_CASE("handler: a run folder made after the viewer started is served once it exists") {
+  io::TemporaryFolder scratch{fs::temp_directory_path(), "mipnerf-view-test-"};
+  HandlerOptions options;
+  options.run_folder = (fs::path(scratch.path()) / "later").string();
+  const Handler h(options, nullptr);
+  CHECK(get(h, "/run/val/a.png").status == 404);
+  CHECK(get(h, "/api/run").status == 200);
+  write_file(fs::path(options.run_folder) / "val" / "a.png", "A");
+  CHECK(get(h, "/run/val/a.png").body == "A");
+}
