@@ -6,9 +6,11 @@
 #   oclgrind   the kernel tests under the oclgrind simulator
 #   sanitizer  the suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh), but
 #              the `quality` tests
-#   fuzz       each fuzz target for 20 s, in that build
+#   fuzz       each fuzz target for 12 s, in that build
 #   intel      the suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI), but the
-#              `quality` tests
+#              `quality` tests and the tests of what does not depend on the OpenCL runtime: the CLI's (arguments,
+#              files, messages; the device work they start is the one the library's tests run here), the layering
+#              check, the reliability (SIGKILL, disk-full) and bench-report tests; the other stages run them
 # The `quality` tests (tests/quality/: a scene trained for hundreds of steps to a PSNR) run on PoCL alone: the code
 # they run is the code the train, eval and graph tests run in every stage, and their minutes there bought nothing
 # the others do not show (a sanitizer report or a runtime's wrong result fails those shorter tests the same way).
@@ -130,7 +132,7 @@ fi
 if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
     eval "$environment"
-    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality)$'
+    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench)$' -E '^(cli|layers): '
     if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM" full; fi
   else
     record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"

@@ -6,21 +6,30 @@
 #include <memory>
 
 #include "core/error.hpp"
-#include "parallel/world.hpp"
+#include "eval/image_output.hpp"
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "io/png.hpp"
+#include "parallel/world.hpp"
 #include "train/model.hpp"
 
 namespace mipnerf::eval {
 namespace fs = std::filesystem;
 namespace {
 
-// Writes a val render as folder/NNN_scaleK.png (view number, scale level).
-void write_val_png(const std::string& folder, const ImageScore& score, const RenderedImage& image) {
-  char name[64];
-  std::snprintf(name, sizeof(name), "%03zu_scale%u.png", score.index, score.scale_level);
-  io::write_png((fs::path(folder) / name).string(), image.width, image.height, 3, image.rgb.data());
+// Writes a val render as folder/NNN_scaleK.png (view number, scale level), and beside it its ground truth (_gt)
+// and error image (_error: mean |render − truth| × 4, as eval writes them), which `mipnerf-cl view` shows.
+void write_val_png(const std::string& folder, const ImageScore& score, const RenderedImage& image,
+                   const float* truth) {
+  char stem[64];
+  std::snprintf(stem, sizeof(stem), "%03zu_scale%u", score.index, score.scale_level);
+  const std::string path = (fs::path(folder) / stem).string();
+  io::write_png(path + ".png", image.width, image.height, 3, image.rgb.data());
+  if (truth == nullptr) return;
+  const size_t pixels = static_cast<size_t>(image.width) * image.height;
+  io::write_png(path + "_gt.png", image.width, image.height, 3, truth);
+  const std::vector<float> error = error_image(image.rgb.data(), truth, pixels, 4.0);
+  io::write_png(path + "_error.png", image.width, image.height, 3, error.data());
 }
 
 // The val split as the run's configuration loads it.
@@ -44,8 +53,8 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
   evaluate.max_views = static_cast<size_t>(c.val_views);
   evaluate.progress = options.val_progress;
   if (!options.val_image_folder.empty() && parallel::world().is_root()) {  // under mpirun, rank 0 writes
-    evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float*) {
-      write_val_png(options.val_image_folder, score, image);
+    evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float* truth) {
+      write_val_png(options.val_image_folder, score, image, truth);
     };
   }
   if (options.on_val_start) options.on_val_start(select_views(val, evaluate.max_views).size());

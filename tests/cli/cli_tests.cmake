@@ -378,6 +378,13 @@ mipnerf_add_checked_test("cli: train with val_every scores val views during trai
   --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every" --preset tiny
   --steps 6 --set val_every=3 --val_views 1)
 set_tests_properties("cli: train with val_every scores val views during training" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_val_every_clean" FIXTURES_SETUP cli_val_every)
+# Each val render of a run has its ground truth and error image beside it (what `mipnerf-cl view` shows beside it).
+add_test(NAME "cli: train writes each val render's ground truth and error image beside it"
+  COMMAND ${CMAKE_COMMAND} -E md5sum "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every/val/000_scale0.png"
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every/val/000_scale0_gt.png"
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every/val/000_scale0_error.png")
+set_tests_properties("cli: train writes each val render's ground truth and error image beside it"
+  PROPERTIES FIXTURES_REQUIRED cli_val_every)
 foreach(format svg png)
   mipnerf_add_checked_test("cli: plot draws a run's val curve as ${format}" EXPECT "wrote .*cli-val-every/curves.${format} \\(2 curves\\)"
   COMMAND mipnerf-cl plot

@@ -297,7 +297,7 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
   auto& ctx = test::test_context();
   std::mt19937 rng(26);
   std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
-  const size_t n_rays = 220, n_samples = 48;  // 10,560 rows
+  const size_t n_rays = test::batch_for_device(220, 32), n_samples = 48;  // 10,560 rows (1,536 under oclgrind)
   std::vector<float> origins, directions, radii, t_edges;
   for (size_t ray = 0; ray < n_rays; ++ray) {
     for (int a = 0; a < 3; ++a) {
