@@ -116,16 +116,8 @@ def main():
     parser.add_argument("--build", default="build")
     parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
     args = parser.parse_args()
-    json_path = os.path.join(RESULTS, "gemm_libs.json")
-    if args.report_only:
-        record = study_common.read_json(json_path)
-    else:
-        record = measure(args)
-        with open(json_path, "w") as f:
-            json.dump(record, f, indent=1)
-    report_md.write_report(os.path.join(RESULTS, "gemm_libs.md"), write_markdown(record),
-                           "python3 bench/gemm_libs.py --report-only")
-
+    report_md.measure_or_reload(RESULTS, "gemm_libs", "bench/gemm_libs.py", args.report_only, lambda: measure(args),
+                                write_markdown)
 
 if __name__ == "__main__":
     main()

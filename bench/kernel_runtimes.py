@@ -14,7 +14,6 @@ Writes bench/results/kernel_runtimes.json and .md (the .md from the .json; hand 
 
 import argparse
 import datetime
-import json
 import os
 import statistics
 import subprocess
@@ -133,16 +132,8 @@ def main():
     parser.add_argument("--build", default="build")
     parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
     args = parser.parse_args()
-    json_path = os.path.join(RESULTS, "kernel_runtimes.json")
-    if args.report_only:
-        record = study_common.read_json(json_path)
-    else:
-        record = measure(args)
-        with open(json_path, "w") as f:
-            json.dump(record, f, indent=1)
-    report_md.write_report(os.path.join(RESULTS, "kernel_runtimes.md"), write_markdown(record),
-                           "python3 bench/kernel_runtimes.py --report-only")
-
+    report_md.measure_or_reload(RESULTS, "kernel_runtimes", "bench/kernel_runtimes.py", args.report_only, lambda: measure(args),
+                                write_markdown)
 
 if __name__ == "__main__":
     main()

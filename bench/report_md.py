@@ -11,6 +11,7 @@ everything above that heading and copies the section, as it stands in the curren
 numbers and labels are changed in the script or the .json, never in the .md; commentary goes under the heading.
 """
 
+import json
 import os
 import subprocess
 
@@ -58,6 +59,22 @@ def write_report(md_path, generated, regen_command):
         f.write(text)
     os.replace(tmp, md_path)
     return text
+
+
+def measure_or_reload(results_dir, name, script, report_only, measure, write_markdown):
+    """A study's last step: its record (results_dir/NAME.json, re-read when report_only, else `measure()` written
+    there), then NAME.md written from it by `write_markdown(record)` (hand notes kept). Returns the record."""
+    json_path = os.path.join(results_dir, name + ".json")
+    if report_only:
+        with open(json_path) as f:
+            record = json.load(f)
+    else:
+        record = measure()
+        with open(json_path, "w") as f:
+            json.dump(record, f, indent=1)
+    write_report(os.path.join(results_dir, name + ".md"), write_markdown(record),
+                 f"python3 {script} --report-only")
+    return record
 
 
 def repo_commit(repo_dir):

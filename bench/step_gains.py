@@ -16,7 +16,6 @@ preset and setting, the median over rounds of the warm s/step median and rays/s,
 
 import argparse
 import datetime
-import json
 import os
 import statistics
 import subprocess
@@ -104,18 +103,10 @@ def main():
     parser.add_argument("--build", default="build")
     parser.add_argument("--report-only", action="store_true")
     args = parser.parse_args()
-    json_path = os.path.join(RESULTS, "step_gains.json")
-    if args.report_only:
-        record = study_common.read_json(json_path)
-    else:
-        if not args.cache:
-            parser.error("--cache is needed to measure (the tuned setting reads its tuning file)")
-        record = measure(args)
-        with open(json_path, "w") as f:
-            json.dump(record, f, indent=1)
-    report_md.write_report(os.path.join(RESULTS, "step_gains.md"), write_markdown(record),
-                           "python3 bench/step_gains.py --report-only")
-
+    if not args.report_only and not args.cache:
+        parser.error("--cache is needed to measure (the tuned setting reads its tuning file)")
+    report_md.measure_or_reload(RESULTS, "step_gains", "bench/step_gains.py", args.report_only, lambda: measure(args),
+                                write_markdown)
 
 if __name__ == "__main__":
     main()
