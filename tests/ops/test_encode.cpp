@@ -44,6 +44,24 @@ double feature_tolerance(double reference) { return 32 * kUnitRoundoff * std::ab
 
 // The fused kernel's work spread per row with a sincos every `sincos_every` degrees (1: a sincos per degree, the
 // features of ipe_fwd bit for bit).
+// The fused kernel's bound on feature i of [rows][96] (degrees 0..15): the feature's own 32u, plus 2^l times the
+// float mean's error (≤ 2u·|o| + 12u·|t·d|, test_gaussian) in the argument and the variance's (≤ 35u relative)
+// through the attenuation, twice those terms; with a sincos every K degrees the doubling's own bound adds
+// atten·(2^j·8u + (2^j − 1)·3u), j doublings since the last sincos (encode.cl); K = 1 never doubles.
+double fused_feature_tolerance(size_t i, const std::vector<double>& features, const std::vector<float>& origins,
+                               const std::vector<double>& means_ref, const std::vector<double>& covs_ref,
+                               size_t n_samples, int sincos_every) {
+  const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
+  const double scale = std::ldexp(1.0, static_cast<int>(l));
+  const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
+                          12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
+  const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
+  const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
+  const int doublings = static_cast<int>(l) % sincos_every;
+  const double doubling = doublings > 0 ? atten * ref::doubling_error_bound(doublings) : 0.0;
+  return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err) + doubling;
+}
+
 ops::EncodeTuning per_row_every(int sincos_every) {
   ops::EncodeTuning tuning;
   tuning.fused_items = ops::EncodeTuning::FusedItems::per_row;
@@ -282,13 +300,7 @@ TEST_CASE("encode: zero radius, axis-aligned and zero directions - IPE is PE of 
     // The fused test's bound: the feature's own 32u, plus 2^l times the float mean's error (≤ 2u·|o| + 12u·|t·d|,
     // test_gaussian) in the argument and the variance's (≤ 35u relative) through the attenuation; twice those terms.
     MIPNERF_CHECK_CLOSE("zero-radius and axis-aligned features", fused_values, features, [&](size_t i) {
-      const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
-      const double scale = std::ldexp(1.0, static_cast<int>(l));
-      const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
-                              12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
-      const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
-      const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
-      return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err);
+      return fused_feature_tolerance(i, features, origins, means_ref, covs_ref, n_samples, 1);
     });
   }
 }
@@ -350,19 +362,9 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
     std::vector<double> means_ref, covs_ref;
     ref::gaussian_fwd({shape}, test::to_double(origins), test::to_double(directions), test::to_double(radii),
                       test::to_double(t_edges), means_ref, covs_ref, n_rays, n_samples);
-    // With a sincos every K degrees (K = 1 here) the doubling's own bound adds atten·(2^j·8u + (2^j − 1)·3u), j
-    // doublings since the last sincos (encode.cl); K = 1 never doubles.
     auto tolerance = [&](int sincos_every) {
       return [&, sincos_every](size_t i) {
-        const size_t row = i / 96, k = i % 96, l = (k % 48) / 3, a = k % 3, ray = row / n_samples;
-        const double scale = std::ldexp(1.0, static_cast<int>(l));
-        const double mean_err = 2 * kUnitRoundoff * std::abs(origins[3 * ray + a]) +
-                                12 * kUnitRoundoff * std::abs(means_ref[3 * row + a] - origins[3 * ray + a]);
-        const double var_err = 35 * kUnitRoundoff * covs_ref[3 * row + a] * scale * scale / 2;
-        const double atten = std::exp(-0.5 * covs_ref[3 * row + a] * scale * scale);
-        const int doublings = static_cast<int>(l) % sincos_every;
-        const double doubling = doublings > 0 ? atten * ref::doubling_error_bound(doublings) : 0.0;
-        return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err) + doubling;
+        return fused_feature_tolerance(i, features, origins, means_ref, covs_ref, n_samples, sincos_every);
       };
     };
     MIPNERF_CHECK_CLOSE("gaussian_ipe features", fused_values, features, tolerance(1));
