@@ -118,7 +118,9 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
   for (const char* flag : {"--radius", "--elevation", "--azimuth", "--fov", "--focal"}) {
     if (given(cmd, flag) && !orbit) throw Error(std::string(flag) + " applies to --path orbit only");
   }
-  if (given(cmd, "--frames") && !orbit && !spiral) throw Error("--frames applies to --path orbit or spiral only");
+  if (given(cmd, "--frames") && args.path.empty()) {
+    throw Error("--frames applies to --path (orbit, spiral, or a camera path file whose frames are keyframes)");
+  }
   if (given(cmd, "--fov") && given(cmd, "--focal")) throw Error("give --fov or --focal, not both");
   if (given(cmd, "--fov") && !(args.fov > 0.0 && args.fov < 180.0)) {
     throw Error("--fov " + std::to_string(args.fov) + ": the horizontal field of view must lie in (0, 180) degrees");
@@ -163,7 +165,9 @@ eval::ViewFrames frames_of(const RenderArgs& args, const CLI::App& cmd, const tr
     return eval::orbit_views(model, orbit, resolution);
   }
   if (args.path == "spiral") return eval::spiral_views(model, checkpoint, args.data, args.frames, resolution);
-  if (!args.path.empty()) return eval::path_views(model, args.path, resolution);
+  if (!args.path.empty()) {  // with --frames, the file's frames are keyframes of a smooth path of that many frames
+    return eval::path_views(model, args.path, resolution, given(cmd, "--frames") ? args.frames : 0);
+  }
   eval::SplitViewRequest split;
   split.data = args.data;
   split.split = args.split.empty() ? "test" : args.split;
@@ -243,7 +247,10 @@ void register_render(CLI::App& app) {
   cmd->add_option("--radius", args->radius, "Orbit: distance from the target (default: the training cameras' mean)");
   cmd->add_option("--elevation", args->elevation, "Orbit: degrees above the horizontal plane")->capture_default_str();
   cmd->add_option("--azimuth", args->azimuth, "Orbit: azimuth of the first frame, degrees")->capture_default_str();
-  cmd->add_option("--frames", args->frames, "Orbit: number of frames")->capture_default_str();
+  cmd->add_option("--frames", args->frames,
+                  "Orbit or spiral: number of frames; with a camera path file: interpolate its frames as keyframes to "
+                  "this many (Catmull-Rom positions, slerped rotations)")
+      ->capture_default_str();
   cmd->add_option("--fov", args->fov, "Orbit: horizontal field of view, degrees (default: the training camera's)");
   cmd->add_option("--focal", args->focal, "Orbit: focal length in pixels of the output size");
   // Resolution.

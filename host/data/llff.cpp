@@ -142,7 +142,16 @@ LlffCapture read_llff(const std::string& dir, const LoadOptions& options) {
     capture.image_dir = (fs::path(dir) / "images").string();
   }
   if (!fs::is_directory(capture.image_dir, ec)) {
-    throw Error(dir + ": an LLFF capture without its images: expected " + capture.image_dir + "/");
+    // What the capture does hold (e.g. only images_8/, as the downsampled LLFF releases): say which factor reads it.
+    std::string present;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.is_directory(ec) && name.rfind("images_", 0) == 0) present += (present.empty() ? "" : ", ") + name;
+    }
+    throw Error(dir + ": an LLFF capture without its images at factor " + std::to_string(options.factor) +
+                ": expected " + capture.image_dir + "/" +
+                (present.empty() ? std::string()
+                                 : " (it holds " + present + "/: give --set factor=N to train on images_N/)"));
   }
   capture.image_files = list_images(capture.image_dir);
   if (capture.image_files.size() != capture.camera_to_world.size()) {

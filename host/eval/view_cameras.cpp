@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "data/formats/formats.hpp"
+#include "data/keyframes.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
 #include "eval/render_setup.hpp"
@@ -139,17 +140,43 @@ data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
   return defaults;
 }
 
-ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
-                      const data::ResolutionRequest& resolution) {
-  const data::CameraPathDefaults defaults = camera_path_defaults(model, resolution);
+namespace {
+
+ViewFrames frames_along(const std::vector<Camera>& file_cameras, const data::ResolutionRequest& resolution,
+                        uint32_t interpolated_frames) {
+  const std::vector<Camera> cameras =
+      interpolated_frames > 0 ? data::interpolate_keyframes(file_cameras, interpolated_frames) : file_cameras;
   ViewFrames frames;
-  frames.source = "the camera path " + path_file;
-  frames.default_folder = "render_" + fs::path(path_file).stem().string();
-  for (const auto& camera : data::read_camera_path(path_file, defaults)) {
+  for (const auto& camera : cameras) {
     frames.cameras.push_back(data::resize_camera(camera, resolution));
     frames.stems.push_back(frame_stem(frames.stems.size()));
   }
+  return frames;
+}
+
+}  // namespace
+
+ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
+                      const data::ResolutionRequest& resolution, uint32_t interpolated_frames) {
+  const data::CameraPathDefaults defaults = camera_path_defaults(model, resolution);
+  const std::vector<Camera> file_cameras = data::read_camera_path(path_file, defaults);
+  ViewFrames frames = frames_along(file_cameras, resolution, interpolated_frames);
+  frames.source = "the camera path " + path_file;
+  frames.default_folder = "render_" + fs::path(path_file).stem().string();
   frames.details = {{"kind", "path"}, {"file", fs::absolute(path_file).lexically_normal().string()}};
+  if (interpolated_frames > 0) frames.details["keyframes"] = file_cameras.size();
+  return frames;
+}
+
+ViewFrames path_views(const train::TrainedModel& model, const nlohmann::json& path, const std::string& source,
+                      const data::ResolutionRequest& resolution, uint32_t interpolated_frames) {
+  const data::CameraPathDefaults defaults = camera_path_defaults(model, resolution);
+  const std::vector<Camera> file_cameras = data::camera_path_from_json(path, source, defaults);
+  ViewFrames frames = frames_along(file_cameras, resolution, interpolated_frames);
+  frames.source = source;
+  frames.default_folder = "render_path";
+  frames.details = {{"kind", "path"}, {"source", source}};
+  if (interpolated_frames > 0) frames.details["keyframes"] = file_cameras.size();
   return frames;
 }
 

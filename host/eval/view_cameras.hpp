@@ -62,8 +62,13 @@ data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
                                               const data::ResolutionRequest& resolution);
 
 // The cameras of a transforms-style camera path file (data::read_camera_path), near/far defaulting to the model's.
+// With interpolated_frames > 0 the file's frames are keyframes and the path is that many frames along them
+// (data::interpolate_keyframes): a few recorded views become a smooth video.
 ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
-                      const data::ResolutionRequest& resolution);
+                      const data::ResolutionRequest& resolution, uint32_t interpolated_frames = 0);
+// The same from a camera path's JSON (the viewer's recorded keyframes); `source` names it in errors and records.
+ViewFrames path_views(const train::TrainedModel& model, const nlohmann::json& path, const std::string& source,
+                      const data::ResolutionRequest& resolution, uint32_t interpolated_frames);
 
 // The full-resolution training cameras of `data`, else of the checkpoint's data when it still exists; empty when
 // neither is there.

@@ -170,6 +170,16 @@ Response Handler::route(const std::string& method, const std::string& path, cons
   }
   if (method == "GET" && path.rfind("/run/", 0) == 0) return serve_run_file(path.substr(5));
   if (method == "POST" && path == "/api/render") return render(request.body);
+  if (path == "/api/path" || path == "/api/path/cancel") {
+    if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+    if (method == "GET" && path == "/api/path") return json_response(backend->path_status_json());
+    if (method == "POST" && path == "/api/path") return start_path(request.body);
+    if (method == "POST") {
+      backend->cancel_path();
+      return json_response(backend->path_status_json());
+    }
+    return text(405, "method not allowed");
+  }
   if (path == "/" || path == "/api/run" || path == "/api/cameras" || path == "/api/render") {
     return text(405, "method not allowed");
   }
@@ -228,11 +238,45 @@ Response Handler::render(const std::string& body) const {
       return r;
     }
     case RenderReply::Status::superseded: return text(409, "superseded by a newer view");
-    case RenderReply::Status::busy: return text(503, "too many renders waiting");
+    case RenderReply::Status::busy: return text(503, reply.message.empty() ? "too many renders waiting" : reply.message);
     case RenderReply::Status::bad_request: return text(400, reply.message);
     case RenderReply::Status::failed: return text(500, reply.message);
   }
   return text(500, "unknown render status");
+}
+
+Response Handler::start_path(const std::string& body) const {
+  const nlohmann::json j = nlohmann::json::parse(body, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return text(400, "the path request is not a JSON object");
+  PathRequest req;
+  int64_t frames = 0, divisor = 0;
+  if (!integer_in(j, "frames", 1, 3600, frames)) return text(400, "'frames' must be an integer in 1..3600");
+  if (!integer_in(j, "divisor", 1, 64, divisor)) return text(400, "'divisor' must be an integer in 1..64");
+  req.frames = static_cast<uint32_t>(frames);
+  req.divisor = static_cast<int>(divisor);
+  if (j.contains("fps")) {
+    const auto& fps = j["fps"];
+    if (!fps.is_number() || !(fps.get<double>() > 0.0 && fps.get<double>() <= 120.0)) {
+      return text(400, "'fps' must be a number in (0, 120]");
+    }
+    req.fps = fps.get<double>();
+  }
+  const auto keyframes = j.find("keyframes");
+  if (keyframes == j.end() || !keyframes->is_object()) return text(400, "'keyframes' must be a camera path object");
+  req.keyframes_json = keyframes->dump();
+  RenderBackend* backend = backend_.load();
+  if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+  const PathReply reply = backend->start_path(req);
+  switch (reply.status) {
+    case PathReply::Status::started: {
+      Response r = json_response(backend->path_status_json());
+      r.status = 202;
+      return r;
+    }
+    case PathReply::Status::busy: return text(409, reply.message);
+    case PathReply::Status::bad_request: return text(400, reply.message);
+  }
+  return text(500, "unknown path status");
 }
 
 }  // namespace mipnerf::view

@@ -47,11 +47,35 @@ struct RenderReply {
   std::string message;   // why, when not ok
 };
 
+// A path recorded in the page, to render into the run folder as frames and a video (as `render --path FILE
+// --frames N --video` would): its keyframes, the frames along them, the divisor of the keyframes' size, the video's
+// frame rate.
+struct PathRequest {
+  std::string keyframes_json;  // {"frames": [{transform_matrix, fl_x, fl_y, cx, cy, w, h}, ...]}
+  uint32_t frames = 60;
+  int divisor = 1;
+  double fps = 30.0;
+};
+
+struct PathReply {
+  enum class Status { started, busy, bad_request };
+  Status status = Status::started;
+  std::string message;  // why, when not started
+};
+
 // What renders the page's cameras: a trained model on a device (view/view_renderer), or a test double.
 class RenderBackend {
  public:
   virtual ~RenderBackend() = default;
   virtual RenderReply render(const RenderRequest& request) = 0;
+  // Starts rendering a recorded path in the background (one at a time) and returns at once.
+  virtual PathReply start_path(const PathRequest& request) = 0;
+  // The path render's progress, as JSON text: {"state": "idle" | "rendering" | "done" | "failed" | "cancelled",
+  // "frames_done", "frames", "seconds", "eta_seconds", "folder" (run-relative), "video" (run-relative, "" without
+  // one), "first_frame" (run-relative), "message"}.
+  virtual std::string path_status_json() = 0;
+  // Asks a running path render to stop after its current chunk of rays (its partial video is not kept).
+  virtual void cancel_path() = 0;
   // The cameras to start from, as JSON text: {"train": [frames], "orbit": {...}} (see view_renderer.hpp).
   virtual std::string cameras_json() = 0;
   // The device and the checkpoint it renders, as JSON text.
@@ -79,6 +103,7 @@ class Handler {
   Response route(const std::string& method, const std::string& path, const Request& request) const;
   Response serve_run_file(const std::string& relative) const;
   Response render(const std::string& body) const;
+  Response start_path(const std::string& body) const;
 
   HandlerOptions options_;
   std::string run_root_;  // canonical run folder

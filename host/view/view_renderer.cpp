@@ -2,6 +2,7 @@
 #include "view/view_renderer.hpp"
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -15,12 +16,27 @@
 #include "eval/render_setup.hpp"
 #include "eval/view_cameras.hpp"
 #include "io/png.hpp"
+#include "io/video.hpp"
 
 namespace mipnerf::view {
 namespace fs = std::filesystem;
 namespace {
 
 struct Superseded {};  // thrown from the chunk callback when a newer request arrived
+struct PathCancelled {};  // thrown from a path render's progress callback when the page cancelled it
+
+// A new folder for a path render, run-relative: view_paths/path_20261126T081500Z (…_2, _3 when taken).
+std::string new_path_folder(const std::string& run_folder) {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
+  const std::string base = std::string("view_paths/path_") + stamp;
+  std::string folder = base;
+  for (int n = 2; fs::exists(fs::path(run_folder) / folder); ++n) folder = base + "_" + std::to_string(n);
+  return folder;
+}
 
 RenderReply answer(RenderReply::Status status, const std::string& message = "") {
   RenderReply reply;
@@ -73,11 +89,20 @@ std::string load_newest(ocl::Context& ctx, const std::string& run_folder, int64_
 
 // Where the page's camera starts: the training cameras and an orbit fitted to them (Blender's default orbit when the
 // training data is gone).
-std::string start_cameras(const train::TrainedModel& model) {
+std::string start_cameras(const train::TrainedModel& model, const std::string& checkpoint) {
   nlohmann::json out;
   out["train"] = nlohmann::json::array();
   const std::vector<Camera> train = eval::training_cameras(model, "");
   for (const Camera& c : train) out["train"].push_back(frame_json(c));
+  // A forward-facing capture's official render path (the spiral `render --path spiral` follows), when the run's data
+  // is an LLFF capture that still exists; the page starts from it and `spin` walks along it.
+  out["spiral"] = nlohmann::json::array();
+  try {
+    for (const Camera& c : eval::spiral_views(model, checkpoint, "", 120, {}).cameras) {
+      out["spiral"].push_back(frame_json(c));
+    }
+  } catch (const Error&) {  // not an LLFF capture, or its data is gone: no spiral to offer
+  }
   data::OrbitOptions orbit;
   if (!train.empty()) {
     orbit = data::orbit_around(train);
@@ -113,11 +138,14 @@ ViewRenderer::ViewRenderer(ocl::Context& ctx, ViewRendererOptions options) : ctx
   eval::ImageRenderer renderer(ctx, model_->spec, model_->network_pointers(), start.cameras,
                                eval::RenderSettings{chunk_rays_, 1, 0});
   warm_up_seconds_ = renderer.warm_up();
-  cameras_json_ = start_cameras(*model_);
+  cameras_json_ = start_cameras(*model_, checkpoint_);
   step_ = model_->step;
 }
 
-ViewRenderer::~ViewRenderer() = default;
+ViewRenderer::~ViewRenderer() {
+  path_cancel_ = true;
+  if (path_thread_.joinable()) path_thread_.join();
+}
 
 int64_t ViewRenderer::step() const {
   std::lock_guard<std::mutex> lock(info_mutex_);
@@ -142,6 +170,13 @@ RenderReply ViewRenderer::render(const RenderRequest& request) {
   }
   auto superseded = [&] { return newest_generation_.load() > request.generation; };
   if (superseded()) return answer(RenderReply::Status::superseded);
+  if (path_running_) {
+    std::lock_guard<std::mutex> lock(path_mutex_);
+    return answer(RenderReply::Status::busy, "the device is rendering the recorded path (frame " +
+                                                 std::to_string(path_status_.frames_done + 1) + "/" +
+                                                 std::to_string(path_status_.frames) +
+                                                 "); the free camera renders again once it ends or is cancelled");
+  }
   if (waiting_.fetch_add(1) >= options_.max_waiting) {
     waiting_.fetch_sub(1);
     return answer(RenderReply::Status::busy);
@@ -185,6 +220,114 @@ RenderReply ViewRenderer::render(const RenderRequest& request) {
     return answer(RenderReply::Status::bad_request, e.what());
   }
 }
+
+PathReply ViewRenderer::start_path(const PathRequest& request) {
+  PathReply reply;
+  if (path_running_) {
+    reply.status = PathReply::Status::busy;
+    reply.message = "a path is rendering already: wait for it, or cancel it first";
+    return reply;
+  }
+  if (path_thread_.joinable()) path_thread_.join();  // the previous path's thread has ended
+  eval::ViewFrames frames;
+  eval::VideoOutput video;
+  const std::string folder = new_path_folder(options_.run_folder);
+  try {
+    std::lock_guard<std::mutex> lock(device_mutex_);
+    data::ResolutionRequest size;
+    if (request.divisor > 1) size.scale = 1.0 / request.divisor;
+    frames = eval::path_views(*model_, nlohmann::json::parse(request.keyframes_json), "the viewer's recorded path",
+                              size, request.frames);
+    for (const Camera& c : frames.cameras) {
+      if (static_cast<uint64_t>(c.width_px) * c.height_px > options_.max_pixels) {
+        throw Error("the path's frames are larger than the viewer renders");
+      }
+    }
+    if (io::video_supported()) {
+      video.path = (fs::path(options_.run_folder) / folder / "path.mp4").string();
+      video.fps = request.fps;
+      eval::check_video_output(video, frames);
+    }
+  } catch (const std::exception& e) {  // mipnerf::Error, or the keyframes' JSON
+    std::error_code ec;
+    fs::remove(fs::path(options_.run_folder) / folder, ec);  // the video check's probe made it; only if empty
+    reply.status = PathReply::Status::bad_request;
+    reply.message = e.what();
+    return reply;
+  }
+  {
+    std::lock_guard<std::mutex> lock(path_mutex_);
+    path_status_ = PathStatus{};
+    path_status_.state = "rendering";
+    path_status_.frames = frames.cameras.size();
+    path_status_.folder = folder;
+  }
+  path_cancel_ = false;
+  path_running_ = true;
+  path_thread_ = std::thread([this, frames = std::move(frames), folder, video]() mutable {
+    render_path(std::move(frames), folder, video);
+  });
+  return reply;
+}
+
+void ViewRenderer::render_path(eval::ViewFrames frames, std::string folder, eval::VideoOutput video) {
+  const auto started = std::chrono::steady_clock::now();
+  auto seconds_since_start = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
+  std::string state = "done", message;
+  try {
+    std::lock_guard<std::mutex> device(device_mutex_);
+    eval::RenderJob job;
+    job.model = model_.get();
+    {
+      std::lock_guard<std::mutex> info(info_mutex_);
+      job.checkpoint = checkpoint_;
+    }
+    job.chunk_rays = chunk_rays_;
+    const size_t frame_count = frames.cameras.size();
+    job.progress = [&](size_t done, size_t total, const std::string&) {
+      if (path_cancel_) throw PathCancelled{};
+      std::lock_guard<std::mutex> lock(path_mutex_);
+      const double fraction = total == 0 ? 0.0 : static_cast<double>(done) / static_cast<double>(total);
+      path_status_.frames_done = static_cast<size_t>(fraction * static_cast<double>(frame_count));
+      path_status_.seconds = seconds_since_start();
+      path_status_.eta_seconds = fraction > 0.0 ? path_status_.seconds * (1.0 - fraction) / fraction : 0.0;
+    };
+    const eval::RenderedFrames rendered = eval::render_frames(
+        *ctx_, job, frames, (fs::path(options_.run_folder) / folder).string(), eval::parse_output_formats("png"), video);
+    std::lock_guard<std::mutex> lock(path_mutex_);
+    path_status_.frames_done = frame_count;
+    path_status_.video = rendered.video.empty() ? "" : folder + "/" + fs::path(rendered.video).filename().string();
+    path_status_.first_frame = folder + "/" + frames.stems.front() + ".png";
+  } catch (const PathCancelled&) {
+    ctx_->queue().finish();
+    state = "cancelled";
+    message = "cancelled from the page; the frames rendered so far are kept, the video is not";
+  } catch (const std::exception& e) {
+    state = "failed";
+    message = e.what();
+  }
+  {
+    std::lock_guard<std::mutex> lock(path_mutex_);
+    path_status_.state = state;
+    path_status_.message = message;
+    path_status_.seconds = seconds_since_start();
+    path_status_.eta_seconds = 0.0;
+  }
+  path_running_ = false;
+}
+
+std::string ViewRenderer::path_status_json() {
+  std::lock_guard<std::mutex> lock(path_mutex_);
+  const PathStatus& p = path_status_;
+  return nlohmann::json{{"state", p.state},       {"frames_done", p.frames_done}, {"frames", p.frames},
+                        {"seconds", p.seconds},   {"eta_seconds", p.eta_seconds}, {"folder", p.folder},
+                        {"video", p.video},       {"first_frame", p.first_frame}, {"message", p.message}}
+      .dump();
+}
+
+void ViewRenderer::cancel_path() { path_cancel_ = true; }
 
 std::string ViewRenderer::cameras_json() { return cameras_json_; }
 

@@ -11,8 +11,11 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "cl/context.hpp"
+#include "eval/render_job.hpp"
+#include "eval/view_cameras.hpp"
 #include "train/checkpoint.hpp"
 #include "view/handler.hpp"
 
@@ -39,10 +42,24 @@ class ViewRenderer : public RenderBackend {
   // {"device", "step", "checkpoint", "warm_up_seconds"}
   std::string status_json() override;
 
+  // A recorded path renders into RUN/view_paths/path_<UTC time>/ (frame_NNNN.png, transforms.json, render.json and,
+  // in a build with video, path.mp4) on a thread of its own, holding the device frame after frame; meanwhile the free
+  // camera's renders answer "busy" with the path's progress.
+  PathReply start_path(const PathRequest& request) override;
+  std::string path_status_json() override;
+  void cancel_path() override;
+
   int64_t step() const;
 
  private:
+  struct PathStatus {
+    std::string state = "idle";  // idle | rendering | done | failed | cancelled
+    size_t frames_done = 0, frames = 0;
+    double seconds = 0.0, eta_seconds = 0.0;
+    std::string folder, video, first_frame, message;  // run-relative paths
+  };
   void reload_if_newer();  // with device_mutex_ held
+  void render_path(eval::ViewFrames frames, std::string folder, eval::VideoOutput video);  // the path thread
 
   ocl::Context* ctx_;
   ViewRendererOptions options_;
@@ -56,6 +73,11 @@ class ViewRenderer : public RenderBackend {
   double warm_up_seconds_ = 0.0;
   std::atomic<uint64_t> newest_generation_{0};
   std::atomic<size_t> waiting_{0};
+  std::thread path_thread_;
+  std::atomic<bool> path_running_{false};
+  std::atomic<bool> path_cancel_{false};
+  mutable std::mutex path_mutex_;  // path_status_
+  PathStatus path_status_;
 };
 
 }  // namespace mipnerf::view

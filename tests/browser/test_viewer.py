@@ -32,7 +32,8 @@ import zlib
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
 CHECKS = ["train a tiny run", "view serves the page", "curves are drawn", "val images are shown",
-          "drag renders a full-size frame", "the frame equals mipnerf-cl render", "screenshot", "Ctrl-C stops view"]
+          "drag renders a full-size frame", "the frame equals mipnerf-cl render",
+          "a recorded path renders as frames and a video, as render --frames does", "screenshot", "Ctrl-C stops view"]
 
 
 class Report:
@@ -235,6 +236,43 @@ def main():
         if a != b and db < 50:
             raise AssertionError(f"the page's frame differs from render's: {db:.2f} dB < 50 dB")
 
+    def record_path():
+        # Two keyframes (the dragged view, then one more drag), rendered by the server from the page's button.
+        driver.find_element(By.ID, "add-key").click()
+        canvas = driver.find_element(By.ID, "view")
+        ActionChains(driver).move_to_element(canvas).click_and_hold().move_by_offset(-80, -20).release().perform()
+        driver.find_element(By.ID, "add-key").click()
+        frames = driver.find_element(By.ID, "path-frames")
+        frames.clear()
+        frames.send_keys("6")
+        driver.find_element(By.ID, "render-path").click()
+        wait_for(lambda: driver.execute_script(
+            "return window.viewer.path && ['done', 'failed', 'cancelled'].includes(window.viewer.path.state)"), 60,
+            "the end of the path render")
+        status = driver.execute_script("return window.viewer.path")
+        if status["state"] != "done" or status["frames_done"] != 6:
+            raise AssertionError(f"path render ended {status}")
+        shown = driver.find_element(By.ID, "path-state").text
+        if "done: 6/6" not in shown:
+            raise AssertionError(f"the page shows {shown!r}")
+        folder = run_dir / status["folder"]
+        pngs = sorted(p.name for p in folder.glob("frame_*.png"))
+        if pngs != [f"frame_{i:04d}.png" for i in range(6)]:
+            raise AssertionError(f"{folder} holds {pngs}")
+        if status["video"] and (run_dir / status["video"]).stat().st_size == 0:
+            raise AssertionError(f"empty video {status['video']}")
+        keyframes = driver.execute_script("return window.viewer.keyframes")
+        (work / "keys.json").write_text(json.dumps({"frames": keyframes}))
+        run([exe, "render", "--checkpoint", str(run_dir), "--path", str(work / "keys.json"), "--frames", "6",
+             "--out", str(work / "render_keys")])
+        for i in (0, 3, 5):  # the keyframes' ends and a frame between them
+            a, wa, ha = decode_png_rgb8((folder / f"frame_{i:04d}.png").read_bytes())
+            b, wb, hb = decode_png_rgb8((work / "render_keys" / f"frame_{i:04d}.png").read_bytes())
+            if (wa, ha) != (wb, hb) or (a != b and psnr(a, b) < 50):
+                raise AssertionError(f"path frame {i} differs from render --frames 6's")
+        print(f"browser: path of 2 keyframes, 6 frames in {status['seconds']:.1f} s, video "
+              f"{status['video'] or '(none: no video in this build)'}", flush=True)
+
     def screenshot():
         path = pathlib.Path(args.screenshot) if args.screenshot else work / "viewer.png"
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -254,8 +292,9 @@ def main():
         check(CHECKS[3], images)
         dragged = check(CHECKS[4], drag)
         check(CHECKS[5], lambda: compare(dragged))
-        check(CHECKS[6], screenshot)
-        check(CHECKS[7], stop)
+        check(CHECKS[6], record_path)
+        check(CHECKS[7], screenshot)
+        check(CHECKS[8], stop)
     finally:
         if driver:
             driver.quit()

@@ -305,9 +305,17 @@ mipnerf_add_cli_error_test("train: a batch beyond the device's memory" PATTERN "
   ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad" --preset tiny
        --batch_size 2147483647)
 set_tests_properties("cli: train: a batch beyond the device's memory" PROPERTIES FIXTURES_REQUIRED cli_scene)
+mipnerf_add_checked_test("cli: render a camera path's frames as keyframes of a longer path" EXPECT "rendered 5 frames of the camera path .*two_keyframes_path.json \\(16x16\\)"
+  COMMAND mipnerf-cl render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/two_keyframes_path.json"
+  --frames 5 --out "${MIPNERF_RENDER_RUN}/render_keyframes")
+set_tests_properties("cli: render a camera path's frames as keyframes of a longer path" PROPERTIES FIXTURES_REQUIRED cli_render_model)
+mipnerf_add_cli_error_test("render: fewer frames than keyframes" PATTERN "1 frames for 2 keyframes would skip keyframes \\(give --frames of at least"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/two_keyframes_path.json" --frames 1)
+mipnerf_add_cli_error_test("render: --frames without a path" PATTERN "--frames applies to --path"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --split test --frames 4)
 mipnerf_add_cli_error_test("render: spiral of a Blender scene" PATTERN "--path spiral follows an LLFF capture's cameras"
   ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path spiral)
-foreach(name "render: spiral of a Blender scene" "render: a chunk beyond the device's memory" "render: malformed camera path file" "render: camera path frame without a pose"
+foreach(name "render: spiral of a Blender scene" "render: fewer frames than keyframes" "render: a chunk beyond the device's memory" "render: malformed camera path file" "render: camera path frame without a pose"
              "render: camera path without a size" "render: too many pixels" "render: elevation out of range"
              "render: unknown split" "eval: missing data")
   set_tests_properties("cli: ${name}" PROPERTIES FIXTURES_REQUIRED cli_render_model)

@@ -325,6 +325,13 @@ TEST_CASE("llff: malformed captures give one line naming the file") {
     expect(dir, "an LLFF capture without its images");
   }
   {
+    // Only another factor's folder (as the downsampled LLFF releases ship): the error names it and the setting.
+    const auto dir = copy_of_capture("llff-other-factor");
+    fs::remove_all(dir / "images");
+    fs::rename(dir / "images_4", dir / "images_8");
+    expect(dir, "it holds images_8/: give --set factor=N");
+  }
+  {
     // Finite but absurd: one camera 1e222 units away (a fuzzed file's; its render path was NaN), or a far bound of
     // 1e230 (both far beyond 1e6 × the nearest bound).
     const auto dir = copy_of_capture("llff-far-away");

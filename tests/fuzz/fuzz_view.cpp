@@ -4,12 +4,14 @@
 // a log, a config and an image, and a symlink to a file outside it. Every request must get a status in 200..599;
 // no response may contain the outside file's text; a render request's camera is read by the camera path reader the
 // real renderer uses (data::parse_camera_path), whose errors must be mipnerf::Error.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "core/error.hpp"
 #include "data/camera_path.hpp"
+#include "data/keyframes.hpp"
 #include "fuzz_support.hpp"
 #include "view/handler.hpp"
 
@@ -34,6 +36,21 @@ struct CameraReadingBackend : view::RenderBackend {
   }
   std::string cameras_json() override { return "{}"; }
   std::string status_json() override { return "{}"; }
+  // A path's keyframes go through the reader and the interpolation the real renderer uses (frames capped: the
+  // handler allows 3600, the fuzzer need not build them all).
+  view::PathReply start_path(const view::PathRequest& request) override {
+    view::PathReply reply;
+    try {
+      const auto keyframes = data::parse_camera_path(request.keyframes_json, "the viewer's recorded path", {});
+      const auto frames = data::interpolate_keyframes(keyframes, std::min<uint32_t>(request.frames, 64));
+      fuzz::check(!frames.empty(), "a path without frames was accepted");
+    } catch (const Error&) {
+      reply.status = view::PathReply::Status::bad_request;
+    }
+    return reply;
+  }
+  std::string path_status_json() override { return R"({"state": "idle"})"; }
+  void cancel_path() override {}
 };
 
 const fs::path& run_folder() {

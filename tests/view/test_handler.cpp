@@ -53,6 +53,25 @@ struct FakeBackend : RenderBackend {
   }
   std::string cameras_json() override { return R"({"train": []})"; }
   std::string status_json() override { return R"({"device": "fake", "step": 4})"; }
+  // Paths: records the request; a second start while "rendering" is busy, as the real renderer's.
+  PathRequest last_path;
+  bool path_rendering = false;
+  bool path_cancelled = false;
+  PathReply start_path(const PathRequest& request) override {
+    PathReply reply;
+    if (path_rendering) {
+      reply.status = PathReply::Status::busy;
+      reply.message = "a path is rendering already";
+      return reply;
+    }
+    last_path = request;
+    path_rendering = true;
+    return reply;
+  }
+  std::string path_status_json() override {
+    return path_rendering ? R"({"state": "rendering", "frames": 12})" : R"({"state": "idle"})";
+  }
+  void cancel_path() override { path_cancelled = true; }
 };
 
 HandlerOptions options_for(const RunFixture& f) {
@@ -303,4 +322,68 @@ TEST_CASE("handler: a run folder made after the viewer started is served once it
   CHECK(get(h, "/api/run").status == 200);
   write_file(fs::path(options.run_folder) / "val" / "a.png", "A");
   CHECK(get(h, "/run/val/a.png").body == "A");
+}
+
+TEST_CASE("handler: a recorded path starts once, reports its progress, and can be cancelled") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const std::string body =
+      std::string(R"({"keyframes": )") + kCamera + R"(, "frames": 12, "divisor": 2, "fps": 24})";
+  CHECK(get(h, "/api/path").body.find("idle") != std::string::npos);
+  const Response started = post(h, "/api/path", body);
+  CHECK(started.status == 202);
+  CHECK(started.body.find("rendering") != std::string::npos);
+  CHECK(backend.last_path.frames == 12);
+  CHECK(backend.last_path.divisor == 2);
+  CHECK(backend.last_path.fps == 24.0);
+  CHECK(backend.last_path.keyframes_json.find("transform_matrix") != std::string::npos);
+  CHECK(post(h, "/api/path", body).status == 409);  // one path at a time
+  CHECK(get(h, "/api/path").body.find("rendering") != std::string::npos);
+  CHECK(post(h, "/api/path/cancel", "").status == 200);
+  CHECK(backend.path_cancelled);
+  CHECK(h.handle({"PUT", "/api/path", ""}).status == 405);
+  CHECK(h.handle({"GET", "/api/path/cancel", ""}).status == 405);
+}
+
+TEST_CASE("handler: a malformed path request is refused before the renderer sees it") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const std::string keys = std::string(R"("keyframes": )") + kCamera;
+  for (const std::string& body :
+       {std::string("not json"), std::string("[]"), std::string(R"({"frames": 12, "divisor": 1})"),
+        "{" + keys + R"(, "frames": 0, "divisor": 1})", "{" + keys + R"(, "frames": 3601, "divisor": 1})",
+        "{" + keys + R"(, "frames": 12, "divisor": 0})", "{" + keys + R"(, "frames": 1.5, "divisor": 1})",
+        "{" + keys + R"(, "frames": 12, "divisor": 1, "fps": 0})",
+        "{" + keys + R"(, "frames": 12, "divisor": 1, "fps": "fast"})",
+        std::string(R"({"keyframes": [], "frames": 12, "divisor": 1})")}) {
+    CAPTURE(body);
+    CHECK(post(h, "/api/path", body).status == 400);
+  }
+  CHECK_FALSE(backend.path_rendering);
+  const Handler without_model(options_for(f), nullptr);
+  CHECK(get(without_model, "/api/path").status == 503);
+}
+
+TEST_CASE("handler: multiscale val views are listed one per scale, each with its ground truth and error image") {
+  RunFixture f;
+  for (int scale = 0; scale < 4; ++scale) {
+    const std::string stem = "001_scale" + std::to_string(scale);
+    write_file(f.run / "val" / (stem + ".png"), "R");
+    write_file(f.run / "val" / (stem + "_gt.png"), "G");
+    write_file(f.run / "val" / (stem + "_error.png"), "E");
+  }
+  const Handler h(options_for(f), nullptr);
+  const auto state = nlohmann::json::parse(get(h, "/api/run").body);
+  std::vector<std::string> names;
+  for (const auto& im : state["images"]) {
+    if (im["folder"] != "val" || im["name"].get<std::string>().rfind("001_", 0) != 0) continue;
+    const std::string name = im["name"];
+    names.push_back(name);
+    CHECK(im["render"] == "val/" + name + ".png");
+    CHECK(im["gt"] == "val/" + name + "_gt.png");
+    CHECK(im["error"] == "val/" + name + "_error.png");
+  }
+  CHECK(names == std::vector<std::string>{"001_scale0", "001_scale1", "001_scale2", "001_scale3"});
 }
