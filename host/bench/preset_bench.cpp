@@ -91,6 +91,20 @@ RenderTiming time_render(ocl::Context& ctx, train::Trainer& trainer, const Prese
                                eval::RenderSettings{timing.chunk_rays, 1, 0});
   timing.warm_up_seconds = renderer.warm_up();
   for (size_t r = 0; r < std::max<size_t>(1, options.render_reps); ++r) timing.renders.add(renderer.render(0).seconds);
+  if (options.profile_steps > 0 && ctx.profiling_queue()) {  // after the timed renders: events slow it a little
+    ocl::StageProfiler profiler;
+    ctx.set_profiler(&profiler);
+    try {
+      profiler.begin_step();
+      renderer.render(0);
+      profiler.end_step(ctx);
+    } catch (...) {
+      ctx.set_profiler(nullptr);
+      throw;
+    }
+    ctx.set_profiler(nullptr);
+    timing.profile = profiler.profile();
+  }
   return timing;
 }
 

@@ -65,6 +65,9 @@ struct RenderTiming {
   size_t chunk_rays = 0;
   double warm_up_seconds = 0.0;  // the first chunk: programs the inference graph needs beyond training's
   Timings renders;               // whole-image renders after it, seconds each
+  // One more render with the stage profiler attached (when the preset's steps are profiled): where it spent its
+  // time, the image as one profiled "step" of width × height rays.
+  std::optional<ocl::StageProfile> profile;
   double megapixels() const { return static_cast<double>(width) * height / 1e6; }
   double seconds_per_megapixel() const { return renders.best() / megapixels(); }  // from the best render
 };

@@ -166,7 +166,9 @@ Ordered render_json(const PresetBenchResult& p) {
           {"renders", r.renders.count()},
           {"render_seconds_best", r.renders.best()},
           {"render_seconds_median", r.renders.median()},
-          {"seconds_per_megapixel", r.seconds_per_megapixel()}};
+          {"seconds_per_megapixel", r.seconds_per_megapixel()},
+          {"stage_profile", r.profile ? stage_profile_json(*r.profile, static_cast<size_t>(r.width) * r.height)
+                                      : Ordered(nullptr)}};
 }
 
 Ordered device_json(const DeviceBench& d) {
@@ -299,7 +301,7 @@ std::string profile_markdown(const DeviceBench& d, const io::Json& machine) {
          "the trainer's; \"gemm <kind>\" are the MLP's products by kind.\n\n" + tables;
 }
 
-std::string render_markdown(const DeviceBench& d, const PresetBenchSettings& s) {
+std::string render_markdown(const DeviceBench& d, const PresetBenchSettings& s, const io::Json& machine) {
   std::ostringstream md;
   md << "### Rendering\n\nSettings: the first training camera resized, one ray per pixel, the trained networks of the "
         "row above; first chunk timed apart (programs the inference graph builds beyond training's), then "
@@ -313,6 +315,13 @@ std::string render_markdown(const DeviceBench& d, const PresetBenchSettings& s) 
        << ") | " << fixed(r.seconds_per_megapixel(), 2) << " |\n";
   }
   md << "\n";
+  for (const auto& p : d.presets) {
+    if (!p.render || !p.render->profile) continue;
+    const auto& r = *p.render;
+    md << "#### Where a " << p.preset << " render's time goes (" << r.width << "x" << r.height
+       << ", one more render with profiling events)\n\n"
+       << stage_profile_markdown(*r.profile, static_cast<size_t>(r.width) * r.height, machine, "image") << "\n";
+  }
   return md.str();
 }
 
@@ -328,7 +337,7 @@ std::string device_markdown(const DeviceBench& d, const BenchRun& run) {
   md << gemm_markdown(d);
   if (d.kernels) md << kernels_markdown(*d.kernels);
   if (!d.presets.empty())
-    md << training_markdown(d, run.presets) << profile_markdown(d, run.machine) << render_markdown(d, run.presets);
+    md << training_markdown(d, run.presets) << profile_markdown(d, run.machine) << render_markdown(d, run.presets, run.machine);
   if (!d.errors.empty()) {
     md << "### Sections that failed\n\n";
     for (const auto& [section, message] : d.errors) md << "- " << section << ": " << message << "\n";

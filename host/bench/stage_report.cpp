@@ -36,7 +36,8 @@ GemmLimit gemm_limit(const ocl::StageProfile& profile, size_t rays_per_step) {
   return g;
 }
 
-std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step, const io::Json& machine) {
+std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step, const io::Json& machine,
+                                   const std::string& unit) {
   std::vector<ocl::StageTime> stages = profile.stages;
   std::stable_sort(stages.begin(), stages.end(),
                    [](const ocl::StageTime& a, const ocl::StageTime& b) { return a.seconds > b.seconds; });
@@ -44,7 +45,7 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
   const double step = per_step(profile.wall_seconds, n);
   auto share = [&](double seconds_per_step) { return step > 0 ? format("%.1f %%", 100.0 * seconds_per_step / step) : "–"; };
   std::ostringstream md;
-  md << "| stage | ms/step | share of step | commands/step | GFLOP/s |\n|---|---:|---:|---:|---:|\n";
+  md << "| stage | ms/" << unit << " | share of " << unit << " | commands/" << unit << " | GFLOP/s |\n|---|---:|---:|---:|---:|\n";
   for (const auto& s : stages) {
     const double ms = 1e3 * per_step(s.seconds, n);
     md << "| " << s.stage << " | " << format("%.2f", ms) << " | " << share(ms * 1e-3) << " | "
@@ -54,12 +55,12 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
   const double outside = step - per_step(profile.stage_seconds(), n);
   md << "| (host time between commands: launches, waits) | " << format("%.2f", 1e3 * outside) << " | "
      << share(outside) << " | | |\n";
-  md << "| **step (wall)** | **" << format("%.2f", 1e3 * step) << "** | 100 % | | |\n\n";
+  md << "| **" << unit << " (wall)** | **" << format("%.2f", 1e3 * step) << "** | 100 % | | |\n\n";
   const GemmLimit g = gemm_limit(profile, rays_per_step);
   md << "GEMM-bound limit: " << format("%.0f", g.limit_rays_per_second) << " rays/s (the MLP products alone, "
-     << format("%.1f", g.gemm_gflops) << " GFLOP/s); the step runs " << format("%.0f", g.rays_per_second)
-     << " rays/s = " << format("%.0f", 100.0 * g.fraction()) << " % of it. Per step over " << profile.steps
-     << " profiled step(s); device times from OpenCL profiling events, host products from host timers.\n";
+     << format("%.1f", g.gemm_gflops) << " GFLOP/s); the " << unit << " runs " << format("%.0f", g.rays_per_second)
+     << " rays/s = " << format("%.0f", 100.0 * g.fraction()) << " % of it. Per " << unit << " over " << profile.steps
+     << " profiled " << unit << "(s); device times from OpenCL profiling events, host products from host timers.\n";
   const double peak = machine.contains("fma_peak_gflops")
                           ? machine["fma_peak_gflops"].value("all_threads", io::Json::object()).value("best", 0.0)
                           : 0.0;

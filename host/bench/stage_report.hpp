@@ -32,8 +32,9 @@ GemmLimit gemm_limit(const ocl::StageProfile& profile, size_t rays_per_step);
 // Stages by share of the step (largest first), then "not in a stage", then the GEMM-bound line.
 // With `machine` (probe_machine()), the products' rate is also given as a fraction of the machine's FMA peak and of
 // its large-sgemm rate.
+// `unit` names what one profiled "step" is: "step" for training, "image" for a render.
 std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays_per_step,
-                                   const io::Json& machine = io::Json::object());
+                                   const io::Json& machine = io::Json::object(), const std::string& unit = "step");
 
 nlohmann::ordered_json stage_profile_json(const ocl::StageProfile& profile, size_t rays_per_step);
 

@@ -327,6 +327,29 @@ TEST_CASE("bench preset: profiled steps follow the timed ones, by stage, also af
     CHECK(g.fraction() < 1.0);
     CHECK(g.limit_rays_per_second > g.rays_per_second);
   }
+  {
+    // With a render: one more render profiled by stage, its products and encoding among them, the profiler detached.
+    auto options = tiny_preset_options("profile-render");
+    options.profile_steps = 1;
+    const auto r = bench::run_preset_bench(ctx, options);
+    fs::remove_all(options.work_dir);
+    CHECK(ctx.profiler() == nullptr);
+    REQUIRE(r.render.has_value());
+    CHECK(r.render->renders.count() == 2);  // the profiled render is not one of the timed ones
+    REQUIRE(r.render->profile.has_value());
+    const ocl::StageProfile& p = *r.render->profile;
+    CHECK(p.steps == 1);
+    for (const char* stage : {"rays", "sampling", "encoding", "gemm forward", "render"}) {
+      CAPTURE(stage);
+      const ocl::StageTime* s = p.find(stage);
+      REQUIRE(s != nullptr);
+      CHECK(s->seconds > 0.0);
+    }
+    CHECK(p.find("gemm backward_data") == nullptr);  // inference: no backward
+    CHECK(p.stage_seconds() <= p.wall_seconds);
+    const std::string md = bench::stage_profile_markdown(p, 48, io::Json::object(), "image");
+    CHECK(md.find("| stage | ms/image | share of image |") != std::string::npos);
+  }
   auto options = tiny_preset_options("profile-refused");
   options.profile_steps = 1;
   CHECK_THROWS_WITH_AS(bench::run_preset_bench(test::test_context(), options),
