@@ -16,9 +16,6 @@ using namespace mipnerf;
 
 namespace {
 
-// float32 rounding unit: 2^-24.
-constexpr double kUnit = 5.9604644775390625e-8;
-
 // One level's inputs for a batch of rays, as floats (what the device sees).
 struct Batch {
   std::vector<float> comp_rgb;    // [R][3]
