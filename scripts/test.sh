@@ -10,15 +10,17 @@
 #   intel      the suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI), but the
 #              `quality` tests and the tests of what does not depend on the OpenCL runtime: the CLI's (arguments,
 #              files, messages; the device work they start is the one the library's tests run here), the layering
-#              check, the reliability (SIGKILL, disk-full) and bench-report tests; the other stages run them
+#              check, the reliability (SIGKILL, disk-full), bench-report and MPI tests (ranks, sharding, a killed
+#              rank: the process orchestration; each rank's kernels are the ones the other tests run here); the
+#              other stages run them
 # The `quality` tests (tests/quality/: a scene trained for hundreds of steps to a PSNR) run on PoCL alone: the code
 # they run is the code the train, eval and graph tests run in every stage, and their minutes there bought nothing
 # the others do not show (a sanitizer report or a runtime's wrong result fails those shorter tests the same way).
 #   browser    `mipnerf-cl view` in headless Chromium (scripts/test-browser.sh): a tiny run trained, its page loaded, the
 #              camera dragged, the full-size frame compared with `mipnerf-cl render`, Ctrl-C; on PoCL
-#   selftest   `mipnerf-selftest` on every runtime above: its --quick checks on PoCL and under oclgrind (the full
-#              list on PoCL is the pocl stage's ops, mlp and graph tests again, the same sources), every check on
-#              Intel's runtime, where it also compares training steps with PoCL's device
+#   selftest   `mipnerf-selftest` on every runtime above: its --quick checks (the full list is the ops, mlp and
+#              graph tests again, the same sources, which the pocl and intel stages run), and on Intel's runtime also
+#              the one check only the self-test has: training steps compared with PoCL's device (--cross-device)
 # Every stage runs on a platform it names and checks (MIPNERF_TEST_PLATFORM); a test that cannot run reports skipped.
 # The command fails when a stage fails, runs no test, or could not run. A stage may be left out only by naming it,
 # MIPNERF_SKIP=intel,oclgrind; with CI=true nothing may be left out and a skipped test fails the command.
@@ -70,11 +72,13 @@ run_ctest() {
   record "$stage" "$platform: $(device_of "platform=$platform")" "$results/$stage.xml" "" $(( $(date +%s) - started ))
 }
 
-# run_selftest PLATFORM full|quick [LAUNCHER...]: mipnerf-selftest on that platform, all its checks or --quick.
+# run_selftest PLATFORM full|quick|quick-cross [LAUNCHER...]: mipnerf-selftest on that platform, all its checks, --quick,
+# or --quick --cross-device.
 run_selftest() {
   local platform="$1" mode="$2" started quick=()
   shift 2
   [ "$mode" = quick ] && quick=(--quick)
+  [ "$mode" = quick-cross ] && quick=(--quick --cross-device)
   started=$(date +%s)
   echo "test: stage 'selftest' on platform '$platform'"
   "$@" "$build_dir/mipnerf-selftest" "${quick[@]}" --device "platform=$platform" --expect-platform "$platform" \
@@ -132,8 +136,8 @@ fi
 if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
     eval "$environment"
-    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench)$' -E '^(cli|layers): '
-    if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM" full; fi
+    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench|mpi)$' -E '^(cli|layers): '
+    if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM" quick-cross; fi
   else
     record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"
   fi

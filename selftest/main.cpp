@@ -31,6 +31,8 @@ using mipnerf::selftest::CheckResult;
 // products take minutes there).
 const char* kFullFilter = "*";
 const char* kQuickFilter = "specialisations:*,mlp kernels:*,adam: device steps*,mlp device: small network*";
+// The check only the self-test has (selftest/test_cross_device.cpp); --quick --cross-device adds it.
+const char* kCrossDevice = "training: three steps agree with another CPU device";
 
 std::string ratio_text(const CheckResult& r) {
   if (r.worst_what.empty()) return "-";
@@ -109,7 +111,7 @@ int main(int argc, char** argv) {
       "mipnerf-selftest: checks every kernel stage, the MLP and training steps on an OpenCL device against "
       "the double-precision CPU reference, at the test suite's bounds"};
   std::string device, expect_platform, junit, injected_option;
-  bool quick = false;
+  bool quick = false, cross_device = false;
   app.add_option("--device", device,
                  "OpenCL device, as mipnerf-cl --device takes it (default: $MIPNERF_DEVICE, "
                  "else the first GPU, else the first CPU)")
@@ -117,6 +119,9 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick,
                "Only the checks that fit a slow device or simulator (every specialisation of every "
                "stage, the MLP kernels, Adam, small networks)");
+  app.add_flag("--cross-device", cross_device,
+               "With --quick: also train three steps here and on another CPU device and compare them (the check the "
+               "full list has that the test suite does not)");
   app.add_option("--expect-platform", expect_platform,
                  "Fail unless the device is on this OpenCL platform (the test command's stages)");
   app.add_option("--junit", junit, "Also write the results as a JUnit file");
@@ -155,10 +160,11 @@ int main(int argc, char** argv) {
 
   doctest::Context checks;
   checks.setOption("reporters", "selftest");
-  checks.setOption("test-case", quick ? kQuickFilter : kFullFilter);
+  const std::string quick_filter = std::string(kQuickFilter) + (cross_device ? "," + std::string(kCrossDevice) : "");
+  checks.setOption("test-case", quick ? quick_filter.c_str() : kFullFilter);
   // Training against another CPU device needs one: without it the check is left out, and said so (not passed).
-  if (!quick && !selftest::other_cpu_device(test::test_context().device_info())) {
-    checks.setOption("test-case-exclude", "training: three steps agree with another CPU device");
+  if ((!quick || cross_device) && !selftest::other_cpu_device(test::test_context().device_info())) {
+    checks.setOption("test-case-exclude", kCrossDevice);
     std::cout << "selftest: no other CPU device here, so training steps are compared with the reference graph only "
                  "(the graph checks), not with a second device\n";
   }

@@ -302,6 +302,8 @@ void ViewRenderer::render_path(eval::ViewFrames frames, std::string folder, eval
     path_status_.first_frame = folder + "/" + frames.stems.front() + ".png";
   } catch (const PathCancelled&) {
     ctx_->queue().finish();
+    std::error_code ec;
+    fs::remove(fs::path(options_.run_folder) / folder, ec);  // only when no frame was written yet (an empty folder)
     state = "cancelled";
     message = "cancelled from the page; the frames rendered so far are kept, the video is not";
   } catch (const std::exception& e) {
