@@ -19,6 +19,19 @@ Response text(int status, const std::string& message) {
   return r;
 }
 
+// Renders and paths before the run's first checkpoint has loaded.
+Response no_checkpoint_yet() {
+  return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+}
+
+// The object at `key` of a request, as JSON text (a camera path: the renderer reads it); false when it is not one.
+bool object_text(const nlohmann::json& j, const char* key, std::string& out) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_object()) return false;
+  out = it->dump();
+  return true;
+}
+
 Response json_response(const std::string& body) {
   Response r;
   r.content_type = "application/json";
@@ -165,13 +178,13 @@ Response Handler::route(const std::string& method, const std::string& path, cons
     return json_response(state.dump());
   }
   if (method == "GET" && path == "/api/cameras") {
-    if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+    if (!backend) return no_checkpoint_yet();
     return json_response(backend->cameras_json());
   }
   if (method == "GET" && path.rfind("/run/", 0) == 0) return serve_run_file(path.substr(5));
   if (method == "POST" && path == "/api/render") return render(request.body);
   if (path == "/api/path" || path == "/api/path/cancel") {
-    if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+    if (!backend) return no_checkpoint_yet();
     if (method == "GET" && path == "/api/path") return json_response(backend->path_status_json());
     if (method == "POST" && path == "/api/path") return start_path(request.body);
     if (method == "POST") {
@@ -220,11 +233,9 @@ Response Handler::render(const std::string& body) const {
       return text(400, "'output' must be rgb, depth or acc");
     }
   }
-  const auto camera = j.find("camera");
-  if (camera == j.end() || !camera->is_object()) return text(400, "'camera' must be a camera path object");
-  req.camera_json = camera->dump();
+  if (!object_text(j, "camera", req.camera_json)) return text(400, "'camera' must be a camera path object");
   RenderBackend* backend = backend_.load();
-  if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+  if (!backend) return no_checkpoint_yet();
   const RenderReply reply = backend->render(req);
   switch (reply.status) {
     case RenderReply::Status::ok: {
@@ -261,11 +272,9 @@ Response Handler::start_path(const std::string& body) const {
     }
     req.fps = fps.get<double>();
   }
-  const auto keyframes = j.find("keyframes");
-  if (keyframes == j.end() || !keyframes->is_object()) return text(400, "'keyframes' must be a camera path object");
-  req.keyframes_json = keyframes->dump();
+  if (!object_text(j, "keyframes", req.keyframes_json)) return text(400, "'keyframes' must be a camera path object");
   RenderBackend* backend = backend_.load();
-  if (!backend) return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
+  if (!backend) return no_checkpoint_yet();
   const PathReply reply = backend->start_path(req);
   switch (reply.status) {
     case PathReply::Status::started: {
