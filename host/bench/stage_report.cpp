@@ -18,6 +18,12 @@ std::string format(const char* pattern, double v) {
 
 double per_step(double total, size_t steps) { return steps ? total / static_cast<double>(steps) : 0.0; }
 
+// The machine probe's STREAM triad on all threads (best of its runs), GB/s; 0 when the run did not probe.
+double machine_triad_gbs(const io::Json& machine) {
+  if (!machine.contains("triad_gbs")) return 0.0;
+  return machine["triad_gbs"].value("all_threads", io::Json::object()).value("best", 0.0);
+}
+
 }  // namespace
 
 GemmLimit gemm_limit(const ocl::StageProfile& profile, size_t rays_per_step) {
@@ -44,18 +50,23 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
   const size_t n = std::max<size_t>(1, profile.steps);
   const double step = per_step(profile.wall_seconds, n);
   auto share = [&](double seconds_per_step) { return step > 0 ? format("%.1f %%", 100.0 * seconds_per_step / step) : "–"; };
+  const double triad = machine_triad_gbs(machine);
   std::ostringstream md;
-  md << "| stage | ms/" << unit << " | share of " << unit << " | commands/" << unit << " | GFLOP/s |\n|---|---:|---:|---:|---:|\n";
+  md << "| stage | ms/" << unit << " | share of " << unit << " | commands/" << unit
+     << " | GFLOP/s | GB/s (least traffic) | of the triad |\n|---|---:|---:|---:|---:|---:|---:|\n";
   for (const auto& s : stages) {
     const double ms = 1e3 * per_step(s.seconds, n);
+    const double gbs = s.bytes > 0 && s.seconds > 0 ? s.bytes / s.seconds * 1e-9 : 0.0;
     md << "| " << s.stage << " | " << format("%.2f", ms) << " | " << share(ms * 1e-3) << " | "
        << format("%.0f", per_step(static_cast<double>(s.commands), n)) << " | "
-       << (s.flops > 0 && s.seconds > 0 ? format("%.1f", s.flops / s.seconds * 1e-9) : "–") << " |\n";
+       << (s.flops > 0 && s.seconds > 0 ? format("%.1f", s.flops / s.seconds * 1e-9) : "–") << " | "
+       << (gbs > 0 ? format("%.2f", gbs) : "–") << " | "
+       << (gbs > 0 && triad > 0 ? format("%.0f %%", 100.0 * gbs / triad) : "–") << " |\n";
   }
   const double outside = step - per_step(profile.stage_seconds(), n);
   md << "| (host time between commands: launches, waits) | " << format("%.2f", 1e3 * outside) << " | "
-     << share(outside) << " | | |\n";
-  md << "| **" << unit << " (wall)** | **" << format("%.2f", 1e3 * step) << "** | 100 % | | |\n\n";
+     << share(outside) << " | | | | |\n";
+  md << "| **" << unit << " (wall)** | **" << format("%.2f", 1e3 * step) << "** | 100 % | | | | |\n\n";
   const GemmLimit g = gemm_limit(profile, rays_per_step);
   md << "GEMM-bound limit: " << format("%.0f", g.limit_rays_per_second) << " rays/s (the MLP products alone, "
      << format("%.1f", g.gemm_gflops) << " GFLOP/s); the " << unit << " runs " << format("%.0f", g.rays_per_second)
@@ -71,6 +82,12 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
        << format("%.0f", 100 * g.gemm_gflops / sgemm) << " % of its large-sgemm rate (" << format("%.1f", sgemm)
        << " GFLOP/s), both probed in this run.\n";
   }
+  md << "\nGB/s (least traffic): the bytes a stage must move at least (each input read once, each output written once; "
+        "host/graph/stage_traffic.hpp) per second of it — a lower bound on the bandwidth it achieved. Beside the "
+        "machine's STREAM triad"
+     << (triad > 0 ? " (" + format("%.1f", triad) + " GB/s, probed in this run)" : " (not probed in this run)")
+     << ": a stage near 100 % is memory-bound, one far below it is limited by its arithmetic. The MLP's stages "
+        "declare FLOPs instead (they work on blocks in cache).\n";
   return md.str();
 }
 
@@ -80,7 +97,8 @@ nlohmann::ordered_json stage_profile_json(const ocl::StageProfile& profile, size
     stages.push_back({{"stage", s.stage},
                       {"seconds_per_step", per_step(s.seconds, profile.steps)},
                       {"commands_per_step", per_step(static_cast<double>(s.commands), profile.steps)},
-                      {"flops_per_step", per_step(s.flops, profile.steps)}});
+                      {"flops_per_step", per_step(s.flops, profile.steps)},
+                      {"least_bytes_per_step", per_step(s.bytes, profile.steps)}});
   }
   const GemmLimit g = gemm_limit(profile, rays_per_step);
   return {{"profiled_steps", profile.steps},

@@ -97,11 +97,19 @@ void StageProfiler::add_flops(double flops) {
   if (recording_) stage_named(current_stage()).flops += flops;
 }
 
+void StageProfiler::add_bytes(double bytes) {
+  if (recording_) stage_named(current_stage()).bytes += bytes;
+}
+
+void add_stage_bytes(Context& ctx, double bytes) {
+  if (StageProfiler* profiler = ctx.recording_profiler()) profiler->add_bytes(bytes);
+}
+
 StageTime& StageProfiler::stage_named(const std::string& stage) {
   const auto found = index_.find(stage);
   if (found != index_.end() && found->second < profile_.stages.size()) return profile_.stages[found->second];
   index_[stage] = profile_.stages.size();
-  profile_.stages.push_back(StageTime{stage, 0.0, 0, 0.0});
+  profile_.stages.push_back(StageTime{stage, 0.0, 0, 0.0, 0.0});
   return profile_.stages.back();
 }
 

@@ -29,6 +29,8 @@ struct StageTime {
   double seconds = 0.0;  // device time of its commands (events) plus host time added to it
   size_t commands = 0;   // commands (kernels, copies, fills, products) it ran
   double flops = 0.0;    // floating-point operations it declared (GEMMs), 0 otherwise
+  double bytes = 0.0;    // memory traffic it declared: the least its commands move (each input read once, each output
+                         // written once; graph/stage_traffic.hpp), 0 where none was declared
 };
 
 // Totals of the profiled steps, stages in the order they first ran.
@@ -64,6 +66,7 @@ class StageProfiler {
   void add_event_span(::cl::Event before, ::cl::Event after);
   void add_host_seconds(double seconds);  // to the current stage, one command
   void add_flops(double flops);           // to the current stage
+  void add_bytes(double bytes);           // to the current stage
 
   const StageProfile& profile() const { return profile_; }
   void reset() {
@@ -98,6 +101,9 @@ class StageScope {
  private:
   StageProfiler* profiler_;
 };
+
+// Declares the least memory traffic of the current stage's commands (no-op when not recording).
+void add_stage_bytes(Context& ctx, double bytes);
 
 // Host work of the current stage timed while it lives (no-op when not recording).
 class HostTimer {

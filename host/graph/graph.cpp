@@ -2,6 +2,7 @@
 #include "graph/graph.hpp"
 
 #include "core/error.hpp"
+#include "graph/stage_traffic.hpp"
 
 namespace mipnerf::graph {
 namespace {
@@ -166,6 +167,7 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
                 std::to_string(max_chunk_rays_) + ")");
   }
   ocl::StageScope stage(*ctx_, "rays");
+  ocl::add_stage_bytes(*ctx_, traffic::rays(chunk.count));
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
   const RngKey rng{key.seed, key.step, first_ray};
@@ -181,6 +183,7 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
   }
   if (spec_.rays.view_dependence) {
     ocl::StageScope view_stage(*ctx_, "view encoding");
+    ocl::add_stage_bytes(*ctx_, traffic::view_encoding(chunk.count, spec_.view_encoding.pe_width()));
     encode_->pe(spec_.view_encoding, {chunk_rays_.viewdirs, chunk.count}, view_features_);
   }
 }
@@ -192,10 +195,12 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
   ocl::StageScope stage(*ctx_, level.sampling == Sampling::stratified ? "sampling" : "resampling");
   switch (level.sampling) {
     case Sampling::stratified:
+      ocl::add_stage_bytes(*ctx_, traffic::stratified_sampling(n_rays, out.intervals));
       sample_->stratified({chunk_rays_, n_rays, out.intervals}, out.t_edges, rng);
       break;
     case Sampling::resample: {
       const LevelBuffers& previous = levels_[l - 1];
+      ocl::add_stage_bytes(*ctx_, traffic::resampling(n_rays, previous.intervals, level.new_samples, false));
       resample_->fwd(resample_options_,
                      {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples}, out.t_edges,
                      rng);
@@ -203,6 +208,7 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
     }
     case Sampling::resample_union: {
       const LevelBuffers& previous = levels_[l - 1];
+      ocl::add_stage_bytes(*ctx_, traffic::resampling(n_rays, previous.intervals, level.new_samples, true));
       resample_->fwd(resample_options_,
                      {previous.t_edges, previous.weights, n_rays, previous.intervals, level.new_samples}, drawn_edges_,
                      rng);
@@ -219,6 +225,7 @@ void Graph::encode_level(size_t l, size_t n_rays) {
   const ops::GaussianInputs intervals{chunk_rays_, buffers.t_edges, n_rays, buffers.intervals};
   const size_t rows = n_rays * buffers.intervals;
   ocl::StageScope stage(*ctx_, "encoding");
+  ocl::add_stage_bytes(*ctx_, traffic::encoding(n_rays, buffers.intervals, spec_.feature_width(level.encoding)));
   switch (level.encoding) {
     case Encoding::integrated:
       encode_->gaussian_ipe(spec_.position_encoding, intervals, features_);
@@ -253,6 +260,7 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const Den
   }
   // The activations are fused into rendering: raw MLP outputs in, composited colour out.
   ocl::StageScope stage(*ctx_, "render");
+  ocl::add_stage_bytes(*ctx_, traffic::render_forward(n_rays, buffers.intervals));
   render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                    {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights}, noise);
 }
@@ -264,10 +272,12 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   const ops::LossChunk loss_chunk{n_rays, chunk.first, step_groups_};
   {
     ocl::StageScope stage(*ctx_, "loss");
+    ocl::add_stage_bytes(*ctx_, traffic::loss(n_rays));
     loss_->fwd_bwd(buffers.outputs.comp_rgb, targets.target_rgb, targets.lossmult,
                    {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
   }
   ocl::StageScope stage(*ctx_, "render backward");
+  ocl::add_stage_bytes(*ctx_, traffic::render_backward(n_rays, buffers.intervals));
   render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals}, buffers.weights,
                    {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_}, noise);
   ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "graph/stage_traffic.hpp"
 #include "parallel/world.hpp"
 #include "train/data_parallel.hpp"
 
@@ -23,6 +24,7 @@ namespace {
 // Draws the step's batch; returns Σ lossmult over it (the batch size without the area loss).
 double draw_batch(StepParts& p, int64_t step) {
   ocl::StageScope stage(p.ctx, "batch");
+  ocl::add_stage_bytes(p.ctx, graph::traffic::batch(static_cast<size_t>(p.config.batch_size)));
   ops::batch_sample(p.ctx, p.data, {p.config.seed, p.config.batching}, static_cast<uint32_t>(step), p.batch);
   if (!p.spec.loss.multiscale) return static_cast<double>(p.config.batch_size);
   double sum = 0.0;
@@ -62,6 +64,9 @@ StepOutcome train_step(StepParts& p, int64_t step, const AfterBackward& after_ba
   bool finite = true;
   for (const auto& l : outcome.losses) finite = finite && l.finite();
   ocl::StageScope adam_stage(p.ctx, "adam");
+  size_t parameters = 0;
+  for (const auto& network : p.networks) parameters += network->params().size();
+  ocl::add_stage_bytes(p.ctx, graph::traffic::adam(parameters));
   std::vector<mlp::GradientStats> stats;
   for (size_t i = 0; i < p.networks.size(); ++i) {
     stats.push_back(p.optimisers[i]->gradient_stats(p.networks[i]->grads()));

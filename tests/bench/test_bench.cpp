@@ -34,6 +34,7 @@
 #include "support/temp_scene.hpp"
 #include "support/mlp_fixtures.hpp"
 #include "bench/stage_report.hpp"
+#include "graph/stage_traffic.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -320,7 +321,11 @@ TEST_CASE("bench preset: profiled steps follow the timed ones, by stage, also af
       const ocl::StageTime* s = p.find(stage);
       REQUIRE(s != nullptr);
       CHECK(s->seconds > 0.0);
+      const bool product = std::string(stage).rfind("gemm", 0) == 0;
+      CHECK((s->bytes > 0.0) == !product);  // every ray stage declares its least traffic
     }
+    // The render's least traffic per step: both levels' batch at the tiny preset's 16 samples a level, over 2 steps.
+    CHECK(p.find("render")->bytes / 2 == doctest::Approx(2 * graph::traffic::render_forward(r.train.batch_rays, 16)));
     CHECK(p.stage_seconds() <= p.wall_seconds);
     const bench::GemmLimit g = bench::gemm_limit(p, r.train.batch_rays);
     CHECK(g.fraction() > 0.0);
@@ -344,6 +349,10 @@ TEST_CASE("bench preset: profiled steps follow the timed ones, by stage, also af
       const ocl::StageTime* s = p.find(stage);
       REQUIRE(s != nullptr);
       CHECK(s->seconds > 0.0);
+      // The ray stages declare their least traffic, the products their FLOPs.
+      const bool product = std::string(stage).rfind("gemm", 0) == 0;
+      CHECK((s->bytes > 0.0) == !product);
+      CHECK((s->flops > 0.0) == product);
     }
     CHECK(p.find("gemm backward_data") == nullptr);  // inference: no backward
     CHECK(p.stage_seconds() <= p.wall_seconds);
@@ -360,8 +369,8 @@ TEST_CASE("bench stage report: per-step figures, largest stage first, and the GE
   ocl::StageProfile p;
   p.steps = 2;
   p.wall_seconds = 2.0;  // 1 s per step
-  p.stages = {{"encoding", 0.2, 4, 0.0}, {"gemm forward", 0.6, 10, 60e9}, {"gemm backward_weights", 0.4, 10, 40e9},
-              {"adam", 0.1, 2, 0.0}};
+  p.stages = {{"encoding", 0.2, 4, 0.0, 4e9}, {"gemm forward", 0.6, 10, 60e9},
+              {"gemm backward_weights", 0.4, 10, 40e9}, {"adam", 0.1, 2, 0.0}};
   const bench::GemmLimit g = bench::gemm_limit(p, 1000);
   CHECK(g.step_seconds == doctest::Approx(1.0));
   CHECK(g.gemm_seconds == doctest::Approx(0.5));
@@ -376,9 +385,36 @@ TEST_CASE("bench stage report: per-step figures, largest stage first, and the GE
   CHECK(md.find("| (host time between commands: launches, waits) | 350.00 | 35.0 %") != std::string::npos);
   CHECK(md.find("GEMM-bound limit: 2000 rays/s") != std::string::npos);
   CHECK(md.find("= 50 % of it") != std::string::npos);
+  // The encoding's 4e9 bytes in 0.2 s: 20 GB/s; no machine probe, so no fraction of the triad.
+  CHECK(md.find("| encoding | 100.00 | 10.0 % | 2 | – | 20.00 | – |") != std::string::npos);
+  CHECK(md.find("| adam | 50.00 | 5.0 % | 1 | – | – | – |") != std::string::npos);
+  io::Json machine;
+  machine["triad_gbs"]["all_threads"]["best"] = 25.0;
+  const std::string with_triad = bench::stage_profile_markdown(p, 1000, machine);
+  CHECK(with_triad.find("| encoding | 100.00 | 10.0 % | 2 | – | 20.00 | 80 % |") != std::string::npos);
+  CHECK(with_triad.find("STREAM triad (25.0 GB/s, probed in this run)") != std::string::npos);
   const auto j = bench::stage_profile_json(p, 1000);
   CHECK(j["gemm_limit_fraction"].get<double>() == doctest::Approx(0.5));
   CHECK(j["stages"].size() == 4);
+  CHECK(j["stages"][0]["least_bytes_per_step"].get<double>() == doctest::Approx(2e9));
+}
+
+TEST_CASE("stage traffic: each stage's least bytes, counted by hand for small sizes") {
+  // 2 rays, 3 intervals, 96 features: per ray 7 ray floats + 4 edges in, 3 × 96 features out.
+  CHECK(graph::traffic::encoding(2, 3, 96) == 4.0 * 2 * (7 + 4 + 3 * 96));
+  // Per ray 2 ids copied (read + write) and read again, 13 ray floats written.
+  CHECK(graph::traffic::rays(5) == 4.0 * 5 * (4 + 2 + 13));
+  CHECK(graph::traffic::stratified_sampling(2, 3) == 4.0 * 2 * (2 + 4));
+  // Resampling 3 → 5 intervals: 4 edges + 3 weights in, 6 edges out; the union reads both again and writes 10.
+  CHECK(graph::traffic::resampling(1, 3, 5, false) == 4.0 * (4 + 3 + 6));
+  CHECK(graph::traffic::resampling(1, 3, 5, true) == 4.0 * (4 + 3 + 6 + 4 + 6 + 10));
+  // Render: per sample raw colour 3, density, edge in, weight out; per ray last edge, direction in, 5 outputs.
+  CHECK(graph::traffic::render_forward(2, 3) == 4.0 * 2 * (3 * 6 + 1 + 3 + 5));
+  CHECK(graph::traffic::render_backward(2, 3) == 4.0 * 2 * (3 * 10 + 1 + 3 + 3));
+  CHECK(graph::traffic::loss(3) == 4.0 * 3 * 10);
+  CHECK(graph::traffic::view_encoding(2, 27) == 4.0 * 2 * 30);
+  CHECK(graph::traffic::adam(10) == 4.0 * 10 * 9);
+  CHECK(graph::traffic::batch(2) == 4.0 * 2 * 9);
 }
 
 TEST_CASE("bench preset: an unknown preset or zero warm steps are refused") {
