@@ -24,24 +24,24 @@
 
 // sigmoid(x) = 1/(1 + e^−x), evaluated through e = exp(−|x|) ≤ 1 so nothing overflows at |x| = 1e4 and the
 // small side keeps its relative accuracy (e/(1 + e) instead of 1 − 1/(1 + e^|x|)).
-inline float stable_sigmoid(float x) {
-  const float e = exp(-fabs(x));
+ALWAYS_INLINE float stable_sigmoid(float x) {
+  const float e = exp_nonpositive(-fabs(x));
   return x >= 0.0f ? 1.0f / (1.0f + e) : e / (1.0f + e);
 }
 
 // sigmoid'(x) = sigmoid(x)·(1 − sigmoid(x)) = e/(1 + e)², e = exp(−|x|): even in x, finite everywhere, and
 // accurate where 1 − sigmoid(x) would round to 0 (x > 17).
-inline float stable_sigmoid_grad(float x) {
-  const float e = exp(-fabs(x));
+ALWAYS_INLINE float stable_sigmoid_grad(float x) {
+  const float e = exp_nonpositive(-fabs(x));
   const float one_plus_e = 1.0f + e;
   return e / (one_plus_e * one_plus_e);
 }
 
 // softplus(x) = log(1 + e^x) = max(x, 0) + log1p(e^−|x|): no overflow for large x (official uses
 // jax.nn.softplus, which is computed the same way), no cancellation for very negative x.
-inline float stable_softplus(float x) { return fmax(x, 0.0f) + log1p(exp(-fabs(x))); }
+ALWAYS_INLINE float stable_softplus(float x) { return fmax(x, 0.0f) + log1p_unit(exp_nonpositive(-fabs(x))); }
 
-inline float density_activation(float raw) {
+ALWAYS_INLINE float density_activation(float raw) {
   const float x = raw + DENSITY_BIAS;
 #if DENSITY_ACTIVATION == DENSITY_ACTIVATION_RELU
   return fmax(x, 0.0f);
@@ -51,7 +51,7 @@ inline float density_activation(float raw) {
 }
 
 // d density / d raw: softplus' = sigmoid; relu' = 1 for x > 0 and 0 otherwise (0 at x = 0, as JAX's relu).
-inline float density_activation_grad(float raw) {
+ALWAYS_INLINE float density_activation_grad(float raw) {
   const float x = raw + DENSITY_BIAS;
 #if DENSITY_ACTIVATION == DENSITY_ACTIVATION_RELU
   return x > 0.0f ? 1.0f : 0.0f;
@@ -60,28 +60,31 @@ inline float density_activation_grad(float raw) {
 #endif
 }
 
-inline float rgb_activation(float raw) { return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid(raw) - RGB_PADDING; }
+ALWAYS_INLINE float rgb_activation(float raw) { return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid(raw) - RGB_PADDING; }
 
-inline float rgb_activation_grad(float raw) { return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid_grad(raw); }
+ALWAYS_INLINE float rgb_activation_grad(float raw) { return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid_grad(raw); }
 
-// density[i] = density_activation(raw_density[i]); rgb[i][c] = rgb_activation(raw_rgb[i][c]). One item per row.
+// density[i] = density_activation(raw_density[i]); rgb[i][c] = rgb_activation(raw_rgb[i][c]). One item per colour
+// value (3·rows items: the flat index j of rgb), the first `rows` items also doing one density each. Why not one item
+// per row: PoCL vectorises across work-items, and a row's three interleaved colour values (stride 3) kept its
+// vectoriser from vectorising the loop at all (17 ms against 6 ms this way for 524,288 rows on its CPU device).
 __kernel void activations_fwd(__global const float* raw_density, __global const float* raw_rgb,
                               __global float* density, __global float* rgb, const uint n_rows) {
-  const size_t i = get_global_id(0);
-  if (i >= n_rows) return;
-  density[i] = density_activation(raw_density[i]);
-  for (int c = 0; c < 3; ++c) rgb[3 * i + c] = rgb_activation(raw_rgb[3 * i + c]);
+  const size_t j = get_global_id(0);
+  if (j >= 3 * (size_t)n_rows) return;
+  rgb[j] = rgb_activation(raw_rgb[j]);
+  if (j < n_rows) density[j] = density_activation(raw_density[j]);
 }
 
 // Backward: the forward saves nothing beyond its inputs (the raw values), from which each derivative is
-// recomputed. d_raw_density [rows], d_raw_rgb [rows][3].
+// recomputed. d_raw_density [rows], d_raw_rgb [rows][3]; items as in the forward (3·rows, flat colour index j).
 __kernel void activations_bwd(__global const float* raw_density, __global const float* raw_rgb,
                               __global const float* d_density, __global const float* d_rgb,
                               __global float* d_raw_density, __global float* d_raw_rgb, const uint n_rows) {
-  const size_t i = get_global_id(0);
-  if (i >= n_rows) return;
-  d_raw_density[i] = d_density[i] * density_activation_grad(raw_density[i]);
-  for (int c = 0; c < 3; ++c) d_raw_rgb[3 * i + c] = d_rgb[3 * i + c] * rgb_activation_grad(raw_rgb[3 * i + c]);
+  const size_t j = get_global_id(0);
+  if (j >= 3 * (size_t)n_rows) return;
+  d_raw_rgb[j] = d_rgb[j] * rgb_activation_grad(raw_rgb[j]);
+  if (j < n_rows) d_raw_density[j] = d_density[j] * density_activation_grad(raw_density[j]);
 }
 
 #endif

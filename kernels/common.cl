@@ -8,6 +8,10 @@
 #ifndef MIPNERF_COMMON_CL
 #define MIPNERF_COMMON_CL
 
+// A helper every caller gets inlined: PoCL vectorises a kernel across work-items only when the work-item loop has
+// no calls left, and its inliner leaves out functions it finds too costly (stable_softplus: cost 300 > 225).
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+
 // Loads/stores a packed 3-vector at element index i (i.e. floats 3i..3i+2).
 #ifndef MIPNERF_TEST_FAULT
 inline float3 load3(__global const float* p, size_t i) { return (float3)(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
@@ -78,5 +82,49 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
   const float r0 = sqrt(-2.0f * log(1.0f - u.x)), r1 = sqrt(-2.0f * log(1.0f - u.z));
   return (float4)(r0 * cospi(2.0f * u.y), r0 * sinpi(2.0f * u.y), r1 * cospi(2.0f * u.w), r1 * sinpi(2.0f * u.w));
 }
+
+// ---- exp and log1p without branches, for the element-wise stages ----
+// PoCL vectorises a kernel across work-items, but its exp/log1p built-ins keep a slow path for special arguments
+// that the whole vector takes when one lane needs it; arithmetic only (fma, rint, bit casts, select) stays in the
+// vector units. Both functions cover exactly the arguments the stages give them, with bounds derived here and checked
+// by the stages' tests against double references (tests/ops/test_activations.cpp sweeps every binade).
+
+// e^x for x ≤ 0 (NaN stays NaN; −∞ gives 0). Cody–Waite: x = n·ln2 + r with n = rint(x·log2 e), |r| ≤ ln2/2 + tiny,
+// r from two fma steps (ln2 split into its float and the remainder, so r's error is ≤ 2^-24·|r| + 2^-50·|n|);
+// e^r by its Taylor polynomial to r^7 (truncation ≤ (ln2/2)^8/8!·e^0.35 < 8e-9 relative), Horner with fma;
+// then ·2^n in two factors 2^⌊n/2⌋·2^(n−⌊n/2⌋), each a normal float, so results down to the smallest denormal
+// (x ≥ −103.97) round once as the true value would. Below x = −104 the result is 0 (e^−104 < 2^−150).
+// Relative error ≤ 3 ulp on normal results (7 roundings of ≤ 2^-24 each in the polynomial, less in the reduction).
+ALWAYS_INLINE float exp_nonpositive(float x) {
+  const float clamped = fmax(x, -104.0f);  // fmax(NaN, c) = c: NaN is restored by the select below
+  const float n = rint(clamped * 1.44269504f);
+  const float r = fma(n, -1.90465430e-9f, fma(n, -0.693147182f, clamped));
+  float p = fma(r, 1.98412698e-4f, 1.38888889e-3f);  // 1/7!, 1/6!
+  p = fma(p, r, 8.33333333e-3f);                       // 1/5!
+  p = fma(p, r, 4.16666667e-2f);                       // 1/4!
+  p = fma(p, r, 1.66666667e-1f);                       // 1/3!
+  p = fma(p, r, 0.5f);
+  p = fma(p, r, 1.0f);
+  p = fma(p, r, 1.0f);
+  const int n_int = (int)n, n_half = n_int / 2;  // n in [−150, 0]: both factors ≥ 2^-75
+  const float scaled = p * as_float((n_half + 127) << 23) * as_float((n_int - n_half + 127) << 23);
+  return isnan(x) ? x : scaled;
+}
+
+// log(1 + y) for y in [0, 1] (the softplus of exp_nonpositive's results): 2·atanh(s) with s = y/(2 + y) in
+// [0, 1/3], an identity with no cancellation, so small y keeps its relative accuracy (s ≈ y/2). Series
+// 2s·(1 + s²/3 + … + s^12/13): the terms left out sum to ≤ (1/9)^7/15/(1 − 1/9) < 1.6e-8 relative; with the
+// division and 7 fma roundings the result is within 3 ulp.
+ALWAYS_INLINE float log1p_unit(float y) {
+  const float s = y / (2.0f + y), s2 = s * s;
+  float p = fma(s2, 7.69230769e-2f, 9.09090909e-2f);  // 1/13, 1/11
+  p = fma(p, s2, 1.11111111e-1f);                       // 1/9
+  p = fma(p, s2, 1.42857143e-1f);                       // 1/7
+  p = fma(p, s2, 0.2f);
+  p = fma(p, s2, 3.33333333e-1f);
+  p = fma(p, s2, 1.0f);
+  return 2.0f * s * p;
+}
+
 
 #endif

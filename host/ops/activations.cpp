@@ -27,7 +27,7 @@ void Activations::fwd(const ActivationInputs& in, const ActivationOutputs& out) 
   detail::require(out.rgb, 3 * in.n_rows, where);
   ocl::set_args(*fwd_, where, in.raw_density, in.raw_rgb, out.density, out.rgb,
                 detail::to_uint(in.n_rows, where, "rows"));
-  ocl::launch_1d(*ctx_, *fwd_, in.n_rows, where);
+  ocl::launch_1d(*ctx_, *fwd_, 3 * in.n_rows, where);  // an item per colour value (kernels/activations.cl)
 }
 
 void Activations::bwd(const ActivationInputs& in, const ActivationGradients& grads, const ActivationRawGradients& out) {
@@ -40,7 +40,7 @@ void Activations::bwd(const ActivationInputs& in, const ActivationGradients& gra
   detail::require(out.d_raw_rgb, 3 * in.n_rows, where);
   ocl::set_args(*bwd_, where, in.raw_density, in.raw_rgb, grads.d_density, grads.d_rgb, out.d_raw_density,
                 out.d_raw_rgb, detail::to_uint(in.n_rows, where, "rows"));
-  ocl::launch_1d(*ctx_, *bwd_, in.n_rows, where);
+  ocl::launch_1d(*ctx_, *bwd_, 3 * in.n_rows, where);
 }
 
 }  // namespace mipnerf::ops

@@ -43,21 +43,10 @@ std::vector<ActivationOptions> all_variants() {
   return {mipnerf, nerf};
 }
 
-}  // namespace
-
-TEST_CASE("activations: forward and backward match the CPU reference on 30,000 random rows") {
-  std::mt19937 rng(7);
-  const size_t rows = 30000;
-  std::vector<float> raw_density(rows), raw_rgb(3 * rows), d_density(rows), d_rgb(3 * rows);
-  std::normal_distribution<float> wide(0.0f, 8.0f), unit(0.0f, 1.0f);
-  for (size_t i = 0; i < rows; ++i) {
-    raw_density[i] = wide(rng);
-    d_density[i] = unit(rng);
-    for (int c = 0; c < 3; ++c) {
-      raw_rgb[3 * i + c] = wide(rng);
-      d_rgb[3 * i + c] = unit(rng);
-    }
-  }
+// The device's forward and backward against the double reference on the given rows, for every variant.
+void check_against_reference(const std::vector<float>& raw_density, const std::vector<float>& raw_rgb,
+                             const std::vector<float>& d_density, const std::vector<float>& d_rgb) {
+  const size_t rows = raw_density.size();
   for (const auto& options : all_variants()) {
     INFO("density activation " << static_cast<int>(options.density));
     const auto dev = run_device(options, raw_density, raw_rgb, d_density, d_rgb);
@@ -65,8 +54,9 @@ TEST_CASE("activations: forward and backward match the CPU reference on 30,000 r
     ref::activations_fwd(options, test::to_double(raw_density), test::to_double(raw_rgb), density, rgb, rows);
     ref::activations_bwd(options, test::to_double(raw_density), test::to_double(raw_rgb), test::to_double(d_density),
                          test::to_double(d_rgb), d_raw_density, d_raw_rgb, rows);
-    // Tolerances. Each value is a handful of float operations whose built-ins (exp, log1p) are within 3 ulp
-    // (OpenCL C 1.2 §7.4): 16 roundoffs relative to the result bound that with margin. On top, the argument
+    // Tolerances. Each value is a handful of float operations on e = exp_nonpositive(−|x|) and log1p_unit(e)
+    // (kernels/common.cl: both within 3 ulp by their derivations): 16 roundoffs relative to the result bound that
+    // with margin. On top, the argument
     // x = raw + bias is rounded once (|Δx| ≤ u·|x|), which moves f(x) by |f'(x)|·u·|x|: softplus' = sigmoid,
     // sigmoid' = e/(1 + e)² (e = e^−|x|), and the sigmoid's own derivative for its gradient,
     // |d/dx sigmoid'(x)| ≤ sigmoid'(x). (Softplus of very negative x, ≈ e^x, keeps its relative accuracy
@@ -93,6 +83,44 @@ TEST_CASE("activations: forward and backward match the CPU reference on 30,000 r
     MIPNERF_CHECK_CLOSE("d_raw_rgb", dev.d_raw_rgb, d_raw_rgb,
                         [&](size_t i) { return 16 * kUnitRoundoff * std::abs(d_raw_rgb[i]) + 1e-38; });
   }
+}
+
+}  // namespace
+
+TEST_CASE("activations: forward and backward match the CPU reference on 30,000 random rows") {
+  std::mt19937 rng(7);
+  const size_t rows = 30000;
+  std::vector<float> raw_density(rows), raw_rgb(3 * rows), d_density(rows), d_rgb(3 * rows);
+  std::normal_distribution<float> wide(0.0f, 8.0f), unit(0.0f, 1.0f);
+  for (size_t i = 0; i < rows; ++i) {
+    raw_density[i] = wide(rng);
+    d_density[i] = unit(rng);
+    for (int c = 0; c < 3; ++c) {
+      raw_rgb[3 * i + c] = wide(rng);
+      d_rgb[3 * i + c] = unit(rng);
+    }
+  }
+  check_against_reference(raw_density, raw_rgb, d_density, d_rgb);
+}
+
+TEST_CASE("activations: every binade of raw values from 2^-40 to 2^7, both signs, matches the CPU reference") {
+  // exp_nonpositive and log1p_unit cover their whole range here: exp of −|x| from −1 to about −128 (down to the
+  // denormals and 0), log1p of values from 1 down to 0; 64 mantissas per binade, each sign, and raw = 0.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> mantissa(1.0f, 2.0f);
+  std::vector<float> raw{0.0f};
+  for (int exponent = -40; exponent <= 6; ++exponent) {
+    for (int k = 0; k < 64; ++k) {
+      const float x = std::ldexp(mantissa(rng), exponent);
+      raw.push_back(x);
+      raw.push_back(-x);
+    }
+  }
+  std::vector<float> raw_rgb(3 * raw.size()), d_density(raw.size(), 1.0f), d_rgb(3 * raw.size(), 1.0f);
+  for (size_t i = 0; i < raw.size(); ++i) {
+    for (int c = 0; c < 3; ++c) raw_rgb[3 * i + c] = raw[(i + 97 * c) % raw.size()];
+  }
+  check_against_reference(raw, raw_rgb, d_density, d_rgb);
 }
 
 TEST_CASE("activations: the reference backward matches central finite differences of the reference forward") {
