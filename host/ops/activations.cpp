@@ -13,8 +13,20 @@ ocl::BuildOptions activation_build_options(const ActivationOptions& options) {
       .define_float("RGB_PADDING", options.rgb_padding);
 }
 
-Activations::Activations(ocl::Context& ctx, const ActivationOptions& options) : ctx_(&ctx), options_(options) {
-  auto& program = ctx.program({"common.cl", "activations.cl"}, activation_build_options(options_));
+namespace {
+
+bool choose_item_per_row(const ocl::Context& ctx, ActivationItems items) {
+  if (items != ActivationItems::device_default) return items == ActivationItems::per_row;
+  const auto& device = ctx.device_info();
+  return (device.type & CL_DEVICE_TYPE_CPU) != 0 && !device.is_pocl();
+}
+
+}  // namespace
+
+Activations::Activations(ocl::Context& ctx, const ActivationOptions& options, ActivationItems items)
+    : ctx_(&ctx), options_(options), per_row_(choose_item_per_row(ctx, items)) {
+  auto& program = ctx.program({"common.cl", "activations.cl"},
+                              activation_build_options(options_).define("ACTIVATION_ITEM_PER_ROW", per_row_ ? 1 : 0));
   fwd_ = &program.kernel("activations_fwd");
   bwd_ = &program.kernel("activations_bwd");
 }
@@ -27,7 +39,7 @@ void Activations::fwd(const ActivationInputs& in, const ActivationOutputs& out) 
   detail::require(out.rgb, 3 * in.n_rows, where);
   ocl::set_args(*fwd_, where, in.raw_density, in.raw_rgb, out.density, out.rgb,
                 detail::to_uint(in.n_rows, where, "rows"));
-  ocl::launch_1d(*ctx_, *fwd_, 3 * in.n_rows, where);  // an item per colour value (kernels/activations.cl)
+  ocl::launch_1d(*ctx_, *fwd_, per_row_ ? in.n_rows : 3 * in.n_rows, where);
 }
 
 void Activations::bwd(const ActivationInputs& in, const ActivationGradients& grads, const ActivationRawGradients& out) {
@@ -40,7 +52,7 @@ void Activations::bwd(const ActivationInputs& in, const ActivationGradients& gra
   detail::require(out.d_raw_rgb, 3 * in.n_rows, where);
   ocl::set_args(*bwd_, where, in.raw_density, in.raw_rgb, grads.d_density, grads.d_rgb, out.d_raw_density,
                 out.d_raw_rgb, detail::to_uint(in.n_rows, where, "rows"));
-  ocl::launch_1d(*ctx_, *bwd_, 3 * in.n_rows, where);
+  ocl::launch_1d(*ctx_, *bwd_, per_row_ ? in.n_rows : 3 * in.n_rows, where);
 }
 
 }  // namespace mipnerf::ops

@@ -18,7 +18,7 @@ struct Activated {
 
 Activated run_device(const ActivationOptions& options, const std::vector<float>& raw_density,
                      const std::vector<float>& raw_rgb, const std::vector<float>& d_density,
-                     const std::vector<float>& d_rgb) {
+                     const std::vector<float>& d_rgb, ops::ActivationItems items = ops::ActivationItems::device_default) {
   auto& ctx = test::test_context();
   const size_t rows = raw_density.size();
   auto raw_density_dev = test::upload(ctx, raw_density, "raw_density");
@@ -27,7 +27,7 @@ Activated run_device(const ActivationOptions& options, const std::vector<float>&
   auto d_rgb_dev = test::upload(ctx, d_rgb, "d_rgb");
   ocl::DeviceArray<float> density(ctx, rows, "density"), rgb(ctx, 3 * rows, "rgb");
   ocl::DeviceArray<float> d_raw_density(ctx, rows, "d_raw_density"), d_raw_rgb(ctx, 3 * rows, "d_raw_rgb");
-  ops::Activations stage(ctx, options);
+  ops::Activations stage(ctx, options, items);
   const ops::ActivationInputs in{raw_density_dev, raw_rgb_dev, rows};
   stage.fwd(in, {density, rgb});
   stage.bwd(in, {d_density_dev, d_rgb_dev}, {d_raw_density, d_raw_rgb});
@@ -43,45 +43,49 @@ std::vector<ActivationOptions> all_variants() {
   return {mipnerf, nerf};
 }
 
-// The device's forward and backward against the double reference on the given rows, for every variant.
+// The device's forward and backward against the double reference on the given rows, for every variant and both
+// ways of giving out work-items (an item per colour value, an item per row).
 void check_against_reference(const std::vector<float>& raw_density, const std::vector<float>& raw_rgb,
                              const std::vector<float>& d_density, const std::vector<float>& d_rgb) {
   const size_t rows = raw_density.size();
-  for (const auto& options : all_variants()) {
-    INFO("density activation " << static_cast<int>(options.density));
-    const auto dev = run_device(options, raw_density, raw_rgb, d_density, d_rgb);
-    std::vector<double> density, rgb, d_raw_density, d_raw_rgb;
-    ref::activations_fwd(options, test::to_double(raw_density), test::to_double(raw_rgb), density, rgb, rows);
-    ref::activations_bwd(options, test::to_double(raw_density), test::to_double(raw_rgb), test::to_double(d_density),
-                         test::to_double(d_rgb), d_raw_density, d_raw_rgb, rows);
-    // Tolerances. Each value is a handful of float operations on e = exp_nonpositive(−|x|) and log1p_unit(e)
-    // (kernels/common.cl: both within 3 ulp by their derivations): 16 roundoffs relative to the result bound that
-    // with margin. On top, the argument
-    // x = raw + bias is rounded once (|Δx| ≤ u·|x|), which moves f(x) by |f'(x)|·u·|x|: softplus' = sigmoid,
-    // sigmoid' = e/(1 + e)² (e = e^−|x|), and the sigmoid's own derivative for its gradient,
-    // |d/dx sigmoid'(x)| ≤ sigmoid'(x). (Softplus of very negative x, ≈ e^x, keeps its relative accuracy
-    // because log1p(e^x) has no cancellation.) The widened sigmoid subtracts ε from (1 + 2ε)·σ: for σ → 0
-    // that cancels, so its absolute error is bounded by the terms' sizes, 16u·((1 + 2ε)·σ + ε).
-    const double pad = options.rgb_padding;
-    const auto x_of = [&](size_t i) { return static_cast<double>(raw_density[i]) + options.density_bias; };
-    const auto argument_error = [&](size_t i, double slope) { return kUnitRoundoff * std::abs(x_of(i)) * slope; };
-    const auto sigmoid_grad = [](double x) {
-      const double e = std::exp(-std::abs(x));
-      return e / ((1 + e) * (1 + e));
-    };
-    const bool relu = options.density == DensityActivation::relu;
-    MIPNERF_CHECK_CLOSE("density", dev.density, density, [&](size_t i) {
-      return 16 * kUnitRoundoff * std::abs(density[i]) +
-             argument_error(i, relu ? 1.0 : ref::density_activation_grad(options, raw_density[i])) + 1e-38;
-    });
-    MIPNERF_CHECK_CLOSE("rgb", dev.rgb, rgb,
-                        [&](size_t i) { return 16 * kUnitRoundoff * (std::abs(rgb[i]) + 2 * pad) + 1e-38; });
-    MIPNERF_CHECK_CLOSE("d_raw_density", dev.d_raw_density, d_raw_density, [&](size_t i) {
-      return 16 * kUnitRoundoff * std::abs(d_raw_density[i]) +
-             std::abs(d_density[i]) * argument_error(i, relu ? 0.0 : sigmoid_grad(x_of(i))) + 1e-38;
-    });
-    MIPNERF_CHECK_CLOSE("d_raw_rgb", dev.d_raw_rgb, d_raw_rgb,
-                        [&](size_t i) { return 16 * kUnitRoundoff * std::abs(d_raw_rgb[i]) + 1e-38; });
+  for (const auto items : {ops::ActivationItems::per_value, ops::ActivationItems::per_row}) {
+    for (const auto& options : all_variants()) {
+      INFO("density activation " << static_cast<int>(options.density) << ", an item per "
+                                 << (items == ops::ActivationItems::per_row ? "row" : "colour value"));
+      const auto dev = run_device(options, raw_density, raw_rgb, d_density, d_rgb, items);
+      std::vector<double> density, rgb, d_raw_density, d_raw_rgb;
+      ref::activations_fwd(options, test::to_double(raw_density), test::to_double(raw_rgb), density, rgb, rows);
+      ref::activations_bwd(options, test::to_double(raw_density), test::to_double(raw_rgb), test::to_double(d_density),
+                           test::to_double(d_rgb), d_raw_density, d_raw_rgb, rows);
+      // Tolerances. Each value is a handful of float operations on e = exp_nonpositive(−|x|) and log1p_unit(e)
+      // (kernels/common.cl: both within 3 ulp by their derivations): 16 roundoffs relative to the result bound that
+      // with margin. On top, the argument
+      // x = raw + bias is rounded once (|Δx| ≤ u·|x|), which moves f(x) by |f'(x)|·u·|x|: softplus' = sigmoid,
+      // sigmoid' = e/(1 + e)² (e = e^−|x|), and the sigmoid's own derivative for its gradient,
+      // |d/dx sigmoid'(x)| ≤ sigmoid'(x). (Softplus of very negative x, ≈ e^x, keeps its relative accuracy
+      // because log1p(e^x) has no cancellation.) The widened sigmoid subtracts ε from (1 + 2ε)·σ: for σ → 0
+      // that cancels, so its absolute error is bounded by the terms' sizes, 16u·((1 + 2ε)·σ + ε).
+      const double pad = options.rgb_padding;
+      const auto x_of = [&](size_t i) { return static_cast<double>(raw_density[i]) + options.density_bias; };
+      const auto argument_error = [&](size_t i, double slope) { return kUnitRoundoff * std::abs(x_of(i)) * slope; };
+      const auto sigmoid_grad = [](double x) {
+        const double e = std::exp(-std::abs(x));
+        return e / ((1 + e) * (1 + e));
+      };
+      const bool relu = options.density == DensityActivation::relu;
+      MIPNERF_CHECK_CLOSE("density", dev.density, density, [&](size_t i) {
+        return 16 * kUnitRoundoff * std::abs(density[i]) +
+               argument_error(i, relu ? 1.0 : ref::density_activation_grad(options, raw_density[i])) + 1e-38;
+      });
+      MIPNERF_CHECK_CLOSE("rgb", dev.rgb, rgb,
+                          [&](size_t i) { return 16 * kUnitRoundoff * (std::abs(rgb[i]) + 2 * pad) + 1e-38; });
+      MIPNERF_CHECK_CLOSE("d_raw_density", dev.d_raw_density, d_raw_density, [&](size_t i) {
+        return 16 * kUnitRoundoff * std::abs(d_raw_density[i]) +
+               std::abs(d_density[i]) * argument_error(i, relu ? 0.0 : sigmoid_grad(x_of(i))) + 1e-38;
+      });
+      MIPNERF_CHECK_CLOSE("d_raw_rgb", dev.d_raw_rgb, d_raw_rgb,
+                          [&](size_t i) { return 16 * kUnitRoundoff * std::abs(d_raw_rgb[i]) + 1e-38; });
+    }
   }
 }
 
