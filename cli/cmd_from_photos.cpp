@@ -122,7 +122,24 @@ std::function<void(const std::string&)> counter(Progress& progress, const std::r
 }
 
 // The model of sparse/ with the most registered images ("" when there is none), and its count.
-std::string largest_model(const fs::path& sparse, size_t& registered);
+std::string largest_model(const fs::path& sparse, size_t& registered) {
+  std::string best;
+  registered = 0;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(sparse, ec)) {
+    if (!entry.is_directory()) continue;
+    try {
+      const data::ColmapModel model = data::read_colmap_model(entry.path().string());
+      if (model.images.size() > registered) {
+        registered = model.images.size();
+        best = entry.path().string();
+      }
+    } catch (const Error&) {
+      // an unfinished model folder: not a candidate
+    }
+  }
+  return best;
+}
 
 // What matching and mapping work on.
 struct MappingJob {
@@ -152,22 +169,18 @@ void run_matcher(const MappingJob& job, bool again, std::ofstream& log) {
 
 // One run of COLMAP's mapper into `out`; returns the registered count of its largest model (0: none).
 size_t run_mapper(const MappingJob& job, const fs::path& out, std::ofstream& log) {
-  const std::string& colmap = job.colmap;
-  const std::string& photos = job.photos;
-  const fs::path& database = job.database;
-  const size_t n_photos = job.n_photos;
   io::make_directories(out.string());
-  Progress progress("COLMAP mapping", static_cast<int64_t>(n_photos));
+  Progress progress("COLMAP mapping", static_cast<int64_t>(job.n_photos));
   const std::regex registered_so_far(R"(Registering image #\d+ \((\d+)\))");
   try {
     run_step("mapping",
-             {colmap, "mapper", "--database_path", database.string(), "--image_path", photos, "--output_path",
-              out.string()},
+             {job.colmap, "mapper", "--database_path", job.database.string(), "--image_path", job.photos,
+              "--output_path", out.string()},
              log, [&](const std::string& line) {
                std::smatch m;
                if (std::regex_search(line, m, registered_so_far)) progress.update(std::stoll(m[1].str()), "registered");
              });
-  } catch (const Error& e) {
+  } catch (const Error&) {
     size_t none = 0;
     if (!largest_model(out, none).empty()) throw;
     // COLMAP's mapper fails ("failed to create sparse model") when no pair of photos could start a model.
@@ -211,24 +224,6 @@ void map_photos(const MappingJob& job, int attempts, std::ofstream& log) {
   fs::rename(best, sparse);
 }
 
-std::string largest_model(const fs::path& sparse, size_t& registered) {
-  std::string best;
-  registered = 0;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(sparse, ec)) {
-    if (!entry.is_directory()) continue;
-    try {
-      const data::ColmapModel model = data::read_colmap_model(entry.path().string());
-      if (model.images.size() > registered) {
-        registered = model.images.size();
-        best = entry.path().string();
-      }
-    } catch (const Error&) {
-      // an unfinished model folder: not a candidate
-    }
-  }
-  return best;
-}
 
 void run_from_photos(const FromPhotosArgs& args) {
   if (args.matcher != "exhaustive" && args.matcher != "sequential") {

@@ -126,5 +126,4 @@ ALWAYS_INLINE float log1p_unit(float y) {
   return 2.0f * s * p;
 }
 
-
 #endif

@@ -18,10 +18,10 @@ std::string format(const char* pattern, double v) {
 
 double per_step(double total, size_t steps) { return steps ? total / static_cast<double>(steps) : 0.0; }
 
-// The machine probe's STREAM triad on all threads (best of its runs), GB/s; 0 when the run did not probe.
-double machine_triad_gbs(const io::Json& machine) {
-  if (!machine.contains("triad_gbs")) return 0.0;
-  return machine["triad_gbs"].value("all_threads", io::Json::object()).value("best", 0.0);
+// A machine-probe figure on all threads (best of its runs), e.g. "triad_gbs"; 0 when the run did not probe.
+double probed_all_threads(const io::Json& machine, const char* figure) {
+  if (!machine.contains(figure)) return 0.0;
+  return machine[figure].value("all_threads", io::Json::object()).value("best", 0.0);
 }
 
 }  // namespace
@@ -50,7 +50,7 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
   const size_t n = std::max<size_t>(1, profile.steps);
   const double step = per_step(profile.wall_seconds, n);
   auto share = [&](double seconds_per_step) { return step > 0 ? format("%.1f %%", 100.0 * seconds_per_step / step) : "–"; };
-  const double triad = machine_triad_gbs(machine);
+  const double triad = probed_all_threads(machine, "triad_gbs");
   std::ostringstream md;
   md << "| stage | ms/" << unit << " | share of " << unit << " | commands/" << unit
      << " | GFLOP/s | GB/s (least traffic) | of the triad |\n|---|---:|---:|---:|---:|---:|---:|\n";
@@ -72,9 +72,7 @@ std::string stage_profile_markdown(const ocl::StageProfile& profile, size_t rays
      << format("%.1f", g.gemm_gflops) << " GFLOP/s); the " << unit << " runs " << format("%.0f", g.rays_per_second)
      << " rays/s = " << format("%.0f", 100.0 * g.fraction()) << " % of it. Per " << unit << " over " << profile.steps
      << " profiled " << unit << "(s); device times from OpenCL profiling events, host products from host timers.\n";
-  const double peak = machine.contains("fma_peak_gflops")
-                          ? machine["fma_peak_gflops"].value("all_threads", io::Json::object()).value("best", 0.0)
-                          : 0.0;
+  const double peak = probed_all_threads(machine, "fma_peak_gflops");
   const double sgemm = machine.contains("large_sgemm_gflops") ? machine["large_sgemm_gflops"].value("best", 0.0) : 0.0;
   if (peak > 0 && sgemm > 0 && g.gemm_gflops > 0) {
     md << "\nThe products' " << format("%.1f", g.gemm_gflops) << " GFLOP/s are " << format("%.0f", 100 * g.gemm_gflops / peak)

@@ -167,7 +167,7 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
                 std::to_string(max_chunk_rays_) + ")");
   }
   ocl::StageScope stage(*ctx_, "rays");
-  ocl::add_stage_bytes(*ctx_, traffic::rays(chunk.count));
+  ocl::add_stage_bytes(*ctx_, traffic::rays(chunk.count, spec_.rays.view_dependence));
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
   const RngKey rng{key.seed, key.step, first_ray};

@@ -5,17 +5,17 @@ namespace mipnerf::graph::traffic {
 namespace {
 
 constexpr double kWord = 4.0;  // bytes of a float32 or a uint32
-constexpr double kRayFloats = 13.0;
 
 double words(double count) { return kWord * count; }
 
 }  // namespace
 
-double rays(size_t n_rays) {
+double rays(size_t n_rays, bool view_dependence) {
   const double r = static_cast<double>(n_rays);
+  const double ray_floats = 3 + 3 + 1 + 1 + 1 + 1 + (view_dependence ? 3 : 0);
   return words(2 * 2 * r)          // the camera and pixel ids copied: read + write each
          + words(2 * r)            // the ids read by the ray kernel
-         + words(kRayFloats * r);  // the ray bundle written
+         + words(ray_floats * r);  // the ray bundle written
 }
 
 double view_encoding(size_t n_rays, size_t view_width) {

@@ -11,8 +11,9 @@
 namespace mipnerf::graph::traffic {
 
 // "rays": the chunk's camera and pixel ids copied in (read + write), read by the ray kernel, which writes the ray
-// bundle's 13 floats a ray (origins, directions, view directions, radii, near, far: ops/ray_bundle.hpp).
-double rays(size_t n_rays);
+// bundle's floats (ops/ray_bundle.hpp): origin, direction (3 each), radius, near, far, loss multiplier, and with
+// `view_dependence` the view direction (3; the kernel leaves it out otherwise).
+double rays(size_t n_rays, bool view_dependence);
 
 // "view encoding": each ray's view direction (3 floats) in, `view_width` features out.
 double view_encoding(size_t n_rays, size_t view_width);

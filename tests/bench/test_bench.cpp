@@ -402,8 +402,9 @@ TEST_CASE("bench stage report: per-step figures, largest stage first, and the GE
 TEST_CASE("stage traffic: each stage's least bytes, counted by hand for small sizes") {
   // 2 rays, 3 intervals, 96 features: per ray 7 ray floats + 4 edges in, 3 × 96 features out.
   CHECK(graph::traffic::encoding(2, 3, 96) == 4.0 * 2 * (7 + 4 + 3 * 96));
-  // Per ray 2 ids copied (read + write) and read again, 13 ray floats written.
-  CHECK(graph::traffic::rays(5) == 4.0 * 5 * (4 + 2 + 13));
+  // Per ray 2 ids copied (read + write) and read again, 13 ray floats written (10 without the view direction).
+  CHECK(graph::traffic::rays(5, true) == 4.0 * 5 * (4 + 2 + 13));
+  CHECK(graph::traffic::rays(5, false) == 4.0 * 5 * (4 + 2 + 10));
   CHECK(graph::traffic::stratified_sampling(2, 3) == 4.0 * 2 * (2 + 4));
   // Resampling 3 → 5 intervals: 4 edges + 3 weights in, 6 edges out; the union reads both again and writes 10.
   CHECK(graph::traffic::resampling(1, 3, 5, false) == 4.0 * (4 + 3 + 6));
