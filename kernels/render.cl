@@ -95,12 +95,14 @@ inline float3 render_rgb(__global const float* rgb, size_t at, const int from_ra
 }
 
 // The forward pass of ray `ray`; `from_raw` (a constant at each call site) applies the activations to the
-// inputs first, with the ray's density noise (`noise`, used only from raw values). Writes comp_rgb, acc, distance
-// and weights (what resampling and the backward need).
+// inputs first, with the ray's density noise (`noise`, used only from raw values). Writes acc, distance and weights
+// (what resampling and the backward need) and, when `with_colour` (a constant at each call site), comp_rgb; without
+// it rgb and comp_rgb are never touched (may be null) and the weights are the same values, computed the same way.
 inline void render_ray_fwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
                            __global const float* directions, __global float* comp_rgb, __global float* acc_out,
                            __global float* distance_out, __global float* weights, const size_t ray,
-                           const uint n_samples, const RayNoiseKey noise, const int from_raw) {
+                           const uint n_samples, const RayNoiseKey noise, const int from_raw,
+                           const int with_colour) {
   const float3 dir = load3(directions, ray);
   const float dir_norm = sqrt(dot(dir, dir));
   __global const float* t = t_edges + ray * (n_samples + 1);
@@ -116,7 +118,7 @@ inline void render_ray_fwd(__global const float* rgb, __global const float* dens
     // α = 1 − exp(−s) as −expm1(−s): the same value, without cancellation for small s (official: 1 − exp).
     const float w = -expm1(-s) * exp(-optical_depth);
     weights[at] = w;
-    color += w * render_rgb(rgb, at, from_raw);
+    if (with_colour) color += w * render_rgb(rgb, at, from_raw);
     acc += w;
     t_weighted += w * (0.5f * (t[i] + t[i + 1]));
     optical_depth += s;
@@ -125,6 +127,7 @@ inline void render_ray_fwd(__global const float* rgb, __global const float* dens
   const float distance = acc > 0.0f ? t_weighted / acc : t_first;
   distance_out[ray] = clamp(distance, t_first, t_last);
   acc_out[ray] = acc;
+  if (!with_colour) return;
 #if BACKGROUND == BACKGROUND_WHITE
   color += 1.0f - acc;
 #endif
@@ -196,7 +199,7 @@ __kernel void render_fwd(__global const float* rgb, __global const float* densit
   const size_t ray = get_global_id(0);
   if (ray >= n_rays) return;
   render_ray_fwd(rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples,
-                 ray_noise_key(0, 0, 0, 0), 0);
+                 ray_noise_key(0, 0, 0, 0), 0, 1);
 }
 
 // d_acc [R] is read only when has_d_acc != 0 (otherwise any buffer may be passed).
@@ -222,7 +225,21 @@ __kernel void render_raw_fwd(__global const float* raw_rgb, __global const float
   const size_t ray = get_global_id(0);
   if (ray >= n_rays) return;
   render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples,
-                 ray_noise_key(seed, first_ray + (uint)ray, step, level), 1);
+                 ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 1);
+}
+
+// render_raw_fwd without the colour, for a level whose colour nothing reads (mip-NeRF's coarse level when rendering:
+// its weights feed the fine level's resampling, its image is never shown): only the raw densities are read and only
+// acc, distance and weights written, the same values render_raw_fwd writes. The MLP skips its colour head for such
+// a level (mlp/network.hpp), so raw colours do not even exist here.
+__kernel void render_raw_weights_fwd(__global const float* raw_density, __global const float* t_edges,
+                                     __global const float* directions, __global float* acc, __global float* distance,
+                                     __global float* weights, const uint n_rays, const uint n_samples,
+                                     const ulong seed, const uint step, const uint first_ray, const uint level) {
+  const size_t ray = get_global_id(0);
+  if (ray >= n_rays) return;
+  render_ray_fwd(0, raw_density, t_edges, directions, 0, acc, distance, weights, ray, n_samples,
+                 ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 0);
 }
 
 // Fused render_bwd then activations_bwd: gradients with respect to the raw outputs, d_raw_rgb [R][N][3] and

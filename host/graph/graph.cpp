@@ -244,7 +244,8 @@ void Graph::encode_level(size_t l, size_t n_rays) {
   }
 }
 
-void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise) {
+void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise,
+                          bool with_colour) {
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& buffers = levels_[l];
   mlp::Network& network = *networks_[level.mlp_index];
@@ -256,11 +257,16 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const Den
   in.samples_per_ray = buffers.intervals;
   {
     ocl::StageScope mlp_stage(*ctx_, "mlp bias + ReLU");
-    network.forward(in, {mlp::view(raw_density_, 1), mlp::view(raw_rgb_, 3)}, ws);
+    network.forward(in, {mlp::view(raw_density_, 1), with_colour ? mlp::view(raw_rgb_, 3) : mlp::MatrixView{}}, ws);
   }
   // The activations are fused into rendering: raw MLP outputs in, composited colour out.
   ocl::StageScope stage(*ctx_, "render");
-  ocl::add_stage_bytes(*ctx_, traffic::render_forward(n_rays, buffers.intervals));
+  ocl::add_stage_bytes(*ctx_, traffic::render_forward(n_rays, buffers.intervals, with_colour));
+  if (!with_colour) {
+    render_->raw_weights_fwd({raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
+                             {buffers.outputs.acc, buffers.outputs.distance, buffers.weights}, noise);
+    return;
+  }
   render_->raw_fwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                    {buffers.outputs.comp_rgb, buffers.outputs.acc, buffers.outputs.distance, buffers.weights}, noise);
 }
@@ -330,7 +336,9 @@ void Graph::render_chunk(const RaySource& source, ChunkRange chunk, StepKey key,
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count);
-    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], DensityNoiseKey{});  // no noise compiled in
+    const bool shown = l + 1 == spec_.levels.size();  // only the last level's colour is shown
+    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], DensityNoiseKey{},  // no noise compiled in
+                  shown || every_level_colour_);
   }
 }
 

@@ -98,7 +98,12 @@ class Graph {
   // Runs every level's forward for the chunk (deterministic sampling); the outputs of each level stay in
   // level_outputs(l) until the next call. An inference_jittered graph jitters ray i of the chunk by
   // (key.seed, key.step, ray number first_ray_number + chunk.first + i); other graphs ignore both.
+  // Only the last level's colour is shown, so by default the levels before it run for their weights alone (what
+  // the next level's resampling reads): the MLP skips its colour head (view branch and rgb layer) and the render
+  // writes no composite, so their comp_rgb stays unwritten while acc, distance and weights are the full forward's
+  // values. With every_level_colour each level's colour is computed too (comparisons of the levels, tests).
   void render_chunk(const RaySource& source, ChunkRange chunk, StepKey key = {}, uint32_t first_ray_number = 0);
+  void set_every_level_colour(bool every_level) { every_level_colour_ = every_level; }
   const LevelOutputs& level_outputs(size_t level) const { return levels_.at(level).outputs; }
 
  private:
@@ -114,8 +119,10 @@ class Graph {
   void generate_rays(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray);
   void sample_level(size_t level, size_t n_rays, StepKey key, uint32_t first_ray);
   void encode_level(size_t level, size_t n_rays);
-  // `noise` keys the level's density noise (RenderOptions::density_noise; training graphs only).
-  void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise);
+  // `noise` keys the level's density noise (RenderOptions::density_noise; training graphs only). Without
+  // `with_colour` (inference only) the level's density alone: its weights, acc and distance, no comp_rgb.
+  void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise,
+                     bool with_colour = true);
   void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
                       const DensityNoiseKey& noise);
 
@@ -125,6 +132,7 @@ class Graph {
   GraphMode mode_;
   size_t max_chunk_rays_;
   size_t max_batch_rays_;
+  bool every_level_colour_ = false;  // rendering: also the colour of levels before the last
 
   // Stages (each builds its specialisation once).
   std::unique_ptr<ops::Rays> rays_;

@@ -41,9 +41,10 @@ double encoding(size_t n_rays, size_t intervals, size_t feature_width) {
   return words(static_cast<double>(n_rays) * per_ray);
 }
 
-double render_forward(size_t n_rays, size_t intervals) {
-  const double per_sample = 3.0 + 1.0 + 1.0 + 1.0;  // raw colour, raw density, an edge; the weight
-  const double per_ray = 1.0 + 3.0 + 3.0 + 1.0 + 1.0;  // the last edge, the direction; colour, opacity, distance
+double render_forward(size_t n_rays, size_t intervals, bool with_colour) {
+  const double colours = with_colour ? 3.0 : 0.0;
+  const double per_sample = colours + 1.0 + 1.0 + 1.0;  // raw colour, raw density, an edge; the weight
+  const double per_ray = 1.0 + 3.0 + colours + 1.0 + 1.0;  // the last edge, the direction; colour, opacity, distance
   return words(static_cast<double>(n_rays) * (per_ray + per_sample * static_cast<double>(intervals)));
 }
 

@@ -29,8 +29,9 @@ double resampling(size_t n_rays, size_t previous_intervals, size_t new_intervals
 double encoding(size_t n_rays, size_t intervals, size_t feature_width);
 
 // "render" (activations fused): per sample the raw colour (3), raw density, an edge in and the weight out; per ray
-// the direction in, colour (3), accumulated opacity and distance out.
-double render_forward(size_t n_rays, size_t intervals);
+// the direction in, colour (3), accumulated opacity and distance out. Without the colour (a level rendered for its
+// weights only, render_raw_weights_fwd) neither colour is moved.
+double render_forward(size_t n_rays, size_t intervals, bool with_colour = true);
 
 // "loss": per ray the rendered colour (3), target colour (3) and loss multiplier in, the colour's gradient (3) out.
 double loss(size_t n_rays);

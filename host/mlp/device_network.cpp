@@ -69,6 +69,7 @@ void DeviceNetwork::heads_forward(const MlpInputs& in, const MlpOutputs& out, Wo
   gemm::sgemm(*ctx_, gemm::GemmBackend::clblast, gemm::gemm_shape(rows, density.out, W), 1.0f, h,
               weights(params_, density), 0.0f, out.raw_density, "density forward");
   kernels_->bias_act_fwd(out.raw_density, rows, density.out, params_, density.bias_offset, false);
+  if (out.raw_rgb.array == nullptr) return;  // density only (inference of a level whose colour nothing reads)
 
   const DenseLayer& rgb = layout_.rgb;
   if (!config_.view_dependence) {

@@ -204,6 +204,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
   const MlpConfig& c = config_;
   const bool training = !b.trunk.empty();
   if (training && b.trunk.size() != c.depth) throw Error("host MLP forward: expected one activation per trunk layer");
+  if (training && b.rgb == nullptr) throw Error("host MLP forward: a training forward needs its colour output");
   const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
   const size_t rays_per = rays_per_block(spr);
   const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
@@ -241,6 +242,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
       w.product(ProductKind::forward, false, false, rows, D.out, W, h, W, P + D.weight_offset, D.out, 0.0f, density,
                 b.density_ld);
       add_bias(density, b.density_ld, rows, D.out, P + D.bias_offset, false);
+      if (b.rgb == nullptr) continue;  // density only
       const DenseLayer& R = layout_.rgb;
       float* rgb = b.rgb + row0 * b.rgb_ld;
       if (!c.view_dependence) {

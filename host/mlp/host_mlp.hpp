@@ -46,7 +46,7 @@ struct HostForwardBuffers {
   size_t view_ld = 0;
   float* density = nullptr;  // [rows][density_outputs], ld density_ld
   size_t density_ld = 0;
-  float* rgb = nullptr;  // [rows][rgb_outputs], ld rgb_ld
+  float* rgb = nullptr;  // [rows][rgb_outputs], ld rgb_ld; null (inference only): density only, no colour head
   size_t rgb_ld = 0;
   std::vector<float*> trunk;  // training: depth × [rows][width] (ld width) kept for the backward; empty: inference
   float* bottleneck = nullptr;   // training with view dependence: [rows][bottleneck_width]

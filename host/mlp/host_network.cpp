@@ -88,7 +88,7 @@ void HostNetwork::forward_impl(const MlpInputs& in, const MlpOutputs& out, Works
   HostForwardBuffers b = host_buffers(mapped, in, ws, save);
   b.density = mapped.at(out.raw_density);
   b.density_ld = out.raw_density.ld;
-  b.rgb = mapped.at(out.raw_rgb);
+  b.rgb = out.raw_rgb.array ? mapped.at(out.raw_rgb) : nullptr;  // null: density only
   b.rgb_ld = out.raw_rgb.ld;
   const HostMlpTimes times = host_.forward(b, ctx_->recording_profiler() != nullptr);
   profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

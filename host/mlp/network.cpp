@@ -140,8 +140,14 @@ void Network::check_inputs(const MlpInputs& in, const Workspace& ws, const char*
 void Network::forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws) {
   check_inputs(in, ws, "forward");
   ocl::require_matrix(out.raw_density, in.rows(), config_.density_outputs, "raw_density", "MLP forward");
-  ocl::require_matrix(out.raw_rgb, in.rows(), config_.rgb_outputs, "raw_rgb", "MLP forward");
   const bool save = ws.mode_ == WorkspaceMode::training;
+  if (out.raw_rgb.array != nullptr) {
+    ocl::require_matrix(out.raw_rgb, in.rows(), config_.rgb_outputs, "raw_rgb", "MLP forward");
+  } else if (save) {
+    throw Error(
+        "MLP forward: no raw_rgb output given to a training workspace (a density-only forward is for inference: the "
+        "backward needs the colour head's activations)");
+  }
   ws.has_forward_ = false;
   forward_impl(in, out, ws, save);
   if (save) {

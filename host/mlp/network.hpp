@@ -40,7 +40,9 @@ struct MlpInputs {
 // Where the forward writes (CLBlast writes into these views directly, no copies).
 struct MlpOutputs {
   MatrixView raw_density;  // [rows][density_outputs]; the shared `raw_density [rows]` layout is ld = 1
-  MatrixView raw_rgb;      // [rows][rgb_outputs]
+  // [rows][rgb_outputs]; no array (inference only): density only, the colour head (view branch, rgb layer) skipped,
+  // for a level whose colour nothing reads (graph.hpp)
+  MatrixView raw_rgb;
 };
 
 // ∂loss/∂outputs of one forward, read only.

@@ -47,6 +47,7 @@ Render::Render(ocl::Context& ctx, const RenderOptions& options, const Activation
   bwd_ = &program.kernel("render_bwd");
   raw_fwd_ = &program.kernel("render_raw_fwd");
   raw_bwd_ = &program.kernel("render_raw_bwd");
+  raw_weights_fwd_ = &program.kernel("render_raw_weights_fwd");
 }
 
 void Render::launch_fwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in,
@@ -109,6 +110,26 @@ void Render::bwd(const RenderInputs& in, const ocl::DeviceArray<float>& weights,
 
 void Render::raw_fwd(const RenderInputs& raw, const RenderOutputs& out, const DensityNoiseKey& noise) {
   launch_fwd(*raw_fwd_, "render_raw_fwd", raw, out, &noise);
+}
+
+void Render::raw_weights_fwd(const RenderDensityInputs& raw, const RenderWeightsOutputs& out,
+                             const DensityNoiseKey& noise) {
+  const std::string where = "render_raw_weights_fwd";
+  detail::require(raw.density, raw.n_rays * raw.n_samples, where);
+  detail::require(raw.t_edges, raw.n_rays * (raw.n_samples + 1), where);
+  detail::require(raw.rays.directions, 3 * raw.n_rays, where);
+  detail::to_uint(raw.n_rays * raw.n_samples, where, "rows");
+  detail::require(out.acc, raw.n_rays, where);
+  detail::require(out.distance, raw.n_rays, where);
+  detail::require(out.weights, raw.n_rays * raw.n_samples, where);
+  check_noise_key(noise, raw.n_samples, where);
+  const cl_uint n_rays = detail::to_uint(raw.n_rays, where, "rays"),
+                n_samples = detail::to_uint(raw.n_samples, where, "samples");
+  ocl::set_args(*raw_weights_fwd_, where, raw.density, raw.t_edges, raw.rays.directions, out.acc, out.distance,
+                out.weights, n_rays, n_samples, static_cast<cl_ulong>(noise.rng.seed),
+                static_cast<cl_uint>(noise.rng.step), static_cast<cl_uint>(noise.rng.first_ray),
+                static_cast<cl_uint>(noise.level));
+  ocl::launch_1d(*ctx_, *raw_weights_fwd_, raw.n_rays, where);
 }
 
 void Render::raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,

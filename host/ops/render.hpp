@@ -31,6 +31,21 @@ struct RenderOutputs {
   ocl::DeviceArray<float>& weights;   // [R][N]: resampling's input, and what the backward needs besides the inputs
 };
 
+// A level rendered for its weights only (render_raw_weights_fwd): no colours in, no composite out.
+struct RenderDensityInputs {
+  const ocl::DeviceArray<float>& density;  // [R][N] raw
+  const ocl::DeviceArray<float>& t_edges;  // [R][N+1]
+  const RayBundle& rays;                   // reads directions
+  size_t n_rays;
+  size_t n_samples;
+};
+
+struct RenderWeightsOutputs {
+  ocl::DeviceArray<float>& acc;       // [R]
+  ocl::DeviceArray<float>& distance;  // [R]
+  ocl::DeviceArray<float>& weights;   // [R][N]
+};
+
 struct RenderGradients {
   const ocl::DeviceArray<float>& d_comp_rgb;  // [R][3] ∂L/∂comp_rgb
   const ocl::DeviceArray<float>* d_acc;       // [R] ∂L/∂acc, or nullptr when the loss does not use acc
@@ -56,6 +71,10 @@ class Render {
   // options().density_noise > 0 each raw density gets its noise first, keyed by `noise` (ray i of the launch is ray
   // noise.rng.first_ray + i of the batch); without, `noise` is not used.
   void raw_fwd(const RenderInputs& raw, const RenderOutputs& out, const DensityNoiseKey& noise = {});
+  // raw_fwd without the colour (render_raw_weights_fwd): the same acc, distance and weights from the raw densities
+  // alone, for a level whose composite colour nothing reads (inference; see graph.hpp).
+  void raw_weights_fwd(const RenderDensityInputs& raw, const RenderWeightsOutputs& out,
+                       const DensityNoiseKey& noise = {});
   // The fused render_bwd + activations_bwd: gradients with respect to the raw outputs. `noise` must be the
   // forward's: the backward draws the same noise again.
   void raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
@@ -74,6 +93,7 @@ class Render {
   ::cl::Kernel* bwd_;
   ::cl::Kernel* raw_fwd_;
   ::cl::Kernel* raw_bwd_;
+  ::cl::Kernel* raw_weights_fwd_;
 };
 
 }  // namespace mipnerf::ops

@@ -121,6 +121,17 @@ void render_raw_fwd(const RenderOptions& options, const ActivationOptions& activ
   render_fwd(options, rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, n_rays, n_samples);
 }
 
+void render_raw_weights_fwd(const RenderOptions& options, const ActivationOptions& activation,
+                            const std::vector<double>& raw_density, const std::vector<double>& t_edges,
+                            const std::vector<double>& directions, std::vector<double>& acc,
+                            std::vector<double>& distance, std::vector<double>& weights, size_t n_rays,
+                            size_t n_samples, const DensityNoiseKey& noise) {
+  const std::vector<double> no_colour(3 * n_rays * n_samples, 0.0);
+  std::vector<double> unused_comp_rgb;
+  render_raw_fwd(options, activation, no_colour, raw_density, t_edges, directions, unused_comp_rgb, acc, distance,
+                 weights, n_rays, n_samples, noise);
+}
+
 void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,

@@ -39,6 +39,14 @@ void render_raw_fwd(const RenderOptions& options, const ActivationOptions& activ
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     std::vector<double>& comp_rgb, std::vector<double>& acc, std::vector<double>& distance,
                     std::vector<double>& weights, size_t n_rays, size_t n_samples, const DensityNoiseKey& noise = {});
+// Mirror of render_raw_weights_fwd: render_raw_fwd's acc, distance and weights from the raw densities alone (no
+// colour is read or composited; in this reference the colours never touch those three, so it runs render_raw_fwd on
+// zero colours and drops the composite).
+void render_raw_weights_fwd(const RenderOptions& options, const ActivationOptions& activation,
+                            const std::vector<double>& raw_density, const std::vector<double>& t_edges,
+                            const std::vector<double>& directions, std::vector<double>& acc,
+                            std::vector<double>& distance, std::vector<double>& weights, size_t n_rays,
+                            size_t n_samples, const DensityNoiseKey& noise = {});
 void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,

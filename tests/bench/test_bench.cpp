@@ -411,6 +411,7 @@ TEST_CASE("stage traffic: each stage's least bytes, counted by hand for small si
   CHECK(graph::traffic::resampling(1, 3, 5, true) == 4.0 * (4 + 3 + 6 + 4 + 6 + 10));
   // Render: per sample raw colour 3, density, edge in, weight out; per ray last edge, direction in, 5 outputs.
   CHECK(graph::traffic::render_forward(2, 3) == 4.0 * 2 * (3 * 6 + 1 + 3 + 5));
+  CHECK(graph::traffic::render_forward(2, 3, false) == 4.0 * 2 * (3 * 3 + 1 + 3 + 2));  // weights only: no colours
   CHECK(graph::traffic::render_backward(2, 3) == 4.0 * 2 * (3 * 10 + 1 + 3 + 3));
   CHECK(graph::traffic::loss(3) == 4.0 * 3 * 10);
   CHECK(graph::traffic::view_encoding(2, 27) == 4.0 * 2 * 30);

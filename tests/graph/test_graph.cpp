@@ -442,6 +442,63 @@ TEST_CASE("graph: a forward-facing LLFF step (cylinders, raw view directions, de
   check_step_against_reference("mipnerf", forward_facing_scene(), kLlffConventions, entries);
 }
 
+// Rendering shows the last level's colour only, so the levels before it run for their weights alone (graph.hpp):
+// the shown outputs are bit for bit those of a graph that also computes every level's colour, the coarse level's
+// acc and distance too, and the products of the coarse colour head are not run.
+TEST_CASE("graph: a render computes the coarse level's weights without its colour, the same image") {
+  ocl::Context ctx(test::test_context().device_info(), true);  // profiling on
+  for (const bool view_dependence : {true, false}) {
+    INFO("view dependence " << view_dependence);
+    auto config = train::resolve_config("tiny", "mipnerf", kLlffConventions);
+    config.view_dependence = view_dependence;
+    const auto dataset = data::load_dataset(forward_facing_scene(), {});
+    data::DeviceDataset device_data(ctx, dataset.split("train"));
+    const size_t rays = 64;
+    ops::BatchArrays batch(ctx, rays);
+    ops::batch_sample(ctx, device_data, {config.seed, ops::Batching::all_images}, 3, batch);
+    const graph::RaySource source{device_data.cameras(), batch.camera_ids, batch.pixel_ids};
+    const auto spec = train::make_graph_spec(config, false);
+    REQUIRE(spec.levels.size() == 2);
+    for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+      INFO("gemm_backend = " << enum_name(backend));
+      auto network = mlp::make_network(ctx, spec.mlps.at(0), backend);
+      struct Render {
+        std::vector<std::vector<float>> shown, coarse;
+        double forward_flops = 0.0;
+      };
+      const auto render = [&](bool every_level) {
+        graph::Graph graph(ctx, spec, {network.get()}, graph::GraphMode::inference, rays);
+        graph.set_every_level_colour(every_level);
+        ocl::StageProfiler profiler;
+        ctx.set_profiler(&profiler);
+        profiler.begin_step();
+        graph.render_chunk(source, {0, rays});
+        profiler.end_step(ctx);
+        ctx.set_profiler(nullptr);
+        Render r;
+        const auto& fine = graph.level_outputs(1);
+        r.shown = {fine.comp_rgb.download(ctx), fine.acc.download(ctx), fine.distance.download(ctx)};
+        r.coarse = {graph.level_outputs(0).acc.download(ctx), graph.level_outputs(0).distance.download(ctx)};
+        r.forward_flops = profiler.profile().find("gemm forward")->flops;
+        return r;
+      };
+      const Render every = render(true), shown_only = render(false);
+      CHECK(shown_only.shown == every.shown);
+      CHECK(shown_only.coarse == every.coarse);
+      // The coarse level's colour head is gone: fewer forward FLOPs, by that head's products over its samples.
+      const mlp::MlpConfig& c = spec.mlps.at(0);
+      const double coarse_rows = static_cast<double>(rays * spec.levels[0].new_samples);
+      const double colour_head =
+          c.view_dependence
+              ? 2.0 * (coarse_rows * (c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
+                                      c.view_branch_width * c.rgb_outputs) +
+                       static_cast<double>(rays) * c.view_width * c.view_branch_width)
+              : 2.0 * coarse_rows * c.width * c.rgb_outputs;
+      CHECK(shown_only.forward_flops == doctest::Approx(every.forward_flops - colour_head));
+    }
+  }
+}
+
 // Density noise regularises training only (official: `if randomized and density_noise > 0`): a rendering graph of a
 // spec with noise renders exactly what the same spec without it renders, while a training step with it differs.
 TEST_CASE("graph: density noise changes a training step and never a render") {
@@ -462,6 +519,7 @@ TEST_CASE("graph: density noise changes a training step and never a render") {
 
   const auto render = [&](const graph::GraphSpec& spec) {
     graph::Graph graph(ctx, spec, {network.get()}, graph::GraphMode::inference, rays);
+    graph.set_every_level_colour(true);
     graph.render_chunk(source, {0, rays});
     std::vector<std::vector<float>> out;
     for (size_t l = 0; l < spec.levels.size(); ++l) {

@@ -470,6 +470,55 @@ TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same 
   }
 }
 
+// Rendering evaluates the levels before the last for their densities only (graph.hpp): an inference forward without
+// a colour output runs the trunk and the density head and nothing else, with the full forward's densities.
+TEST_CASE("mlp device: a density-only inference forward gives the full forward's densities from the trunk alone") {
+  ocl::Context ctx(test::test_context().device_info(), true);  // profiling on
+  for (const bool view : {false, true}) {
+    const mlp::MlpConfig config = test::small_mlp_config(view);
+    for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+      INFO("gemm_backend = " << enum_name(backend) << ", view dependence " << view);
+      std::mt19937 rng(111);
+      const auto network = mlp::make_network(ctx, config, backend);
+      mlp::Network& net = *network;
+      const Pass p = make_pass(config, 5, 6, rng);
+      DevicePass d(ctx, config, p);
+      auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::inference);
+      net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+      const auto full_density = d.raw_density.download(ctx);
+      const std::vector<float> sentinel(p.rows() * config.rgb_outputs, 7.0f);
+      d.raw_rgb.upload(ctx, sentinel);
+      d.raw_density.upload(ctx, std::vector<float>(full_density.size(), 0.0f));
+      ocl::StageProfiler profiler;
+      ctx.set_profiler(&profiler);
+      profiler.begin_step();
+      net.forward(inputs_for(d, p, config), {ocl::view(d.raw_density, config.density_outputs), {}}, ws);
+      profiler.end_step(ctx);
+      ctx.set_profiler(nullptr);
+      CHECK(d.raw_density.download(ctx) == full_density);
+      CHECK(d.raw_rgb.download(ctx) == sentinel);  // no colour written
+      // The products are the trunk's and the density head's only: the forward's count minus the colour head's.
+      double colour_head = 0.0;
+      if (view) {
+        colour_head = 2.0 * (p.rows() * (config.width * config.bottleneck_width +
+                                         config.bottleneck_width * config.view_branch_width +
+                                         config.view_branch_width * config.rgb_outputs) +
+                             p.n_rays * config.view_width * config.view_branch_width);
+      } else {
+        colour_head = 2.0 * p.rows() * config.width * config.rgb_outputs;
+      }
+      const auto* forward = profiler.profile().find("gemm forward");
+      REQUIRE(forward != nullptr);
+      CHECK(forward->flops == forward_flops(config, p.rows(), p.n_rays) - colour_head);
+      // A training forward must compute the colour its backward needs.
+      auto training = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+      CHECK_THROWS_WITH_AS(
+          net.forward(inputs_for(d, p, config), {ocl::view(d.raw_density, config.density_outputs), {}}, training),
+          doctest::Contains("density-only forward is for inference"), Error);
+    }
+  }
+}
+
 TEST_CASE("mlp device: a host network's workspace refuses the device network's backward, saying what to do") {
   auto& ctx = test::test_context();
   if (test::supported_gemm_backends(ctx).size() < 2) {
