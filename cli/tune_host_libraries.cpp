@@ -21,15 +21,25 @@
 namespace mipnerf::cli {
 namespace {
 
-// The products of `config` in blocks of the host MLP's rows for `samples_per_ray`, added to `shapes` by label.
+// The products of `config` in blocks of the host MLP's rows for `samples_per_ray` (the forward's at its block rows,
+// the backward's at its own), added to `shapes` by label.
 void add_products(std::map<std::string, gemm::HostProductShape>& shapes, const mlp::MlpConfig& config,
                   size_t samples_per_ray) {
   const size_t target = mlp::HostMlpOptions{}.target_block_rows;
-  const size_t rows = std::max<size_t>(1, target / std::max<size_t>(1, samples_per_ray)) * samples_per_ray;
-  for (const gemm::GemmProblem& p : mlp::mlp_gemm_problems(config, rows)) {
-    const gemm::HostProductShape shape{p.shape.transpose_a, p.shape.transpose_b, p.shape.m, p.shape.n, p.shape.k};
-    shapes.emplace(gemm::host_product_label(shape), shape);
-  }
+  const auto block_rows = [&](size_t target_rows) {
+    return std::max<size_t>(1, target_rows / std::max<size_t>(1, samples_per_ray)) * samples_per_ray;
+  };
+  const size_t forward_rows = block_rows(target);
+  const size_t backward_rows = block_rows(mlp::backward_block_rows_for(config.width, target));
+  const auto add = [&](size_t rows, bool forward_products) {
+    for (const gemm::GemmProblem& p : mlp::mlp_gemm_problems(config, rows)) {
+      if ((p.kind() == gemm::GemmKind::forward) != forward_products) continue;
+      const gemm::HostProductShape shape{p.shape.transpose_a, p.shape.transpose_b, p.shape.m, p.shape.n, p.shape.k};
+      shapes.emplace(gemm::host_product_label(shape), shape);
+    }
+  };
+  add(forward_rows, true);
+  add(backward_rows, false);
 }
 
 std::map<std::string, gemm::HostProductShape> products_to_time(const mlp::MlpConfig& flags_network,

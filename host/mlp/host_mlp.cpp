@@ -142,6 +142,17 @@ size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
   return std::max<size_t>(1, options_.target_block_rows / std::max<size_t>(1, samples_per_ray));
 }
 
+size_t backward_block_rows_for(size_t width, size_t target_block_rows) {
+  return width >= 256 ? 2 * target_block_rows : target_block_rows;
+}
+
+size_t HostMlp::backward_rays_per_block(size_t samples_per_ray) const {
+  const size_t rows = options_.backward_target_block_rows > 0
+                          ? options_.backward_target_block_rows
+                          : backward_block_rows_for(config_.width, options_.target_block_rows);
+  return std::max<size_t>(1, rows / std::max<size_t>(1, samples_per_ray));
+}
+
 namespace {
 
 // Runs work(worker, first_block, end_block) on `threads` threads over n_blocks blocks, contiguous ranges in thread
@@ -279,7 +290,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
   const HostForwardBuffers& b = bb.saved;
   if (b.trunk.size() != c.depth) throw Error("host MLP backward: the forward kept no activations (inference?)");
   const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
-  const size_t rays_per = rays_per_block(spr);
+  const size_t rays_per = backward_rays_per_block(spr);
   const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
   const float* P = b.params;
   SingleThreadedBlas one_thread;

@@ -31,6 +31,9 @@ namespace mipnerf::mlp {
 
 struct HostMlpOptions {
   size_t target_block_rows = 256;  // rows per block ≈ this, rounded to whole rays (at least one ray)
+  // Rows per backward block, ≈ (whole rays); 0: backward_block_rows_for(width). The forward keeps target_block_rows,
+  // so training and inference forwards stay bit-equal; the backward's blocks change only its summation order.
+  size_t backward_target_block_rows = 0;
   size_t threads = 1;              // worker threads (the device's compute units)
   // Which CPU GEMM library runs which product (default: OpenBLAS for all; tune's per-shape choice when the device's
   // tuning file has one). Each call holds every library to its worker thread: our threads split the rows.
@@ -70,6 +73,14 @@ struct HostMlpTimes {
   double total() const { return gemm_forward + gemm_backward_data + gemm_backward_weights + elementwise; }
 };
 
+// The backward's default rows per block for a network `width` wide: 2 × target_block_rows from 256 wide up, else
+// target_block_rows. Why: each block's weight-gradient products read and write the thread's whole gradient buffer
+// (2.4 MB for the paper's network, several times the core's L2; 0.38 MB for the quick preset's), so longer blocks
+// halve that traffic per FLOP where it spills. Measured with `mipnerf-cl bench` (PoCL CPU device, 2 EPYC cores,
+// 2026-11-26, 4 alternating rounds): paper step 7.0–7.4 s with 512-row backward blocks against 7.9–8.2 s with 256
+// (1,024: 7.4–7.8); the quick preset's step was slower with 512 (0.19–0.24 against 0.17–0.21 s, 3 rounds).
+size_t backward_block_rows_for(size_t width, size_t target_block_rows);
+
 class HostMlp {
  public:
   HostMlp(const MlpConfig& config, HostMlpOptions options);
@@ -78,7 +89,8 @@ class HostMlp {
   HostMlp& operator=(const HostMlp&) = delete;
 
   const HostMlpOptions& options() const { return options_; }
-  size_t rays_per_block(size_t samples_per_ray) const;
+  size_t rays_per_block(size_t samples_per_ray) const;           // forward blocks
+  size_t backward_rays_per_block(size_t samples_per_ray) const;  // backward blocks
 
   // Thread times are measured only when `timed` (a clock read around each product).
   HostMlpTimes forward(const HostForwardBuffers& b, bool timed);

@@ -90,7 +90,9 @@ struct StageDescription {
 // gaussian_points_fwd have no specialisations of their own and are left out (tests/ops/test_sample.cpp and
 // test_gaussian.cpp check them). The concatenated-PE variant's gaussian_concat_pe_fwd is built only under
 // MIPNERF_CONCAT_PE (a variant of one study, not a stage every scene runs) and is left out too
-// (tests/ops/test_concat_pe.cpp checks it, with and without that option).
+// (tests/ops/test_concat_pe.cpp checks it, with and without that option). render_raw_weights_fwd (rendering's coarse
+// level: render_raw_fwd's code without the colour) is left out as well: tests/ops/test_render.cpp holds it bit for bit
+// to render_raw_fwd on every background, with and without density noise, and renders time it in their "render" stage.
 const std::vector<StageDescription>& ray_math_stages();
 
 }  // namespace mipnerf::ops

@@ -227,10 +227,20 @@ TEST_CASE("mlp device: the host path's blocks and threads do not change what it 
     check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 106, &options);
     check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(false), 4, 7, 3, 107, &options);
   }
+  // Backward blocks of their own size (longer, or shorter, than the forward's): the same gradients within the bounds.
+  for (const auto& forward_backward : {std::pair<size_t, size_t>{6, 30}, {40, 7}}) {
+    mlp::HostMlpOptions options = host_options(forward_backward.first, 2);
+    options.backward_target_block_rows = forward_backward.second;
+    INFO("target_block_rows " << options.target_block_rows << ", backward " << options.backward_target_block_rows);
+    check_against_reference_on(gemm::GemmBackend::host, test::small_mlp_config(true), 5, 6, 9, 110, &options);
+  }
   mlp::MlpConfig paper;
   paper.seed = 8;
   const mlp::HostMlpOptions one_ray_per_block = host_options(1, 2);
   check_against_reference_on(gemm::GemmBackend::host, paper, 3, 16, 8, 108, &one_ray_per_block);
+  // By default the backward of a network 256 wide takes blocks twice as long as its forward's; narrower ones the same.
+  CHECK(mlp::backward_block_rows_for(paper.width, 256) == 512);
+  CHECK(mlp::backward_block_rows_for(test::small_mlp_config(true).width, 256) == 256);
 }
 
 TEST_CASE("mlp device: the host path on every CPU GEMM library built in matches the reference") {
