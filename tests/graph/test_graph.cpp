@@ -21,6 +21,7 @@
 #include "ref/sample.hpp"
 #include "gemm/cpu_sgemm.hpp"
 #include "support/gemm_backends.hpp"
+#include "support/profile_once.hpp"
 #include "support/scoped_environment.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
@@ -469,17 +470,12 @@ TEST_CASE("graph: a render computes the coarse level's weights without its colou
       const auto render = [&](bool every_level) {
         graph::Graph graph(ctx, spec, {network.get()}, graph::GraphMode::inference, rays);
         graph.set_every_level_colour(every_level);
-        ocl::StageProfiler profiler;
-        ctx.set_profiler(&profiler);
-        profiler.begin_step();
-        graph.render_chunk(source, {0, rays});
-        profiler.end_step(ctx);
-        ctx.set_profiler(nullptr);
+        const ocl::StageProfile profile = test::profile_once(ctx, [&] { graph.render_chunk(source, {0, rays}); });
         Render r;
         const auto& fine = graph.level_outputs(1);
         r.shown = {fine.comp_rgb.download(ctx), fine.acc.download(ctx), fine.distance.download(ctx)};
         r.coarse = {graph.level_outputs(0).acc.download(ctx), graph.level_outputs(0).distance.download(ctx)};
-        r.forward_flops = profiler.profile().find("gemm forward")->flops;
+        r.forward_flops = profile.find("gemm forward")->flops;
         return r;
       };
       const Render every = render(true), shown_only = render(false);

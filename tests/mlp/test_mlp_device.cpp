@@ -21,6 +21,7 @@
 #include "ref/mlp.hpp"
 #include "support/gemm_backends.hpp"
 #include "support/mlp_fixtures.hpp"
+#include "support/profile_once.hpp"
 #include "support/skip.hpp"
 #include "support/test_context.hpp"
 
@@ -442,91 +443,82 @@ double backward_data_flops(const mlp::MlpConfig& c, double rows) {
   return 2.0 * rows * per_row;
 }
 
-}  // namespace
-
-TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same on each backend") {
-  ocl::Context ctx(test::test_context().device_info(), true);
+// Runs body(config, net, pass, device pass, workspace) for the small network with and without view dependence on
+// every backend the test device supports: a pass of 5 rays × 6 samples drawn with `seed`, a workspace of `mode`.
+template <typename Body>
+void for_each_small_network(ocl::Context& ctx, unsigned seed, mlp::WorkspaceMode mode, const Body& body) {
   for (const bool view : {true, false}) {
     const mlp::MlpConfig config = test::small_mlp_config(view);
     for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
       INFO("gemm_backend = " << enum_name(backend) << ", view dependence " << view);
-      std::mt19937 rng(109);
+      std::mt19937 rng(seed);
       const auto network = mlp::make_network(ctx, config, backend);
-      mlp::Network& net = *network;
       const Pass p = make_pass(config, 5, 6, rng);
       DevicePass d(ctx, config, p);
-      auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
-      ocl::StageProfiler profiler;
-      ctx.set_profiler(&profiler);
-      profiler.begin_step();
-      net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
-      net.backward(ws, gradients_for(d, config));
-      profiler.end_step(ctx);
-      ctx.set_profiler(nullptr);
-      const ocl::StageProfile& profile = profiler.profile();
-      const auto* forward = profile.find("gemm forward");
-      const auto* data = profile.find("gemm backward_data");
-      const auto* weights = profile.find("gemm backward_weights");
-      REQUIRE(forward != nullptr);
-      REQUIRE(data != nullptr);
-      REQUIRE(weights != nullptr);
-      const double rows = static_cast<double>(p.rows()), rays = static_cast<double>(p.n_rays);
-      CHECK(forward->flops == forward_flops(config, rows, rays));
-      CHECK(weights->flops == forward_flops(config, rows, rays));  // one weight-gradient product per weight block
-      CHECK(data->flops == backward_data_flops(config, rows));
-      CHECK(forward->seconds > 0.0);
-      CHECK(profile.stage_seconds() <= profile.wall_seconds);
+      auto ws = network->make_workspace(p.rows(), p.n_rays, mode);
+      body(config, *network, p, d, ws);
     }
   }
+}
+
+}  // namespace
+
+TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same on each backend") {
+  ocl::Context ctx(test::test_context().device_info(), true);
+  for_each_small_network(ctx, 109, mlp::WorkspaceMode::training, [&](const mlp::MlpConfig& config, mlp::Network& net,
+                                                                     const Pass& p, DevicePass& d, mlp::Workspace& ws) {
+    const ocl::StageProfile profile = test::profile_once(ctx, [&] {
+      net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+      net.backward(ws, gradients_for(d, config));
+    });
+    const auto* forward = profile.find("gemm forward");
+    const auto* data = profile.find("gemm backward_data");
+    const auto* weights = profile.find("gemm backward_weights");
+    REQUIRE(forward != nullptr);
+    REQUIRE(data != nullptr);
+    REQUIRE(weights != nullptr);
+    const double rows = static_cast<double>(p.rows()), rays = static_cast<double>(p.n_rays);
+    CHECK(forward->flops == forward_flops(config, rows, rays));
+    CHECK(weights->flops == forward_flops(config, rows, rays));  // one weight-gradient product per weight block
+    CHECK(data->flops == backward_data_flops(config, rows));
+    CHECK(forward->seconds > 0.0);
+    CHECK(profile.stage_seconds() <= profile.wall_seconds);
+  });
 }
 
 // Rendering evaluates the levels before the last for their densities only (graph.hpp): an inference forward without
 // a colour output runs the trunk and the density head and nothing else, with the full forward's densities.
 TEST_CASE("mlp device: a density-only inference forward gives the full forward's densities from the trunk alone") {
   ocl::Context ctx(test::test_context().device_info(), true);  // profiling on
-  for (const bool view : {false, true}) {
-    const mlp::MlpConfig config = test::small_mlp_config(view);
-    for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
-      INFO("gemm_backend = " << enum_name(backend) << ", view dependence " << view);
-      std::mt19937 rng(111);
-      const auto network = mlp::make_network(ctx, config, backend);
-      mlp::Network& net = *network;
-      const Pass p = make_pass(config, 5, 6, rng);
-      DevicePass d(ctx, config, p);
-      auto ws = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::inference);
-      net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
-      const auto full_density = d.raw_density.download(ctx);
-      const std::vector<float> sentinel(p.rows() * config.rgb_outputs, 7.0f);
-      d.raw_rgb.upload(ctx, sentinel);
-      d.raw_density.upload(ctx, std::vector<float>(full_density.size(), 0.0f));
-      ocl::StageProfiler profiler;
-      ctx.set_profiler(&profiler);
-      profiler.begin_step();
-      net.forward(inputs_for(d, p, config), {ocl::view(d.raw_density, config.density_outputs), {}}, ws);
-      profiler.end_step(ctx);
-      ctx.set_profiler(nullptr);
-      CHECK(d.raw_density.download(ctx) == full_density);
-      CHECK(d.raw_rgb.download(ctx) == sentinel);  // no colour written
-      // The products are the trunk's and the density head's only: the forward's count minus the colour head's.
-      double colour_head = 0.0;
-      if (view) {
-        colour_head = 2.0 * (p.rows() * (config.width * config.bottleneck_width +
-                                         config.bottleneck_width * config.view_branch_width +
-                                         config.view_branch_width * config.rgb_outputs) +
-                             p.n_rays * config.view_width * config.view_branch_width);
-      } else {
-        colour_head = 2.0 * p.rows() * config.width * config.rgb_outputs;
-      }
-      const auto* forward = profiler.profile().find("gemm forward");
-      REQUIRE(forward != nullptr);
-      CHECK(forward->flops == forward_flops(config, p.rows(), p.n_rays) - colour_head);
-      // A training forward must compute the colour its backward needs.
-      auto training = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
-      CHECK_THROWS_WITH_AS(
-          net.forward(inputs_for(d, p, config), {ocl::view(d.raw_density, config.density_outputs), {}}, training),
-          doctest::Contains("density-only forward is for inference"), Error);
-    }
-  }
+  for_each_small_network(ctx, 111, mlp::WorkspaceMode::inference, [&](const mlp::MlpConfig& config, mlp::Network& net,
+                                                                      const Pass& p, DevicePass& d, mlp::Workspace& ws) {
+    net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+    const auto full_density = d.raw_density.download(ctx);
+    const std::vector<float> sentinel(p.rows() * config.rgb_outputs, 7.0f);
+    d.raw_rgb.upload(ctx, sentinel);
+    d.raw_density.upload(ctx, std::vector<float>(full_density.size(), 0.0f));
+    const mlp::MlpOutputs density_only{ocl::view(d.raw_density, config.density_outputs), {}};
+    const ocl::StageProfile profile =
+        test::profile_once(ctx, [&] { net.forward(inputs_for(d, p, config), density_only, ws); });
+    CHECK(d.raw_density.download(ctx) == full_density);
+    CHECK(d.raw_rgb.download(ctx) == sentinel);  // no colour written
+    // The products are the trunk's and the density head's only: the forward's count minus the colour head's.
+    const double rows = static_cast<double>(p.rows()), rays = static_cast<double>(p.n_rays);
+    const double colour_head =
+        config.view_dependence
+            ? 2.0 * (rows * (config.width * config.bottleneck_width +
+                             config.bottleneck_width * config.view_branch_width +
+                             config.view_branch_width * config.rgb_outputs) +
+                     rays * config.view_width * config.view_branch_width)
+            : 2.0 * rows * config.width * config.rgb_outputs;
+    const auto* forward = profile.find("gemm forward");
+    REQUIRE(forward != nullptr);
+    CHECK(forward->flops == forward_flops(config, rows, rays) - colour_head);
+    // A training forward must compute the colour its backward needs.
+    auto training = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+    CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), density_only, training),
+                         doctest::Contains("density-only forward is for inference"), Error);
+  });
 }
 
 TEST_CASE("mlp device: a host network's workspace refuses the device network's backward, saying what to do") {

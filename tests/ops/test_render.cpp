@@ -507,55 +507,6 @@ TEST_CASE("render: the fused activation and render kernels equal activations the
   }
 }
 
-TEST_CASE("render: the weights-only kernel writes the fused kernel's acc, distance and weights, and no composite") {
-  // render_raw_weights_fwd serves levels whose colour nothing reads (the coarse level when rendering): the same
-  // values as render_raw_fwd, bit for bit (the same inline code without the colour sum), with and without density
-  // noise, on every background; the composite it must not write keeps a sentinel.
-  auto& ctx = test::test_context();
-  Batch raw = random_batch(test::batch_for_device(2000), 24, 515);
-  std::mt19937 rng(15);
-  std::normal_distribution<float> normal(0.0f, 4.0f);
-  for (auto& x : raw.density) x = normal(rng);
-  for (auto& x : raw.rgb) x = normal(rng);
-  const size_t rows = raw.n_rays * raw.n_samples;
-  auto raw_density = test::upload(ctx, raw.density, "raw_density");
-  auto t_edges = test::upload(ctx, raw.t_edges, "t_edges");
-  ops::RayBundle rays(ctx, raw.n_rays);
-  rays.directions.upload(ctx, raw.directions);
-  for (const float noise_scale : {0.0f, 1.0f}) {
-    for (auto background : kBackgrounds) {
-      INFO("background " << static_cast<int>(background) << ", density noise " << noise_scale);
-      const RenderOptions options{background, noise_scale};
-      const DensityNoiseKey key{{77, 3, 100}, 1};
-      const auto fused = run_device(options, raw, true, true, {}, key);
-      ocl::DeviceArray<float> acc(ctx, raw.n_rays, "acc"), distance(ctx, raw.n_rays, "distance");
-      ocl::DeviceArray<float> weights(ctx, rows, "weights");
-      ops::Render render(ctx, options);
-      render.raw_weights_fwd({raw_density, t_edges, rays, raw.n_rays, raw.n_samples}, {acc, distance, weights}, key);
-      CHECK(acc.download(ctx) == fused.acc);
-      CHECK(distance.download(ctx) == fused.distance);
-      CHECK(weights.download(ctx) == fused.weights);
-      // The reference mirror agrees with the fused reference (colours never reach these three).
-      std::vector<double> ref_acc, ref_distance, ref_weights, comp, full_acc, full_distance, full_weights;
-      const auto density = test::to_double(raw.density), t = test::to_double(raw.t_edges);
-      const auto dirs = test::to_double(raw.directions);
-      ref::render_raw_weights_fwd(options, {}, density, t, dirs, ref_acc, ref_distance, ref_weights, raw.n_rays,
-                                  raw.n_samples, key);
-      ref::render_raw_fwd(options, {}, test::to_double(raw.rgb), density, t, dirs, comp, full_acc, full_distance,
-                          full_weights, raw.n_rays, raw.n_samples, key);
-      CHECK(ref_weights == full_weights);
-      CHECK(ref_acc == full_acc);
-      CHECK(ref_distance == full_distance);
-    }
-  }
-  // Sizes that do not fit are refused before the launch, naming the kernel.
-  ocl::DeviceArray<float> small(ctx, 1, "small"), distance(ctx, raw.n_rays, "distance"), weights(ctx, rows, "weights");
-  ops::Render render(ctx, RenderOptions{});
-  CHECK_THROWS_WITH(render.raw_weights_fwd({raw_density, t_edges, rays, raw.n_rays, raw.n_samples},
-                                           {small, distance, weights}),
-                    doctest::Contains("render_raw_weights_fwd"));
-}
-
 // ---- Density noise (DENSITY_NOISE): N(0, 1) draws added to the raw densities by the fused kernels while training ----
 
 namespace {
@@ -615,6 +566,51 @@ std::vector<float> tail_of(const std::vector<float>& v, size_t first_element) {
 }
 
 }  // namespace
+
+TEST_CASE("render: the weights-only kernel writes the fused kernel's acc, distance and weights, and no composite") {
+  // render_raw_weights_fwd serves levels whose colour nothing reads (the coarse level when rendering): the same
+  // values as render_raw_fwd, bit for bit (the same inline code without the colour sum), with and without density
+  // noise, on every background; the composite it must not write keeps a sentinel.
+  auto& ctx = test::test_context();
+  const Batch raw = raw_batch(test::batch_for_device(2000), 24, 515);
+  const size_t rows = raw.n_rays * raw.n_samples;
+  auto raw_density = test::upload(ctx, raw.density, "raw_density");
+  auto t_edges = test::upload(ctx, raw.t_edges, "t_edges");
+  ops::RayBundle rays(ctx, raw.n_rays);
+  rays.directions.upload(ctx, raw.directions);
+  for (const float noise_scale : {0.0f, 1.0f}) {
+    for (auto background : kBackgrounds) {
+      INFO("background " << static_cast<int>(background) << ", density noise " << noise_scale);
+      const RenderOptions options{background, noise_scale};
+      const DensityNoiseKey key{{77, 3, 100}, 1};
+      const auto fused = run_device(options, raw, true, true, {}, key);
+      ocl::DeviceArray<float> acc(ctx, raw.n_rays, "acc"), distance(ctx, raw.n_rays, "distance");
+      ocl::DeviceArray<float> weights(ctx, rows, "weights");
+      ops::Render render(ctx, options);
+      render.raw_weights_fwd({raw_density, t_edges, rays, raw.n_rays, raw.n_samples}, {acc, distance, weights}, key);
+      CHECK(acc.download(ctx) == fused.acc);
+      CHECK(distance.download(ctx) == fused.distance);
+      CHECK(weights.download(ctx) == fused.weights);
+      // The reference mirror agrees with the fused reference (colours never reach these three).
+      std::vector<double> ref_acc, ref_distance, ref_weights, comp, full_acc, full_distance, full_weights;
+      const auto density = test::to_double(raw.density), t = test::to_double(raw.t_edges);
+      const auto dirs = test::to_double(raw.directions);
+      ref::render_raw_weights_fwd(options, {}, density, t, dirs, ref_acc, ref_distance, ref_weights, raw.n_rays,
+                                  raw.n_samples, key);
+      ref::render_raw_fwd(options, {}, test::to_double(raw.rgb), density, t, dirs, comp, full_acc, full_distance,
+                          full_weights, raw.n_rays, raw.n_samples, key);
+      CHECK(ref_weights == full_weights);
+      CHECK(ref_acc == full_acc);
+      CHECK(ref_distance == full_distance);
+    }
+  }
+  // Sizes that do not fit are refused before the launch, naming the kernel.
+  ocl::DeviceArray<float> small(ctx, 1, "small"), distance(ctx, raw.n_rays, "distance"), weights(ctx, rows, "weights");
+  ops::Render render(ctx, RenderOptions{});
+  CHECK_THROWS_WITH(render.raw_weights_fwd({raw_density, t_edges, rays, raw.n_rays, raw.n_samples},
+                                           {small, distance, weights}),
+                    doctest::Contains("render_raw_weights_fwd"));
+}
 
 TEST_CASE("render: density-noise draws - the kernel's normals are the host mirror's within float32 and are N(0, 1)") {
   auto& ctx = test::test_context();
