@@ -6,7 +6,8 @@
 //
 // Shapes: mlp::mlp_gemm_problems of each preset's network at the host MLP's block (HostMlpOptions'
 // target_block_rows = 256 rows, rounded down to whole rays): forward, backward data, backward weights, each with
-// how often it occurs in one forward + backward. Two thread arrangements per library:
+// how often it occurs in one forward + backward. (The host MLP's backward of a network 256 wide runs twice as long
+// blocks, mlp::backward_block_rows_for; this benchmark times every product at the forward's block.) Two thread arrangements per library:
 //   ours     2 threads, each its own block's product, the library held to 1 thread per call: what host_mlp.cpp
 //            does (run_blocks + SingleThreadedBlas);
 //   library  1 product of 2 blocks' rows in one call, the library's own 2 threads.
@@ -32,6 +33,7 @@
 #include "gemm/cpu_sgemm.hpp"
 #include "gemm/cpu_sgemm_timing.hpp"
 #include "gemm/gemm_tuning.hpp"
+#include "mlp/host_mlp.hpp"
 #include "mlp/mlp_products.hpp"
 #include "train/config.hpp"
 #include "train/model.hpp"
@@ -43,7 +45,7 @@ using nlohmann::ordered_json;
 namespace {
 
 constexpr int kThreads = 2;
-constexpr size_t kBlockRows = 256;  // HostMlpOptions::target_block_rows
+const size_t kBlockRows = mlp::HostMlpOptions{}.target_block_rows;  // the forward's blocks
 
 struct Args {
   std::vector<std::string> presets{"quick", "paper"};
@@ -138,7 +140,7 @@ ordered_json bench_preset(const std::string& preset, const std::vector<gemm::Cpu
   const train::TrainConfig config = train::resolve_config(preset, "mipnerf", {});
   const graph::GraphSpec spec = train::make_graph_spec(config, false);
   const size_t samples = static_cast<size_t>(config.num_samples);
-  const size_t rows = std::max<size_t>(1, kBlockRows / samples) * samples;
+  const size_t rows = mlp::rays_per_block(kBlockRows, samples) * samples;
   ordered_json j;
   j["preset"] = preset;
   j["block_rows"] = rows;

@@ -224,7 +224,6 @@ void map_photos(const MappingJob& job, int attempts, std::ofstream& log) {
   fs::rename(best, sparse);
 }
 
-
 void run_from_photos(const FromPhotosArgs& args) {
   if (args.matcher != "exhaustive" && args.matcher != "sequential") {
     throw Error("--matcher '" + args.matcher + "': expected exhaustive (any photos) or sequential (a video or a walk)");

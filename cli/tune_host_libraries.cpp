@@ -27,7 +27,7 @@ void add_products(std::map<std::string, gemm::HostProductShape>& shapes, const m
                   size_t samples_per_ray) {
   const size_t target = mlp::HostMlpOptions{}.target_block_rows;
   const auto block_rows = [&](size_t target_rows) {
-    return std::max<size_t>(1, target_rows / std::max<size_t>(1, samples_per_ray)) * samples_per_ray;
+    return mlp::rays_per_block(target_rows, samples_per_ray) * samples_per_ray;
   };
   const size_t forward_rows = block_rows(target);
   const size_t backward_rows = block_rows(mlp::backward_block_rows_for(config.width, target));

@@ -138,19 +138,23 @@ HostMlp::HostMlp(const MlpConfig& config, HostMlpOptions options)
 
 HostMlp::~HostMlp() = default;
 
-size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
-  return std::max<size_t>(1, options_.target_block_rows / std::max<size_t>(1, samples_per_ray));
+size_t rays_per_block(size_t target_rows, size_t samples_per_ray) {
+  return std::max<size_t>(1, target_rows / std::max<size_t>(1, samples_per_ray));
 }
 
 size_t backward_block_rows_for(size_t width, size_t target_block_rows) {
   return width >= 256 ? 2 * target_block_rows : target_block_rows;
 }
 
+size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
+  return mlp::rays_per_block(options_.target_block_rows, samples_per_ray);
+}
+
 size_t HostMlp::backward_rays_per_block(size_t samples_per_ray) const {
   const size_t rows = options_.backward_target_block_rows > 0
                           ? options_.backward_target_block_rows
                           : backward_block_rows_for(config_.width, options_.target_block_rows);
-  return std::max<size_t>(1, rows / std::max<size_t>(1, samples_per_ray));
+  return mlp::rays_per_block(rows, samples_per_ray);
 }
 
 namespace {

@@ -73,6 +73,9 @@ struct HostMlpTimes {
   double total() const { return gemm_forward + gemm_backward_data + gemm_backward_weights + elementwise; }
 };
 
+// Whole rays per block of about `target_rows` rows (at least one ray): how the host MLP cuts its passes.
+size_t rays_per_block(size_t target_rows, size_t samples_per_ray);
+
 // The backward's default rows per block for a network `width` wide: 2 × target_block_rows from 256 wide up, else
 // target_block_rows. Why: each block's weight-gradient products read and write the thread's whole gradient buffer
 // (2.4 MB for the paper's network, several times the core's L2; 0.38 MB for the quick preset's), so longer blocks

@@ -12,12 +12,24 @@
 namespace mipnerf::ops {
 namespace {
 
-void check_inputs(const RenderInputs& in, const std::string& where) {
-  detail::require(in.rgb, 3 * in.n_rays * in.n_samples, where);
+// What every forward and backward reads besides the colours: densities, edges, directions.
+void check_density_inputs(const RenderDensityInputs& in, const std::string& where) {
   detail::require(in.density, in.n_rays * in.n_samples, where);
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
   detail::require(in.rays.directions, 3 * in.n_rays, where);
   detail::to_uint(in.n_rays * in.n_samples, where, "rows");
+}
+
+// What every forward writes besides the composite: opacity, distance, weights.
+void check_weights_outputs(const RenderWeightsOutputs& out, size_t n_rays, size_t n_samples, const std::string& where) {
+  detail::require(out.acc, n_rays, where);
+  detail::require(out.distance, n_rays, where);
+  detail::require(out.weights, n_rays * n_samples, where);
+}
+
+void check_inputs(const RenderInputs& in, const std::string& where) {
+  detail::require(in.rgb, 3 * in.n_rays * in.n_samples, where);
+  check_density_inputs({in.density, in.t_edges, in.rays, in.n_rays, in.n_samples}, where);
 }
 
 // The noise's counter slot is level·2^24 + sample/4 (kernels/render.cl): 256 levels of fewer than 2^26 samples.
@@ -54,9 +66,7 @@ void Render::launch_fwd(::cl::Kernel& kernel, const std::string& where, const Re
                         const RenderOutputs& out, const DensityNoiseKey* noise) {
   check_inputs(in, where);
   detail::require(out.comp_rgb, 3 * in.n_rays, where);
-  detail::require(out.acc, in.n_rays, where);
-  detail::require(out.distance, in.n_rays, where);
-  detail::require(out.weights, in.n_rays * in.n_samples, where);
+  check_weights_outputs({out.acc, out.distance, out.weights}, in.n_rays, in.n_samples, where);
   const cl_uint n_rays = detail::to_uint(in.n_rays, where, "rays"),
                 n_samples = detail::to_uint(in.n_samples, where, "samples");
   if (noise) {
@@ -115,13 +125,8 @@ void Render::raw_fwd(const RenderInputs& raw, const RenderOutputs& out, const De
 void Render::raw_weights_fwd(const RenderDensityInputs& raw, const RenderWeightsOutputs& out,
                              const DensityNoiseKey& noise) {
   const std::string where = "render_raw_weights_fwd";
-  detail::require(raw.density, raw.n_rays * raw.n_samples, where);
-  detail::require(raw.t_edges, raw.n_rays * (raw.n_samples + 1), where);
-  detail::require(raw.rays.directions, 3 * raw.n_rays, where);
-  detail::to_uint(raw.n_rays * raw.n_samples, where, "rows");
-  detail::require(out.acc, raw.n_rays, where);
-  detail::require(out.distance, raw.n_rays, where);
-  detail::require(out.weights, raw.n_rays * raw.n_samples, where);
+  check_density_inputs(raw, where);
+  check_weights_outputs(out, raw.n_rays, raw.n_samples, where);
   check_noise_key(noise, raw.n_samples, where);
   const cl_uint n_rays = detail::to_uint(raw.n_rays, where, "rays"),
                 n_samples = detail::to_uint(raw.n_samples, where, "samples");

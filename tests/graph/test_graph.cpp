@@ -21,6 +21,7 @@
 #include "ref/sample.hpp"
 #include "gemm/cpu_sgemm.hpp"
 #include "support/gemm_backends.hpp"
+#include "support/mlp_fixtures.hpp"
 #include "support/profile_once.hpp"
 #include "support/scoped_environment.hpp"
 #include "support/temp_scene.hpp"
@@ -482,14 +483,8 @@ TEST_CASE("graph: a render computes the coarse level's weights without its colou
       CHECK(shown_only.shown == every.shown);
       CHECK(shown_only.coarse == every.coarse);
       // The coarse level's colour head is gone: fewer forward FLOPs, by that head's products over its samples.
-      const mlp::MlpConfig& c = spec.mlps.at(0);
       const double coarse_rows = static_cast<double>(rays * spec.levels[0].new_samples);
-      const double colour_head =
-          c.view_dependence
-              ? 2.0 * (coarse_rows * (c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
-                                      c.view_branch_width * c.rgb_outputs) +
-                       static_cast<double>(rays) * c.view_width * c.view_branch_width)
-              : 2.0 * coarse_rows * c.width * c.rgb_outputs;
+      const double colour_head = test::colour_head_flops(spec.mlps.at(0), coarse_rows, static_cast<double>(rays));
       CHECK(shown_only.forward_flops == doctest::Approx(every.forward_flops - colour_head));
     }
   }

@@ -423,24 +423,13 @@ double forward_flops(const mlp::MlpConfig& c, double rows, double rays) {
   double per_row = c.input_width * c.width;
   for (size_t i = 1; i < c.depth; ++i) per_row += (c.width + (mlp::skip_after(c, i - 1) ? c.input_width : 0)) * c.width;
   per_row += c.width * c.density_outputs;
-  double per_ray = 0.0;
-  if (c.view_dependence) {
-    per_row += c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
-               c.view_branch_width * c.rgb_outputs;
-    per_ray += c.view_width * c.view_branch_width;
-  } else {
-    per_row += c.width * c.rgb_outputs;
-  }
-  return 2.0 * (rows * per_row + rays * per_ray);
+  return 2.0 * rows * per_row + test::colour_head_flops(c, rows, rays);
 }
 
 // The backward's input-gradient products: every layer's but the first's and the inputs' (features, view encoding).
 double backward_data_flops(const mlp::MlpConfig& c, double rows) {
-  double per_row = (c.depth - 1) * c.width * c.width + c.width * c.density_outputs;
-  per_row += c.view_dependence ? c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
-                                     c.view_branch_width * c.rgb_outputs
-                               : c.width * c.rgb_outputs;
-  return 2.0 * rows * per_row;
+  const double per_row = (c.depth - 1) * c.width * c.width + c.width * c.density_outputs;
+  return 2.0 * rows * per_row + test::colour_head_flops(c, rows, 0.0);  // no per-ray product: the view encoding
 }
 
 // Runs body(config, net, pass, device pass, workspace) for the small network with and without view dependence on
@@ -504,16 +493,9 @@ TEST_CASE("mlp device: a density-only inference forward gives the full forward's
     CHECK(d.raw_rgb.download(ctx) == sentinel);  // no colour written
     // The products are the trunk's and the density head's only: the forward's count minus the colour head's.
     const double rows = static_cast<double>(p.rows()), rays = static_cast<double>(p.n_rays);
-    const double colour_head =
-        config.view_dependence
-            ? 2.0 * (rows * (config.width * config.bottleneck_width +
-                             config.bottleneck_width * config.view_branch_width +
-                             config.view_branch_width * config.rgb_outputs) +
-                     rays * config.view_width * config.view_branch_width)
-            : 2.0 * rows * config.width * config.rgb_outputs;
     const auto* forward = profile.find("gemm forward");
     REQUIRE(forward != nullptr);
-    CHECK(forward->flops == forward_flops(config, rows, rays) - colour_head);
+    CHECK(forward->flops == forward_flops(config, rows, rays) - test::colour_head_flops(config, rows, rays));
     // A training forward must compute the colour its backward needs.
     auto training = net.make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
     CHECK_THROWS_WITH_AS(net.forward(inputs_for(d, p, config), density_only, training),

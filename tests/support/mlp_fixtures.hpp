@@ -23,4 +23,14 @@ inline mlp::MlpConfig small_mlp_config(bool view_dependence = true) {
   return c;
 }
 
+// FLOPs of the colour head's forward products over `rows` samples of `rays` rays, counted from the architecture
+// (mlp.hpp): with view dependence the bottleneck, the view layer (its view-encoding part once per ray) and the rgb
+// layer; without, the rgb layer on the trunk's output. What a density-only forward leaves out.
+inline double colour_head_flops(const mlp::MlpConfig& c, double rows, double rays) {
+  if (!c.view_dependence) return 2.0 * rows * c.width * c.rgb_outputs;
+  return 2.0 * (rows * (c.width * c.bottleneck_width + c.bottleneck_width * c.view_branch_width +
+                        c.view_branch_width * c.rgb_outputs) +
+                rays * c.view_width * c.view_branch_width);
+}
+
 }  // namespace mipnerf::test
