@@ -83,11 +83,12 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
   return (float4)(r0 * cospi(2.0f * u.y), r0 * sinpi(2.0f * u.y), r1 * cospi(2.0f * u.w), r1 * sinpi(2.0f * u.w));
 }
 
-// ---- exp and log1p without branches, for the element-wise stages ----
+// ---- exp, expm1 and log1p without branches, for the element-wise stages and the render's sample loops ----
 // PoCL vectorises a kernel across work-items, but its exp/log1p built-ins keep a slow path for special arguments
 // that the whole vector takes when one lane needs it; arithmetic only (fma, rint, bit casts, select) stays in the
-// vector units. Both functions cover exactly the arguments the stages give them, with bounds derived here and checked
-// by the stages' tests against double references (tests/ops/test_activations.cpp sweeps every binade).
+// vector units; and a built-in is a call, which keeps PoCL from vectorising the loop it sits in at all. The functions
+// cover exactly the arguments the stages give them, with bounds derived here and checked by the stages' tests against
+// double references (tests/ops/test_activations.cpp and test_render.cpp sweep every binade).
 
 // e^x for x ≤ 0 (NaN stays NaN; −∞ gives 0). Cody–Waite: x = n·ln2 + r with n = rint(x·log2 e), |r| ≤ ln2/2 + tiny,
 // r from two fma steps (ln2 split into its float and the remainder, so r's error is ≤ 2^-24·|r| + 2^-50·|n|);
@@ -109,6 +110,29 @@ ALWAYS_INLINE float exp_nonpositive(float x) {
   const int n_int = (int)n, n_half = n_int / 2;  // n in [−150, 0]: both factors ≥ 2^-75
   const float scaled = p * as_float((n_half + 127) << 23) * as_float((n_int - n_half + 127) << 23);
   return isnan(x) ? x : scaled;
+}
+
+// e^x − 1 for x ≤ 0 (NaN stays NaN; −∞ gives −1), without the cancellation of exp(x) − 1 near 0. The same reduction
+// as exp_nonpositive, x = n·ln2 + r, and e^x − 1 = 2^n·(e^r − 1) + (2^n − 1) with e^r − 1 = r + r²·p(r), p the Taylor
+// polynomial to r^8 (truncation ≤ (ln2/2)^7/9!·e^0.35 < 3e-9 relative to e^r − 1). For |x| < ln2/2, n = 0 and r = x
+// exactly, so small arguments keep their full relative accuracy; otherwise |e^x − 1| ≥ 0.29 and 2^n − 1 is exact
+// (n ≥ −43 after the clamp), so the final fma adds at most 1 ulp to the ≤ 2 ulp of e^r − 1 scaled by 2^n ≤ 1/2.
+// Below x = −30 the result is −1 (e^−30 < 2^−25·1: −1 is the correctly rounded value). Within 3 ulp by this count;
+// the same formula in C on the host, checked against double expm1 at every float in [−40, 0), is within 0.89 ulp.
+ALWAYS_INLINE float expm1_nonpositive(float x) {
+  const float clamped = fmax(x, -30.0f);  // fmax(NaN, c) = c: NaN is restored by the select below
+  const float n = rint(clamped * 1.44269504f);
+  const float r = fma(n, -1.90465430e-9f, fma(n, -0.693147182f, clamped));
+  float p = fma(r, 2.48015873e-5f, 1.98412698e-4f);  // 1/8!, 1/7!
+  p = fma(p, r, 1.38888889e-3f);                       // 1/6!
+  p = fma(p, r, 8.33333333e-3f);                       // 1/5!
+  p = fma(p, r, 4.16666667e-2f);                       // 1/4!
+  p = fma(p, r, 1.66666667e-1f);                       // 1/3!
+  p = fma(p, r, 0.5f);
+  const float expm1_r = fma(p * r, r, r);
+  const float two_n = as_float(((int)n + 127) << 23);  // n in [−43, 0]: a normal float
+  const float result = fma(two_n, expm1_r, two_n - 1.0f);
+  return isnan(x) ? x : result;
 }
 
 // log(1 + y) for y in [0, 1] (the softplus of exp_nonpositive's results): 2·atanh(s) with s = y/(2 + y) in

@@ -10,7 +10,8 @@
 // jnp.nan_to_num and the clip raises it to t_0, so distance = t_0 there; BACKGROUND_NONE and
 // BACKGROUND_BLACK give the same composite (black adds 0·(1 − acc)); "none" is for premultiplied output,
 // where the caller composites over its own background with acc.
-// One work-item per ray, O(N), no atomics. Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
+// One work-item per ray, O(N), no atomics; no buffer aliases another (`restrict`: the loads may move past the stores,
+// which PoCL's vectoriser needs). Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
 // directions [R][3], comp_rgb [R][3], acc [R], distance [R], weights [R][N].
 //
 // Density noise (DENSITY_NOISE, defined only when the noise is on; training only): the fused render_raw_* kernels
@@ -19,6 +20,15 @@
 // level, sample): draw i % 4 of rng_normal4(seed, first_ray + ray, step, level·2^24 + i/4, RNG_STREAM_DENSITY_NOISE).
 // The backward draws the same numbers again, so it differentiates the forward's noisy value; chunking does not
 // change them. The plain render_fwd/bwd take activated densities and never add noise.
+//
+// Samples in lockstep (SAMPLES_IN_LOCKSTEP = 1; the host's choice on PoCL's CPU device, ops/render.hpp): a barrier
+// ends every step of the sample loops, so all rays of a work-group take sample i before any takes i + 1. PoCL turns a
+// work-group into a loop over its items and LLVM vectorises only innermost loops: with a whole ray per item that loop
+// sits outside the sample loop and runs one ray at a time; the barriers split the body so the loop over items sits
+// inside each step, and it vectorises across rays (a ray per vector lane; the running sums live in per-item arrays).
+// Every item must then reach every barrier, so the padding items of the last work-group run the last ray again and
+// store nothing (`live`). The loops hold no call (arithmetic exp and expm1, no float3 values: both stop PoCL's
+// vectoriser) in either mode; without lockstep they are the same code without the barriers.
 
 #ifndef MIPNERF_RENDER_CL
 #define MIPNERF_RENDER_CL
@@ -28,6 +38,15 @@
 #define BACKGROUND_WHITE 2
 #ifndef BACKGROUND
 #define BACKGROUND BACKGROUND_WHITE
+#endif
+
+#ifndef SAMPLES_IN_LOCKSTEP
+#define SAMPLES_IN_LOCKSTEP 0
+#endif
+#if SAMPLES_IN_LOCKSTEP
+#define END_OF_SAMPLE_STEP() barrier(CLK_LOCAL_MEM_FENCE)
+#else
+#define END_OF_SAMPLE_STEP()
 #endif
 
 #define DENSITY_NOISE_LEVEL_SHIFT 24 /* slot = level·2^24 + sample/4: 256 levels of up to 2^26 samples */
@@ -79,59 +98,81 @@ inline float noisy_raw_density(float raw, float z) {
 
 // s_i = σ_i·δ_i. An interval of zero length contributes nothing, whatever its density (σ = ∞ would give
 // ∞·0 = NaN otherwise).
-inline float optical_thickness(float density, float t0, float t1, float dir_norm) {
+ALWAYS_INLINE float optical_thickness(float density, float t0, float t1, float dir_norm) {
   const float delta = (t1 - t0) * dir_norm;
   return delta > 0.0f ? density * delta : 0.0f;
 }
 
 // Density `at`: activated from a raw value with its noise draw z, or as given.
-inline float render_density(__global const float* density, size_t at, float z, const int from_raw) {
+ALWAYS_INLINE float render_density(__global const float* density, size_t at, float z, const int from_raw) {
   return from_raw ? density_activation(noisy_raw_density(density[at], z)) : density[at];
 }
 
-inline float3 render_rgb(__global const float* rgb, size_t at, const int from_raw) {
-  const float3 c = load3(rgb, at);
-  return from_raw ? (float3)(rgb_activation(c.x), rgb_activation(c.y), rgb_activation(c.z)) : c;
+// Colour channel `c` (0..2) of sample `at`: activated from its raw value, or as given. One channel at a time: a float3
+// value in the sample loop keeps PoCL from vectorising it.
+ALWAYS_INLINE float render_channel(__global const float* rgb, size_t at, int c, const int from_raw) {
+  const float value = rgb[3 * at + c];
+  return from_raw ? rgb_activation(value) : value;
+}
+
+// The length of direction `ray`, which turns depth t into distance.
+ALWAYS_INLINE float direction_norm(__global const float* directions, size_t ray) {
+  const float x = directions[3 * ray], y = directions[3 * ray + 1], z = directions[3 * ray + 2];
+  return sqrt(x * x + y * y + z * z);
 }
 
 // The forward pass of ray `ray`; `from_raw` (a constant at each call site) applies the activations to the
 // inputs first, with the ray's density noise (`noise`, used only from raw values). Writes acc, distance and weights
 // (what resampling and the backward need) and, when `with_colour` (a constant at each call site), comp_rgb; without
 // it rgb and comp_rgb are never touched (may be null) and the weights are the same values, computed the same way.
-inline void render_ray_fwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
-                           __global const float* directions, __global float* comp_rgb, __global float* acc_out,
-                           __global float* distance_out, __global float* weights, const size_t ray,
-                           const uint n_samples, const RayNoiseKey noise, const int from_raw,
-                           const int with_colour) {
-  const float3 dir = load3(directions, ray);
-  const float dir_norm = sqrt(dot(dir, dir));
+// Stores nothing unless `live` (see "Samples in lockstep").
+ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const float* density,
+                                  __global const float* t_edges, __global const float* directions,
+                                  __global float* comp_rgb, __global float* acc_out,
+                                  __global float* distance_out, __global float* weights,
+                                  const size_t ray, const int live, const uint n_samples, const RayNoiseKey noise,
+                                  const int from_raw, const int with_colour) {
+  const float dir_norm = direction_norm(directions, ray);
   __global const float* t = t_edges + ray * (n_samples + 1);
   float optical_depth = 0.0f;  // Σ_{j<i} s_j
-  float3 color = (float3)(0.0f);
+  float red = 0.0f, green = 0.0f, blue = 0.0f;
   float acc = 0.0f, t_weighted = 0.0f;
+  float t_near = t[0];            // t_i
   float4 draws = (float4)(0.0f);  // the noise of samples i.. to the end of i's group of 4
   for (uint i = 0; i < n_samples; ++i) {
     const size_t at = ray * n_samples + i;
     if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
-    const float s = optical_thickness(render_density(density, at, draws.x, from_raw), t[i], t[i + 1], dir_norm);
+    const float t_far = t[i + 1];
+    const float s = optical_thickness(render_density(density, at, draws.x, from_raw), t_near, t_far, dir_norm);
     draws = draws.yzwx;
     // α = 1 − exp(−s) as −expm1(−s): the same value, without cancellation for small s (official: 1 − exp).
-    const float w = -expm1(-s) * exp(-optical_depth);
-    weights[at] = w;
-    if (with_colour) color += w * render_rgb(rgb, at, from_raw);
+    const float w = -expm1_nonpositive(-s) * exp_nonpositive(-optical_depth);
+    if (live) weights[at] = w;
+    if (with_colour) {
+      red += w * render_channel(rgb, at, 0, from_raw);
+      green += w * render_channel(rgb, at, 1, from_raw);
+      blue += w * render_channel(rgb, at, 2, from_raw);
+    }
     acc += w;
-    t_weighted += w * (0.5f * (t[i] + t[i + 1]));
+    t_weighted += w * (0.5f * (t_near + t_far));
     optical_depth += s;
+    t_near = t_far;
+    END_OF_SAMPLE_STEP();
   }
+  if (!live) return;
   const float t_first = t[0], t_last = t[n_samples];
   const float distance = acc > 0.0f ? t_weighted / acc : t_first;
   distance_out[ray] = clamp(distance, t_first, t_last);
   acc_out[ray] = acc;
   if (!with_colour) return;
 #if BACKGROUND == BACKGROUND_WHITE
-  color += 1.0f - acc;
+  red += 1.0f - acc;
+  green += 1.0f - acc;
+  blue += 1.0f - acc;
 #endif
-  store3(comp_rgb, ray, color);
+  comp_rgb[3 * ray] = red;
+  comp_rgb[3 * ray + 1] = green;
+  comp_rgb[3 * ray + 2] = blue;
 }
 
 // The backward pass of ray `ray`. With g_i = ∂L/∂w_i = d_comp·c_i + d_acc_total (d_acc_total = d_acc, minus
@@ -142,18 +183,20 @@ inline void render_ray_fwd(__global const float* rgb, __global const float* dens
 // Evaluated in one reverse sweep with T_{i+1} = T_N + Σ_{k>i} w_k and the suffix sums accumulated as they
 // go: every term is a sum of like-signed values, so the error stays relative to T_{i+1} (no exp(+s) that
 // overflows, no total − prefix that cancels behind an opaque surface). T_N comes from a forward sweep of s.
-inline void render_ray_bwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
-                           __global const float* directions, __global const float* weights,
-                           __global const float* d_comp_rgb, __global const float* d_acc, const uint has_d_acc,
-                           __global float* d_rgb, __global float* d_density, const size_t ray, const uint n_samples,
-                           const RayNoiseKey noise, const int from_raw) {
-  const float3 dir = load3(directions, ray);
-  const float dir_norm = sqrt(dot(dir, dir));
+// Stores nothing unless `live`.
+ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const float* density,
+                                  __global const float* t_edges, __global const float* directions,
+                                  __global const float* weights, __global const float* d_comp_rgb,
+                                  __global const float* d_acc, const uint has_d_acc,
+                                  __global float* d_rgb, __global float* d_density,
+                                  const size_t ray, const int live, const uint n_samples, const RayNoiseKey noise,
+                                  const int from_raw) {
+  const float dir_norm = direction_norm(directions, ray);
   __global const float* t = t_edges + ray * (n_samples + 1);
-  const float3 d_comp = load3(d_comp_rgb, ray);
+  const float d_red = d_comp_rgb[3 * ray], d_green = d_comp_rgb[3 * ray + 1], d_blue = d_comp_rgb[3 * ray + 2];
   float d_acc_total = has_d_acc ? d_acc[ray] : 0.0f;
 #if BACKGROUND == BACKGROUND_WHITE
-  d_acc_total -= d_comp.x + d_comp.y + d_comp.z;
+  d_acc_total -= d_red + d_green + d_blue;
 #endif
   float optical_depth = 0.0f;
   float4 draws = (float4)(0.0f);  // the forward's noise, drawn again: samples i.. to the end of i's group
@@ -162,98 +205,107 @@ inline void render_ray_bwd(__global const float* rgb, __global const float* dens
     optical_depth +=
         optical_thickness(render_density(density, ray * n_samples + i, draws.x, from_raw), t[i], t[i + 1], dir_norm);
     draws = draws.yzwx;
+    END_OF_SAMPLE_STEP();
   }
-  const float trans_last = exp(-optical_depth);  // T_N
-  float weight_after = 0.0f;                     // Σ_{k>i} w_k
-  float grad_weight_after = 0.0f;                // Σ_{k>i} g_k·w_k
+  const float trans_last = exp_nonpositive(-optical_depth);  // T_N
+  float weight_after = 0.0f;                                 // Σ_{k>i} w_k
+  float grad_weight_after = 0.0f;                            // Σ_{k>i} g_k·w_k
   for (uint r = 0; r < n_samples; ++r) {
     const uint i = n_samples - 1 - r;
     const size_t at = ray * n_samples + i;
     // Backwards: samples i, i − 1, .. to the start of i's group, drawn again on entering it.
     if (from_raw && (r == 0 || i % 4 == 3)) draws = density_noise_group_reversed(noise, i);
     const float w = weights[at];
-    const float3 c = render_rgb(rgb, at, from_raw);
-    const float g = dot(d_comp, c) + d_acc_total;
-    const float3 d_c = d_comp * w;
+    const float red = render_channel(rgb, at, 0, from_raw), green = render_channel(rgb, at, 1, from_raw);
+    const float blue = render_channel(rgb, at, 2, from_raw);
+    const float g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
     const float delta = (t[i + 1] - t[i]) * dir_norm;
     const float d_s = g * (trans_last + weight_after) - grad_weight_after;
     float d_sigma = delta > 0.0f ? delta * d_s : 0.0f;
+    float d_red_i = d_red * w, d_green_i = d_green * w, d_blue_i = d_blue * w;  // ∂L/∂c_i
     if (from_raw) {
       d_sigma *= density_activation_grad(noisy_raw_density(density[at], draws.x));
-      const float3 raw = load3(rgb, at);
-      store3(d_rgb, at,
-             d_c * (float3)(rgb_activation_grad(raw.x), rgb_activation_grad(raw.y), rgb_activation_grad(raw.z)));
-    } else {
-      store3(d_rgb, at, d_c);
+      d_red_i *= rgb_activation_grad(rgb[3 * at]);
+      d_green_i *= rgb_activation_grad(rgb[3 * at + 1]);
+      d_blue_i *= rgb_activation_grad(rgb[3 * at + 2]);
     }
-    d_density[at] = d_sigma;
+    if (live) {
+      d_rgb[3 * at] = d_red_i;
+      d_rgb[3 * at + 1] = d_green_i;
+      d_rgb[3 * at + 2] = d_blue_i;
+      d_density[at] = d_sigma;
+    }
     weight_after += w;
     grad_weight_after += g * w;
     draws = draws.yzwx;
+    END_OF_SAMPLE_STEP();
   }
 }
 
-__kernel void render_fwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
-                         __global const float* directions, __global float* comp_rgb, __global float* acc,
-                         __global float* distance, __global float* weights, const uint n_rays, const uint n_samples) {
-  const size_t ray = get_global_id(0);
-  if (ray >= n_rays) return;
-  render_ray_fwd(rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples,
-                 ray_noise_key(0, 0, 0, 0), 0, 1);
+// A work-item's ray, and whether it is one (`live`): the padding items past n_rays leave at once, or, with samples in
+// lockstep, run the last ray again and store nothing. n_rays > 0 (the host launches nothing for zero rays).
+#define RAY_OF_WORK_ITEM(n_rays)                              \
+  const size_t item = get_global_id(0);                       \
+  if (!SAMPLES_IN_LOCKSTEP && item >= (n_rays)) return;       \
+  const int live = item < (n_rays);                           \
+  const size_t ray = live ? item : (size_t)(n_rays) - 1
+
+__kernel void render_fwd(__global const float* restrict rgb, __global const float* restrict density, __global const float* restrict t_edges,
+                         __global const float* restrict directions, __global float* restrict comp_rgb, __global float* restrict acc,
+                         __global float* restrict distance, __global float* restrict weights, const uint n_rays, const uint n_samples) {
+  RAY_OF_WORK_ITEM(n_rays);
+  render_ray_fwd(rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, ray, live,
+                 n_samples, ray_noise_key(0, 0, 0, 0), 0, 1);
 }
 
 // d_acc [R] is read only when has_d_acc != 0 (otherwise any buffer may be passed).
 // Outputs d_rgb [R][N][3] and d_density [R][N] (overwritten, not accumulated).
-__kernel void render_bwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
-                         __global const float* directions, __global const float* weights,
-                         __global const float* d_comp_rgb, __global const float* d_acc, const uint has_d_acc,
-                         __global float* d_rgb, __global float* d_density, const uint n_rays, const uint n_samples) {
-  const size_t ray = get_global_id(0);
-  if (ray >= n_rays) return;
+__kernel void render_bwd(__global const float* restrict rgb, __global const float* restrict density, __global const float* restrict t_edges,
+                         __global const float* restrict directions, __global const float* restrict weights,
+                         __global const float* restrict d_comp_rgb, __global const float* restrict d_acc, const uint has_d_acc,
+                         __global float* restrict d_rgb, __global float* restrict d_density, const uint n_rays, const uint n_samples) {
+  RAY_OF_WORK_ITEM(n_rays);
   render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_rgb, d_density, ray,
-                 n_samples, ray_noise_key(0, 0, 0, 0), 0);
+                 live, n_samples, ray_noise_key(0, 0, 0, 0), 0);
 }
 
 // Fused activations + rendering: the same as activations_fwd then render_fwd, reading the MLP's raw outputs
 // (raw_rgb [R][N][3], raw_density [R][N]) so the activated values never go through memory. With DENSITY_NOISE the
 // raw densities get their noise first, keyed by (seed, step, first_ray + ray, level); without, those are unused.
-__kernel void render_raw_fwd(__global const float* raw_rgb, __global const float* raw_density,
-                             __global const float* t_edges, __global const float* directions,
-                             __global float* comp_rgb, __global float* acc, __global float* distance,
-                             __global float* weights, const uint n_rays, const uint n_samples, const ulong seed,
+__kernel void render_raw_fwd(__global const float* restrict raw_rgb, __global const float* restrict raw_density,
+                             __global const float* restrict t_edges, __global const float* restrict directions,
+                             __global float* restrict comp_rgb, __global float* restrict acc, __global float* restrict distance,
+                             __global float* restrict weights, const uint n_rays, const uint n_samples, const ulong seed,
                              const uint step, const uint first_ray, const uint level) {
-  const size_t ray = get_global_id(0);
-  if (ray >= n_rays) return;
-  render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, n_samples,
-                 ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 1);
+  RAY_OF_WORK_ITEM(n_rays);
+  render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, live,
+                 n_samples, ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 1);
 }
 
 // render_raw_fwd without the colour, for a level whose colour nothing reads (mip-NeRF's coarse level when rendering:
 // its weights feed the fine level's resampling, its image is never shown): only the raw densities are read and only
 // acc, distance and weights written, the same values render_raw_fwd writes. The MLP skips its colour head for such
 // a level (mlp/network.hpp), so raw colours do not even exist here.
-__kernel void render_raw_weights_fwd(__global const float* raw_density, __global const float* t_edges,
-                                     __global const float* directions, __global float* acc, __global float* distance,
-                                     __global float* weights, const uint n_rays, const uint n_samples,
+__kernel void render_raw_weights_fwd(__global const float* restrict raw_density, __global const float* restrict t_edges,
+                                     __global const float* restrict directions, __global float* restrict acc, __global float* restrict distance,
+                                     __global float* restrict weights, const uint n_rays, const uint n_samples,
                                      const ulong seed, const uint step, const uint first_ray, const uint level) {
-  const size_t ray = get_global_id(0);
-  if (ray >= n_rays) return;
-  render_ray_fwd(0, raw_density, t_edges, directions, 0, acc, distance, weights, ray, n_samples,
+  RAY_OF_WORK_ITEM(n_rays);
+  render_ray_fwd(0, raw_density, t_edges, directions, 0, acc, distance, weights, ray, live, n_samples,
                  ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 0);
 }
 
 // Fused render_bwd then activations_bwd: gradients with respect to the raw outputs, d_raw_rgb [R][N][3] and
 // d_raw_density [R][N]; the key must be the forward's (the same noise, drawn again).
-__kernel void render_raw_bwd(__global const float* raw_rgb, __global const float* raw_density,
-                             __global const float* t_edges, __global const float* directions,
-                             __global const float* weights, __global const float* d_comp_rgb,
-                             __global const float* d_acc, const uint has_d_acc, __global float* d_raw_rgb,
-                             __global float* d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
+__kernel void render_raw_bwd(__global const float* restrict raw_rgb, __global const float* restrict raw_density,
+                             __global const float* restrict t_edges, __global const float* restrict directions,
+                             __global const float* restrict weights, __global const float* restrict d_comp_rgb,
+                             __global const float* restrict d_acc, const uint has_d_acc, __global float* restrict d_raw_rgb,
+                             __global float* restrict d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
                              const uint step, const uint first_ray, const uint level) {
-  const size_t ray = get_global_id(0);
-  if (ray >= n_rays) return;
+  RAY_OF_WORK_ITEM(n_rays);
   render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_raw_rgb,
-                 d_raw_density, ray, n_samples, ray_noise_key(seed, first_ray + (uint)ray, step, level), 1);
+                 d_raw_density, ray, live, n_samples, ray_noise_key(seed, first_ray + (uint)ray, step, level), 1);
 }
 
 #endif

@@ -52,9 +52,21 @@ ocl::BuildOptions render_build_options(const RenderOptions& options, const Activ
   return build;
 }
 
-Render::Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation)
-    : ctx_(&ctx), options_(options) {
-  auto& program = ctx.program({"common.cl", "activations.cl", "render.cl"}, render_build_options(options, activation));
+namespace {
+
+bool choose_lockstep(const ocl::Context& ctx, RenderSampleLoop loop) {
+  if (loop != RenderSampleLoop::device_default) return loop == RenderSampleLoop::lockstep;
+  const auto& device = ctx.device_info();
+  return (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
+}
+
+}  // namespace
+
+Render::Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation,
+               RenderSampleLoop loop)
+    : ctx_(&ctx), options_(options), lockstep_(choose_lockstep(ctx, loop)) {
+  auto& program = ctx.program({"common.cl", "activations.cl", "render.cl"},
+                              render_build_options(options, activation).define("SAMPLES_IN_LOCKSTEP", lockstep_ ? 1 : 0));
   fwd_ = &program.kernel("render_fwd");
   bwd_ = &program.kernel("render_bwd");
   raw_fwd_ = &program.kernel("render_raw_fwd");

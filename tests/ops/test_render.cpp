@@ -59,9 +59,10 @@ struct DeviceResult {
 };
 
 // Runs Render::fwd and ::bwd (or the fused raw_* kernels, on raw inputs, with `noise` keying their density noise)
-// for one batch.
+// for one batch, walking the samples as `loop` says.
 DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_d_acc, bool raw = false,
-                        const ActivationOptions& activation = {}, const DensityNoiseKey& noise = {}) {
+                        const ActivationOptions& activation = {}, const DensityNoiseKey& noise = {},
+                        ops::RenderSampleLoop loop = ops::RenderSampleLoop::device_default) {
   auto& ctx = test::test_context();
   auto rgb = test::upload(ctx, b.rgb, "rgb"), density = test::upload(ctx, b.density, "density");
   auto t_edges = test::upload(ctx, b.t_edges, "t_edges");
@@ -72,7 +73,7 @@ DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_
   ocl::DeviceArray<float> comp(ctx, 3 * b.n_rays, "comp_rgb"), acc(ctx, b.n_rays, "acc");
   ocl::DeviceArray<float> distance(ctx, b.n_rays, "distance"), weights(ctx, rows, "weights");
   ocl::DeviceArray<float> d_rgb(ctx, 3 * rows, "d_rgb"), d_density(ctx, rows, "d_density");
-  ops::Render render(ctx, options, activation);
+  ops::Render render(ctx, options, activation, loop);
   const ops::RenderInputs in{rgb, density, t_edges, rays, b.n_rays, b.n_samples};
   const ops::RenderOutputs out{comp, acc, distance, weights};
   const ops::RenderGradients grads{d_comp, with_d_acc ? &d_acc : nullptr};
@@ -200,16 +201,26 @@ std::function<double(size_t)> from(const std::vector<double>& bounds) {
   return [&bounds](size_t i) { return bounds[i]; };
 }
 
+const ops::RenderSampleLoop kSampleLoops[] = {ops::RenderSampleLoop::per_ray, ops::RenderSampleLoop::lockstep};
+
+const char* loop_name(ops::RenderSampleLoop loop) {
+  return loop == ops::RenderSampleLoop::lockstep ? "samples in lockstep" : "a ray per item";
+}
+
+// The device's forward and backward against the reference bounds, both ways of walking the samples.
 void check_against_reference(const RenderOptions& options, const Batch& b, bool with_d_acc) {
-  const auto dev = run_device(options, b, with_d_acc);
   const auto r = run_ref(options, b, with_d_acc);
   const auto bounds = float_bounds(options, b, r, with_d_acc);
-  MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
-  MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
-  MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
-  MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
-  MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
-  MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+  for (const auto loop : kSampleLoops) {
+    INFO(loop_name(loop));
+    const auto dev = run_device(options, b, with_d_acc, false, {}, {}, loop);
+    MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
+    MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
+    MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
+    MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
+    MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
+    MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+  }
 }
 
 const Background kBackgrounds[] = {Background::none, Background::black, Background::white};
@@ -332,35 +343,38 @@ TEST_CASE("render: hard cases stay finite - sigma 0, sigma 1e10, empty intervals
   for (auto background : kBackgrounds) {
     INFO("background " << static_cast<int>(background));
     const RenderOptions options{background};
-    const auto dev = run_device(options, b, true);
-    for (const auto* v : {&dev.comp_rgb, &dev.acc, &dev.distance, &dev.weights, &dev.d_rgb, &dev.d_density}) {
-      CHECK(test::all_finite(*v));
+    for (const auto loop : kSampleLoops) {
+      INFO(loop_name(loop));
+      const auto dev = run_device(options, b, true, false, {}, {}, loop);
+      for (const auto* v : {&dev.comp_rgb, &dev.acc, &dev.distance, &dev.weights, &dev.d_rgb, &dev.d_density}) {
+        CHECK(test::all_finite(*v));
+      }
+      const float bg = background == Background::white ? 1.0f : 0.0f;
+      const auto t_at = [&](size_t ray, size_t k) { return b.t_edges[ray * (n + 1) + k]; };
+      // σ = 0: nothing accumulates; the background shows; distance = t_0 (official nan_to_num + clip).
+      CHECK(dev.acc[0] == 0.0f);
+      for (int c = 0; c < 3; ++c) CHECK(dev.comp_rgb[c] == bg);
+      CHECK(dev.distance[0] == t_at(0, 0));
+      // σ = 1e10: the first non-empty sample takes all the weight.
+      size_t first = 0;
+      while (t_at(1, first + 1) == t_at(1, first)) ++first;
+      CHECK(dev.weights[1 * n + first] == 1.0f);
+      CHECK(dev.acc[1] == 1.0f);
+      for (int c = 0; c < 3; ++c) CHECK(dev.comp_rgb[3 + c] == b.rgb[3 * (1 * n + first) + c]);
+      CHECK(dev.distance[1] == doctest::Approx(0.5 * (t_at(1, first) + t_at(1, first + 1))).epsilon(1e-6));
+      // Behind an opaque sample nothing changes the colour: the density gradients there are 0.
+      for (size_t i = first + 1; i < n; ++i) CHECK(dev.d_density[1 * n + i] == 0.0f);
+      // Empty intervals: no weight whatever σ (even ∞), distance = the common t, zero density gradients.
+      for (size_t ray : {size_t(2), size_t(3)}) {
+        CHECK(dev.acc[ray] == 0.0f);
+        CHECK(dev.distance[ray] == 4.0f);
+        for (size_t i = 0; i < n; ++i) CHECK(dev.d_density[ray * n + i] == 0.0f);
+      }
+      // One opaque sample behind clear space takes all the weight; behind it the gradients vanish.
+      CHECK(dev.acc[4] == 1.0f);
+      CHECK(dev.weights[4 * n + 5] == 1.0f);
+      for (size_t i = 6; i < n; ++i) CHECK(dev.d_density[4 * n + i] == 0.0f);
     }
-    const float bg = background == Background::white ? 1.0f : 0.0f;
-    const auto t_at = [&](size_t ray, size_t k) { return b.t_edges[ray * (n + 1) + k]; };
-    // σ = 0: nothing accumulates; the background shows; distance = t_0 (official nan_to_num + clip).
-    CHECK(dev.acc[0] == 0.0f);
-    for (int c = 0; c < 3; ++c) CHECK(dev.comp_rgb[c] == bg);
-    CHECK(dev.distance[0] == t_at(0, 0));
-    // σ = 1e10: the first non-empty sample takes all the weight.
-    size_t first = 0;
-    while (t_at(1, first + 1) == t_at(1, first)) ++first;
-    CHECK(dev.weights[1 * n + first] == 1.0f);
-    CHECK(dev.acc[1] == 1.0f);
-    for (int c = 0; c < 3; ++c) CHECK(dev.comp_rgb[3 + c] == b.rgb[3 * (1 * n + first) + c]);
-    CHECK(dev.distance[1] == doctest::Approx(0.5 * (t_at(1, first) + t_at(1, first + 1))).epsilon(1e-6));
-    // Behind an opaque sample nothing changes the colour: the density gradients there are 0.
-    for (size_t i = first + 1; i < n; ++i) CHECK(dev.d_density[1 * n + i] == 0.0f);
-    // Empty intervals: no weight whatever σ (even ∞), distance = the common t, zero density gradients.
-    for (size_t ray : {size_t(2), size_t(3)}) {
-      CHECK(dev.acc[ray] == 0.0f);
-      CHECK(dev.distance[ray] == 4.0f);
-      for (size_t i = 0; i < n; ++i) CHECK(dev.d_density[ray * n + i] == 0.0f);
-    }
-    // One opaque sample behind clear space takes all the weight; behind it the gradients vanish.
-    CHECK(dev.acc[4] == 1.0f);
-    CHECK(dev.weights[4 * n + 5] == 1.0f);
-    for (size_t i = 6; i < n; ++i) CHECK(dev.d_density[4 * n + i] == 0.0f);
     // Everything but ray 3 (σ = ∞ is outside the reference's domain) also matches the reference bounds.
     Batch finite = b;
     for (size_t i = 0; i < n; ++i) finite.density[3 * n + i] = 1e10f;
@@ -430,8 +444,8 @@ TEST_CASE("render: sigma times delta overflowing to +inf, and far distances arou
     INFO("fused, background " << static_cast<int>(background));
     const RenderOptions options{background};
     const auto fused = run_device(options, raw, true, true);
-    for (const auto* v : {&fused.comp_rgb, &fused.acc, &fused.distance, &fused.weights, &fused.d_rgb,
-                          &fused.d_density}) {
+    for (const auto* v :
+         {&fused.comp_rgb, &fused.acc, &fused.distance, &fused.weights, &fused.d_rgb, &fused.d_density}) {
       CHECK(test::all_finite(*v));
     }
     auto raw_density = test::upload(ctx, raw.density, "raw_density"), raw_rgb = test::upload(ctx, raw.rgb, "raw_rgb");
@@ -607,9 +621,73 @@ TEST_CASE("render: the weights-only kernel writes the fused kernel's acc, distan
   // Sizes that do not fit are refused before the launch, naming the kernel.
   ocl::DeviceArray<float> small(ctx, 1, "small"), distance(ctx, raw.n_rays, "distance"), weights(ctx, rows, "weights");
   ops::Render render(ctx, RenderOptions{});
-  CHECK_THROWS_WITH(render.raw_weights_fwd({raw_density, t_edges, rays, raw.n_rays, raw.n_samples},
-                                           {small, distance, weights}),
-                    doctest::Contains("render_raw_weights_fwd"));
+  CHECK_THROWS_WITH(
+      render.raw_weights_fwd({raw_density, t_edges, rays, raw.n_rays, raw.n_samples}, {small, distance, weights}),
+      doctest::Contains("render_raw_weights_fwd"));
+}
+
+TEST_CASE("render: samples in lockstep give the per-ray values bit for bit, with a partial last work-group") {
+  // The same arithmetic in the same order per ray, only the order of the rays' steps differs; 1,000 rays (100 under
+  // oclgrind) leave the last work-group partial, whose padding items run the last ray again and must store nothing.
+  const Batch plain = random_batch(test::batch_for_device(1000), 24, 525);
+  const Batch raw = raw_batch(test::batch_for_device(1000), 24, 526);
+  const auto check_equal = [](const DeviceResult& per_ray, const DeviceResult& lockstep) {
+    CHECK(lockstep.comp_rgb == per_ray.comp_rgb);
+    CHECK(lockstep.acc == per_ray.acc);
+    CHECK(lockstep.distance == per_ray.distance);
+    CHECK(lockstep.weights == per_ray.weights);
+    CHECK(lockstep.d_rgb == per_ray.d_rgb);
+    CHECK(lockstep.d_density == per_ray.d_density);
+  };
+  for (auto background : kBackgrounds) {
+    INFO("background " << static_cast<int>(background));
+    const RenderOptions options{background};
+    check_equal(run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::per_ray),
+                run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::lockstep));
+    for (const float noise_scale : {0.0f, 1.0f}) {
+      INFO("fused, density noise " << noise_scale);
+      const RenderOptions noisy{background, noise_scale};
+      const DensityNoiseKey key{{91, 5, 40}, 1};
+      check_equal(run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::per_ray),
+                  run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::lockstep));
+    }
+  }
+}
+
+TEST_CASE("render: one sample's weight is alpha = -expm1(-sigma delta) within 3 ulp, every binade, both loops") {
+  // With t = [0, 1] and |d| = 1, δ = 1 exactly and the single weight is −expm1_nonpositive(−σ)·exp_nonpositive(0)
+  // = −expm1_nonpositive(−σ) (kernels/common.cl; within 3 ulp by its derivation): σ over every binade from 2^-40
+  // (where α ≈ σ must keep its relative accuracy: 1 − exp(−σ) would lose it all) to 2^6, 64 mantissas per binade (6
+  // under oclgrind), and σ = 0; against double expm1, at 3 ulp ≤ 6u·|α|.
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> mantissa(1.0f, 2.0f);
+  Batch b = random_batch(1, 1, 31);
+  std::vector<float> sigmas{0.0f};
+  const size_t per_binade = test::batch_for_device(64, 6);
+  for (int exponent = -40; exponent <= 6; ++exponent) {
+    for (size_t k = 0; k < per_binade; ++k) sigmas.push_back(std::ldexp(mantissa(rng), exponent));
+  }
+  const Batch one_ray = b;
+  b = Batch{};
+  b.n_rays = sigmas.size();
+  b.n_samples = 1;
+  for (const float sigma : sigmas) {
+    b.density.push_back(sigma);
+    b.t_edges.insert(b.t_edges.end(), {0.0f, 1.0f});
+    b.directions.insert(b.directions.end(), {1.0f, 0.0f, 0.0f});
+    b.rgb.insert(b.rgb.end(), one_ray.rgb.begin(), one_ray.rgb.end());
+    b.d_comp_rgb.insert(b.d_comp_rgb.end(), one_ray.d_comp_rgb.begin(), one_ray.d_comp_rgb.end());
+    b.d_acc.push_back(one_ray.d_acc[0]);
+  }
+  std::vector<double> alpha(sigmas.size());
+  for (size_t i = 0; i < sigmas.size(); ++i) alpha[i] = -std::expm1(-static_cast<double>(sigmas[i]));
+  for (const auto loop : kSampleLoops) {
+    INFO(loop_name(loop));
+    const auto dev = run_device({Background::black}, b, false, false, {}, {}, loop);
+    MIPNERF_CHECK_CLOSE("weight of one sample", dev.weights, alpha,
+                        [&](size_t i) { return 6 * kUnitRoundoff * std::abs(alpha[i]); });
+    CHECK(dev.acc == dev.weights);
+  }
 }
 
 TEST_CASE("render: density-noise draws - the kernel's normals are the host mirror's within float32 and are N(0, 1)") {
