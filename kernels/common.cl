@@ -55,21 +55,46 @@ inline void store3(__global float* p, size_t i, float3 v) {
 #define RNG_STREAM_SUBPIXEL 3u    /* sub-pixel position of a ray (supersampling) */
 #define RNG_STREAM_DENSITY_NOISE 4u /* noise added to the raw density while training (render.cl) */
 
-inline uint4 philox4x32_10(uint4 counter, uint2 key) {
-  for (int round = 0; round < 10; ++round) {
-    const uint hi0 = mul_hi(0xD2511F53u, counter.x), lo0 = 0xD2511F53u * counter.x;
-    const uint hi1 = mul_hi(0xCD9E8D57u, counter.z), lo1 = 0xCD9E8D57u * counter.z;
-    counter = (uint4)(hi1 ^ counter.y ^ key.x, lo1, hi0 ^ counter.w ^ key.y, lo0);
-    key += (uint2)(0x9E3779B9u, 0xBB67AE85u);
+// The four words of one Philox call, as scalars: what the rounds work on, and what a kernel PoCL should vectorise
+// across work-items takes (its vectoriser cannot widen vector-typed values such as uint4).
+typedef struct {
+  uint w0, w1, w2, w3;
+} PhiloxWords;
+
+ALWAYS_INLINE PhiloxWords philox4x32_10_words(uint c0, uint c1, uint c2, uint c3, uint k0, uint k1) {
+  __attribute__((opencl_unroll_hint)) for (int round = 0; round < 10; ++round) {
+    const uint hi0 = mul_hi(0xD2511F53u, c0), lo0 = 0xD2511F53u * c0;
+    const uint hi1 = mul_hi(0xCD9E8D57u, c2), lo1 = 0xCD9E8D57u * c2;
+    c0 = hi1 ^ c1 ^ k0;
+    c1 = lo1;
+    c2 = hi0 ^ c3 ^ k1;
+    c3 = lo0;
+    k0 += 0x9E3779B9u;
+    k1 += 0xBB67AE85u;
   }
-  return counter;
+  const PhiloxWords words = {c0, c1, c2, c3};
+  return words;
 }
 
-// Four uniform floats in [0, 1): the top 24 bits of each word, so every value is exact in float32
-// and 1.0 is never returned.
-inline float4 rng_uniform4(ulong seed, uint item, uint step, uint slot, uint stream) {
-  const uint4 bits = philox4x32_10((uint4)(item, step, slot, stream), (uint2)((uint)seed, (uint)(seed >> 32)));
-  return convert_float4(bits >> 8) * (1.0f / 16777216.0f);
+ALWAYS_INLINE uint4 philox4x32_10(uint4 counter, uint2 key) {
+  const PhiloxWords w = philox4x32_10_words(counter.x, counter.y, counter.z, counter.w, key.x, key.y);
+  return (uint4)(w.w0, w.w1, w.w2, w.w3);
+}
+
+// A uniform float in [0, 1) from one word: its top 24 bits, so every value is exact in float32 and 1.0 is never
+// returned.
+ALWAYS_INLINE float rng_uniform_of_word(uint word) { return (float)(word >> 8) * (1.0f / 16777216.0f); }
+
+// The four words of rng_uniform4's call (the same counter and key), for rng_uniform_of_word.
+ALWAYS_INLINE PhiloxWords rng_words(ulong seed, uint item, uint step, uint slot, uint stream) {
+  return philox4x32_10_words(item, step, slot, stream, (uint)seed, (uint)(seed >> 32));
+}
+
+// Four uniform floats in [0, 1), rng_uniform_of_word of each word of one call.
+ALWAYS_INLINE float4 rng_uniform4(ulong seed, uint item, uint step, uint slot, uint stream) {
+  const PhiloxWords w = rng_words(seed, item, step, slot, stream);
+  return (float4)(rng_uniform_of_word(w.w0), rng_uniform_of_word(w.w1), rng_uniform_of_word(w.w2),
+                  rng_uniform_of_word(w.w3));
 }
 
 // Four standard normal draws from the four uniforms of rng_uniform4 (same counter), by the Box–Muller transform:

@@ -27,7 +27,7 @@
 // sample_along_rays computes 1/near·(1 − s) + 1/far·s as written, where ∞·0 makes the edge at the other end NaN
 // (the last for near = 0, the first for far = 0, both for near = far = 0). For positive bounds the left-out term
 // is exactly 0 anyway: the result is bit for bit the plain formula's.
-inline float stratified_edge(float near, float far, uint k, uint n_samples) {
+ALWAYS_INLINE float stratified_edge(float near, float far, uint k, uint n_samples) {
   const float s = (float)k / (float)n_samples;
 #if SAMPLE_LINDISP
   const float near_term = s < 1.0f ? (1.0f - s) / near : 0.0f;
@@ -38,7 +38,18 @@ inline float stratified_edge(float near, float far, uint k, uint n_samples) {
 #endif
 }
 
-// One item per (ray, group of 4 edges): one Philox call gives the 4 jitters of a group.
+// Edge k = 4·group + j of a ray: jittered by u (its group's draw j) unless not randomized.
+ALWAYS_INLINE float stratified_jittered_edge(float t_near, float t_far, uint k, uint n_samples, const uint randomized,
+                                             float u) {
+  const float t_k = stratified_edge(t_near, t_far, k, n_samples);
+  if (!randomized) return t_k;
+  const float lower = k == 0 ? t_k : 0.5f * (stratified_edge(t_near, t_far, k - 1, n_samples) + t_k);
+  const float upper = k == n_samples ? t_k : 0.5f * (t_k + stratified_edge(t_near, t_far, k + 1, n_samples));
+  return lower + (upper - lower) * u;
+}
+
+// One item per (ray, group of 4 edges): one Philox call gives the 4 jitters of a group. The four edges are written
+// out one by one (no private array, no loop with a break: either keeps PoCL from vectorising across items).
 __kernel void sample_stratified_fwd(__global const float* near, __global const float* far,
                                     __global float* t_edges, const uint n_rays, const uint n_samples,
                                     const uint randomized, const ulong seed, const uint step,
@@ -50,20 +61,18 @@ __kernel void sample_stratified_fwd(__global const float* near, __global const f
   const size_t ray = item / groups;
   const uint group = (uint)(item % groups);
   const float t_near = near[ray], t_far = far[ray];
-  float u[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-  if (randomized) vstore4(rng_uniform4(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED), 0, u);
+  const PhiloxWords u = rng_words(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED);  // unused unless randomized
   __global float* out = t_edges + ray * n_edges;
-  for (uint j = 0; j < 4; ++j) {
-    const uint k = 4 * group + j;
-    if (k >= n_edges) break;
-    const float t_k = stratified_edge(t_near, t_far, k, n_samples);
-    if (!randomized) {
-      out[k] = t_k;
-      continue;
-    }
-    const float lower = k == 0 ? t_k : 0.5f * (stratified_edge(t_near, t_far, k - 1, n_samples) + t_k);
-    const float upper = k == n_samples ? t_k : 0.5f * (t_k + stratified_edge(t_near, t_far, k + 1, n_samples));
-    out[k] = lower + (upper - lower) * u[j];
+  const uint k = 4 * group;
+  out[k] = stratified_jittered_edge(t_near, t_far, k, n_samples, randomized, rng_uniform_of_word(u.w0));
+  if (k + 1 < n_edges) {
+    out[k + 1] = stratified_jittered_edge(t_near, t_far, k + 1, n_samples, randomized, rng_uniform_of_word(u.w1));
+  }
+  if (k + 2 < n_edges) {
+    out[k + 2] = stratified_jittered_edge(t_near, t_far, k + 2, n_samples, randomized, rng_uniform_of_word(u.w2));
+  }
+  if (k + 3 < n_edges) {
+    out[k + 3] = stratified_jittered_edge(t_near, t_far, k + 3, n_samples, randomized, rng_uniform_of_word(u.w3));
   }
 }
 
