@@ -10,8 +10,7 @@
 // jnp.nan_to_num and the clip raises it to t_0, so distance = t_0 there; BACKGROUND_NONE and
 // BACKGROUND_BLACK give the same composite (black adds 0·(1 − acc)); "none" is for premultiplied output,
 // where the caller composites over its own background with acc.
-// One work-item per ray, O(N), no atomics; no buffer aliases another (`restrict`: the loads may move past the stores,
-// which PoCL's vectoriser needs). Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
+// One work-item per ray, O(N), no atomics. Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
 // directions [R][3], comp_rgb [R][3], acc [R], distance [R], weights [R][N].
 //
 // Density noise (DENSITY_NOISE, defined only when the noise is on; training only): the fused render_raw_* kernels
@@ -250,9 +249,9 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
   const int live = item < (n_rays);                           \
   const size_t ray = live ? item : (size_t)(n_rays) - 1
 
-__kernel void render_fwd(__global const float* restrict rgb, __global const float* restrict density, __global const float* restrict t_edges,
-                         __global const float* restrict directions, __global float* restrict comp_rgb, __global float* restrict acc,
-                         __global float* restrict distance, __global float* restrict weights, const uint n_rays, const uint n_samples) {
+__kernel void render_fwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
+                         __global const float* directions, __global float* comp_rgb, __global float* acc,
+                         __global float* distance, __global float* weights, const uint n_rays, const uint n_samples) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_fwd(rgb, density, t_edges, directions, comp_rgb, acc, distance, weights, ray, live,
                  n_samples, ray_noise_key(0, 0, 0, 0), 0, 1);
@@ -260,10 +259,10 @@ __kernel void render_fwd(__global const float* restrict rgb, __global const floa
 
 // d_acc [R] is read only when has_d_acc != 0 (otherwise any buffer may be passed).
 // Outputs d_rgb [R][N][3] and d_density [R][N] (overwritten, not accumulated).
-__kernel void render_bwd(__global const float* restrict rgb, __global const float* restrict density, __global const float* restrict t_edges,
-                         __global const float* restrict directions, __global const float* restrict weights,
-                         __global const float* restrict d_comp_rgb, __global const float* restrict d_acc, const uint has_d_acc,
-                         __global float* restrict d_rgb, __global float* restrict d_density, const uint n_rays, const uint n_samples) {
+__kernel void render_bwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
+                         __global const float* directions, __global const float* weights,
+                         __global const float* d_comp_rgb, __global const float* d_acc, const uint has_d_acc,
+                         __global float* d_rgb, __global float* d_density, const uint n_rays, const uint n_samples) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_rgb, d_density, ray,
                  live, n_samples, ray_noise_key(0, 0, 0, 0), 0);
@@ -272,10 +271,10 @@ __kernel void render_bwd(__global const float* restrict rgb, __global const floa
 // Fused activations + rendering: the same as activations_fwd then render_fwd, reading the MLP's raw outputs
 // (raw_rgb [R][N][3], raw_density [R][N]) so the activated values never go through memory. With DENSITY_NOISE the
 // raw densities get their noise first, keyed by (seed, step, first_ray + ray, level); without, those are unused.
-__kernel void render_raw_fwd(__global const float* restrict raw_rgb, __global const float* restrict raw_density,
-                             __global const float* restrict t_edges, __global const float* restrict directions,
-                             __global float* restrict comp_rgb, __global float* restrict acc, __global float* restrict distance,
-                             __global float* restrict weights, const uint n_rays, const uint n_samples, const ulong seed,
+__kernel void render_raw_fwd(__global const float* raw_rgb, __global const float* raw_density,
+                             __global const float* t_edges, __global const float* directions,
+                             __global float* comp_rgb, __global float* acc, __global float* distance,
+                             __global float* weights, const uint n_rays, const uint n_samples, const ulong seed,
                              const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, live,
@@ -286,9 +285,9 @@ __kernel void render_raw_fwd(__global const float* restrict raw_rgb, __global co
 // its weights feed the fine level's resampling, its image is never shown): only the raw densities are read and only
 // acc, distance and weights written, the same values render_raw_fwd writes. The MLP skips its colour head for such
 // a level (mlp/network.hpp), so raw colours do not even exist here.
-__kernel void render_raw_weights_fwd(__global const float* restrict raw_density, __global const float* restrict t_edges,
-                                     __global const float* restrict directions, __global float* restrict acc, __global float* restrict distance,
-                                     __global float* restrict weights, const uint n_rays, const uint n_samples,
+__kernel void render_raw_weights_fwd(__global const float* raw_density, __global const float* t_edges,
+                                     __global const float* directions, __global float* acc, __global float* distance,
+                                     __global float* weights, const uint n_rays, const uint n_samples,
                                      const ulong seed, const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_fwd(0, raw_density, t_edges, directions, 0, acc, distance, weights, ray, live, n_samples,
@@ -297,11 +296,11 @@ __kernel void render_raw_weights_fwd(__global const float* restrict raw_density,
 
 // Fused render_bwd then activations_bwd: gradients with respect to the raw outputs, d_raw_rgb [R][N][3] and
 // d_raw_density [R][N]; the key must be the forward's (the same noise, drawn again).
-__kernel void render_raw_bwd(__global const float* restrict raw_rgb, __global const float* restrict raw_density,
-                             __global const float* restrict t_edges, __global const float* restrict directions,
-                             __global const float* restrict weights, __global const float* restrict d_comp_rgb,
-                             __global const float* restrict d_acc, const uint has_d_acc, __global float* restrict d_raw_rgb,
-                             __global float* restrict d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
+__kernel void render_raw_bwd(__global const float* raw_rgb, __global const float* raw_density,
+                             __global const float* t_edges, __global const float* directions,
+                             __global const float* weights, __global const float* d_comp_rgb,
+                             __global const float* d_acc, const uint has_d_acc, __global float* d_raw_rgb,
+                             __global float* d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
                              const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_raw_rgb,
