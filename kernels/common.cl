@@ -1,7 +1,8 @@
 // Shared helpers for every mipnerf-cl program; prepended before a stage's own file.
 // Plain OpenCL C 1.2. Conventions used by all kernels:
 //  - 1-D launches are padded to a multiple of the work-group size (host/cl/launch.hpp), so every
-//    kernel starts with `if (i >= n) return;` and none uses a barrier after that guard.
+//    kernel starts with `if (i >= n) return;` and none uses a barrier after that guard; render.cl's
+//    SAMPLES_IN_LOCKSTEP kernels, which do use barriers, keep their padding items running instead.
 //  - Arrays are flat, row-major, float32; a 3-vector is 3 consecutive floats (never float3, whose
 //    16-byte alignment would change the layout).
 
