@@ -116,6 +116,19 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // cover exactly the arguments the stages give them, with bounds derived here and checked by the stages' tests against
 // double references (tests/ops/test_activations.cpp and test_render.cpp sweep every binade).
 
+// x = n·ln2 + r for x ≤ 0 clamped: n = rint(x·log2 e), r by two fma steps (ln2 split into its float and the
+// remainder), |r| ≤ ln2/2 + tiny.
+typedef struct {
+  float n, r;
+} Ln2Reduced;
+
+ALWAYS_INLINE Ln2Reduced reduce_by_ln2(float x) {
+  Ln2Reduced reduced;
+  reduced.n = rint(x * 1.44269504f);
+  reduced.r = fma(reduced.n, -1.90465430e-9f, fma(reduced.n, -0.693147182f, x));
+  return reduced;
+}
+
 // e^x for x ≤ 0 (NaN stays NaN; −∞ gives 0). Cody–Waite: x = n·ln2 + r with n = rint(x·log2 e), |r| ≤ ln2/2 + tiny,
 // r from two fma steps (ln2 split into its float and the remainder, so r's error is ≤ 2^-24·|r| + 2^-50·|n|);
 // e^r by its Taylor polynomial to r^7 (truncation ≤ (ln2/2)^8/8!·e^0.35 < 8e-9 relative), Horner with fma;
@@ -123,9 +136,8 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // (x ≥ −103.97) round once as the true value would. Below x = −104 the result is 0 (e^−104 < 2^−150).
 // Relative error ≤ 3 ulp on normal results (7 roundings of ≤ 2^-24 each in the polynomial, less in the reduction).
 ALWAYS_INLINE float exp_nonpositive(float x) {
-  const float clamped = fmax(x, -104.0f);  // fmax(NaN, c) = c: NaN is restored by the select below
-  const float n = rint(clamped * 1.44269504f);
-  const float r = fma(n, -1.90465430e-9f, fma(n, -0.693147182f, clamped));
+  const Ln2Reduced reduced = reduce_by_ln2(fmax(x, -104.0f));  // fmax(NaN, c) = c: NaN is restored below
+  const float n = reduced.n, r = reduced.r;
   float p = fma(r, 1.98412698e-4f, 1.38888889e-3f);  // 1/7!, 1/6!
   p = fma(p, r, 8.33333333e-3f);                       // 1/5!
   p = fma(p, r, 4.16666667e-2f);                       // 1/4!
@@ -146,9 +158,8 @@ ALWAYS_INLINE float exp_nonpositive(float x) {
 // Below x = −30 the result is −1 (e^−30 < 2^−25·1: −1 is the correctly rounded value). Within 3 ulp by this count;
 // the same formula in C on the host, checked against double expm1 at every float in [−40, 0), is within 0.89 ulp.
 ALWAYS_INLINE float expm1_nonpositive(float x) {
-  const float clamped = fmax(x, -30.0f);  // fmax(NaN, c) = c: NaN is restored by the select below
-  const float n = rint(clamped * 1.44269504f);
-  const float r = fma(n, -1.90465430e-9f, fma(n, -0.693147182f, clamped));
+  const Ln2Reduced reduced = reduce_by_ln2(fmax(x, -30.0f));  // fmax(NaN, c) = c: NaN is restored below
+  const float n = reduced.n, r = reduced.r;
   float p = fma(r, 2.48015873e-5f, 1.98412698e-4f);  // 1/8!, 1/7!
   p = fma(p, r, 1.38888889e-3f);                       // 1/6!
   p = fma(p, r, 8.33333333e-3f);                       // 1/5!

@@ -88,6 +88,16 @@ DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_
           weights.download(ctx), d_rgb.download(ctx), d_density.download(ctx)};
 }
 
+// Every output of two device runs, bit for bit.
+void check_bit_equal(const DeviceResult& a, const DeviceResult& b) {
+  CHECK(a.comp_rgb == b.comp_rgb);
+  CHECK(a.acc == b.acc);
+  CHECK(a.distance == b.distance);
+  CHECK(a.weights == b.weights);
+  CHECK(a.d_rgb == b.d_rgb);
+  CHECK(a.d_density == b.d_density);
+}
+
 struct RefResult {
   std::vector<double> comp_rgb, acc, distance, weights, d_rgb, d_density;
 };
@@ -631,24 +641,16 @@ TEST_CASE("render: samples in lockstep give the per-ray values bit for bit, with
   // oclgrind) leave the last work-group partial, whose padding items run the last ray again and must store nothing.
   const Batch plain = random_batch(test::batch_for_device(1000), 24, 525);
   const Batch raw = raw_batch(test::batch_for_device(1000), 24, 526);
-  const auto check_equal = [](const DeviceResult& per_ray, const DeviceResult& lockstep) {
-    CHECK(lockstep.comp_rgb == per_ray.comp_rgb);
-    CHECK(lockstep.acc == per_ray.acc);
-    CHECK(lockstep.distance == per_ray.distance);
-    CHECK(lockstep.weights == per_ray.weights);
-    CHECK(lockstep.d_rgb == per_ray.d_rgb);
-    CHECK(lockstep.d_density == per_ray.d_density);
-  };
   for (auto background : kBackgrounds) {
     INFO("background " << static_cast<int>(background));
     const RenderOptions options{background};
-    check_equal(run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::per_ray),
+    check_bit_equal(run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::per_ray),
                 run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::lockstep));
     for (const float noise_scale : {0.0f, 1.0f}) {
       INFO("fused, density noise " << noise_scale);
       const RenderOptions noisy{background, noise_scale};
       const DensityNoiseKey key{{91, 5, 40}, 1};
-      check_equal(run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::per_ray),
+      check_bit_equal(run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::per_ray),
                   run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::lockstep));
     }
   }
@@ -739,13 +741,7 @@ TEST_CASE("render: density noise - the fused kernels add the kernel's own draws,
       const auto z = device_noise_draws(ctx, key, raw.n_rays, raw.n_samples);
       Batch shifted = raw;
       for (size_t k = 0; k < shifted.density.size(); ++k) shifted.density[k] = raw.density[k] + sigma * z[k];
-      const auto plain = run_device({Background::black}, shifted, true, true);
-      CHECK(noisy.comp_rgb == plain.comp_rgb);
-      CHECK(noisy.acc == plain.acc);
-      CHECK(noisy.distance == plain.distance);
-      CHECK(noisy.weights == plain.weights);
-      CHECK(noisy.d_rgb == plain.d_rgb);
-      CHECK(noisy.d_density == plain.d_density);
+      check_bit_equal(noisy, run_device({Background::black}, shifted, true, true));
       // And the noise is there: the same key without it gives other weights.
       CHECK(run_device({Background::black}, raw, true, true, {}, key).weights != noisy.weights);
     }
