@@ -56,46 +56,48 @@ inline void store3(__global float* p, size_t i, float3 v) {
 #define RNG_STREAM_SUBPIXEL 3u    /* sub-pixel position of a ray (supersampling) */
 #define RNG_STREAM_DENSITY_NOISE 4u /* noise added to the raw density while training (render.cl) */
 
-// The four words of one Philox call, as scalars: what the rounds work on, and what a kernel PoCL should vectorise
-// across work-items takes (its vectoriser cannot widen vector-typed values such as uint4).
-typedef struct {
-  uint w0, w1, w2, w3;
-} PhiloxWords;
-
-ALWAYS_INLINE PhiloxWords philox4x32_10_words(uint c0, uint c1, uint c2, uint c3, uint k0, uint k1) {
+// One Philox call on four scalar words, in place: counter (c0..c3) in, random words out. Scalars, because PoCL's
+// vectoriser cannot widen vector-typed values such as uint4 (a kernel it should vectorise across work-items takes
+// these); out-parameters rather than a returned struct, whose inlining oclgrind 21.10 cannot run
+// (llvm.experimental.noalias.scope.decl).
+ALWAYS_INLINE void philox4x32_10_words(uint* c0, uint* c1, uint* c2, uint* c3, uint k0, uint k1) {
   __attribute__((opencl_unroll_hint)) for (int round = 0; round < 10; ++round) {
-    const uint hi0 = mul_hi(0xD2511F53u, c0), lo0 = 0xD2511F53u * c0;
-    const uint hi1 = mul_hi(0xCD9E8D57u, c2), lo1 = 0xCD9E8D57u * c2;
-    c0 = hi1 ^ c1 ^ k0;
-    c1 = lo1;
-    c2 = hi0 ^ c3 ^ k1;
-    c3 = lo0;
+    const uint hi0 = mul_hi(0xD2511F53u, *c0), lo0 = 0xD2511F53u * *c0;
+    const uint hi1 = mul_hi(0xCD9E8D57u, *c2), lo1 = 0xCD9E8D57u * *c2;
+    *c0 = hi1 ^ *c1 ^ k0;
+    *c1 = lo1;
+    *c2 = hi0 ^ *c3 ^ k1;
+    *c3 = lo0;
     k0 += 0x9E3779B9u;
     k1 += 0xBB67AE85u;
   }
-  const PhiloxWords words = {c0, c1, c2, c3};
-  return words;
 }
 
 ALWAYS_INLINE uint4 philox4x32_10(uint4 counter, uint2 key) {
-  const PhiloxWords w = philox4x32_10_words(counter.x, counter.y, counter.z, counter.w, key.x, key.y);
-  return (uint4)(w.w0, w.w1, w.w2, w.w3);
+  uint c0 = counter.x, c1 = counter.y, c2 = counter.z, c3 = counter.w;
+  philox4x32_10_words(&c0, &c1, &c2, &c3, key.x, key.y);
+  return (uint4)(c0, c1, c2, c3);
 }
 
 // A uniform float in [0, 1) from one word: its top 24 bits, so every value is exact in float32 and 1.0 is never
 // returned.
 ALWAYS_INLINE float rng_uniform_of_word(uint word) { return (float)(word >> 8) * (1.0f / 16777216.0f); }
 
-// The four words of rng_uniform4's call (the same counter and key), for rng_uniform_of_word.
-ALWAYS_INLINE PhiloxWords rng_words(ulong seed, uint item, uint step, uint slot, uint stream) {
-  return philox4x32_10_words(item, step, slot, stream, (uint)seed, (uint)(seed >> 32));
+// The four words of rng_uniform4's call (the same counter and key), for rng_uniform_of_word: w0..w3 are set.
+ALWAYS_INLINE void rng_words(ulong seed, uint item, uint step, uint slot, uint stream, uint* w0, uint* w1, uint* w2,
+                             uint* w3) {
+  *w0 = item;
+  *w1 = step;
+  *w2 = slot;
+  *w3 = stream;
+  philox4x32_10_words(w0, w1, w2, w3, (uint)seed, (uint)(seed >> 32));
 }
 
 // Four uniform floats in [0, 1), rng_uniform_of_word of each word of one call.
 ALWAYS_INLINE float4 rng_uniform4(ulong seed, uint item, uint step, uint slot, uint stream) {
-  const PhiloxWords w = rng_words(seed, item, step, slot, stream);
-  return (float4)(rng_uniform_of_word(w.w0), rng_uniform_of_word(w.w1), rng_uniform_of_word(w.w2),
-                  rng_uniform_of_word(w.w3));
+  uint w0, w1, w2, w3;
+  rng_words(seed, item, step, slot, stream, &w0, &w1, &w2, &w3);
+  return (float4)(rng_uniform_of_word(w0), rng_uniform_of_word(w1), rng_uniform_of_word(w2), rng_uniform_of_word(w3));
 }
 
 // Four standard normal draws from the four uniforms of rng_uniform4 (same counter), by the Box–Muller transform:
@@ -116,17 +118,11 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // cover exactly the arguments the stages give them, with bounds derived here and checked by the stages' tests against
 // double references (tests/ops/test_activations.cpp and test_render.cpp sweep every binade).
 
-// x = n·ln2 + r for x ≤ 0 clamped: n = rint(x·log2 e), r by two fma steps (ln2 split into its float and the
-// remainder), |r| ≤ ln2/2 + tiny.
-typedef struct {
-  float n, r;
-} Ln2Reduced;
-
-ALWAYS_INLINE Ln2Reduced reduce_by_ln2(float x) {
-  Ln2Reduced reduced;
-  reduced.n = rint(x * 1.44269504f);
-  reduced.r = fma(reduced.n, -1.90465430e-9f, fma(reduced.n, -0.693147182f, x));
-  return reduced;
+// x = n·ln2 + r for x ≤ 0 clamped: sets *n = rint(x·log2 e) and returns r, by two fma steps (ln2 split into its
+// float and the remainder), |r| ≤ ln2/2 + tiny. (An out-parameter, not a returned struct: see philox4x32_10_words.)
+ALWAYS_INLINE float reduce_by_ln2(float x, float* n) {
+  *n = rint(x * 1.44269504f);
+  return fma(*n, -1.90465430e-9f, fma(*n, -0.693147182f, x));
 }
 
 // e^x for x ≤ 0 (NaN stays NaN; −∞ gives 0). Cody–Waite: x = n·ln2 + r with n = rint(x·log2 e), |r| ≤ ln2/2 + tiny,
@@ -136,8 +132,8 @@ ALWAYS_INLINE Ln2Reduced reduce_by_ln2(float x) {
 // (x ≥ −103.97) round once as the true value would. Below x = −104 the result is 0 (e^−104 < 2^−150).
 // Relative error ≤ 3 ulp on normal results (7 roundings of ≤ 2^-24 each in the polynomial, less in the reduction).
 ALWAYS_INLINE float exp_nonpositive(float x) {
-  const Ln2Reduced reduced = reduce_by_ln2(fmax(x, -104.0f));  // fmax(NaN, c) = c: NaN is restored below
-  const float n = reduced.n, r = reduced.r;
+  float n;
+  const float r = reduce_by_ln2(fmax(x, -104.0f), &n);  // fmax(NaN, c) = c: NaN is restored below
   float p = fma(r, 1.98412698e-4f, 1.38888889e-3f);  // 1/7!, 1/6!
   p = fma(p, r, 8.33333333e-3f);                       // 1/5!
   p = fma(p, r, 4.16666667e-2f);                       // 1/4!
@@ -158,8 +154,8 @@ ALWAYS_INLINE float exp_nonpositive(float x) {
 // Below x = −30 the result is −1 (e^−30 < 2^−25·1: −1 is the correctly rounded value). Within 3 ulp by this count;
 // the same formula in C on the host, checked against double expm1 at every float in [−40, 0), is within 0.89 ulp.
 ALWAYS_INLINE float expm1_nonpositive(float x) {
-  const Ln2Reduced reduced = reduce_by_ln2(fmax(x, -30.0f));  // fmax(NaN, c) = c: NaN is restored below
-  const float n = reduced.n, r = reduced.r;
+  float n;
+  const float r = reduce_by_ln2(fmax(x, -30.0f), &n);  // fmax(NaN, c) = c: NaN is restored below
   float p = fma(r, 2.48015873e-5f, 1.98412698e-4f);  // 1/8!, 1/7!
   p = fma(p, r, 1.38888889e-3f);                       // 1/6!
   p = fma(p, r, 8.33333333e-3f);                       // 1/5!

@@ -61,18 +61,19 @@ __kernel void sample_stratified_fwd(__global const float* near, __global const f
   const size_t ray = item / groups;
   const uint group = (uint)(item % groups);
   const float t_near = near[ray], t_far = far[ray];
-  const PhiloxWords u = rng_words(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED);  // unused unless randomized
+  uint u0, u1, u2, u3;  // the group's random words, unused unless randomized
+  rng_words(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED, &u0, &u1, &u2, &u3);
   __global float* out = t_edges + ray * n_edges;
   const uint k = 4 * group;
-  out[k] = stratified_jittered_edge(t_near, t_far, k, n_samples, randomized, rng_uniform_of_word(u.w0));
+  out[k] = stratified_jittered_edge(t_near, t_far, k, n_samples, randomized, rng_uniform_of_word(u0));
   if (k + 1 < n_edges) {
-    out[k + 1] = stratified_jittered_edge(t_near, t_far, k + 1, n_samples, randomized, rng_uniform_of_word(u.w1));
+    out[k + 1] = stratified_jittered_edge(t_near, t_far, k + 1, n_samples, randomized, rng_uniform_of_word(u1));
   }
   if (k + 2 < n_edges) {
-    out[k + 2] = stratified_jittered_edge(t_near, t_far, k + 2, n_samples, randomized, rng_uniform_of_word(u.w2));
+    out[k + 2] = stratified_jittered_edge(t_near, t_far, k + 2, n_samples, randomized, rng_uniform_of_word(u2));
   }
   if (k + 3 < n_edges) {
-    out[k + 3] = stratified_jittered_edge(t_near, t_far, k + 3, n_samples, randomized, rng_uniform_of_word(u.w3));
+    out[k + 3] = stratified_jittered_edge(t_near, t_far, k + 3, n_samples, randomized, rng_uniform_of_word(u3));
   }
 }
 
