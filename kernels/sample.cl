@@ -61,8 +61,8 @@ __kernel void sample_stratified_fwd(__global const float* near, __global const f
   const size_t ray = item / groups;
   const uint group = (uint)(item % groups);
   const float t_near = near[ray], t_far = far[ray];
-  uint u0, u1, u2, u3;  // the group's random words, unused unless randomized
-  rng_words(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED, &u0, &u1, &u2, &u3);
+  uint u0 = 0, u1 = 0, u2 = 0, u3 = 0;  // the group's random words, drawn only when randomized
+  if (randomized) rng_words(seed, first_ray + (uint)ray, step, group, RNG_STREAM_STRATIFIED, &u0, &u1, &u2, &u3);
   __global float* out = t_edges + ray * n_edges;
   const uint k = 4 * group;
   out[k] = stratified_jittered_edge(t_near, t_far, k, n_samples, randomized, rng_uniform_of_word(u0));
