@@ -639,6 +639,10 @@ TEST_CASE("render: the weights-only kernel writes the fused kernel's acc, distan
 TEST_CASE("render: samples in lockstep give the per-ray values bit for bit, with a partial last work-group") {
   // The same arithmetic in the same order per ray, only the order of the rays' steps differs; 1,000 rays (100 under
   // oclgrind) leave the last work-group partial, whose padding items run the last ray again and must store nothing.
+  // The two programs really differ: each loop asked for is the one built (else the equality below would be vacuous).
+  auto& ctx = test::test_context();
+  CHECK(ops::Render(ctx, RenderOptions{}, {}, ops::RenderSampleLoop::lockstep).samples_in_lockstep());
+  CHECK_FALSE(ops::Render(ctx, RenderOptions{}, {}, ops::RenderSampleLoop::per_ray).samples_in_lockstep());
   const Batch plain = random_batch(test::batch_for_device(1000), 24, 525);
   const Batch raw = raw_batch(test::batch_for_device(1000), 24, 526);
   for (auto background : kBackgrounds) {
