@@ -28,6 +28,7 @@
 #include "eval/report.hpp"
 #include "io/json.hpp"
 #include "gemm/clblast_check.hpp"
+#include "gemm/cpu_sgemm.hpp"
 #include "gemm/gemm_backend.hpp"
 #include "gemm/gemm_tuning.hpp"
 #include "ops/stage_list.hpp"
@@ -587,8 +588,37 @@ TEST_CASE("bench: the machine probe measures the FMA peak, the triad and a large
     CHECK(positive(probe[part]["all_threads"]));
   }
   CHECK(positive(probe["large_sgemm_gflops"]));
+  // The peak is the fastest vector width timed (16 floats where the CPU has AVX-512), the large sgemm the fastest
+  // library built in, each named: a slower denominator would put well-run products above "the limit".
+  const auto fastest_of = [](const io::Json& options, const std::string& chosen, const char* rate_key) {
+    double best = 0.0;
+    std::string name;
+    for (const auto& [key, value] : options.items()) {
+      const io::Json& rate = rate_key ? value[rate_key] : value;
+      if (rate.value("best", 0.0) > best) best = rate.value("best", 0.0), name = key;
+    }
+    return name == chosen;
+  };
+  const io::Json& fma = probe["fma_peak_gflops"];
+  if (!fma.contains("skipped")) {
+    REQUIRE(fma.contains("by_vector"));
+    CHECK(fma["by_vector"].contains("avx2_8_floats"));
+#if defined(__x86_64__)
+    CHECK(fma["by_vector"].contains("avx512_16_floats") == static_cast<bool>(__builtin_cpu_supports("avx512f")));
+#endif
+    CHECK(fastest_of(fma["by_vector"], fma.value("vector", ""), "all_threads"));
+    CHECK(fma["all_threads"] == fma["by_vector"][fma.value("vector", "")]["all_threads"]);
+  }
+  const io::Json& sgemm = probe["large_sgemm_gflops"];
+  if (!sgemm.contains("skipped")) {
+    REQUIRE(sgemm.contains("by_library"));
+    CHECK(sgemm["by_library"].size() == gemm::cpu_sgemm_libraries().size());
+    CHECK(fastest_of(sgemm["by_library"], sgemm.value("library", ""), nullptr));
+    CHECK(sgemm.value("best", 0.0) == sgemm["by_library"][sgemm.value("library", "")].value("best", -1.0));
+  }
   const std::string line = bench::machine_summary(probe);
   CHECK(line.find("FMA peak ") == 0);
-  CHECK(line.find("(2 threads), triad ") != std::string::npos);
+  CHECK(line.find("(2 threads, " + fma.value("vector", std::string("not probed")) + "), triad ") != std::string::npos);
+  CHECK(line.find("GFLOP/s (" + sgemm.value("library", std::string("none")) + ")") != std::string::npos);
   CHECK(bench::machine_summary(io::Json::object()).empty());
 }
