@@ -7,9 +7,11 @@ what it was before angle doubling) beside the device default. Per kernel: the me
 round's best call, PoCL / Intel, and whether PoCL is within 1.5x (issue 28's target). Intel's runtime comes from
 scripts/install-intel-opencl.sh (PyPI), as in the test command.
 
-    python3 bench/kernel_runtimes.py [--rounds 3] [--reps 10] [--build build] [--report-only]
+    python3 bench/kernel_runtimes.py [--rounds 3] [--reps 10] [--build build] [--name kernel_runtimes] [--report-only]
 
-Writes bench/results/kernel_runtimes.json and .md (the .md from the .json; hand notes kept).
+Writes bench/results/<name>.json and .md (the .md from the .json; hand notes kept): kernel_runtimes for the machine
+the committed figures were first taken on (PoCL's `pthread-haswell-AMD EPYC`), another name for another machine
+(e.g. kernel_runtimes_xeon). Each run records both runtimes' device names.
 """
 
 import argparse
@@ -57,6 +59,14 @@ def parse_kernel_table(text):
     return rows
 
 
+def device_of(text):
+    """The device name bench_kernels' heading gives ("## Ray-math kernels: NAME"), or ""."""
+    for line in text.splitlines():
+        if line.startswith("## Ray-math kernels: "):
+            return line[len("## Ray-math kernels: "):].strip()
+    return ""
+
+
 def run_bench(exe, platform, env, reps, sincos_every=None):
     environment = dict(os.environ, **env)
     environment.pop("MIPNERF_IPE_SINCOS_EVERY", None)
@@ -64,7 +74,7 @@ def run_bench(exe, platform, env, reps, sincos_every=None):
         environment["MIPNERF_IPE_SINCOS_EVERY"] = str(sincos_every)
     out = subprocess.run([exe, "--device", f"platform={platform}", "--reps", str(reps)], capture_output=True,
                          text=True, env=environment, check=True).stdout
-    return parse_kernel_table(out)
+    return parse_kernel_table(out), device_of(out)
 
 
 def measure(args):
@@ -76,14 +86,14 @@ def measure(args):
         for name, platform, env in (("pocl", POCL, {}), ("intel", intel, intel_env)):
             for sincos_every in (None, 1):
                 load = os.getloadavg()[0]
-                rows = run_bench(exe, platform, env, args.reps, sincos_every)
-                runs.append({"round": round_index, "runtime": name, "platform": platform,
+                rows, device = run_bench(exe, platform, env, args.reps, sincos_every)
+                runs.append({"round": round_index, "runtime": name, "platform": platform, "device": device,
                              "sincos_every": sincos_every or "default", "load_1min": load, "stages": rows})
                 print(f"round {round_index} {name} sincos_every={sincos_every or 'default'}: "
                       f"{len(rows)} stages, load {load:.2f}", file=sys.stderr)
     return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "commit": study_common.commit_of(ROOT), "rounds": args.rounds, "reps": args.reps,
-            "command": "python3 bench/kernel_runtimes.py " + " ".join(sys.argv[1:]), "runs": runs}
+            "command": "python3 bench/kernel_runtimes.py " + " ".join(sys.argv[1:]), "name": args.name, "runs": runs}
 
 
 def summary(record):
@@ -96,14 +106,26 @@ def summary(record):
     return {stage: {key: statistics.median(values) for key, values in by.items()} for stage, by in table.items()}
 
 
+def devices_text(record):
+    """"PoCL: NAME; Intel: NAME" from the runs (older records, without names: the machine they were taken on)."""
+    names = {}
+    for run in record["runs"]:
+        if run.get("device"):
+            names.setdefault(run["runtime"], run["device"])
+    if not names:
+        return "not recorded (runs before 2026-11-26 21:40 UTC: PoCL's `pthread-haswell-AMD EPYC`, 2 cores)"
+    return "; ".join(f"{'PoCL' if runtime == 'pocl' else 'Intel'} `{name}`" for runtime, name in names.items())
+
+
 def write_markdown(record):
     s = summary(record)
     loads = [run["load_1min"] for run in record["runs"]]
-    lines = [report_md.generated_banner("bench/kernel_runtimes.py", "kernel_runtimes.json"), "",
+    lines = [report_md.generated_banner("bench/kernel_runtimes.py", record.get("name", "kernel_runtimes") + ".json"), "",
              "# Ray-math kernels: PoCL beside Intel's CPU runtime", "",
              f"Date: {record['date']} (UTC), commit {record['commit']}. Command: `{record['command']}`; "
              f"{record['rounds']} alternating rounds, each kernel's best of {record['reps']} calls per round, the "
              f"median over rounds shown. Load average (1 min) at each run: {min(loads):.2f}-{max(loads):.2f}.", "",
+             "Devices: " + devices_text(record) + ".", "",
              "Batch: 4,096 rays x 128 samples (bench_kernels' defaults). Target (issue 28): PoCL within "
              f"{TARGET_RATIO}x of Intel's runtime.", "",
              "| kernel | PoCL ms | Intel ms | PoCL / Intel | within 1.5x |", "|---|---:|---:|---:|:---:|"]
@@ -130,9 +152,12 @@ def main():
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--reps", type=int, default=10)
     parser.add_argument("--build", default="build")
+    parser.add_argument("--name", default="kernel_runtimes",
+                        help="results stem: bench/results/NAME.json and .md (another machine, another name)")
     parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
     args = parser.parse_args()
-    report_md.measure_or_reload(RESULTS, "kernel_runtimes", "bench/kernel_runtimes.py", args.report_only, lambda: measure(args),
+    script = "bench/kernel_runtimes.py" + ("" if args.name == "kernel_runtimes" else f" --name {args.name}")
+    report_md.measure_or_reload(RESULTS, args.name, script, args.report_only, lambda: measure(args),
                                 write_markdown)
 
 if __name__ == "__main__":
