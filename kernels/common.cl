@@ -62,8 +62,11 @@ inline void store3(__global float* p, size_t i, float3 v) {
 // (llvm.experimental.noalias.scope.decl).
 ALWAYS_INLINE void philox4x32_10_words(uint* c0, uint* c1, uint* c2, uint* c3, uint k0, uint k1) {
   __attribute__((opencl_unroll_hint)) for (int round = 0; round < 10; ++round) {
-    const uint hi0 = mul_hi(0xD2511F53u, *c0), lo0 = 0xD2511F53u * *c0;
-    const uint hi1 = mul_hi(0xCD9E8D57u, *c2), lo1 = 0xCD9E8D57u * *c2;
+    // Each 32 x 32 → 64-bit product once, its halves taken apart: the built-in mul_hi is a call PoCL does not
+    // always inline (its remarks), and a call in the work-item loop stops the vectoriser.
+    const ulong product0 = (ulong)0xD2511F53u * *c0, product1 = (ulong)0xCD9E8D57u * *c2;
+    const uint hi0 = (uint)(product0 >> 32), lo0 = (uint)product0;
+    const uint hi1 = (uint)(product1 >> 32), lo1 = (uint)product1;
     *c0 = hi1 ^ *c1 ^ k0;
     *c1 = lo1;
     *c2 = hi0 ^ *c3 ^ k1;
