@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <exception>
+#include <string>
 #include <thread>
 
 #include "core/error.hpp"
+#include "core/flush_denormals.hpp"
 #include "gemm/host_gemm.hpp"
 
 namespace mipnerf::mlp {
@@ -159,15 +162,27 @@ size_t HostMlp::backward_rays_per_block(size_t samples_per_ray) const {
 
 namespace {
 
+// MIPNERF_KEEP_DENORMALS=1: the host MLP computes with denormals as they come (bench/denormals.py compares the two);
+// by default its threads flush them (core/flush_denormals.hpp: training's steps slowed 1.7x without).
+bool keep_denormals() {
+  static const bool keep = [] {
+    const char* value = std::getenv("MIPNERF_KEEP_DENORMALS");
+    return value != nullptr && std::string(value) == "1";
+  }();
+  return keep;
+}
+
 // Runs work(worker, first_block, end_block) on `threads` threads over n_blocks blocks, contiguous ranges in thread
 // order (the calling thread takes the first), each thread holding the table's libraries to itself first (oneDNN's
-// OpenMP thread count is per calling thread). Rethrows the first exception after every thread has ended. Returns how
+// OpenMP thread count is per calling thread) and flushing denormals while it works (the calling thread gets its
+// setting back). Rethrows the first exception after every thread has ended. Returns how
 // many threads ran (at least one, at most one per block).
 template <typename Work>
 size_t run_blocks(size_t threads, size_t n_blocks, const gemm::HostProductTable& products, const Work& work) {
   const size_t t_count = std::max<size_t>(1, std::min(threads, n_blocks));
   std::vector<std::exception_ptr> errors(t_count);
   auto range = [&](size_t t) {
+    const FlushDenormalsInScope flush(!keep_denormals());  // core/flush_denormals.hpp
     try {
       for (const gemm::CpuSgemmLibrary* library : products.libraries()) library->set_threads(1);
       work(t, t * n_blocks / t_count, (t + 1) * n_blocks / t_count);

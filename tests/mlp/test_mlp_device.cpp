@@ -6,12 +6,15 @@
 
 #include <clblast.h>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <random>
 #include <string>
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "core/flush_denormals.hpp"
 #include "gemm/clblast_check.hpp"
 #include "gemm/cpu_sgemm.hpp"
 #include "mlp/host_mlp.hpp"
@@ -242,6 +245,61 @@ TEST_CASE("mlp device: the host path's blocks and threads do not change what it 
   // By default the backward of a network 256 wide takes blocks twice as long as its forward's; narrower ones the same.
   CHECK(mlp::backward_block_rows_for(paper.width, 256) == 512);
   CHECK(mlp::backward_block_rows_for(test::small_mlp_config(true).width, 256) == 256);
+}
+
+TEST_CASE("mlp device: the host path flushes denormals in its threads and gives the caller's setting back") {
+  // Why the host path flushes: core/flush_denormals.hpp. Every weight 1 but the first layer's, 2^-70, features 2^-70:
+  // the first products are 2^-140 (denormal), so a thread that flushes computes 0 all the way to the outputs, while
+  // the exact values grow back to normal floats (~2^-121) by the outputs (the reference shows them). Blocks of one
+  // ray on two threads: the caller's thread and a worker both compute.
+#if defined(__x86_64__)
+  const auto backends = test::supported_gemm_backends(test::test_context());
+  if (backends.size() < 2) {
+    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
+    return;
+  }
+  auto& ctx = test::test_context();
+  mlp::MlpConfig config = test::small_mlp_config(false);
+  config.skip_layer = 0;  // no skip: the features reach the first layer only
+  const mlp::HostMlpOptions options = host_options(1, 2);
+  const auto network = mlp::make_network(ctx, config, gemm::GemmBackend::host, &options);
+  const float tiny = std::ldexp(1.0f, -70);
+  auto params = network->download_params();
+  std::fill(params.begin(), params.end(), 0.0f);  // biases 0
+  const auto layers = network->layout().all();
+  for (const auto* layer : layers) {
+    const float weight = layer == layers.front() ? tiny : 1.0f;
+    std::fill_n(params.begin() + layer->weight_offset, layer->in * layer->out, weight);
+  }
+  network->upload_params(params);
+  std::mt19937 rng(5);
+  Pass pass = make_pass(config, 4, 3, rng);
+  std::fill(pass.features.begin(), pass.features.end(), tiny);
+  DevicePass device(ctx, config, pass);
+  auto workspace = network->make_workspace(pass.rows(), pass.n_rays, mlp::WorkspaceMode::inference);
+
+  REQUIRE_FALSE(FlushDenormalsInScope::active());
+  network->forward(inputs_for(device, pass, config), outputs_for(device, config), workspace);
+  CHECK_FALSE(FlushDenormalsInScope::active());  // the caller's thread has its own setting back
+
+  std::vector<double> density_ref, rgb_ref;
+  ref::mlp_forward(config, test::as_double(params), dense_features(pass, config.input_width), {}, pass.n_rays,
+                   pass.samples_per_ray, density_ref, rgb_ref, nullptr);
+  const auto density = device.raw_density.download(ctx);
+  REQUIRE(density.size() == density_ref.size());
+  for (size_t i = 0; i < density.size(); ++i) {
+    CAPTURE(i);
+    CHECK(density_ref[i] > std::ldexp(1.0, -126));  // the exact value is a normal float...
+    CHECK(density[i] == 0.0f);                      // ...which only a chain of flushed denormals makes 0
+  }
+  {
+    const FlushDenormalsInScope flush;
+    CHECK(FlushDenormalsInScope::active());
+  }
+  CHECK_FALSE(FlushDenormalsInScope::active());
+#else
+  test::skip_test("denormals are flushed on x86-64 only (core/flush_denormals.hpp)");
+#endif
 }
 
 TEST_CASE("mlp device: the host path on every CPU GEMM library built in matches the reference") {
