@@ -55,9 +55,11 @@ wanted() { case "$skip_list" in *",$1,"*) return 1 ;; esac; }
 # record STAGE WHERE JUNIT NOTE SECONDS: one row of the closing table (JUNIT: the stage's results, or "").
 record() { printf '%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" "${5:-0}" >> "$results/rows.tsv"; }
 
-# device_of SELECTOR: the name of the device the executable picks for SELECTOR.
+# device_of SELECTOR: the name of the device the executable picks for SELECTOR, run under $DEVICE_LAUNCHER when set
+# (oclgrind: its platform exists only inside its launcher, as the stage's tests run).
 device_of() {
-  "$build_dir/mipnerf-cl" --device "$1" devices 2>/dev/null | sed -n 's/^\[[0-9]*\] \(.*\)   <- selected.*/\1/p'
+  ${DEVICE_LAUNCHER:-} "$build_dir/mipnerf-cl" --device "$1" devices 2>/dev/null |
+    sed -n 's/^\[[0-9]*\] \(.*\)   <- selected.*/\1/p'
 }
 
 # run_ctest STAGE PLATFORM BUILD_DIR CTEST_ARGS...: a stage of CTest tests, the tests and the executable both on
@@ -112,7 +114,7 @@ fi
 # oclgrind: the kernel tests under the simulator, and the self-test under it.
 if wanted oclgrind; then
   if command -v oclgrind >/dev/null; then
-    run_ctest oclgrind "$oclgrind_platform" "$build_dir" -L '^oclgrind$'
+    DEVICE_LAUNCHER=oclgrind run_ctest oclgrind "$oclgrind_platform" "$build_dir" -L '^oclgrind$'
     if wanted selftest; then run_selftest "$oclgrind_platform" quick oclgrind; fi
   else
     record oclgrind "-" "" "could not run: oclgrind is not installed (Debian package 'oclgrind')"
