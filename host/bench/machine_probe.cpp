@@ -16,6 +16,18 @@ namespace {
 
 io::Json rate_json(const gemm::RateStats& s) { return {{"best", s.best}, {"median", s.median}}; }
 
+// The key of `options` ({name: figure}) whose figure's "best" is highest; the figure is options[name][rate_key], or
+// options[name] itself when rate_key is null.
+std::string fastest_entry(const io::Json& options, const char* rate_key) {
+  std::string fastest;
+  double fastest_best = 0.0;
+  for (const auto& [name, figure] : options.items()) {
+    const double best = (rate_key ? figure.at(rate_key) : figure).value("best", 0.0);
+    if (fastest.empty() || best > fastest_best) fastest = name, fastest_best = best;
+  }
+  return fastest;
+}
+
 #if defined(__x86_64__)
 // 12 independent 8-wide FMA chains (enough to cover the FMA latency on two pipes), nothing from memory. Named
 // variables, not an array: an array of __m256 is kept on the stack and every iteration would store and reload it.
@@ -89,12 +101,7 @@ io::Json fma_peak(const MachineProbeSettings& s) {
   if (!__builtin_cpu_supports("fma") || !__builtin_cpu_supports("avx2")) return {{"skipped", "no AVX2 + FMA"}};
   io::Json by_vector = {{"avx2_8_floats", fma_rates(s, fma_loop_8_wide, 8)}};
   if (__builtin_cpu_supports("avx512f")) by_vector["avx512_16_floats"] = fma_rates(s, fma_loop_16_wide, 16);
-  std::string fastest;
-  for (const auto& [name, rates] : by_vector.items()) {
-    if (fastest.empty() || rates["all_threads"].value("best", 0.0) > by_vector[fastest]["all_threads"].value("best", 0.0)) {
-      fastest = name;
-    }
-  }
+  const std::string fastest = fastest_entry(by_vector, "all_threads");
   io::Json j = by_vector[fastest];
   j["vector"] = fastest;
   j["by_vector"] = by_vector;
@@ -131,7 +138,6 @@ io::Json large_sgemm(const MachineProbeSettings& s) {
   const int m = 65536, n = 256, k = 256;
   std::vector<float> a(size_t{m} * k, 0.5f), b(size_t{k} * n, 0.25f), c(size_t{m} * n, 0.0f);
   io::Json by_library = io::Json::object();
-  std::string fastest;
   for (const gemm::CpuSgemmLibrary& blas : libraries) {
     blas.set_threads(s.threads);
     const gemm::RateStats rate = gemm::measure_rate(1, 2.0 * m * n * k * 1e-9, s.rounds, s.batch_seconds,
@@ -143,8 +149,8 @@ io::Json large_sgemm(const MachineProbeSettings& s) {
                                                     });
     blas.set_threads(1);
     by_library[blas.name] = rate_json(rate);
-    if (fastest.empty() || rate.best > by_library[fastest].value("best", 0.0)) fastest = blas.name;
   }
+  const std::string fastest = fastest_entry(by_library, nullptr);
   io::Json j = by_library[fastest];
   j["library"] = fastest;
   j["shape"] = "65536x256x256 forward";

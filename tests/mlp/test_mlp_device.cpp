@@ -183,6 +183,13 @@ class GemmRoutineOverride {
   std::unordered_map<std::string, size_t> saved_;
 };
 
+// Whether the test device can run the host GEMM backend (host BLAS on shared memory); reports the test skipped if not.
+bool host_backend_runs_here() {
+  if (test::supported_gemm_backends(test::test_context()).size() >= 2) return true;
+  test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
+  return false;
+}
+
 // Host MLP options with these block rows and threads, the rest (the library choice: OpenBLAS) by default.
 mlp::HostMlpOptions host_options(size_t target_block_rows, size_t threads) {
   mlp::HostMlpOptions options;
@@ -219,11 +226,7 @@ TEST_CASE("mlp device: the paper's network through CLBlast's indirect GEMM path 
 TEST_CASE("mlp device: the host path's blocks and threads do not change what it computes") {
   // At test sizes every pass is one block on one thread; here blocks of one ray (and of several rays with a ragged
   // last block) on more threads than blocks or cores, through both networks.
-  const auto backends = test::supported_gemm_backends(test::test_context());
-  if (backends.size() < 2) {
-    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
-    return;
-  }
+  if (!host_backend_runs_here()) return;
   for (const auto& rows_threads : {std::pair<size_t, size_t>{1, 3}, {20, 2}, {40, 7}}) {
     const size_t rows = rows_threads.first, threads = rows_threads.second;  // INFO cannot capture a structured binding
     INFO("target_block_rows " << rows << ", threads " << threads);
@@ -253,11 +256,7 @@ TEST_CASE("mlp device: the host path flushes denormals in its threads and gives 
   // the exact values grow back to normal floats (~2^-121) by the outputs (the reference shows them). Blocks of one
   // ray on two threads: the caller's thread and a worker both compute.
 #if defined(__x86_64__)
-  const auto backends = test::supported_gemm_backends(test::test_context());
-  if (backends.size() < 2) {
-    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
-    return;
-  }
+  if (!host_backend_runs_here()) return;
   auto& ctx = test::test_context();
   mlp::MlpConfig config = test::small_mlp_config(false);
   config.skip_layer = 0;  // no skip: the features reach the first layer only
@@ -305,11 +304,7 @@ TEST_CASE("mlp device: the host path flushes denormals in its threads and gives 
 TEST_CASE("mlp device: the host path on every CPU GEMM library built in matches the reference") {
   // Each library for every product (libxsmm, which cannot run backward-data products, for all the others), two
   // threads on blocks of a few rays, the small networks and the paper's.
-  const auto backends = test::supported_gemm_backends(test::test_context());
-  if (backends.size() < 2) {
-    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
-    return;
-  }
+  if (!host_backend_runs_here()) return;
   mlp::MlpConfig paper;
   paper.seed = 9;
   for (const auto& library : gemm::cpu_sgemm_libraries()) {
@@ -447,11 +442,7 @@ BackendRun run_on(gemm::GemmBackend backend, unsigned seed) {
 }  // namespace
 
 TEST_CASE("mlp device: the host BLAS and CLBlast backends agree on outputs and gradients") {
-  const auto backends = test::supported_gemm_backends(test::test_context());
-  if (backends.size() < 2) {
-    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
-    return;
-  }
+  if (!host_backend_runs_here()) return;
   const BackendRun clblast = run_on(gemm::GemmBackend::clblast, 105);
   const BackendRun host = run_on(gemm::GemmBackend::host, 105);
   // Both are float32 with different summation orders. Each stays within the float32 bound above (≈ 5.5e-6 of a

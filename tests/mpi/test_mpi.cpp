@@ -95,8 +95,9 @@ int run(const std::vector<std::string>& argv, const fs::path& log) {
   return child.exit_code();
 }
 
-io::CheckpointFile final_checkpoint(const fs::path& run_dir) {
-  return io::read_checkpoint_file(train::checkpoint_path((run_dir / "checkpoints").string(), kSteps));
+// The run's checkpoint after `step` (by default its last, kSteps).
+io::CheckpointFile checkpoint_at(const fs::path& run_dir, int step = kSteps) {
+  return io::read_checkpoint_file(train::checkpoint_path((run_dir / "checkpoints").string(), step));
 }
 
 // The pid of rank `rank` of the mipnerf-cl processes writing into `out` (from /proc), or -1.
@@ -114,13 +115,13 @@ pid_t rank_pid(int rank, const std::string& out) {
   return -1;
 }
 
-}  // namespace
-
 // The val PSNR a run printed ("val PSNR 18.44 dB"), or NaN.
 double printed_val_psnr(const std::string& log) {
   const size_t at = log.find("val PSNR ");
   return at == std::string::npos ? std::nan("") : std::stod(log.substr(at + 9));
 }
+
+}  // namespace
 
 TEST_CASE("2 ranks train the single-process weights, within the summation-order bound") {
   if (!mpi_available()) return;
@@ -148,10 +149,7 @@ TEST_CASE("2 ranks train the single-process weights, within the summation-order 
   // (u = 2^-24). Adam's first moment after one step is 0.1·g, computed the same way from either g, so its elements
   // differ by that much; with the terms of an element no larger than ~10x the tensor's largest |m| / 0.1, that is
   // ≤ 30·6e-8·10 ≈ 2e-5 of the largest |m|.
-  const auto at_step = [](const fs::path& run_dir, int step) {
-    return io::read_checkpoint_file(train::checkpoint_path((run_dir / "checkpoints").string(), step));
-  };
-  const io::CheckpointFile one_1 = at_step(root / "one_1", 1), two_1 = at_step(root / "two_1", 1);
+  const io::CheckpointFile one_1 = checkpoint_at(root / "one_1", 1), two_1 = checkpoint_at(root / "two_1", 1);
   const std::vector<float> m_one = one_1.tensor("network0.adam_m", "one process"),
                            m_two = two_1.tensor("network0.adam_m", "two ranks");
   REQUIRE(m_one.size() == m_two.size());
@@ -187,7 +185,7 @@ TEST_CASE("2 ranks train the single-process weights, within the summation-order 
   // After kSteps: the same number of Adam steps, one val score (rank 0's), and the same val PSNR within 0.01 dB:
   // the differences above compound (a weight stepped the other way gets other gradients after it), but stay far below
   // what shows in the images (the largest weight difference is printed).
-  const io::CheckpointFile one = final_checkpoint(root / "one"), two = final_checkpoint(root / "two");
+  const io::CheckpointFile one = checkpoint_at(root / "one"), two = checkpoint_at(root / "two");
   CHECK(one.header.at("adam_steps") == two.header.at("adam_steps"));
   const std::vector<float> a = one.tensor("network0.params", "one process"),
                            b = two.tensor("network0.params", "two ranks");
@@ -243,7 +241,7 @@ TEST_CASE("a killed rank stops the job with a message, the checkpoints verify, a
 
   REQUIRE_MESSAGE(run(two_ranks(train_args(killed.string(), true)), root / "resumed.log") == 0,
                   test::read_text(root / "resumed.log"));
-  const io::CheckpointFile a = final_checkpoint(straight), b = final_checkpoint(killed);
+  const io::CheckpointFile a = checkpoint_at(straight), b = checkpoint_at(killed);
   // Two ranks sum in the same order every time (rank 0's share + rank 1's): bit-equal.
   for (const char* tensor : {"network0.params", "network0.adam_m", "network0.adam_v"}) {
     CHECK_MESSAGE(test::same_bits(a.tensor(tensor, "straight"), b.tensor(tensor, "resumed")), tensor);
