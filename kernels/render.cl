@@ -28,6 +28,12 @@
 // Every item must then reach every barrier, so the padding items of the last work-group run the last ray again and
 // store nothing (`live`). The loops hold no call (arithmetic exp and expm1, no float3 values: both stop PoCL's
 // vectoriser) in either mode; without lockstep they are the same code without the barriers.
+//
+// Indices: rays, samples, colour values and edges are indexed with 32-bit `uint` (the host checks that 3·R·N and
+// R·(N + 1) fit, ops/render.cpp). With 64-bit indices PoCL's vectoriser kept the per-sample loads and stores out of
+// its vector loops ("store instruction cannot be vectorized") or made them 4 wide: on the AVX-512 Xeon render_fwd
+// took 3.85 ms and render_raw_bwd 10.6 ms for 524,288 samples, 1.9 and 4.6 ms with 32-bit ones
+// (bench/results/kernel_runtimes_xeon.md).
 
 #ifndef MIPNERF_RENDER_CL
 #define MIPNERF_RENDER_CL
@@ -103,19 +109,19 @@ ALWAYS_INLINE float optical_thickness(float density, float t0, float t1, float d
 }
 
 // Density `at`: activated from a raw value with its noise draw z, or as given.
-ALWAYS_INLINE float render_density(__global const float* density, size_t at, float z, const int from_raw) {
+ALWAYS_INLINE float render_density(__global const float* density, uint at, float z, const int from_raw) {
   return from_raw ? density_activation(noisy_raw_density(density[at], z)) : density[at];
 }
 
 // Colour channel `c` (0..2) of sample `at`: activated from its raw value, or as given. One channel at a time: a float3
 // value in the sample loop keeps PoCL from vectorising it.
-ALWAYS_INLINE float render_channel(__global const float* rgb, size_t at, int c, const int from_raw) {
+ALWAYS_INLINE float render_channel(__global const float* rgb, uint at, int c, const int from_raw) {
   const float value = rgb[3 * at + c];
   return from_raw ? rgb_activation(value) : value;
 }
 
 // The length of direction `ray`, which turns depth t into distance.
-ALWAYS_INLINE float direction_norm(__global const float* directions, size_t ray) {
+ALWAYS_INLINE float direction_norm(__global const float* directions, uint ray) {
   const float x = directions[3 * ray], y = directions[3 * ray + 1], z = directions[3 * ray + 2];
   return sqrt(x * x + y * y + z * z);
 }
@@ -129,19 +135,19 @@ ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const floa
                                   __global const float* t_edges, __global const float* directions,
                                   __global float* comp_rgb, __global float* acc_out,
                                   __global float* distance_out, __global float* weights,
-                                  const size_t ray, const int live, const uint n_samples, const RayNoiseKey noise,
+                                  const uint ray, const int live, const uint n_samples, const RayNoiseKey noise,
                                   const int from_raw, const int with_colour) {
   const float dir_norm = direction_norm(directions, ray);
-  __global const float* t = t_edges + ray * (n_samples + 1);
+  const uint t_first_at = ray * (n_samples + 1);  // t_edges index of t_0
   float optical_depth = 0.0f;  // Σ_{j<i} s_j
   float red = 0.0f, green = 0.0f, blue = 0.0f;
   float acc = 0.0f, t_weighted = 0.0f;
-  float t_near = t[0];            // t_i
+  float t_near = t_edges[t_first_at];  // t_i
   float4 draws = (float4)(0.0f);  // the noise of samples i.. to the end of i's group of 4
   for (uint i = 0; i < n_samples; ++i) {
-    const size_t at = ray * n_samples + i;
+    const uint at = ray * n_samples + i;
     if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
-    const float t_far = t[i + 1];
+    const float t_far = t_edges[t_first_at + i + 1];
     const float s = optical_thickness(render_density(density, at, draws.x, from_raw), t_near, t_far, dir_norm);
     draws = draws.yzwx;
     // α = 1 − exp(−s) as −expm1(−s): the same value, without cancellation for small s (official: 1 − exp).
@@ -159,7 +165,7 @@ ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const floa
     END_OF_SAMPLE_STEP();
   }
   if (!live) return;
-  const float t_first = t[0], t_last = t[n_samples];
+  const float t_first = t_edges[t_first_at], t_last = t_edges[t_first_at + n_samples];
   const float distance = acc > 0.0f ? t_weighted / acc : t_first;
   distance_out[ray] = clamp(distance, t_first, t_last);
   acc_out[ray] = acc;
@@ -188,10 +194,10 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
                                   __global const float* weights, __global const float* d_comp_rgb,
                                   __global const float* d_acc, const uint has_d_acc,
                                   __global float* d_rgb, __global float* d_density,
-                                  const size_t ray, const int live, const uint n_samples, const RayNoiseKey noise,
+                                  const uint ray, const int live, const uint n_samples, const RayNoiseKey noise,
                                   const int from_raw) {
   const float dir_norm = direction_norm(directions, ray);
-  __global const float* t = t_edges + ray * (n_samples + 1);
+  const uint t_first_at = ray * (n_samples + 1);  // t_edges index of t_0
   const float d_red = d_comp_rgb[3 * ray], d_green = d_comp_rgb[3 * ray + 1], d_blue = d_comp_rgb[3 * ray + 2];
   float d_acc_total = has_d_acc ? d_acc[ray] : 0.0f;
 #if BACKGROUND == BACKGROUND_WHITE
@@ -199,10 +205,15 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
 #endif
   float optical_depth = 0.0f;
   float4 draws = (float4)(0.0f);  // the forward's noise, drawn again: samples i.. to the end of i's group
+  // Not a vector reduction: with 32-bit indices Intel's CPU runtime vectorised this sum along the samples for a
+  // partial work-group's rays, summing in another order (T_N, and so ∂L/∂σ, then differed in the last bit from the
+  // same ray's in a full group, and from render_raw_bwd's). The sum's order is the loop's.
+#pragma clang loop vectorize(disable)
   for (uint i = 0; i < n_samples; ++i) {
     if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
     optical_depth +=
-        optical_thickness(render_density(density, ray * n_samples + i, draws.x, from_raw), t[i], t[i + 1], dir_norm);
+        optical_thickness(render_density(density, ray * n_samples + i, draws.x, from_raw), t_edges[t_first_at + i],
+                          t_edges[t_first_at + i + 1], dir_norm);
     draws = draws.yzwx;
     END_OF_SAMPLE_STEP();
   }
@@ -211,14 +222,14 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
   float grad_weight_after = 0.0f;                            // Σ_{k>i} g_k·w_k
   for (uint r = 0; r < n_samples; ++r) {
     const uint i = n_samples - 1 - r;
-    const size_t at = ray * n_samples + i;
+    const uint at = ray * n_samples + i;
     // Backwards: samples i, i − 1, .. to the start of i's group, drawn again on entering it.
     if (from_raw && (r == 0 || i % 4 == 3)) draws = density_noise_group_reversed(noise, i);
     const float w = weights[at];
     const float red = render_channel(rgb, at, 0, from_raw), green = render_channel(rgb, at, 1, from_raw);
     const float blue = render_channel(rgb, at, 2, from_raw);
     const float g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
-    const float delta = (t[i + 1] - t[i]) * dir_norm;
+    const float delta = (t_edges[t_first_at + i + 1] - t_edges[t_first_at + i]) * dir_norm;
     const float d_s = g * (trans_last + weight_after) - grad_weight_after;
     float d_sigma = delta > 0.0f ? delta * d_s : 0.0f;
     float d_red_i = d_red * w, d_green_i = d_green * w, d_blue_i = d_blue * w;  // ∂L/∂c_i
@@ -247,7 +258,7 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
   const size_t item = get_global_id(0);                       \
   if (!SAMPLES_IN_LOCKSTEP && item >= (n_rays)) return;       \
   const int live = item < (n_rays);                           \
-  const size_t ray = live ? item : (size_t)(n_rays) - 1
+  const uint ray = live ? (uint)item : (n_rays) - 1
 
 __kernel void render_fwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
                          __global const float* directions, __global float* comp_rgb, __global float* acc,
@@ -278,7 +289,7 @@ __kernel void render_raw_fwd(__global const float* raw_rgb, __global const float
                              const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_fwd(raw_rgb, raw_density, t_edges, directions, comp_rgb, acc, distance, weights, ray, live,
-                 n_samples, ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 1);
+                 n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1, 1);
 }
 
 // render_raw_fwd without the colour, for a level whose colour nothing reads (mip-NeRF's coarse level when rendering:
@@ -291,7 +302,7 @@ __kernel void render_raw_weights_fwd(__global const float* raw_density, __global
                                      const ulong seed, const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_fwd(0, raw_density, t_edges, directions, 0, acc, distance, weights, ray, live, n_samples,
-                 ray_noise_key(seed, first_ray + (uint)ray, step, level), 1, 0);
+                 ray_noise_key(seed, first_ray + ray, step, level), 1, 0);
 }
 
 // Fused render_bwd then activations_bwd: gradients with respect to the raw outputs, d_raw_rgb [R][N][3] and
@@ -304,7 +315,7 @@ __kernel void render_raw_bwd(__global const float* raw_rgb, __global const float
                              const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
   render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_raw_rgb,
-                 d_raw_density, ray, live, n_samples, ray_noise_key(seed, first_ray + (uint)ray, step, level), 1);
+                 d_raw_density, ray, live, n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1);
 }
 
 #endif

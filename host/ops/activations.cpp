@@ -23,6 +23,16 @@ bool choose_item_per_row(const ocl::Context& ctx, ActivationItems items) {
 
 }  // namespace
 
+// Per value (activations.cl): the colour values' work-groups first, then the densities' from the next group on, so
+// no group holds both (the kernel tells them apart by group id, from the local size given here).
+void Activations::launch(::cl::Kernel& kernel, size_t n_rows, const std::string& where) {
+  if (per_row_) return ocl::launch_1d(*ctx_, kernel, n_rows, where);
+  const size_t local = ctx_->traits().local_size_1d;
+  const size_t n_items = ocl::round_up(3 * n_rows, local) + n_rows;
+  detail::to_uint(ocl::round_up(n_items, local), where, "work-items");  // the kernels index them in 32 bits
+  ocl::launch_1d(*ctx_, kernel, n_items, where, local);
+}
+
 Activations::Activations(ocl::Context& ctx, const ActivationOptions& options, ActivationItems items)
     : ctx_(&ctx), options_(options), per_row_(choose_item_per_row(ctx, items)) {
   auto& program = ctx.program({"common.cl", "activations.cl"},
@@ -39,7 +49,7 @@ void Activations::fwd(const ActivationInputs& in, const ActivationOutputs& out) 
   detail::require(out.rgb, 3 * in.n_rows, where);
   ocl::set_args(*fwd_, where, in.raw_density, in.raw_rgb, out.density, out.rgb,
                 detail::to_uint(in.n_rows, where, "rows"));
-  ocl::launch_1d(*ctx_, *fwd_, per_row_ ? in.n_rows : 3 * in.n_rows, where);
+  launch(*fwd_, in.n_rows, where);
 }
 
 void Activations::bwd(const ActivationInputs& in, const ActivationGradients& grads, const ActivationRawGradients& out) {
@@ -52,7 +62,7 @@ void Activations::bwd(const ActivationInputs& in, const ActivationGradients& gra
   detail::require(out.d_raw_rgb, 3 * in.n_rows, where);
   ocl::set_args(*bwd_, where, in.raw_density, in.raw_rgb, grads.d_density, grads.d_rgb, out.d_raw_density,
                 out.d_raw_rgb, detail::to_uint(in.n_rows, where, "rows"));
-  ocl::launch_1d(*ctx_, *bwd_, per_row_ ? in.n_rows : 3 * in.n_rows, where);
+  launch(*bwd_, in.n_rows, where);
 }
 
 }  // namespace mipnerf::ops

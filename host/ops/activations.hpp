@@ -34,10 +34,11 @@ struct ActivationRawGradients {
   ocl::DeviceArray<float>& d_raw_rgb;      // [rows][3]
 };
 
-// How the element-wise kernels give out work-items (ACTIVATION_ITEM_PER_ROW of activations.cl): one per colour value
-// (3·rows; a row's density by the first rows items) or one per row (its density and 3 colour values). Measured on
-// 524,288 rows: PoCL's vectoriser handles only the first (6.2 against 17 ms), Intel's CPU runtime is 4x faster with
-// the second (2.0 against 8 ms); GPUs read consecutive floats with consecutive items in the first.
+// How the element-wise kernels give out work-items (ACTIVATION_ITEM_PER_ROW of activations.cl): one per value (the
+// 3·rows colour values' items in whole work-groups, then one per density) or one per row (its density and 3 colour
+// values). Measured on 524,288 rows: PoCL's vectoriser handles only the first (6.2 against 17 ms), Intel's CPU
+// runtime is 4x faster with the second (2.0 against 8 ms); GPUs read consecutive floats with consecutive items in the
+// first.
 enum class ActivationItems { device_default, per_value, per_row };
 
 class Activations {
@@ -54,6 +55,9 @@ class Activations {
   void bwd(const ActivationInputs& in, const ActivationGradients& grads, const ActivationRawGradients& out);
 
  private:
+  // Launches `kernel` with the items ACTIVATION_ITEM_PER_ROW asks for.
+  void launch(::cl::Kernel& kernel, size_t n_rows, const std::string& where);
+
   ocl::Context* ctx_;
   ActivationOptions options_;
   bool per_row_;

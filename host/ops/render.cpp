@@ -17,7 +17,8 @@ void check_density_inputs(const RenderDensityInputs& in, const std::string& wher
   detail::require(in.density, in.n_rays * in.n_samples, where);
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
   detail::require(in.rays.directions, 3 * in.n_rays, where);
-  detail::to_uint(in.n_rays * in.n_samples, where, "rows");
+  // The kernels index samples and edges in 32 bits (kernels/render.cl, "Indices").
+  detail::to_uint(in.n_rays * (in.n_samples + 1), where, "edges");
 }
 
 // What every forward writes besides the composite: opacity, distance, weights.
@@ -29,6 +30,7 @@ void check_weights_outputs(const RenderWeightsOutputs& out, size_t n_rays, size_
 
 void check_inputs(const RenderInputs& in, const std::string& where) {
   detail::require(in.rgb, 3 * in.n_rays * in.n_samples, where);
+  detail::to_uint(3 * in.n_rays * in.n_samples, where, "colour values");
   check_density_inputs({in.density, in.t_edges, in.rays, in.n_rays, in.n_samples}, where);
 }
 
