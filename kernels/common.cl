@@ -14,8 +14,10 @@
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 
 // Loads/stores a packed 3-vector at element index i (i.e. floats 3i..3i+2).
+// load3_component: component `axis` (0..2) of that vector alone, for kernels with an item per axis.
 #ifndef MIPNERF_TEST_FAULT
 inline float3 load3(__global const float* p, size_t i) { return (float3)(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
+ALWAYS_INLINE float load3_component(__global const float* p, uint i, uint axis) { return p[3 * i + axis]; }
 #else
 // Test-only, never defined otherwise: `mipnerf-selftest --inject-build-option=-DMIPNERF_TEST_FAULT` stands in for a
 // driver with a broken vector load. Every 3-vector read loses the low 8 bits of its mantissas (relative error up to
@@ -24,6 +26,7 @@ inline float drop_low_bits(float x) { return as_float(as_uint(x) & 0xFFFFFF00u);
 inline float3 load3(__global const float* p, size_t i) {
   return (float3)(drop_low_bits(p[3 * i]), drop_low_bits(p[3 * i + 1]), drop_low_bits(p[3 * i + 2]));
 }
+ALWAYS_INLINE float load3_component(__global const float* p, uint i, uint axis) { return drop_low_bits(p[3 * i + axis]); }
 #endif
 inline void store3(__global float* p, size_t i, float3 v) {
   p[3 * i] = v.x;

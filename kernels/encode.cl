@@ -22,6 +22,7 @@
 //    exact for that float. At degree 15 one ulp of μ ~ 1 moves y by 2^15·2^−23 ≈ 0.004 rad; that is a
 //    property of float32 inputs, not of the encoding, and exp(−v/2) makes those features vanish for any frustum
 //    wider than ~2^−15.
+// (gaussian_ipe_axis_fwd, at the end, has its own sin/cos and exp, with their bounds there.)
 // The three axes go through the vector built-ins (exp, sincos on float3) without branches, which lets PoCL
 // vectorise across work-items (1.7x faster than per-axis calls with a skip for zero attenuations on its CPU
 // device). A zero attenuation gives 0·sin(y) = 0 for any finite y, so σ² = ∞ or 1e12 still encodes to exactly 0.
@@ -202,6 +203,110 @@ __kernel void gaussian_concat_pe_fwd(__global const float* origins, __global con
     __global float* cosines = cov_pe + 6 * (cov_degrees + l);
     encode_degree(upper_first, (float3)(0.0f), l, sines, cosines);
     encode_degree(upper_second, (float3)(0.0f), l, sines + 3, cosines + 3);
+  }
+}
+#endif
+
+#ifdef IPE_AXIS_MAX_DEG
+// ---- gaussian_ipe_axis_fwd: one item per (row, axis), in a program of its own (ops/encode.cpp) ----
+// The per-row kernel above is a loop over degrees with float3 sincos/exp calls inside: PoCL runs it one row at a time
+// (its vectoriser takes only a work-group loop with no loop or call inside). Here an item encodes one axis of one row
+// with every degree IPE_AXIS_MIN_DEG..IPE_AXIS_MAX_DEG−1 unrolled (the degrees are compile-time), arithmetic only:
+// sin/cos by sincos_reduced_in_double, the attenuation by exp_nonpositive (common.cl, ≤ 3 ulp, the bound OpenCL gives
+// exp), a sincos every IPE_SINCOS_EVERY degrees and angle doubling between (the bound above). No float3 values and no
+// consecutive same-shape loads (an item reads its own axis, so PoCL's first -O2 pass finds no x, y pair to pack into a
+// <2 x float>, which its work-group vectoriser refuses). The host builds it with -cl-denorms-are-zero: features
+// below FLT_MIN become 0 (|error| < 1.2e-38; the per-row kernel also cuts attenuations there) instead of taking
+// the CPU's slow path for denormals. Needs fp64 (the host picks this kernel only on such devices).
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+
+// sin(y) and cos(y) of a float y, |y| < 2^40 (|μ| < 2^25 at degree 15), each within 2 ulp:
+//  - reduction y = n·π/2 + r in double: n = rint(y·2/π); π/2 = P1 + P2 + P3 (the double of π/2, the double of what
+//    is left, and again; the sum is within 6e-50 of π/2). y − n·P1 is exact (y and n·P1 are multiples of 2^−52 and
+//    the difference is below 1 in size, so it fits in 53 bits; for |y| < π/4, n = 0 and r = y); the next two fma round
+//    once each, relative to their result; the truncation adds |n|·6e-50 < 4e-38. For every float y in [π/4, 2^40)
+//    the reduced |r| ≥ 2.0e-9 (exhaustive search: closest at y = 2.19993846e10, which tests/ops/test_encode.cpp
+//    encodes), so r's relative error stays below 2^−52 and the float of r is r within half an ulp.
+//  - |r| ≤ π/4 + 2^−12: sin by r + r³·(Taylor to r^11), cos by 1 + r²·(Taylor to r^12), Horner in r² with fma
+//    (truncation below 3e-9 relative). Rounding r to float moves sin r by ≤ |r|·2^−24 < 1.12 ulp of sin r, and cos r by
+//    ≤ |r|·sin|r|·2^−24 < 0.79 ulp; the polynomials themselves, over every float r in [2^−12, 0.7856] against long
+//    double, are within 0.69 ulp (sin) and 0.88 ulp (cos), and below 2^−12 the terms past r and 1 are under 2^−25
+//    relative. So ≤ 1.8 ulp (sin) and 1.7 ulp (cos); the quadrant n mod 4 swaps and negates exactly.
+// That is inside the 4 ulp the tests and the doubling bound assume for a sincos. Beyond 2^40 the first reduction step
+// stays exact to |y| ≈ 2^54, but no bound is claimed there.
+ALWAYS_INLINE void sincos_reduced_in_double(float y, float* sin_out, float* cos_out) {
+  const double y_wide = (double)y;
+  const double n = rint(y_wide * 0.6366197723675814);
+  double r_wide = fma(-n, 1.5707963267948966, y_wide);
+  r_wide = fma(-n, 6.123233995736766e-17, r_wide);
+  r_wide = fma(-n, -1.4973849048591698e-33, r_wide);
+  const float r = (float)r_wide, r2 = r * r;
+  float ps = fma(r2, -2.50521084e-8f, 2.75573192e-6f);  // −1/11!, 1/9!
+  ps = fma(ps, r2, -1.98412698e-4f);                      // −1/7!
+  ps = fma(ps, r2, 8.33333333e-3f);                       // 1/5!
+  ps = fma(ps, r2, -1.66666667e-1f);                      // −1/3!
+  const float sin_r = fma(r * r2, ps, r);
+  float pc = fma(r2, 2.08767570e-9f, -2.75573192e-7f);  // 1/12!, −1/10!
+  pc = fma(pc, r2, 2.48015873e-5f);                       // 1/8!
+  pc = fma(pc, r2, -1.38888889e-3f);                      // −1/6!
+  pc = fma(pc, r2, 4.16666667e-2f);                       // 1/4!
+  pc = fma(pc, r2, -0.5f);
+  const float cos_r = fma(pc, r2, 1.0f);
+  const int quadrant = (int)((long)n & 3);  // y = n·π/2 + r: sin y = sin r, cos r, −sin r, −cos r for n mod 4 = 0..3
+  const float sin_abs = (quadrant & 1) ? cos_r : sin_r, cos_abs = (quadrant & 1) ? sin_r : cos_r;
+  *sin_out = (quadrant & 2) ? -sin_abs : sin_abs;
+  *cos_out = ((quadrant + 1) & 2) ? -cos_abs : cos_abs;
+}
+
+// Row `row`'s Gaussian along `axis` (0..2): the mean and variance lift_gaussian gives that axis, computed for it
+// alone. |d|² by fma from d_x² (no two same-shape products of neighbouring loads, see above); the sum of the other two
+// squares in axis order as lift_gaussian adds them.
+ALWAYS_INLINE void axis_gaussian(__global const float* origins, __global const float* directions,
+                                 __global const float* radii, __global const float* t_edges, uint row, uint axis,
+                                 uint n_samples, float* mean, float* var) {
+  const uint ray = row / n_samples, i = row % n_samples, t_at = ray * (n_samples + 1) + i;
+  const float3 moments = interval_moments(t_edges[t_at], t_edges[t_at + 1], radii[ray]);
+  const float dx = load3_component(directions, ray, 0), dy = load3_component(directions, ray, 1);
+  const float dz = load3_component(directions, ray, 2);
+  const float d_mag_sq = fmax(1e-10f, fma(dz, dz, fma(dy, dy, dx * dx)));
+  const float d_axis = load3_component(directions, ray, axis);
+  const float d_first = axis == 0 ? dy : dx, d_second = axis == 2 ? dy : dz;  // the other two, in order
+  const float null_outer = (d_first * d_first + d_second * d_second) / d_mag_sq;
+  *mean = load3_component(origins, ray, axis) + moments.x * d_axis;
+  *var = moments.y * (d_axis * d_axis) + moments.z * null_outer;
+}
+
+// exp(−½·4^l·σ²) as attenuation() above, from exp_nonpositive.
+ALWAYS_INLINE float axis_attenuation(float var, float scale) {
+  const float exponent = -0.5f * (var * (scale * scale));
+  return exponent < -87.0f ? 0.0f : exp_nonpositive(exponent);
+}
+
+// features [R·N][6L], L = IPE_AXIS_MAX_DEG − IPE_AXIS_MIN_DEG: item = row·3 + axis.
+__kernel void gaussian_ipe_axis_fwd(__global const float* origins, __global const float* directions,
+                                    __global const float* radii, __global const float* t_edges,
+                                    __global float* features, const uint n_rays, const uint n_samples) {
+  const uint n_degrees = IPE_AXIS_MAX_DEG - IPE_AXIS_MIN_DEG;
+  const size_t item = get_global_id(0);
+  if (item >= 3 * (size_t)n_rays * n_samples) return;
+  const uint row = (uint)item / 3, axis = (uint)item % 3;
+  float mean, var;
+  axis_gaussian(origins, directions, radii, t_edges, row, axis, n_samples, &mean, &var);
+  const uint out_at = row * 6 * n_degrees + axis;
+  float s = 0.0f, c = 1.0f;
+#pragma unroll
+  for (uint l = 0; l < n_degrees; ++l) {
+    const float scale = as_float((uint)(IPE_AXIS_MIN_DEG + l + 127) << 23);  // 2^degree, exact (degree ≤ 60)
+    if (l % IPE_SINCOS_EVERY == 0) {
+      sincos_reduced_in_double(mean * scale, &s, &c);  // exact argument: a power-of-two scaling
+    } else {
+      const float doubled_sin = 2.0f * (s * c);
+      c = (c - s) * (c + s);
+      s = doubled_sin;
+    }
+    const float atten = axis_attenuation(var, scale);
+    features[out_at + 3 * l] = atten * s;
+    features[out_at + 3 * (n_degrees + l)] = atten * c;
   }
 }
 #endif

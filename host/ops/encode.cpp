@@ -17,22 +17,22 @@ void check_degrees(const EncodingOptions& options, const std::string& where, boo
   }
 }
 
-bool choose_fused_per_row(const ocl::Context& ctx, const EncodeTuning& tuning) {
-  switch (tuning.fused_items) {
-    case EncodeTuning::FusedItems::per_row:
-      return true;
-    case EncodeTuning::FusedItems::per_row_and_degree:
-      return false;
-    default:
-      return (ctx.device_info().type & CL_DEVICE_TYPE_CPU) != 0;
+EncodeTuning::FusedItems choose_fused_items(const ocl::Context& ctx, const EncodeTuning& tuning) {
+  using Items = EncodeTuning::FusedItems;
+  const auto& device = ctx.device_info();
+  if (tuning.fused_items == Items::per_row_and_axis && !device.has_fp64) {
+    throw Error("Encode: the per-(row, axis) Gaussian + IPE kernel needs fp64, which " + device.name + " lacks");
   }
+  if (tuning.fused_items != Items::device_default) return tuning.fused_items;
+  if ((device.type & CL_DEVICE_TYPE_CPU) == 0) return Items::per_row_and_degree;
+  return device.has_fp64 ? Items::per_row_and_axis : Items::per_row;
 }
 
 // A sincos every K degrees (IPE_SINCOS_EVERY; its error bound in encode.cl): K = 4 on CPUs, where the sincos of
 // every degree was ~70 % of the fused kernel (bench/results/kernel_runtimes.md measures K = 1 and 4 on PoCL and
-// Intel's runtime); 1 elsewhere, where nothing has measured it. Only per-row items can double.
-int choose_sincos_every(const ocl::Context& ctx, const EncodeTuning& tuning, bool per_row) {
-  if (!per_row) return 1;
+// Intel's runtime); 1 elsewhere, where nothing has measured it. Items per (row, degree) cannot double.
+int choose_sincos_every(const ocl::Context& ctx, const EncodeTuning& tuning, EncodeTuning::FusedItems items) {
+  if (items == EncodeTuning::FusedItems::per_row_and_degree) return 1;
   if (tuning.sincos_every > 0) return tuning.sincos_every;
   if (const char* forced = std::getenv("MIPNERF_IPE_SINCOS_EVERY")) {
     const int k = std::atoi(forced);
@@ -49,13 +49,13 @@ int choose_sincos_every(const ocl::Context& ctx, const EncodeTuning& tuning, boo
 Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning)
     : ctx_(&ctx),
       gaussian_options_(options),
-      fused_per_row_(choose_fused_per_row(ctx, tuning)),
-      sincos_every_(choose_sincos_every(ctx, tuning, fused_per_row_)) {
+      fused_items_(choose_fused_items(ctx, tuning)),
+      sincos_every_(choose_sincos_every(ctx, tuning, fused_items_)) {
   if (sincos_every_ < 1 || sincos_every_ > 8) {
     throw Error("Encode: sincos_every = " + std::to_string(sincos_every_) + " is not 1 to 8 (degrees per sincos)");
   }
   auto build_options = gaussian_build_options(options)
-                           .define("GAUSSIAN_IPE_PER_ROW", fused_per_row_ ? 1 : 0)
+                           .define("GAUSSIAN_IPE_PER_ROW", fused_items_ == EncodeTuning::FusedItems::per_row ? 1 : 0)
                            .define("IPE_SINCOS_EVERY", sincos_every_);
   if (tuning.concat_pe) build_options.define("MIPNERF_CONCAT_PE", 1);
   auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl"}, build_options);
@@ -63,6 +63,22 @@ Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTu
   pe_ = &program.kernel("pe_fwd");
   gaussian_ipe_ = &program.kernel("gaussian_ipe_fwd");
   if (tuning.concat_pe) gaussian_concat_pe_ = &program.kernel("gaussian_concat_pe_fwd");
+}
+
+::cl::Kernel& Encode::axis_kernel(const EncodingOptions& options) {
+  const auto degrees = std::make_pair(options.min_deg, options.max_deg);
+  auto found = axis_kernels_.find(degrees);
+  if (found != axis_kernels_.end()) return *found->second;
+  // Its own program: the degrees are compiled in, and denormals are flushed in it only (encode.cl says why).
+  auto& program = ctx_->program({"common.cl", "gaussian.cl", "encode.cl"},
+                                gaussian_build_options(gaussian_options_)
+                                    .define("IPE_SINCOS_EVERY", sincos_every_)
+                                    .define("IPE_AXIS_MIN_DEG", options.min_deg)
+                                    .define("IPE_AXIS_MAX_DEG", options.max_deg)
+                                    .flag("-cl-denorms-are-zero"));
+  ::cl::Kernel* kernel = &program.kernel("gaussian_ipe_axis_fwd");
+  axis_kernels_.emplace(degrees, kernel);
+  return *kernel;
 }
 
 void Encode::ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features) {
@@ -100,11 +116,19 @@ void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& 
   detail::require(in.t_edges, in.n_rays * (in.n_samples + 1), where);
   const size_t rows = in.n_rays * in.n_samples;
   detail::require(features, rows * options.ipe_width(), where);
-  const size_t items = fused_per_row_ ? rows : rows * options.degrees();
+  const cl_uint n_rays = detail::to_uint(in.n_rays, where, "rays"),
+                n_samples = detail::to_uint(in.n_samples, where, "samples");
+  if (fused_items_ == EncodeTuning::FusedItems::per_row_and_axis) {
+    detail::to_uint(rows * options.ipe_width(), where, "features");  // the kernel indexes them in 32 bits
+    auto& kernel = axis_kernel(options);
+    ocl::set_args(kernel, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features, n_rays,
+                  n_samples);
+    return ocl::launch_1d(*ctx_, kernel, 3 * rows, where);
+  }
+  const size_t items = fused_items_ == EncodeTuning::FusedItems::per_row ? rows : rows * options.degrees();
   detail::to_uint(items, where, "items");
   ocl::set_args(*gaussian_ipe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features,
-                detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"),
-                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
+                n_rays, n_samples, static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
   ocl::launch_1d(*ctx_, *gaussian_ipe_, items, where);
 }
 

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
+#include <utility>
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
@@ -26,8 +28,11 @@ struct PeInputs {
 
 // How gaussian_ipe_fwd spreads its work (the GAUSSIAN_IPE_PER_ROW tunable of encode.cl).
 struct EncodeTuning {
-  enum class FusedItems { device_default, per_row, per_row_and_degree };
-  FusedItems fused_items = FusedItems::device_default;  // default: per row on CPUs, per (row, degree) elsewhere
+  // per_row_and_axis: gaussian_ipe_axis_fwd, arithmetic sin/cos and exp with the degrees compiled in (a program per
+  // degree range, built on first use), which PoCL vectorises; needs fp64.
+  enum class FusedItems { device_default, per_row, per_row_and_degree, per_row_and_axis };
+  // default: per (row, axis) on CPUs with fp64, per row on other CPUs, per (row, degree) elsewhere
+  FusedItems fused_items = FusedItems::device_default;
   // gaussian_ipe_fwd's per-row items: one sincos every this many degrees, the others by angle doubling
   // (IPE_SINCOS_EVERY of encode.cl, with its error bound). 0: the device's default (encode.cpp); 1: a sincos per
   // degree. MIPNERF_IPE_SINCOS_EVERY=K overrides the default (benchmarks).
@@ -38,11 +43,13 @@ struct EncodeTuning {
 };
 
 // Degrees are kernel arguments (EncodingOptions per call: positions and view directions differ); the program is
-// the one specialisation of RAY_SHAPE that the fused gaussian_ipe needs.
+// the one specialisation of RAY_SHAPE that the fused gaussian_ipe needs. The per-(row, axis) fused kernel is the
+// exception: its degrees are compiled in, a program per degree range on first use.
 class Encode {
  public:
   Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTuning& tuning = {});
-  bool fused_per_row() const { return fused_per_row_; }
+  bool fused_per_row() const { return fused_items_ == EncodeTuning::FusedItems::per_row; }
+  EncodeTuning::FusedItems fused_items() const { return fused_items_; }
   int sincos_every() const { return sincos_every_; }
 
   // Enqueues ipe_fwd: features [rows][options.ipe_width()].
@@ -57,9 +64,13 @@ class Encode {
 
  private:
   ocl::Context* ctx_;
+  // gaussian_ipe_axis_fwd for degrees [min_deg, max_deg), built on first use.
+  ::cl::Kernel& axis_kernel(const EncodingOptions& options);
+
   GaussianOptions gaussian_options_;
-  bool fused_per_row_;
+  EncodeTuning::FusedItems fused_items_;
   int sincos_every_;
+  std::map<std::pair<int, int>, ::cl::Kernel*> axis_kernels_;
   ::cl::Kernel* ipe_;
   ::cl::Kernel* pe_;
   ::cl::Kernel* gaussian_ipe_;

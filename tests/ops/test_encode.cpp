@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <array>
+#include <vector>
 #include <cfloat>
 
 #include "kernel_checks.hpp"
@@ -62,11 +63,29 @@ double fused_feature_tolerance(size_t i, const std::vector<double>& features, co
   return feature_tolerance(features[i]) + 2 * atten * (scale * mean_err + var_err) + doubling;
 }
 
-ops::EncodeTuning per_row_every(int sincos_every) {
+ops::EncodeTuning items_every(ops::EncodeTuning::FusedItems items, int sincos_every) {
   ops::EncodeTuning tuning;
-  tuning.fused_items = ops::EncodeTuning::FusedItems::per_row;
+  tuning.fused_items = items;
   tuning.sincos_every = sincos_every;
   return tuning;
+}
+
+ops::EncodeTuning per_row_every(int sincos_every) {
+  return items_every(ops::EncodeTuning::FusedItems::per_row, sincos_every);
+}
+
+// The fused kernels that can double angles: per row, and per (row, axis) where the device has fp64 (its sin/cos
+// reduce in double); the latter's absence is checked to be refused.
+std::vector<ops::EncodeTuning::FusedItems> doubling_items(ocl::Context& ctx) {
+  if (ctx.device_info().has_fp64) {
+    return {ops::EncodeTuning::FusedItems::per_row, ops::EncodeTuning::FusedItems::per_row_and_axis};
+  }
+  CHECK_THROWS(ops::Encode(ctx, {RayShape::cone}, items_every(ops::EncodeTuning::FusedItems::per_row_and_axis, 4)));
+  return {ops::EncodeTuning::FusedItems::per_row};
+}
+
+const char* items_name(ops::EncodeTuning::FusedItems items) {
+  return items == ops::EncodeTuning::FusedItems::per_row_and_axis ? "per (row, axis)" : "per row";
 }
 
 }  // namespace
@@ -368,18 +387,24 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
       };
     };
     MIPNERF_CHECK_CLOSE("gaussian_ipe features", fused_values, features, tolerance(1));
-    // Angle doubling (IPE_SINCOS_EVERY = K): the same reference, the derived bound added, never more.
-    for (const int k : {2, 4, 8}) {
-      INFO("a sincos every " << k << " degrees");
-      ops::Encode doubling(ctx, {shape}, per_row_every(k));
-      REQUIRE(doubling.sincos_every() == k);
-      auto doubled = test::filled(ctx, rows * 96, 7.0f, "fused (doubling)");
-      doubling.gaussian_ipe(options, in, doubled);
-      const auto doubled_values = doubled.download(ctx);
-      MIPNERF_CHECK_CLOSE("gaussian_ipe features by angle doubling", doubled_values, features, tolerance(k));
-      size_t differ = 0;  // and it is a different computation: some features are not those of a sincos per degree
-      for (size_t i = 0; i < doubled_values.size(); ++i) differ += doubled_values[i] != fused_values[i];
-      CHECK(differ > 0);
+    // Angle doubling (IPE_SINCOS_EVERY = K): the same reference, the derived bound added, never more. Items per
+    // (row, axis) with K = 1 too: their sin/cos and exp are the kernel's own (≤ 2 and 3 ulp, encode.cl), inside the
+    // same bound.
+    for (const auto items : doubling_items(ctx)) {
+      for (const int k : {1, 2, 4, 8}) {
+        if (k == 1 && items == ops::EncodeTuning::FusedItems::per_row) continue;  // checked bit for bit above
+        INFO("items " << items_name(items) << ", a sincos every " << k << " degrees");
+        ops::Encode doubling(ctx, {shape}, items_every(items, k));
+        REQUIRE(doubling.sincos_every() == k);
+        REQUIRE(doubling.fused_items() == items);
+        auto doubled = test::filled(ctx, rows * 96, 7.0f, "fused (doubling)");
+        doubling.gaussian_ipe(options, in, doubled);
+        const auto doubled_values = doubled.download(ctx);
+        MIPNERF_CHECK_CLOSE("gaussian_ipe features by angle doubling", doubled_values, features, tolerance(k));
+        size_t differ = 0;  // and it is a different computation: some features are not those of a sincos per degree
+        for (size_t i = 0; i < doubled_values.size(); ++i) differ += doubled_values[i] != fused_values[i];
+        CHECK(differ > 0);
+      }
     }
   }
 }
@@ -436,9 +461,10 @@ TEST_CASE("encode: the fused kernel's angle doubling at large arguments (up to 2
   const ops::GaussianInputs in{rays, t, n_rays, n_samples};
   const EncodingOptions options;
   ops::Encode device_default(ctx, {RayShape::cone});
+  for (const auto items : doubling_items(ctx))
   for (const int k : {device_default.sincos_every(), 4}) {
-    INFO("a sincos every " << k << " degrees");
-    ops::Encode encode(ctx, {RayShape::cone}, per_row_every(k));
+    INFO("items " << items_name(items) << ", a sincos every " << k << " degrees");
+    ops::Encode encode(ctx, {RayShape::cone}, items_every(items, k));
     auto features = test::filled(ctx, n_rays * n_samples * 96, 7.0f, "features");
     encode.gaussian_ipe(options, in, features);
     const auto got = features.download(ctx);
@@ -461,4 +487,62 @@ TEST_CASE("encode: the fused kernel's angle doubling at large arguments (up to 2
     INFO("worst error " << worst_ratio << " of the bound");
     CHECK(failures == 0);
   }
+}
+
+TEST_CASE("encode: per (row, axis), sin and cos reduced in double are within 2 ulp for |y| up to 2^40") {
+  // encode.cl derives ≤ 1.8 ulp for sincos_reduced_in_double over |y| < 2^40. Rays of direction 0 and radius 0 give
+  // means equal to their origins and variance 0 (attenuation exp(0) = 1 exactly), so with a sincos every degree
+  // each feature is the kernel's sin or cos of y = 2^l·o, compared here with long double of that exact float y.
+  // Origins: ±10^[−3, 7.5] log-uniform (|y| up to 1e12 at degree 15), and the float whose y at degree 15 lies
+  // closest to a multiple of π/2 in [π/4, 2^40) (an exhaustive search over every float: 2.19993846e10, |r| = 2.0e-9).
+  auto& ctx = test::test_context();
+  if (!ctx.device_info().has_fp64) {
+    CHECK_THROWS(ops::Encode(ctx, {RayShape::cone}, items_every(ops::EncodeTuning::FusedItems::per_row_and_axis, 1)));
+    return;
+  }
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> magnitude(-3.0, 7.5);
+  const size_t n_rays = test::batch_for_device(3000), n_samples = 1;
+  std::vector<float> origins, directions(3 * n_rays, 0.0f), radii(n_rays, 0.0f), t_edges;
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    for (int a = 0; a < 3; ++a) {
+      origins.push_back(static_cast<float>((ray % 2 ? 1 : -1) * std::pow(10.0, magnitude(rng))));
+    }
+    t_edges.insert(t_edges.end(), {1.0f, 2.0f});
+  }
+  origins[0] = std::ldexp(2.19993846e10f, -15);  // exact: a power-of-two scaling of the hardest argument
+  REQUIRE(std::ldexp(static_cast<double>(origins[0]), 15) == static_cast<double>(2.19993846e10f));
+  ops::RayBundle rays(ctx, n_rays);
+  rays.origins.upload(ctx, origins);
+  rays.directions.upload(ctx, directions);
+  rays.radii.upload(ctx, radii);
+  auto t = test::upload(ctx, t_edges, "t_edges");
+  const EncodingOptions options;
+  ops::Encode encode(ctx, {RayShape::cone}, items_every(ops::EncodeTuning::FusedItems::per_row_and_axis, 1));
+  auto features = test::filled(ctx, n_rays * 96, 7.0f, "features");
+  encode.gaussian_ipe(options, {rays, t, n_rays, n_samples}, features);
+  const auto got = features.download(ctx);
+  double worst_ulps = 0;
+  size_t failures = 0;
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    for (int a = 0; a < 3; ++a) {
+      for (int l = 0; l < 16; ++l) {
+        long double want[2];
+        ref::ipe_pair<long double>(origins[3 * ray + a], 0.0L, l, want[0], want[1]);
+        const float have[2] = {got[ray * 96 + 3 * l + a], got[ray * 96 + 48 + 3 * l + a]};
+        for (int k = 0; k < 2; ++k) {
+          REQUIRE(std::isfinite(have[k]));
+          const float want_float = static_cast<float>(std::abs(want[k]));
+          const double ulp = std::nextafter(want_float, INFINITY) - want_float;
+          const double ulps = static_cast<double>(std::abs(have[k] - want[k])) / ulp;
+          worst_ulps = std::max(worst_ulps, ulps);
+          failures += !(ulps <= 2.0);
+        }
+      }
+    }
+  }
+  if (std::getenv("MIPNERF_TEST_VERBOSE")) MESSAGE("worst error " << worst_ulps << " ulp");
+  INFO("worst error " << worst_ulps << " ulp of the long-double sin/cos of the exact float argument");
+  CHECK(failures == 0);
+  CHECK(worst_ulps > 0.3);  // not vacuous: the kernel's values are not the long double's rounded
 }
