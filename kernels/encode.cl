@@ -220,39 +220,53 @@ __kernel void gaussian_concat_pe_fwd(__global const float* origins, __global con
 // the CPU's slow path for denormals. Needs fp64 (the host picks this kernel only on such devices).
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 
-// sin(y) and cos(y) of a float y, |y| < 2^40 (|μ| < 2^25 at degree 15), each within 2 ulp:
+// sin(y) and cos(y) of a float y, |y| < 2^40 (|μ| < 2^25 at degree 15), each within 2 ulp (host mirror, bit for bit:
+// ref::sincos_reduced_in_double):
 //  - reduction y = n·π/2 + r in double: n = rint(y·2/π); π/2 = P1 + P2 + P3 (the double of π/2, the double of what
 //    is left, and again; the sum is within 6e-50 of π/2). y − n·P1 is exact (y and n·P1 are multiples of 2^−52 and
 //    the difference is below 1 in size, so it fits in 53 bits; for |y| < π/4, n = 0 and r = y); the next two fma round
 //    once each, relative to their result; the truncation adds |n|·6e-50 < 4e-38. For every float y in [π/4, 2^40)
-//    the reduced |r| ≥ 2.0e-9 (exhaustive search: closest at y = 2.19993846e10, which tests/ops/test_encode.cpp
-//    encodes), so r's relative error stays below 2^−52 and the float of r is r within half an ulp.
+//    the reduced |r| ≥ 2.0e-9 (every float searched by bench/bench_sincos_reduction: closest at y = 2.19993846e10,
+//    which tests/ops/test_encode.cpp encodes), so r's relative error stays below 2^−52 and the float of r is r
+//    within half an ulp.
 //  - |r| ≤ π/4 + 2^−12: sin by r + r³·(Taylor to r^11), cos by 1 + r²·(Taylor to r^12), Horner in r² with fma
 //    (truncation below 3e-9 relative). Rounding r to float moves sin r by ≤ |r|·2^−24 < 1.12 ulp of sin r, and cos r by
 //    ≤ |r|·sin|r|·2^−24 < 0.79 ulp; the polynomials themselves, over every float r in [2^−12, 0.7856] against long
-//    double, are within 0.69 ulp (sin) and 0.88 ulp (cos), and below 2^−12 the terms past r and 1 are under 2^−25
-//    relative. So ≤ 1.8 ulp (sin) and 1.7 ulp (cos); the quadrant n mod 4 swaps and negates exactly.
+//    double, are within 0.69 ulp (sin) and 0.88 ulp (cos) (the same bench), and below 2^−12 the terms past r and 1
+//    are under 2^−25 relative. So ≤ 1.8 ulp (sin) and 1.7 ulp (cos); the quadrant n mod 4 swaps and negates exactly.
 // That is inside the 4 ulp the tests and the doubling bound assume for a sincos. Beyond 2^40 the first reduction step
 // stays exact to |y| ≈ 2^54, but no bound is claimed there.
-ALWAYS_INLINE void sincos_reduced_in_double(float y, float* sin_out, float* cos_out) {
+
+// y = n·π/2 + r: sets *n and returns r, both in double.
+ALWAYS_INLINE double reduce_by_half_pi(float y, double* n) {
   const double y_wide = (double)y;
-  const double n = rint(y_wide * 0.6366197723675814);
-  double r_wide = fma(-n, 1.5707963267948966, y_wide);
-  r_wide = fma(-n, 6.123233995736766e-17, r_wide);
-  r_wide = fma(-n, -1.4973849048591698e-33, r_wide);
-  const float r = (float)r_wide, r2 = r * r;
+  *n = rint(y_wide * 0.6366197723675814);
+  const double r_wide = fma(-*n, 6.123233995736766e-17, fma(-*n, 1.5707963267948966, y_wide));
+  return fma(-*n, -1.4973849048591698e-33, r_wide);
+}
+
+// sin r and cos r for |r| ≲ π/4.
+ALWAYS_INLINE void sincos_of_reduced(float r, float* sin_r, float* cos_r) {
+  const float r2 = r * r;
   float ps = fma(r2, -2.50521084e-8f, 2.75573192e-6f);  // −1/11!, 1/9!
   ps = fma(ps, r2, -1.98412698e-4f);                      // −1/7!
   ps = fma(ps, r2, 8.33333333e-3f);                       // 1/5!
   ps = fma(ps, r2, -1.66666667e-1f);                      // −1/3!
-  const float sin_r = fma(r * r2, ps, r);
+  *sin_r = fma(r * r2, ps, r);
   float pc = fma(r2, 2.08767570e-9f, -2.75573192e-7f);  // 1/12!, −1/10!
   pc = fma(pc, r2, 2.48015873e-5f);                       // 1/8!
   pc = fma(pc, r2, -1.38888889e-3f);                      // −1/6!
   pc = fma(pc, r2, 4.16666667e-2f);                       // 1/4!
   pc = fma(pc, r2, -0.5f);
-  const float cos_r = fma(pc, r2, 1.0f);
-  const int quadrant = (int)((long)n & 3);  // y = n·π/2 + r: sin y = sin r, cos r, −sin r, −cos r for n mod 4 = 0..3
+  *cos_r = fma(pc, r2, 1.0f);
+}
+
+ALWAYS_INLINE void sincos_reduced_in_double(float y, float* sin_out, float* cos_out) {
+  double n;
+  const float r = (float)reduce_by_half_pi(y, &n);
+  float sin_r, cos_r;
+  sincos_of_reduced(r, &sin_r, &cos_r);
+  const int quadrant = (int)((long)n & 3);  // sin y = sin r, cos r, −sin r, −cos r for n mod 4 = 0..3
   const float sin_abs = (quadrant & 1) ? cos_r : sin_r, cos_abs = (quadrant & 1) ? sin_r : cos_r;
   *sin_out = (quadrant & 2) ? -sin_abs : sin_abs;
   *cos_out = ((quadrant + 1) & 2) ? -cos_abs : cos_abs;

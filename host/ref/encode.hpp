@@ -61,6 +61,44 @@ inline double doubling_error_bound(int doublings) {
   return growth * 8 * u + (growth - 1) * 3 * u;
 }
 
+// Mirror of encode.cl's sincos_reduced_in_double (gaussian_ipe_axis_fwd's sin/cos), operation for operation in float
+// and double, so the host computes the kernel's values bit for bit: y = n·π/2 + r in double (π/2 in three parts),
+// then Taylor polynomials in float on |r| ≲ π/4, and the quadrant. encode.cl derives ≤ 2 ulp for |y| < 2^40;
+// bench/bench_sincos_reduction measures the two inputs of that derivation (the smallest |r| over every float, the
+// polynomials' error over every float r).
+inline double reduce_by_half_pi(float y, double* n) {
+  const double y_wide = static_cast<double>(y);
+  *n = std::rint(y_wide * 0.6366197723675814);
+  const double r_wide = std::fma(-*n, 6.123233995736766e-17, std::fma(-*n, 1.5707963267948966, y_wide));
+  return std::fma(-*n, -1.4973849048591698e-33, r_wide);
+}
+
+inline void sincos_of_reduced(float r, float* sin_r, float* cos_r) {
+  const float r2 = r * r;
+  float ps = std::fma(r2, -2.50521084e-8f, 2.75573192e-6f);
+  ps = std::fma(ps, r2, -1.98412698e-4f);
+  ps = std::fma(ps, r2, 8.33333333e-3f);
+  ps = std::fma(ps, r2, -1.66666667e-1f);
+  *sin_r = std::fma(r * r2, ps, r);
+  float pc = std::fma(r2, 2.08767570e-9f, -2.75573192e-7f);
+  pc = std::fma(pc, r2, 2.48015873e-5f);
+  pc = std::fma(pc, r2, -1.38888889e-3f);
+  pc = std::fma(pc, r2, 4.16666667e-2f);
+  pc = std::fma(pc, r2, -0.5f);
+  *cos_r = std::fma(pc, r2, 1.0f);
+}
+
+inline void sincos_reduced_in_double(float y, float* sin_out, float* cos_out) {
+  double n = 0;
+  const float r = static_cast<float>(reduce_by_half_pi(y, &n));
+  float sin_r = 0, cos_r = 0;
+  sincos_of_reduced(r, &sin_r, &cos_r);
+  const int quadrant = static_cast<int>(static_cast<long long>(n) & 3);
+  const float sin_abs = (quadrant & 1) ? cos_r : sin_r, cos_abs = (quadrant & 1) ? sin_r : cos_r;
+  *sin_out = (quadrant & 2) ? -sin_abs : sin_abs;
+  *cos_out = ((quadrant + 1) & 2) ? -cos_abs : cos_abs;
+}
+
 // Mirror of ipe_fwd: ipe_features [rows][6L] from means, covs [rows][3] (sines then cosines, index l·3 + axis).
 void ipe_fwd(const EncodingOptions& options, const std::vector<double>& means, const std::vector<double>& covs,
              std::vector<double>& features, size_t n_rows);
