@@ -76,11 +76,14 @@ ALWAYS_INLINE float rgb_activation_grad(float raw) { return (1.0f + 2.0f * RGB_P
 #define ACTIVATION_ITEM_PER_ROW 0
 #endif
 
-// Per-value items: the work-groups of colour-value items, 3·rows padded to whole groups (indices fit 32 bits: the host
-// checks, ops/activations.cpp).
-inline uint colour_value_groups(uint n_rows) {
-  const uint group = (uint)get_local_size(0);
-  return (3 * n_rows + group - 1) / group;
+// Per-value items: whether this item is a colour value's (its work-group is among the first ⌈3·rows / group size⌉)
+// and, in *index, the flat index of that colour value or of its density (indices fit 32 bits: the host checks,
+// ops/activations.cpp). The test is on the group id alone, so a work-group takes one branch.
+inline int colour_value_item(uint n_rows, uint* index) {
+  const uint group = (uint)get_local_size(0), colour_groups = (3 * n_rows + group - 1) / group;
+  const int colour = get_group_id(0) < colour_groups;
+  *index = (uint)get_global_id(0) - (colour ? 0 : colour_groups * group);
+  return colour;
 }
 
 // density[i] = density_activation(raw_density[i]); rgb[i][c] = rgb_activation(raw_rgb[i][c]).
@@ -92,13 +95,11 @@ __kernel void activations_fwd(__global const float* raw_density, __global const 
   density[i] = density_activation(raw_density[i]);
   for (int c = 0; c < 3; ++c) rgb[3 * i + c] = rgb_activation(raw_rgb[3 * i + c]);
 #else
-  const uint rgb_groups = colour_value_groups(n_rows);
-  if (get_group_id(0) < rgb_groups) {
-    const uint j = get_global_id(0);
-    if (j < 3 * n_rows) rgb[j] = rgb_activation(raw_rgb[j]);
-  } else {
-    const uint i = get_global_id(0) - rgb_groups * get_local_size(0);
-    if (i < n_rows) density[i] = density_activation(raw_density[i]);
+  uint k;
+  if (colour_value_item(n_rows, &k)) {
+    if (k < 3 * n_rows) rgb[k] = rgb_activation(raw_rgb[k]);
+  } else if (k < n_rows) {
+    density[k] = density_activation(raw_density[k]);
   }
 #endif
 }
@@ -114,13 +115,11 @@ __kernel void activations_bwd(__global const float* raw_density, __global const 
   d_raw_density[i] = d_density[i] * density_activation_grad(raw_density[i]);
   for (int c = 0; c < 3; ++c) d_raw_rgb[3 * i + c] = d_rgb[3 * i + c] * rgb_activation_grad(raw_rgb[3 * i + c]);
 #else
-  const uint rgb_groups = colour_value_groups(n_rows);
-  if (get_group_id(0) < rgb_groups) {
-    const uint j = get_global_id(0);
-    if (j < 3 * n_rows) d_raw_rgb[j] = d_rgb[j] * rgb_activation_grad(raw_rgb[j]);
-  } else {
-    const uint i = get_global_id(0) - rgb_groups * get_local_size(0);
-    if (i < n_rows) d_raw_density[i] = d_density[i] * density_activation_grad(raw_density[i]);
+  uint k;
+  if (colour_value_item(n_rows, &k)) {
+    if (k < 3 * n_rows) d_raw_rgb[k] = d_rgb[k] * rgb_activation_grad(raw_rgb[k]);
+  } else if (k < n_rows) {
+    d_raw_density[k] = d_density[k] * density_activation_grad(raw_density[k]);
   }
 #endif
 }

@@ -35,9 +35,11 @@
 // arguments stay ≥ −87. Why: at high degrees most attenuations underflow, and on PoCL's CPU device the exp of such
 // arguments and the denormal products after it made the fused kernel ~2.5x slower than with them cut off
 // (bench/results/kernel_runtimes.md).
+#define IPE_MIN_EXPONENT -87.0f /* attenuations below exp(IPE_MIN_EXPONENT) are 0 */
+
 inline float3 attenuation(float3 var, float scale) {
   const float3 exponent = -0.5f * (var * (scale * scale));
-  return select(exp(fmax(exponent, -87.0f)), (float3)(0.0f), isless(exponent, (float3)(-87.0f)));
+  return select(exp(fmax(exponent, IPE_MIN_EXPONENT)), (float3)(0.0f), isless(exponent, (float3)(IPE_MIN_EXPONENT)));
 }
 
 // Writes degree `degree`'s 3 sines at sin_out[0..2] and 3 cosines at cos_out[0..2] for mean μ, variance σ².
@@ -111,6 +113,16 @@ __kernel void pe_fwd(__global const float* x, __global float* features, const ui
 #ifndef GAUSSIAN_IPE_PER_ROW
 #define GAUSSIAN_IPE_PER_ROW 1
 #endif
+
+// One doubling, in place, in the order the bound above counts: (s, c) of y becomes (s, c) of 2y. A macro so the
+// per-row kernel (float3) and the per-axis one (float) run the same operations.
+#define DOUBLE_ANGLE(type, s, c)               \
+  do {                                         \
+    const type doubled_sin = 2.0f * ((s) * (c)); \
+    (c) = ((c) - (s)) * ((c) + (s));           \
+    (s) = doubled_sin;                         \
+  } while (0)
+
 #ifndef IPE_SINCOS_EVERY
 #define IPE_SINCOS_EVERY 1
 #endif
@@ -130,9 +142,7 @@ inline void encode_degrees(float3 mean, float3 var, int min_deg, uint l_begin, u
       s = sincos(mean * scale, &c);  // exact argument: a power-of-two scaling
 #endif
     } else {
-      const float3 doubled_sin = 2.0f * (s * c);
-      c = (c - s) * (c + s);
-      s = doubled_sin;
+      DOUBLE_ANGLE(float3, s, c);
     }
     const float3 atten = attenuation(var, scale);
     vstore3(atten * s, 0, out + 3 * l);
@@ -293,7 +303,7 @@ ALWAYS_INLINE void axis_gaussian(__global const float* origins, __global const f
 // exp(−½·4^l·σ²) as attenuation() above, from exp_nonpositive.
 ALWAYS_INLINE float axis_attenuation(float var, float scale) {
   const float exponent = -0.5f * (var * (scale * scale));
-  return exponent < -87.0f ? 0.0f : exp_nonpositive(exponent);
+  return exponent < IPE_MIN_EXPONENT ? 0.0f : exp_nonpositive(exponent);
 }
 
 // features [R·N][6L], L = IPE_AXIS_MAX_DEG − IPE_AXIS_MIN_DEG: item = row·3 + axis.
@@ -314,9 +324,7 @@ __kernel void gaussian_ipe_axis_fwd(__global const float* origins, __global cons
     if (l % IPE_SINCOS_EVERY == 0) {
       sincos_reduced_in_double(mean * scale, &s, &c);  // exact argument: a power-of-two scaling
     } else {
-      const float doubled_sin = 2.0f * (s * c);
-      c = (c - s) * (c + s);
-      s = doubled_sin;
+      DOUBLE_ANGLE(float, s, c);
     }
     const float atten = axis_attenuation(var, scale);
     features[out_at + 3 * l] = atten * s;
