@@ -11,7 +11,6 @@ that grows with training shows as it grows, and the training time and val PSNR. 
 and .md (the .md from the .json; hand notes kept). Why the flush: host/core/flush_denormals.hpp.
 """
 
-import argparse
 import csv
 import datetime
 import os
@@ -115,16 +114,15 @@ def write_markdown(record):
     return "\n".join(lines) + "\n"
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def add_arguments(parser):
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--preset", default="quick")
     parser.add_argument("--data", default=None, help="scene folder (default: the built-in procedural scene)")
     parser.add_argument("--bin", default=os.path.join(ROOT, "build", "mipnerf-cl"))
-    parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
-    args = parser.parse_args()
-    report_md.measure_or_reload(RESULTS, "denormals", "bench/denormals.py", args.report_only, lambda: measure(args),
-                                write_markdown)
+
+
+def main():
+    report_md.study_main(__doc__, RESULTS, "denormals", "bench/denormals.py", add_arguments, measure, write_markdown)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ the rounds with the best in brackets; then per preset the time of one forward + 
 alone against the fastest library per product.
 """
 
-import argparse
 import datetime
 import json
 import os
@@ -109,15 +108,14 @@ def write_markdown(record):
     return "\n".join(lines) + "\n"
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def add_arguments(parser):
     parser.add_argument("--presets", default="quick,paper")
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--build", default="build")
-    parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
-    args = parser.parse_args()
-    report_md.measure_or_reload(RESULTS, "gemm_libs", "bench/gemm_libs.py", args.report_only, lambda: measure(args),
-                                write_markdown)
+
+
+def main():
+    report_md.study_main(__doc__, RESULTS, "gemm_libs", "bench/gemm_libs.py", add_arguments, measure, write_markdown)
 
 if __name__ == "__main__":
     main()

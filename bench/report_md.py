@@ -11,6 +11,7 @@ everything above that heading and copies the section, as it stands in the curren
 numbers and labels are changed in the script or the .json, never in the .md; commentary goes under the heading.
 """
 
+import argparse
 import json
 import os
 import subprocess
@@ -75,6 +76,16 @@ def measure_or_reload(results_dir, name, script, report_only, measure, write_mar
     write_report(os.path.join(results_dir, name + ".md"), write_markdown(record),
                  f"python3 {script} --report-only")
     return record
+
+
+def study_main(doc, results_dir, name, script, add_arguments, measure, write_markdown):
+    """A study script's main(): its arguments (`add_arguments(parser)`, plus --report-only; the description is the
+    first line of `doc`), then measure_or_reload with `measure(args)`."""
+    parser = argparse.ArgumentParser(description=doc.split("\n")[0])
+    add_arguments(parser)
+    parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
+    args = parser.parse_args()
+    return measure_or_reload(results_dir, name, script, args.report_only, lambda: measure(args), write_markdown)
 
 
 def repo_commit(repo_dir):
