@@ -124,33 +124,46 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // cover exactly the arguments the stages give them, with bounds derived here and checked by the stages' tests against
 // double references (tests/ops/test_activations.cpp and test_render.cpp sweep every binade).
 
-// x = n·ln2 + r for x ≤ 0 clamped: sets *n = rint(x·log2 e) and returns r, by two fma steps (ln2 split into its
-// float and the remainder), |r| ≤ ln2/2 + tiny. (An out-parameter, not a returned struct: see philox4x32_10_words.)
-ALWAYS_INLINE float reduce_by_ln2(float x, float* n) {
-  *n = rint(x * 1.44269504f);
-  return fma(*n, -1.90465430e-9f, fma(*n, -0.693147182f, x));
-}
+// Overloads: the element-wise math below is defined for float and for float16, the explicit vectors of the
+// activations' per-vector items (activations.cl). Each such function is written once, in a macro over its value type
+// V (float or float16) and W, the width's suffix of the conversion built-ins (empty or 16): the vector version runs
+// the same operations lane by lane, so a lane gets the same float, bit for bit, as the scalar version (the tests'
+// exact comparisons of fused and separate kernels rely on it). Comments inside the macros are /* */, which a
+// continued line cannot end early.
+#define OVERLOADABLE __attribute__((overloadable))
 
-// e^x for x ≤ 0 (NaN stays NaN; −∞ gives 0). Cody–Waite: x = n·ln2 + r with n = rint(x·log2 e), |r| ≤ ln2/2 + tiny,
-// r from two fma steps (ln2 split into its float and the remainder, so r's error is ≤ 2^-24·|r| + 2^-50·|n|);
-// e^r by its Taylor polynomial to r^7 (truncation ≤ (ln2/2)^8/8!·e^0.35 < 8e-9 relative), Horner with fma;
-// then ·2^n in two factors 2^⌊n/2⌋·2^(n−⌊n/2⌋), each a normal float, so results down to the smallest denormal
-// (x ≥ −103.97) round once as the true value would. Below x = −104 the result is 0 (e^−104 < 2^−150).
-// Relative error ≤ 3 ulp on normal results (7 roundings of ≤ 2^-24 each in the polynomial, less in the reduction).
-ALWAYS_INLINE float exp_nonpositive(float x) {
-  float n;
-  const float r = reduce_by_ln2(fmax(x, -104.0f), &n);  // fmax(NaN, c) = c: NaN is restored below
-  float p = fma(r, 1.98412698e-4f, 1.38888889e-3f);  // 1/7!, 1/6!
-  p = fma(p, r, 8.33333333e-3f);                       // 1/5!
-  p = fma(p, r, 4.16666667e-2f);                       // 1/4!
-  p = fma(p, r, 1.66666667e-1f);                       // 1/3!
-  p = fma(p, r, 0.5f);
-  p = fma(p, r, 1.0f);
-  p = fma(p, r, 1.0f);
-  const int n_int = (int)n, n_half = n_int / 2;  // n in [−150, 0]: both factors ≥ 2^-75
-  const float scaled = p * as_float((n_half + 127) << 23) * as_float((n_int - n_half + 127) << 23);
-  return isnan(x) ? x : scaled;
-}
+// reduce_by_ln2(x, n): x = n·ln2 + r for x ≤ 0 clamped: sets *n = rint(x·log2 e) and returns r, by two fma steps (ln2
+// split into its float and the remainder), |r| ≤ ln2/2 + tiny. (An out-parameter, not a returned struct: see
+// philox4x32_10_words.)
+//
+// exp_nonpositive(x): e^x for x ≤ 0 (NaN stays NaN; −∞ gives 0). Cody–Waite: x = n·ln2 + r with n = rint(x·log2 e),
+// |r| ≤ ln2/2 + tiny, r from two fma steps (ln2 split into its float and the remainder, so r's error is
+// ≤ 2^-24·|r| + 2^-50·|n|); e^r by its Taylor polynomial to r^7 (truncation ≤ (ln2/2)^8/8!·e^0.35 < 8e-9 relative),
+// Horner with fma; then ·2^n in two factors 2^⌊n/2⌋·2^(n−⌊n/2⌋), each a normal float, so results down to the
+// smallest denormal (x ≥ −103.97) round once as the true value would. Below x = −104 the result is 0
+// (e^−104 < 2^−150). Relative error ≤ 3 ulp on normal results (7 roundings of ≤ 2^-24 each in the polynomial, less
+// in the reduction). n in [−150, 0] after the clamp, so both factors are ≥ 2^-75.
+#define DEFINE_EXP_NONPOSITIVE(V, W)                                                                          \
+  ALWAYS_INLINE OVERLOADABLE V reduce_by_ln2(V x, V* n) {                                                     \
+    *n = rint(x * 1.44269504f);                                                                               \
+    return fma(*n, (V)(-1.90465430e-9f), fma(*n, (V)(-0.693147182f), x));                                     \
+  }                                                                                                           \
+  ALWAYS_INLINE OVERLOADABLE V exp_nonpositive(V x) {                                                         \
+    V n;                                                                                                      \
+    const V r = reduce_by_ln2(fmax(x, -104.0f), &n); /* fmax(NaN, c) = c: NaN is restored below */           \
+    V p = fma(r, (V)1.98412698e-4f, (V)1.38888889e-3f); /* 1/7!, 1/6! */                                      \
+    p = fma(p, r, (V)8.33333333e-3f);                   /* 1/5! */                                            \
+    p = fma(p, r, (V)4.16666667e-2f);                   /* 1/4! */                                            \
+    p = fma(p, r, (V)1.66666667e-1f);                   /* 1/3! */                                            \
+    p = fma(p, r, (V)0.5f);                                                                                   \
+    p = fma(p, r, (V)1.0f);                                                                                   \
+    p = fma(p, r, (V)1.0f);                                                                                   \
+    const int##W n_int = convert_int##W(n), n_half = n_int / 2;                                              \
+    const V scaled = p * as_float##W((n_half + 127) << 23) * as_float##W((n_int - n_half + 127) << 23);       \
+    return isnan(x) ? x : scaled;                                                                             \
+  }
+DEFINE_EXP_NONPOSITIVE(float, )
+DEFINE_EXP_NONPOSITIVE(float16, 16)
 
 // e^x − 1 for x ≤ 0 (NaN stays NaN; −∞ gives −1), without the cancellation of exp(x) − 1 near 0. The same reduction
 // as exp_nonpositive, x = n·ln2 + r, and e^x − 1 = 2^n·(e^r − 1) + (2^n − 1) with e^r − 1 = r + r²·p(r), p the Taylor
@@ -174,19 +187,22 @@ ALWAYS_INLINE float expm1_nonpositive(float x) {
   return isnan(x) ? x : result;
 }
 
-// log(1 + y) for y in [0, 1] (the softplus of exp_nonpositive's results): 2·atanh(s) with s = y/(2 + y) in
-// [0, 1/3], an identity with no cancellation, so small y keeps its relative accuracy (s ≈ y/2). Series
-// 2s·(1 + s²/3 + … + s^12/13): the terms left out sum to ≤ (1/9)^7/15/(1 − 1/9) < 1.6e-8 relative; with the
-// division and 7 fma roundings the result is within 3 ulp.
-ALWAYS_INLINE float log1p_unit(float y) {
-  const float s = y / (2.0f + y), s2 = s * s;
-  float p = fma(s2, 7.69230769e-2f, 9.09090909e-2f);  // 1/13, 1/11
-  p = fma(p, s2, 1.11111111e-1f);                       // 1/9
-  p = fma(p, s2, 1.42857143e-1f);                       // 1/7
-  p = fma(p, s2, 0.2f);
-  p = fma(p, s2, 3.33333333e-1f);
-  p = fma(p, s2, 1.0f);
-  return 2.0f * s * p;
-}
+// log1p_unit(y): log(1 + y) for y in [0, 1] (the softplus of exp_nonpositive's results): 2·atanh(s) with
+// s = y/(2 + y) in [0, 1/3], an identity with no cancellation, so small y keeps its relative accuracy (s ≈ y/2).
+// Series 2s·(1 + s²/3 + … + s^12/13): the terms left out sum to ≤ (1/9)^7/15/(1 − 1/9) < 1.6e-8 relative; with the
+// division and 7 fma roundings the result is within 3 ulp. Overloaded as exp_nonpositive is.
+#define DEFINE_LOG1P_UNIT(V)                                                  \
+  ALWAYS_INLINE OVERLOADABLE V log1p_unit(V y) {                              \
+    const V s = y / (2.0f + y), s2 = s * s;                                   \
+    V p = fma(s2, (V)7.69230769e-2f, (V)9.09090909e-2f); /* 1/13, 1/11 */     \
+    p = fma(p, s2, (V)1.11111111e-1f);                   /* 1/9 */            \
+    p = fma(p, s2, (V)1.42857143e-1f);                   /* 1/7 */            \
+    p = fma(p, s2, (V)0.2f);                                                  \
+    p = fma(p, s2, (V)3.33333333e-1f);                                        \
+    p = fma(p, s2, (V)1.0f);                                                  \
+    return 2.0f * s * p;                                                      \
+  }
+DEFINE_LOG1P_UNIT(float)
+DEFINE_LOG1P_UNIT(float16)
 
 #endif

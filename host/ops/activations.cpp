@@ -15,28 +15,46 @@ ocl::BuildOptions activation_build_options(const ActivationOptions& options) {
 
 namespace {
 
-bool choose_item_per_row(const ocl::Context& ctx, ActivationItems items) {
-  if (items != ActivationItems::device_default) return items == ActivationItems::per_row;
+ActivationItems choose_items(const ocl::Context& ctx, ActivationItems items) {
+  if (items != ActivationItems::device_default) return items;
   const auto& device = ctx.device_info();
-  return (device.type & CL_DEVICE_TYPE_CPU) != 0 && !device.is_pocl();
+  if ((device.type & CL_DEVICE_TYPE_CPU) == 0) return ActivationItems::per_value;
+  return device.is_pocl() ? ActivationItems::per_vector : ActivationItems::per_row;
 }
+
+// ACTIVATION_ITEMS of activations.cl.
+int items_define(ActivationItems items) {
+  switch (items) {
+    case ActivationItems::per_row:
+      return 1;
+    case ActivationItems::per_vector:
+      return 2;
+    default:
+      return 0;
+  }
+}
+
+constexpr size_t kValuesPerVector = 16;  // VALUES_PER_VECTOR of activations.cl
 
 }  // namespace
 
-// Per value (activations.cl): the colour values' work-groups first, then the densities' from the next group on, so
-// no group holds both (the kernel tells them apart by group id, from the local size given here).
+// Per value or per vector (activations.cl): the colour items' work-groups first, then the densities' from the next
+// group on, so no group holds both (the kernel tells them apart by group id, from the local size given here).
 void Activations::launch(::cl::Kernel& kernel, size_t n_rows, const std::string& where) {
-  if (per_row_) return ocl::launch_1d(*ctx_, kernel, n_rows, where);
+  if (items_ == ActivationItems::per_row) return ocl::launch_1d(*ctx_, kernel, n_rows, where);
+  const size_t per_item = items_ == ActivationItems::per_vector ? kValuesPerVector : 1;
+  const auto items_for = [&](size_t values) { return (values + per_item - 1) / per_item; };
   const size_t local = ctx_->traits().local_size_1d;
-  const size_t n_items = ocl::round_up(3 * n_rows, local) + n_rows;
+  const size_t n_items = ocl::round_up(items_for(3 * n_rows), local) + items_for(n_rows);
   detail::to_uint(ocl::round_up(n_items, local), where, "work-items");  // the kernels index them in 32 bits
+  detail::to_uint(3 * n_rows, where, "colour values");
   ocl::launch_1d(*ctx_, kernel, n_items, where, local);
 }
 
 Activations::Activations(ocl::Context& ctx, const ActivationOptions& options, ActivationItems items)
-    : ctx_(&ctx), options_(options), per_row_(choose_item_per_row(ctx, items)) {
+    : ctx_(&ctx), options_(options), items_(choose_items(ctx, items)) {
   auto& program = ctx.program({"common.cl", "activations.cl"},
-                              activation_build_options(options_).define("ACTIVATION_ITEM_PER_ROW", per_row_ ? 1 : 0));
+                              activation_build_options(options_).define("ACTIVATION_ITEMS", items_define(items_)));
   fwd_ = &program.kernel("activations_fwd");
   bwd_ = &program.kernel("activations_bwd");
 }

@@ -34,20 +34,20 @@ struct ActivationRawGradients {
   ocl::DeviceArray<float>& d_raw_rgb;      // [rows][3]
 };
 
-// How the element-wise kernels give out work-items (ACTIVATION_ITEM_PER_ROW of activations.cl): one per value (the
-// 3·rows colour values' items in whole work-groups, then one per density) or one per row (its density and 3 colour
-// values). Measured on 524,288 rows: PoCL's vectoriser handles only the first (6.2 against 17 ms), Intel's CPU
-// runtime is 4x faster with the second (2.0 against 8 ms); GPUs read consecutive floats with consecutive items in the
-// first.
-enum class ActivationItems { device_default, per_value, per_row };
+// How the element-wise kernels give out work-items (ACTIVATION_ITEMS of activations.cl): one per value (the 3·rows
+// colour values' items in whole work-groups, then one per density), one per row (its density and 3 colour values),
+// or one per vector of 16 consecutive values (colour vectors, then density vectors, split by work-group as per
+// value). Measured on 524,288 rows: PoCL's vectoriser handles per value and not per row (6.2 against 17 ms on the
+// AMD EPYC), and runs per vector faster still (bench/results/kernel_runtimes_xeon.md); Intel's CPU runtime is 4x
+// faster per row than per value (2.0 against 8 ms); GPUs read consecutive floats with consecutive items per value.
+enum class ActivationItems { device_default, per_value, per_row, per_vector };
 
 class Activations {
  public:
-  // device_default: per row on CPU runtimes other than PoCL, per value elsewhere.
+  // device_default: per vector on PoCL's CPU device, per row on other CPU runtimes, per value elsewhere.
   Activations(ocl::Context& ctx, const ActivationOptions& options,
               ActivationItems items = ActivationItems::device_default);
   const ActivationOptions& options() const { return options_; }
-  bool item_per_row() const { return per_row_; }
 
   // Enqueues activations_fwd.
   void fwd(const ActivationInputs& in, const ActivationOutputs& out);
@@ -55,12 +55,12 @@ class Activations {
   void bwd(const ActivationInputs& in, const ActivationGradients& grads, const ActivationRawGradients& out);
 
  private:
-  // Launches `kernel` with the items ACTIVATION_ITEM_PER_ROW asks for.
+  // Launches `kernel` with the items ACTIVATION_ITEMS asks for.
   void launch(::cl::Kernel& kernel, size_t n_rows, const std::string& where);
 
   ocl::Context* ctx_;
   ActivationOptions options_;
-  bool per_row_;
+  ActivationItems items_;  // never device_default
   ::cl::Kernel* fwd_;
   ::cl::Kernel* bwd_;
 };
