@@ -306,20 +306,15 @@ ALWAYS_INLINE float axis_attenuation(float var, float scale) {
   return exponent < IPE_MIN_EXPONENT ? 0.0f : exp_nonpositive(exponent);
 }
 
-// features [R·N][6L], L = IPE_AXIS_MAX_DEG − IPE_AXIS_MIN_DEG: item = row·3 + axis.
-__kernel void gaussian_ipe_axis_fwd(__global const float* origins, __global const float* directions,
-                                    __global const float* radii, __global const float* t_edges,
-                                    __global float* features, const uint n_rays, const uint n_samples) {
-  const uint n_degrees = IPE_AXIS_MAX_DEG - IPE_AXIS_MIN_DEG;
-  const size_t item = get_global_id(0);
-  if (item >= 3 * (size_t)n_rays * n_samples) return;
-  const uint row = (uint)item / 3, axis = (uint)item % 3;
-  float mean, var;
-  axis_gaussian(origins, directions, radii, t_edges, row, axis, n_samples, &mean, &var);
-  const uint out_at = row * 6 * n_degrees + axis;
+#define IPE_AXIS_DEGREES (IPE_AXIS_MAX_DEG - IPE_AXIS_MIN_DEG)
+
+// One axis of one row, every degree: features[at + 3l] = atten·sin, features[at + 3(L + l)] = atten·cos for
+// l = 0..L − 1 (L = IPE_AXIS_DEGREES; `at` is the row's first feature plus the axis), a sincos every IPE_SINCOS_EVERY
+// degrees. A zero variance makes every attenuation exp_nonpositive(−0) = 1 exactly: PE is IPE with σ² = 0, bit for bit.
+ALWAYS_INLINE void encode_axis_degrees(float mean, float var, __global float* features, uint at) {
   float s = 0.0f, c = 1.0f;
 #pragma unroll
-  for (uint l = 0; l < n_degrees; ++l) {
+  for (uint l = 0; l < IPE_AXIS_DEGREES; ++l) {
     const float scale = as_float((uint)(IPE_AXIS_MIN_DEG + l + 127) << 23);  // 2^degree, exact (degree ≤ 60)
     if (l % IPE_SINCOS_EVERY == 0) {
       sincos_reduced_in_double(mean * scale, &s, &c);  // exact argument: a power-of-two scaling
@@ -327,9 +322,45 @@ __kernel void gaussian_ipe_axis_fwd(__global const float* origins, __global cons
       DOUBLE_ANGLE(float, s, c);
     }
     const float atten = axis_attenuation(var, scale);
-    features[out_at + 3 * l] = atten * s;
-    features[out_at + 3 * (n_degrees + l)] = atten * c;
+    features[at + 3 * l] = atten * s;
+    features[at + 3 * (IPE_AXIS_DEGREES + l)] = atten * c;
   }
+}
+
+// features [R·N][6L]: item = row·3 + axis.
+__kernel void gaussian_ipe_axis_fwd(__global const float* origins, __global const float* directions,
+                                    __global const float* radii, __global const float* t_edges,
+                                    __global float* features, const uint n_rays, const uint n_samples) {
+  const size_t item = get_global_id(0);
+  if (item >= 3 * (size_t)n_rays * n_samples) return;
+  const uint row = (uint)item / 3, axis = (uint)item % 3;
+  float mean, var;
+  axis_gaussian(origins, directions, radii, t_edges, row, axis, n_samples, &mean, &var);
+  encode_axis_degrees(mean, var, features, row * 6 * IPE_AXIS_DEGREES + axis);
+}
+
+// ipe_fwd per (row, axis): features [rows][6L] from means and covs [rows][3]; item = row·3 + axis. The host builds it
+// with IPE_SINCOS_EVERY = 1 (ipe_fwd's bound has no angle doubling in it).
+__kernel void ipe_axis_fwd(__global const float* means, __global const float* covs, __global float* features,
+                           const uint n_rows) {
+  const size_t item = get_global_id(0);
+  if (item >= 3 * (size_t)n_rows) return;
+  const uint row = (uint)item / 3, axis = (uint)item % 3;
+  encode_axis_degrees(load3_component(means, row, axis), load3_component(covs, row, axis), features,
+                      row * 6 * IPE_AXIS_DEGREES + axis);
+}
+
+// pe_fwd per (row, axis): features [rows][F] from x [rows][3], F = 6L plus 3 for the identity, which comes first when
+// append_identity; item = row·3 + axis. IPE_SINCOS_EVERY = 1, as ipe_axis_fwd.
+__kernel void pe_axis_fwd(__global const float* x, __global float* features, const uint n_rows,
+                          const uint append_identity) {
+  const size_t item = get_global_id(0);
+  if (item >= 3 * (size_t)n_rows) return;
+  const uint row = (uint)item / 3, axis = (uint)item % 3;
+  const uint identity = append_identity ? 3 : 0, row_at = row * (identity + 6 * IPE_AXIS_DEGREES);
+  const float value = load3_component(x, row, axis);
+  if (identity) features[row_at + axis] = value;
+  encode_axis_degrees(value, 0.0f, features, row_at + identity + axis);
 }
 #endif
 

@@ -65,19 +65,19 @@ Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTu
   if (tuning.concat_pe) gaussian_concat_pe_ = &program.kernel("gaussian_concat_pe_fwd");
 }
 
-::cl::Kernel& Encode::axis_kernel(const EncodingOptions& options) {
-  const auto degrees = std::make_pair(options.min_deg, options.max_deg);
-  auto found = axis_kernels_.find(degrees);
+::cl::Kernel& Encode::axis_kernel(const EncodingOptions& options, const std::string& name, int sincos_every) {
+  const AxisKernelKey key{name, options.min_deg, options.max_deg, sincos_every};
+  auto found = axis_kernels_.find(key);
   if (found != axis_kernels_.end()) return *found->second;
   // Its own program: the degrees are compiled in, and denormals are flushed in it only (encode.cl says why).
-  auto& program = ctx_->program({"common.cl", "gaussian.cl", "encode.cl"},
-                                gaussian_build_options(gaussian_options_)
-                                    .define("IPE_SINCOS_EVERY", sincos_every_)
-                                    .define("IPE_AXIS_MIN_DEG", options.min_deg)
-                                    .define("IPE_AXIS_MAX_DEG", options.max_deg)
-                                    .flag("-cl-denorms-are-zero"));
-  ::cl::Kernel* kernel = &program.kernel("gaussian_ipe_axis_fwd");
-  axis_kernels_.emplace(degrees, kernel);
+  auto& program =
+      ctx_->program({"common.cl", "gaussian.cl", "encode.cl"}, gaussian_build_options(gaussian_options_)
+                                                                   .define("IPE_SINCOS_EVERY", sincos_every)
+                                                                   .define("IPE_AXIS_MIN_DEG", options.min_deg)
+                                                                   .define("IPE_AXIS_MAX_DEG", options.max_deg)
+                                                                   .flag("-cl-denorms-are-zero"));
+  ::cl::Kernel* kernel = &program.kernel(name);
+  axis_kernels_.emplace(key, kernel);
   return *kernel;
 }
 
@@ -87,9 +87,16 @@ void Encode::ipe(const EncodingOptions& options, const IpeInputs& in, ocl::Devic
   detail::require(in.means, 3 * in.n_rows, where);
   detail::require(in.covs, 3 * in.n_rows, where);
   detail::require(features, in.n_rows * options.ipe_width(), where);
+  const cl_uint n_rows = detail::to_uint(in.n_rows, where, "rows");
+  if (fused_items_ == EncodeTuning::FusedItems::per_row_and_axis) {
+    detail::to_uint(in.n_rows * options.ipe_width(), where, "features");  // the kernel indexes them in 32 bits
+    auto& kernel = axis_kernel(options, "ipe_axis_fwd", 1);
+    ocl::set_args(kernel, where, in.means, in.covs, features, n_rows);
+    return ocl::launch_1d(*ctx_, kernel, 3 * in.n_rows, where);
+  }
   const size_t items = in.n_rows * options.degrees();
-  ocl::set_args(*ipe_, where, in.means, in.covs, features, detail::to_uint(in.n_rows, where, "rows"),
-                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
+  ocl::set_args(*ipe_, where, in.means, in.covs, features, n_rows, static_cast<cl_int>(options.min_deg),
+                static_cast<cl_int>(options.max_deg));
   detail::to_uint(items, where, "items");
   ocl::launch_1d(*ctx_, *ipe_, items, where);
 }
@@ -99,10 +106,17 @@ void Encode::pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceA
   check_degrees(options, where, options.append_identity);
   detail::require(in.x, 3 * in.n_rows, where);
   detail::require(features, in.n_rows * options.pe_width(), where);
+  const cl_uint n_rows = detail::to_uint(in.n_rows, where, "rows");
+  const cl_uint append_identity = options.append_identity ? 1 : 0;
+  if (fused_items_ == EncodeTuning::FusedItems::per_row_and_axis) {
+    detail::to_uint(in.n_rows * options.pe_width(), where, "features");  // the kernel indexes them in 32 bits
+    auto& kernel = axis_kernel(options, "pe_axis_fwd", 1);
+    ocl::set_args(kernel, where, in.x, features, n_rows, append_identity);
+    return ocl::launch_1d(*ctx_, kernel, 3 * in.n_rows, where);
+  }
   const size_t items = in.n_rows * std::max(1, options.degrees());
-  ocl::set_args(*pe_, where, in.x, features, detail::to_uint(in.n_rows, where, "rows"),
-                static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg),
-                static_cast<cl_uint>(options.append_identity ? 1 : 0));
+  ocl::set_args(*pe_, where, in.x, features, n_rows, static_cast<cl_int>(options.min_deg),
+                static_cast<cl_int>(options.max_deg), append_identity);
   detail::to_uint(items, where, "items");
   ocl::launch_1d(*ctx_, *pe_, items, where);
 }
@@ -120,15 +134,15 @@ void Encode::gaussian_ipe(const EncodingOptions& options, const GaussianInputs& 
                 n_samples = detail::to_uint(in.n_samples, where, "samples");
   if (fused_items_ == EncodeTuning::FusedItems::per_row_and_axis) {
     detail::to_uint(rows * options.ipe_width(), where, "features");  // the kernel indexes them in 32 bits
-    auto& kernel = axis_kernel(options);
+    auto& kernel = axis_kernel(options, "gaussian_ipe_axis_fwd", sincos_every_);
     ocl::set_args(kernel, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features, n_rays,
                   n_samples);
     return ocl::launch_1d(*ctx_, kernel, 3 * rows, where);
   }
   const size_t items = fused_items_ == EncodeTuning::FusedItems::per_row ? rows : rows * options.degrees();
   detail::to_uint(items, where, "items");
-  ocl::set_args(*gaussian_ipe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features,
-                n_rays, n_samples, static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
+  ocl::set_args(*gaussian_ipe_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, features, n_rays,
+                n_samples, static_cast<cl_int>(options.min_deg), static_cast<cl_int>(options.max_deg));
   ocl::launch_1d(*ctx_, *gaussian_ipe_, items, where);
 }
 

@@ -5,13 +5,15 @@
 
 #include <cstddef>
 #include <map>
+#include <string>
+#include <tuple>
 #include <utility>
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "cl/program.hpp"
-#include "ops/gaussian.hpp"
 #include "core/stage_options.hpp"
+#include "ops/gaussian.hpp"
 
 namespace mipnerf::ops {
 
@@ -29,7 +31,8 @@ struct PeInputs {
 // How gaussian_ipe_fwd spreads its work (the GAUSSIAN_IPE_PER_ROW tunable of encode.cl).
 struct EncodeTuning {
   // per_row_and_axis: gaussian_ipe_axis_fwd, arithmetic sin/cos and exp with the degrees compiled in (a program per
-  // degree range, built on first use), which PoCL vectorises; needs fp64.
+  // degree range, built on first use), which PoCL vectorises; needs fp64. With it ipe_fwd and pe_fwd also run per
+  // (row, axis) (ipe_axis_fwd, pe_axis_fwd, a sincos per degree); otherwise per (row, degree).
   enum class FusedItems { device_default, per_row, per_row_and_degree, per_row_and_axis };
   // default: per (row, axis) on CPUs with fp64, per row on other CPUs, per (row, degree) elsewhere
   FusedItems fused_items = FusedItems::device_default;
@@ -64,13 +67,22 @@ class Encode {
 
  private:
   ocl::Context* ctx_;
-  // gaussian_ipe_axis_fwd for degrees [min_deg, max_deg), built on first use.
-  ::cl::Kernel& axis_kernel(const EncodingOptions& options);
+  // Kernel `name` of the per-(row, axis) program for degrees [min_deg, max_deg) and a sincos every `sincos_every`
+  // degrees, built on first use.
+  ::cl::Kernel& axis_kernel(const EncodingOptions& options, const std::string& name, int sincos_every);
+  struct AxisKernelKey {
+    std::string name;
+    int min_deg, max_deg, sincos_every;
+    bool operator<(const AxisKernelKey& other) const {
+      return std::tie(name, min_deg, max_deg, sincos_every) <
+             std::tie(other.name, other.min_deg, other.max_deg, other.sincos_every);
+    }
+  };
 
   GaussianOptions gaussian_options_;
   EncodeTuning::FusedItems fused_items_;
   int sincos_every_;
-  std::map<std::pair<int, int>, ::cl::Kernel*> axis_kernels_;
+  std::map<AxisKernelKey, ::cl::Kernel*> axis_kernels_;
   ::cl::Kernel* ipe_;
   ::cl::Kernel* pe_;
   ::cl::Kernel* gaussian_ipe_;

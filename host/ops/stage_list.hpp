@@ -96,6 +96,8 @@ struct StageDescription {
 // gaussian_ipe_axis_fwd is Encode's fused kernel per (row, axis), in a program of its own with the degrees compiled
 // in: on CPUs with fp64 the "gaussian_ipe_fwd (fused)" row times it, as Encode::gaussian_ipe runs it there in place of
 // gaussian_ipe_fwd (test_encode.cpp checks it against the reference and its sin/cos against long double).
+// ipe_axis_fwd and pe_axis_fwd, the same program's IPE and PE per (row, axis), likewise stand in for ipe_fwd and
+// pe_fwd there, and their rows time them (test_encode.cpp's IPE and PE tests run them on such devices).
 const std::vector<StageDescription>& ray_math_stages();
 
 }  // namespace mipnerf::ops

@@ -18,7 +18,8 @@ struct Activated {
 
 Activated run_device(const ActivationOptions& options, const std::vector<float>& raw_density,
                      const std::vector<float>& raw_rgb, const std::vector<float>& d_density,
-                     const std::vector<float>& d_rgb, ops::ActivationItems items = ops::ActivationItems::device_default) {
+                     const std::vector<float>& d_rgb,
+                     ops::ActivationItems items = ops::ActivationItems::device_default) {
   auto& ctx = test::test_context();
   const size_t rows = raw_density.size();
   auto raw_density_dev = test::upload(ctx, raw_density, "raw_density");
@@ -58,7 +59,8 @@ void check_against_reference(const std::vector<float>& raw_density, const std::v
       const auto dev = run_device(options, raw_density, raw_rgb, d_density, d_rgb, items);
       // Every way of giving out items runs the same float operations per value (activations.cl): bit for bit the
       // per-value items' results.
-      const auto per_value = run_device(options, raw_density, raw_rgb, d_density, d_rgb, ops::ActivationItems::per_value);
+      const auto per_value =
+          run_device(options, raw_density, raw_rgb, d_density, d_rgb, ops::ActivationItems::per_value);
       CHECK(dev.density == per_value.density);
       CHECK(dev.rgb == per_value.rgb);
       CHECK(dev.d_raw_density == per_value.d_raw_density);
@@ -184,8 +186,7 @@ TEST_CASE("activations: the device backward matches finite differences of the re
     // Float32 derivative (16u relative, as above) plus the finite difference's own error (≤ 1e-8, see the
     // previous test); ReLU's kink is never hit by a float within 1e-5 of −bias in this sample (checked).
     for (size_t i = 0; i < rows; ++i) {
-      if (options.density == DensityActivation::relu)
-        REQUIRE(std::abs(raw_density[i] + options.density_bias) > 1e-5);
+      if (options.density == DensityActivation::relu) REQUIRE(std::abs(raw_density[i] + options.density_bias) > 1e-5);
     }
     MIPNERF_CHECK_CLOSE("d density / d raw", dev.d_raw_density, fd_density,
                         [&](size_t i) { return 16 * kUnitRoundoff * std::abs(fd_density[i]) + 1e-8; });

@@ -4,8 +4,8 @@
 #include <doctest/doctest.h>
 
 #include <array>
-#include <vector>
 #include <cfloat>
+#include <vector>
 
 #include "kernel_checks.hpp"
 #include "ops/encode.hpp"
@@ -19,22 +19,29 @@ using test::kUnitRoundoff;
 
 namespace {
 
+// ipe_fwd (pe_fwd) as Encode runs it with `items`: per (row, axis) with per_row_and_axis, else per (row, degree).
 std::vector<float> run_ipe(const EncodingOptions& options, const std::vector<float>& means,
-                           const std::vector<float>& covs) {
+                           const std::vector<float>& covs,
+                           ops::EncodeTuning::FusedItems items = ops::EncodeTuning::FusedItems::device_default) {
   auto& ctx = test::test_context();
   const size_t rows = means.size() / 3;
   auto means_dev = test::upload(ctx, means, "means"), covs_dev = test::upload(ctx, covs, "covs");
   auto features = test::filled(ctx, rows * options.ipe_width(), 7.0f, "ipe_features");
-  ops::Encode(ctx, {}).ipe(options, {means_dev, covs_dev, rows}, features);
+  ops::EncodeTuning tuning;
+  tuning.fused_items = items;
+  ops::Encode(ctx, {}, tuning).ipe(options, {means_dev, covs_dev, rows}, features);
   return features.download(ctx);
 }
 
-std::vector<float> run_pe(const EncodingOptions& options, const std::vector<float>& x) {
+std::vector<float> run_pe(const EncodingOptions& options, const std::vector<float>& x,
+                          ops::EncodeTuning::FusedItems items = ops::EncodeTuning::FusedItems::device_default) {
   auto& ctx = test::test_context();
   const size_t rows = x.size() / 3;
   auto x_dev = test::upload(ctx, x, "x");
   auto features = test::filled(ctx, rows * options.pe_width(), 7.0f, "pe_features");
-  ops::Encode(ctx, {}).pe(options, {x_dev, rows}, features);
+  ops::EncodeTuning tuning;
+  tuning.fused_items = items;
+  ops::Encode(ctx, {}, tuning).pe(options, {x_dev, rows}, features);
   return features.download(ctx);
 }
 
@@ -74,9 +81,10 @@ ops::EncodeTuning per_row_every(int sincos_every) {
   return items_every(ops::EncodeTuning::FusedItems::per_row, sincos_every);
 }
 
-// The fused kernels that can double angles: per row, and per (row, axis) where the device has fp64 (its sin/cos
-// reduce in double); the latter's absence is checked to be refused.
-std::vector<ops::EncodeTuning::FusedItems> doubling_items(ocl::Context& ctx) {
+// Per row and, where the device has fp64 (its sin/cos reduce in double), per (row, axis); the latter's absence is
+// checked to be refused. The fused kernels that can double angles, and the two ways ipe_fwd and pe_fwd run (per
+// (row, degree) unless per (row, axis)).
+std::vector<ops::EncodeTuning::FusedItems> row_and_axis_items(ocl::Context& ctx) {
   if (ctx.device_info().has_fp64) {
     return {ops::EncodeTuning::FusedItems::per_row, ops::EncodeTuning::FusedItems::per_row_and_axis};
   }
@@ -86,6 +94,11 @@ std::vector<ops::EncodeTuning::FusedItems> doubling_items(ocl::Context& ctx) {
 
 const char* items_name(ops::EncodeTuning::FusedItems items) {
   return items == ops::EncodeTuning::FusedItems::per_row_and_axis ? "per (row, axis)" : "per row";
+}
+
+// ipe_fwd and pe_fwd's items under `items`, for messages.
+const char* encoding_items_name(ops::EncodeTuning::FusedItems items) {
+  return items == ops::EncodeTuning::FusedItems::per_row_and_axis ? "per (row, axis)" : "per (row, degree)";
 }
 
 }  // namespace
@@ -101,10 +114,13 @@ TEST_CASE("encode: IPE matches the CPU reference on 10,000 rows over degrees 0-1
   }
   const EncodingOptions options;  // 0..15, the paper's L = 16
   REQUIRE(options.ipe_width() == 96);
-  const auto dev = run_ipe(options, means, covs);
   std::vector<double> features;
   ref::ipe_fwd(options, test::to_double(means), test::to_double(covs), features, rows);
-  MIPNERF_CHECK_CLOSE("ipe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
+  for (auto items : row_and_axis_items(test::test_context())) {
+    INFO("items " << encoding_items_name(items));
+    const auto dev = run_ipe(options, means, covs, items);
+    MIPNERF_CHECK_CLOSE("ipe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
+  }
 }
 
 TEST_CASE("encode: IPE of large arguments (up to 2^15 x 100) is accurate against long double") {
@@ -119,30 +135,33 @@ TEST_CASE("encode: IPE of large arguments (up to 2^15 x 100) is accurate against
     means[i] = static_cast<float>(sign * std::pow(10.0, magnitude(rng)));
   }
   const EncodingOptions options;
-  const auto dev = run_ipe(options, means, covs);
-  const int n_degrees = options.degrees();
-  double worst_ulps = 0;
-  size_t failures = 0;
-  for (size_t row = 0; row < rows; ++row) {
-    for (int l = 0; l < n_degrees; ++l) {
-      for (int a = 0; a < 3; ++a) {
-        long double s, c;
-        ref::ipe_pair<long double>(means[3 * row + a], 0.0L, l, s, c);
-        const float got[2] = {dev[row * 96 + 3 * l + a], dev[row * 96 + 48 + 3 * l + a]};
-        const long double want[2] = {s, c};
-        for (int k = 0; k < 2; ++k) {
-          REQUIRE(std::isfinite(got[k]));
-          const double ulp = std::nextafter(std::abs(float(want[k])), INFINITY) - std::abs(float(want[k]));
-          const double ulps = static_cast<double>(std::abs(got[k] - want[k])) / ulp;
-          worst_ulps = std::max(worst_ulps, ulps);
-          if (ulps > 4.0) ++failures;  // the OpenCL bound for sin and cos
+  for (auto items : row_and_axis_items(test::test_context())) {
+    INFO("items " << encoding_items_name(items));
+    const auto dev = run_ipe(options, means, covs, items);
+    const int n_degrees = options.degrees();
+    double worst_ulps = 0;
+    size_t failures = 0;
+    for (size_t row = 0; row < rows; ++row) {
+      for (int l = 0; l < n_degrees; ++l) {
+        for (int a = 0; a < 3; ++a) {
+          long double s, c;
+          ref::ipe_pair<long double>(means[3 * row + a], 0.0L, l, s, c);
+          const float got[2] = {dev[row * 96 + 3 * l + a], dev[row * 96 + 48 + 3 * l + a]};
+          const long double want[2] = {s, c};
+          for (int k = 0; k < 2; ++k) {
+            REQUIRE(std::isfinite(got[k]));
+            const double ulp = std::nextafter(std::abs(float(want[k])), INFINITY) - std::abs(float(want[k]));
+            const double ulps = static_cast<double>(std::abs(got[k] - want[k])) / ulp;
+            worst_ulps = std::max(worst_ulps, ulps);
+            if (ulps > 4.0) ++failures;  // the OpenCL bound for sin and cos
+          }
         }
       }
     }
+    if (std::getenv("MIPNERF_TEST_VERBOSE")) MESSAGE("worst error " << worst_ulps << " ulp");
+    INFO("worst error " << worst_ulps << " ulp of the long-double sin/cos of the exact float argument");
+    CHECK(failures == 0);
   }
-  if (std::getenv("MIPNERF_TEST_VERBOSE")) MESSAGE("worst error " << worst_ulps << " ulp");
-  INFO("worst error " << worst_ulps << " ulp of the long-double sin/cos of the exact float argument");
-  CHECK(failures == 0);
 }
 
 TEST_CASE("encode: feature order is sines then cosines, index l times 3 plus axis") {
@@ -186,16 +205,19 @@ TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 fe
     options.max_deg = max_deg;
     options.append_identity = true;
     REQUIRE(options.pe_width() == (max_deg == 4 ? 27 : 63));
-    const auto dev = run_pe(options, *x);
     std::vector<double> features;
     ref::pe_fwd(options, test::to_double(*x), features, rows);
-    MIPNERF_CHECK_CLOSE("pe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
+    for (auto items : row_and_axis_items(test::test_context())) {
+      INFO("degrees 0.." << max_deg - 1 << ", items " << encoding_items_name(items));
+      const auto dev = run_pe(options, *x, items);
+      MIPNERF_CHECK_CLOSE("pe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
+    }
   }
   // Identity only (no degrees) is a copy.
   EncodingOptions identity_only;
   identity_only.max_deg = 0;
   identity_only.append_identity = true;
-  CHECK(run_pe(identity_only, dirs) == dirs);
+  for (auto items : row_and_axis_items(test::test_context())) CHECK(run_pe(identity_only, dirs, items) == dirs);
 }
 
 TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge variance gives 0 not NaN") {
@@ -205,9 +227,12 @@ TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge vari
   std::vector<float> means(3 * rows);
   for (auto& m : means) m = position(rng);
   const EncodingOptions options;
-  const auto ipe = run_ipe(options, means, std::vector<float>(3 * rows, 0.0f));
-  const auto pe = run_pe(options, means);  // no identity: the same 96 features
-  CHECK(ipe == pe);
+  for (auto items : row_and_axis_items(test::test_context())) {
+    INFO("items " << encoding_items_name(items));
+    const auto ipe = run_ipe(options, means, std::vector<float>(3 * rows, 0.0f), items);
+    const auto pe = run_pe(options, means, items);  // no identity: the same 96 features
+    CHECK(ipe == pe);
+  }
   // σ² = 1e12 (4^l·σ² up to 1e21) and σ² = +∞: every attenuation is exactly 0.
   for (float var : {1e12f, INFINITY}) {
     const auto wide = run_ipe(options, means, std::vector<float>(3 * rows, var));
@@ -255,8 +280,8 @@ TEST_CASE("encode: zero radius, axis-aligned and zero directions - IPE is PE of 
   auto& ctx = test::test_context();
   std::mt19937 rng(27);
   std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
-  const std::vector<std::array<float, 3>> dirs = {{1, 0, 0}, {0, -1, 0}, {0, 0, -1}, {0, 0, 2}, {0, 0, 0},
-                                                  {0.3f, -1.2f, 0.5f}, {-0.7f, 0.2f, -1.9f}};
+  const std::vector<std::array<float, 3>> dirs = {{1, 0, 0}, {0, -1, 0},          {0, 0, -1},          {0, 0, 2},
+                                                  {0, 0, 0}, {0.3f, -1.2f, 0.5f}, {-0.7f, 0.2f, -1.9f}};
   const size_t n_samples = 24;
   std::vector<float> origins, directions, radii, t_edges;
   for (int copy = 0; copy < 20; ++copy) {
@@ -390,7 +415,7 @@ TEST_CASE("encode: the fused Gaussian and IPE kernel equals gaussian_fwd then ip
     // Angle doubling (IPE_SINCOS_EVERY = K): the same reference, the derived bound added, never more. Items per
     // (row, axis) with K = 1 too: their sin/cos and exp are the kernel's own (≤ 2 and 3 ulp, encode.cl), inside the
     // same bound.
-    for (const auto items : doubling_items(ctx)) {
+    for (const auto items : row_and_axis_items(ctx)) {
       for (const int k : {1, 2, 4, 8}) {
         if (k == 1 && items == ops::EncodeTuning::FusedItems::per_row) continue;  // checked bit for bit above
         INFO("items " << items_name(items) << ", a sincos every " << k << " degrees");
@@ -461,32 +486,32 @@ TEST_CASE("encode: the fused kernel's angle doubling at large arguments (up to 2
   const ops::GaussianInputs in{rays, t, n_rays, n_samples};
   const EncodingOptions options;
   ops::Encode device_default(ctx, {RayShape::cone});
-  for (const auto items : doubling_items(ctx))
-  for (const int k : {device_default.sincos_every(), 4}) {
-    INFO("items " << items_name(items) << ", a sincos every " << k << " degrees");
-    ops::Encode encode(ctx, {RayShape::cone}, items_every(items, k));
-    auto features = test::filled(ctx, n_rays * n_samples * 96, 7.0f, "features");
-    encode.gaussian_ipe(options, in, features);
-    const auto got = features.download(ctx);
-    size_t failures = 0;
-    double worst_ratio = 0;
-    for (size_t row = 0; row < n_rays * n_samples; ++row) {
-      for (int a = 1; a < 3; ++a) {
-        const float o = origins[3 * (row / n_samples) + a];
-        for (int l = 0; l < 16; ++l) {
-          long double want_s, want_c;
-          ref::ipe_pair<long double>(o, 0.0L, l, want_s, want_c);
-          const double error = static_cast<double>(std::max(std::abs(got[row * 96 + 3 * l + a] - want_s),
-                                                            std::abs(got[row * 96 + 48 + 3 * l + a] - want_c)));
-          const double bound = ref::doubling_error_bound(l % k);
-          worst_ratio = std::max(worst_ratio, error / bound);
-          failures += !(error <= bound);
+  for (const auto items : row_and_axis_items(ctx))
+    for (const int k : {device_default.sincos_every(), 4}) {
+      INFO("items " << items_name(items) << ", a sincos every " << k << " degrees");
+      ops::Encode encode(ctx, {RayShape::cone}, items_every(items, k));
+      auto features = test::filled(ctx, n_rays * n_samples * 96, 7.0f, "features");
+      encode.gaussian_ipe(options, in, features);
+      const auto got = features.download(ctx);
+      size_t failures = 0;
+      double worst_ratio = 0;
+      for (size_t row = 0; row < n_rays * n_samples; ++row) {
+        for (int a = 1; a < 3; ++a) {
+          const float o = origins[3 * (row / n_samples) + a];
+          for (int l = 0; l < 16; ++l) {
+            long double want_s, want_c;
+            ref::ipe_pair<long double>(o, 0.0L, l, want_s, want_c);
+            const double error = static_cast<double>(std::max(std::abs(got[row * 96 + 3 * l + a] - want_s),
+                                                              std::abs(got[row * 96 + 48 + 3 * l + a] - want_c)));
+            const double bound = ref::doubling_error_bound(l % k);
+            worst_ratio = std::max(worst_ratio, error / bound);
+            failures += !(error <= bound);
+          }
         }
       }
+      INFO("worst error " << worst_ratio << " of the bound");
+      CHECK(failures == 0);
     }
-    INFO("worst error " << worst_ratio << " of the bound");
-    CHECK(failures == 0);
-  }
 }
 
 TEST_CASE("encode: per (row, axis), sin and cos reduced in double are within 2 ulp for |y| up to 2^40") {
