@@ -165,27 +165,31 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 DEFINE_EXP_NONPOSITIVE(float, )
 DEFINE_EXP_NONPOSITIVE(float16, 16)
 
-// e^x − 1 for x ≤ 0 (NaN stays NaN; −∞ gives −1), without the cancellation of exp(x) − 1 near 0. The same reduction
-// as exp_nonpositive, x = n·ln2 + r, and e^x − 1 = 2^n·(e^r − 1) + (2^n − 1) with e^r − 1 = r + r²·p(r), p the Taylor
-// polynomial to r^8 (truncation ≤ (ln2/2)^7/9!·e^0.35 < 3e-9 relative to e^r − 1). For |x| < ln2/2, n = 0 and r = x
-// exactly, so small arguments keep their full relative accuracy; otherwise |e^x − 1| ≥ 0.29 and 2^n − 1 is exact
-// (n ≥ −43 after the clamp), so the final fma adds at most 1 ulp to the ≤ 2 ulp of e^r − 1 scaled by 2^n ≤ 1/2.
-// Below x = −30 the result is −1 (e^−30 < 2^−25·1: −1 is the correctly rounded value). Within 3 ulp by this count;
-// the same formula in C on the host, checked against double expm1 at every float in [−40, 0), is within 0.89 ulp.
-ALWAYS_INLINE float expm1_nonpositive(float x) {
-  float n;
-  const float r = reduce_by_ln2(fmax(x, -30.0f), &n);  // fmax(NaN, c) = c: NaN is restored below
-  float p = fma(r, 2.48015873e-5f, 1.98412698e-4f);  // 1/8!, 1/7!
-  p = fma(p, r, 1.38888889e-3f);                       // 1/6!
-  p = fma(p, r, 8.33333333e-3f);                       // 1/5!
-  p = fma(p, r, 4.16666667e-2f);                       // 1/4!
-  p = fma(p, r, 1.66666667e-1f);                       // 1/3!
-  p = fma(p, r, 0.5f);
-  const float expm1_r = fma(p * r, r, r);
-  const float two_n = as_float(((int)n + 127) << 23);  // n in [−43, 0]: a normal float
-  const float result = fma(two_n, expm1_r, two_n - 1.0f);
-  return isnan(x) ? x : result;
-}
+// expm1_nonpositive(x): e^x − 1 for x ≤ 0 (NaN stays NaN; −∞ gives −1), without the cancellation of exp(x) − 1 near
+// 0. The same reduction as exp_nonpositive, x = n·ln2 + r, and e^x − 1 = 2^n·(e^r − 1) + (2^n − 1) with
+// e^r − 1 = r + r²·p(r), p the Taylor polynomial to r^8 (truncation ≤ (ln2/2)^7/9!·e^0.35 < 3e-9 relative to
+// e^r − 1). For |x| < ln2/2, n = 0 and r = x exactly, so small arguments keep their full relative accuracy; otherwise
+// |e^x − 1| ≥ 0.29 and 2^n − 1 is exact (n ≥ −43 after the clamp: 2^n a normal float), so the final fma adds at most
+// 1 ulp to the ≤ 2 ulp of e^r − 1 scaled by 2^n ≤ 1/2. Below x = −30 the result is −1 (e^−30 < 2^−25·1: −1 is the
+// correctly rounded value). Within 3 ulp by this count; the same formula in C on the host, checked against double
+// expm1 at every float in [−40, 0), is within 0.89 ulp. Overloaded as exp_nonpositive is.
+#define DEFINE_EXPM1_NONPOSITIVE(V, W)                                                                    \
+  ALWAYS_INLINE OVERLOADABLE V expm1_nonpositive(V x) {                                                   \
+    V n;                                                                                                  \
+    const V r = reduce_by_ln2(fmax(x, -30.0f), &n); /* fmax(NaN, c) = c: NaN is restored below */         \
+    V p = fma(r, (V)2.48015873e-5f, (V)1.98412698e-4f); /* 1/8!, 1/7! */                                  \
+    p = fma(p, r, (V)1.38888889e-3f);                   /* 1/6! */                                        \
+    p = fma(p, r, (V)8.33333333e-3f);                   /* 1/5! */                                        \
+    p = fma(p, r, (V)4.16666667e-2f);                   /* 1/4! */                                        \
+    p = fma(p, r, (V)1.66666667e-1f);                   /* 1/3! */                                        \
+    p = fma(p, r, (V)0.5f);                                                                               \
+    const V expm1_r = fma(p * r, r, r);                                                                   \
+    const V two_n = as_float##W((convert_int##W(n) + 127) << 23);                                         \
+    const V result = fma(two_n, expm1_r, two_n - 1.0f);                                                   \
+    return isnan(x) ? x : result;                                                                         \
+  }
+DEFINE_EXPM1_NONPOSITIVE(float, )
+DEFINE_EXPM1_NONPOSITIVE(float16, 16)
 
 // log1p_unit(y): log(1 + y) for y in [0, 1] (the softplus of exp_nonpositive's results): 2·atanh(s) with
 // s = y/(2 + y) in [0, 1/3], an identity with no cancellation, so small y keeps its relative accuracy (s ≈ y/2).

@@ -56,19 +56,22 @@ ocl::BuildOptions render_build_options(const RenderOptions& options, const Activ
 
 namespace {
 
-bool choose_lockstep(const ocl::Context& ctx, RenderSampleLoop loop) {
-  if (loop != RenderSampleLoop::device_default) return loop == RenderSampleLoop::lockstep;
+RenderSampleLoop choose_sample_loop(const ocl::Context& ctx, RenderSampleLoop loop) {
+  if (loop != RenderSampleLoop::device_default) return loop;
   const auto& device = ctx.device_info();
-  return (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
+  const bool pocl_cpu = (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
+  return pocl_cpu ? RenderSampleLoop::per_vector : RenderSampleLoop::per_ray;
 }
 
 }  // namespace
 
 Render::Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation,
                RenderSampleLoop loop)
-    : ctx_(&ctx), options_(options), lockstep_(choose_lockstep(ctx, loop)) {
+    : ctx_(&ctx), options_(options), loop_(choose_sample_loop(ctx, loop)) {
   auto& program = ctx.program({"common.cl", "activations.cl", "render.cl"},
-                              render_build_options(options, activation).define("SAMPLES_IN_LOCKSTEP", lockstep_ ? 1 : 0));
+                              render_build_options(options, activation)
+                                  .define("SAMPLES_IN_LOCKSTEP", loop_ == RenderSampleLoop::lockstep ? 1 : 0)
+                                  .define("SAMPLES_PER_VECTOR", loop_ == RenderSampleLoop::per_vector ? 1 : 0));
   fwd_ = &program.kernel("render_fwd");
   bwd_ = &program.kernel("render_bwd");
   raw_fwd_ = &program.kernel("render_raw_fwd");

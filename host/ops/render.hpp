@@ -16,12 +16,12 @@ ocl::BuildOptions render_build_options(const RenderOptions& options, const Activ
 
 // For fwd/bwd the activated values; for raw_fwd/raw_bwd the MLP's raw outputs in the same layouts.
 struct RenderInputs {
-  const ocl::DeviceArray<float>& rgb;         // [R][N][3]
-  const ocl::DeviceArray<float>& density;     // [R][N]
-  const ocl::DeviceArray<float>& t_edges;     // [R][N+1]
-  const RayBundle& rays;                      // reads directions, unnormalised (δ = Δt·|d|)
-  size_t n_rays;                              // R ≤ rays.n_rays(): the bundle's first R rays
-  size_t n_samples;                           // N
+  const ocl::DeviceArray<float>& rgb;      // [R][N][3]
+  const ocl::DeviceArray<float>& density;  // [R][N]
+  const ocl::DeviceArray<float>& t_edges;  // [R][N+1]
+  const RayBundle& rays;                   // reads directions, unnormalised (δ = Δt·|d|)
+  size_t n_rays;                           // R ≤ rays.n_rays(): the bundle's first R rays
+  size_t n_samples;                        // N
 };
 
 struct RenderOutputs {
@@ -56,20 +56,23 @@ struct RenderInputGradients {
   ocl::DeviceArray<float>& d_density;  // [R][N]    (∂L/∂raw_density for raw_bwd); overwritten
 };
 
-// How the kernels walk their rays' samples (SAMPLES_IN_LOCKSTEP of render.cl): each work-item through its own ray
-// (per_ray), or all rays of a work-group a sample at a time, a barrier after each (lockstep), which PoCL's CPU device
-// vectorises across rays: render_raw_fwd on 4,096 rays x 128 samples 24 against 9 ms there (bench_kernels). The
-// values are the same either way, bit for bit.
-enum class RenderSampleLoop { device_default, per_ray, lockstep };
+// How the kernels walk their rays' samples (render.cl): each work-item through its own ray (per_ray); all rays of a
+// work-group a sample at a time, a barrier after each (lockstep, SAMPLES_IN_LOCKSTEP), which PoCL's CPU device
+// vectorises across rays (render_raw_fwd on 4,096 rays x 128 samples 24 against 9 ms on the AMD EPYC, per ray against
+// lockstep); or a ray per item, 16 samples at a time as float16 (per_vector, SAMPLES_PER_VECTOR), which PoCL runs in
+// full-width vector registers without gathers (bench/results/kernel_runtimes_xeon.md). Lockstep gives the per-ray
+// values bit for bit; per vector sums the forward's optical depth and composite in another order, within the same
+// float32 bounds (render.cl).
+enum class RenderSampleLoop { device_default, per_ray, lockstep, per_vector };
 
 // Rendering for one BACKGROUND (and, for the fused kernels, one set of activations).
 class Render {
  public:
-  // device_default: lockstep on PoCL's CPU device, per ray elsewhere.
+  // device_default: per vector on PoCL's CPU device, per ray elsewhere.
   Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation = {},
          RenderSampleLoop loop = RenderSampleLoop::device_default);
   const RenderOptions& options() const { return options_; }
-  bool samples_in_lockstep() const { return lockstep_; }
+  RenderSampleLoop sample_loop() const { return loop_; }
 
   // Enqueues render_fwd.
   void fwd(const RenderInputs& in, const RenderOutputs& out);
@@ -98,7 +101,7 @@ class Render {
                   const DensityNoiseKey* noise);
   ocl::Context* ctx_;
   RenderOptions options_;
-  bool lockstep_;
+  RenderSampleLoop loop_;  // never device_default
   ::cl::Kernel* fwd_;
   ::cl::Kernel* bwd_;
   ::cl::Kernel* raw_fwd_;

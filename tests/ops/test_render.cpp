@@ -88,6 +88,25 @@ DeviceResult run_device(const RenderOptions& options, const Batch& b, bool with_
           weights.download(ctx), d_rgb.download(ctx), d_density.download(ctx)};
 }
 
+// Render::bwd alone on the given weights (with d_acc), walking the samples as `loop` says: d_rgb and d_density.
+DeviceResult run_backward_on(const RenderOptions& options, const Batch& b, const std::vector<float>& weight_values,
+                             ops::RenderSampleLoop loop) {
+  auto& ctx = test::test_context();
+  auto rgb = test::upload(ctx, b.rgb, "rgb"), density = test::upload(ctx, b.density, "density");
+  auto t_edges = test::upload(ctx, b.t_edges, "t_edges"), weights = test::upload(ctx, weight_values, "weights");
+  ops::RayBundle rays(ctx, b.n_rays);
+  rays.directions.upload(ctx, b.directions);
+  auto d_comp = test::upload(ctx, b.d_comp_rgb, "d_comp_rgb"), d_acc = test::upload(ctx, b.d_acc, "d_acc");
+  const size_t rows = b.n_rays * b.n_samples;
+  ocl::DeviceArray<float> d_rgb(ctx, 3 * rows, "d_rgb"), d_density(ctx, rows, "d_density");
+  ops::Render(ctx, options, {}, loop)
+      .bwd({rgb, density, t_edges, rays, b.n_rays, b.n_samples}, weights, {d_comp, &d_acc}, {d_rgb, d_density});
+  DeviceResult result;
+  result.d_rgb = d_rgb.download(ctx);
+  result.d_density = d_density.download(ctx);
+  return result;
+}
+
 // Every output of two device runs, bit for bit.
 void check_bit_equal(const DeviceResult& a, const DeviceResult& b) {
   CHECK(a.comp_rgb == b.comp_rgb);
@@ -211,10 +230,18 @@ std::function<double(size_t)> from(const std::vector<double>& bounds) {
   return [&bounds](size_t i) { return bounds[i]; };
 }
 
-const ops::RenderSampleLoop kSampleLoops[] = {ops::RenderSampleLoop::per_ray, ops::RenderSampleLoop::lockstep};
+const ops::RenderSampleLoop kSampleLoops[] = {ops::RenderSampleLoop::per_ray, ops::RenderSampleLoop::lockstep,
+                                              ops::RenderSampleLoop::per_vector};
 
 const char* loop_name(ops::RenderSampleLoop loop) {
-  return loop == ops::RenderSampleLoop::lockstep ? "samples in lockstep" : "a ray per item";
+  switch (loop) {
+    case ops::RenderSampleLoop::lockstep:
+      return "samples in lockstep";
+    case ops::RenderSampleLoop::per_vector:
+      return "samples by vectors of 16";
+    default:
+      return "a ray per item";
+  }
 }
 
 // The device's forward and backward against the reference bounds, both ways of walking the samples.
@@ -639,24 +666,49 @@ TEST_CASE("render: the weights-only kernel writes the fused kernel's acc, distan
 TEST_CASE("render: samples in lockstep give the per-ray values bit for bit, with a partial last work-group") {
   // The same arithmetic in the same order per ray, only the order of the rays' steps differs; 1,000 rays (100 under
   // oclgrind) leave the last work-group partial, whose padding items run the last ray again and must store nothing.
-  // The two programs really differ: each loop asked for is the one built (else the equality below would be vacuous).
+  // The programs really differ: each loop asked for is the one built (else the equality below would be vacuous).
   auto& ctx = test::test_context();
-  CHECK(ops::Render(ctx, RenderOptions{}, {}, ops::RenderSampleLoop::lockstep).samples_in_lockstep());
-  CHECK_FALSE(ops::Render(ctx, RenderOptions{}, {}, ops::RenderSampleLoop::per_ray).samples_in_lockstep());
+  for (const auto loop : kSampleLoops) CHECK(ops::Render(ctx, RenderOptions{}, {}, loop).sample_loop() == loop);
   const Batch plain = random_batch(test::batch_for_device(1000), 24, 525);
   const Batch raw = raw_batch(test::batch_for_device(1000), 24, 526);
   for (auto background : kBackgrounds) {
     INFO("background " << static_cast<int>(background));
     const RenderOptions options{background};
     check_bit_equal(run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::per_ray),
-                run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::lockstep));
+                    run_device(options, plain, true, false, {}, {}, ops::RenderSampleLoop::lockstep));
     for (const float noise_scale : {0.0f, 1.0f}) {
       INFO("fused, density noise " << noise_scale);
       const RenderOptions noisy{background, noise_scale};
       const DensityNoiseKey key{{91, 5, 40}, 1};
       check_bit_equal(run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::per_ray),
-                  run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::lockstep));
+                      run_device(noisy, raw, true, true, {}, key, ops::RenderSampleLoop::lockstep));
     }
+  }
+}
+
+TEST_CASE(
+    "render: samples by vectors of 16 - against the reference with 8 samples after the vectors, and the "
+    "backward is the per-ray loop's bit for bit given the same weights") {
+  // 40 samples: two vectors, then 8 samples by the scalar loop, which carries on the vectors' sums. The forward's sums
+  // run in another order (render.cl), so it is held to the reference's bounds; the backward, given the forward's
+  // weights, runs the per-ray loop's operations in its order: its gradients must match the per-ray backward's
+  // exactly when that backward reads the same weights.
+  const Batch b = random_batch(test::batch_for_device(2000), 40, 527);
+  for (auto background : kBackgrounds) {
+    INFO("background " << static_cast<int>(background));
+    const RenderOptions options{background};
+    const auto r = run_ref(options, b, true);
+    const auto bounds = float_bounds(options, b, r, true);
+    const auto dev = run_device(options, b, true, false, {}, {}, ops::RenderSampleLoop::per_vector);
+    MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
+    MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
+    MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
+    MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
+    MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
+    MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+    const auto per_ray = run_backward_on(options, b, dev.weights, ops::RenderSampleLoop::per_ray);
+    CHECK(per_ray.d_rgb == dev.d_rgb);
+    CHECK(per_ray.d_density == dev.d_density);
   }
 }
 
