@@ -32,23 +32,41 @@
 // For t0 ≥ 0 the bracket of t_var lies in [3/20, 1/3], so there is no cancellation anywhere: the relative error is
 // a few ulp whatever the width (unlike eqs. 20–22, which subtract nearly equal powers of t0 and t1).
 // The denominator is 0 only for t0 = t1 = 0, where every term it divides is 0 too; the guard makes that 0/0 a 0.
+// frustum_moments and cylinder_moments_of: the moments of interval(s) [t0, t1] of a ray of radius `radius`, for
+// V = float and for V = float16 (gaussian_fwd's per-vector items), written once: the same operations per lane, so
+// the same floats bit for bit.
+#define DEFINE_INTERVAL_MOMENTS(V)                                                                                 \
+  ALWAYS_INLINE OVERLOADABLE void frustum_moments(V t0, V t1, float radius, V* t_mean, V* t_var, V* r_var) {       \
+    const V mu = 0.5f * (t0 + t1);                                                                                 \
+    const V hw = 0.5f * (t1 - t0);                                                                                 \
+    const V mu2 = mu * mu, hw2 = hw * hw;                                                                          \
+    const V denom = fmax(3.0f * mu2 + hw2, FLT_MIN);                                                               \
+    const V ratio = hw2 / denom;                                                                                   \
+    const V q = (12.0f * mu2 - hw2) / denom;                                                                       \
+    *t_mean = mu * (1.0f + 2.0f * ratio);                                                                          \
+    *t_var = hw2 * (1.0f / 3.0f - (4.0f / 15.0f) * ratio * q);                                                     \
+    *r_var = radius * radius * (0.25f * mu2 + hw2 * (5.0f / 12.0f - (4.0f / 15.0f) * ratio));                      \
+  }                                                                                                                \
+  ALWAYS_INLINE OVERLOADABLE void cylinder_moments_of(V t0, V t1, float radius, V* t_mean, V* t_var, V* r_var) {   \
+    const V width = t1 - t0;                                                                                       \
+    *t_mean = 0.5f * (t0 + t1);                                                                                    \
+    *t_var = width * width / 12.0f;                                                                                \
+    *r_var = (V)(0.25f * radius * radius);                                                                         \
+  }
+DEFINE_INTERVAL_MOMENTS(float)
+DEFINE_INTERVAL_MOMENTS(float16)
+
 inline float3 conical_frustum_moments(float t0, float t1, float radius) {
-  const float mu = 0.5f * (t0 + t1);
-  const float hw = 0.5f * (t1 - t0);
-  const float mu2 = mu * mu, hw2 = hw * hw;
-  const float denom = fmax(3.0f * mu2 + hw2, FLT_MIN);
-  const float ratio = hw2 / denom;
-  const float q = (12.0f * mu2 - hw2) / denom;
-  const float t_mean = mu * (1.0f + 2.0f * ratio);
-  const float t_var = hw2 * (1.0f / 3.0f - (4.0f / 15.0f) * ratio * q);
-  const float r_var = radius * radius * (0.25f * mu2 + hw2 * (5.0f / 12.0f - (4.0f / 15.0f) * ratio));
+  float t_mean, t_var, r_var;
+  frustum_moments(t0, t1, radius, &t_mean, &t_var, &r_var);
   return (float3)(t_mean, t_var, r_var);
 }
 
 // Cylinder of radius r (official cylinder_to_gaussian): uniform along t, uniform disc across.
 inline float3 cylinder_moments(float t0, float t1, float radius) {
-  const float width = t1 - t0;
-  return (float3)(0.5f * (t0 + t1), width * width / 12.0f, 0.25f * radius * radius);
+  float t_mean, t_var, r_var;
+  cylinder_moments_of(t0, t1, radius, &t_mean, &t_var, &r_var);
+  return (float3)(t_mean, t_var, r_var);
 }
 
 // Lifts the moments along the ray to a diagonal 3-D covariance (official lift_gaussian, diag = True):
@@ -98,15 +116,65 @@ inline void row_gaussian(__global const float* origins, __global const float* di
 }
 
 // One item per row: means [R][N][3], covs [R][N][3].
-__kernel void gaussian_fwd(__global const float* origins, __global const float* directions,
-                           __global const float* radii, __global const float* t_edges, __global float* means,
-                           __global float* covs, const uint n_rays, const uint n_samples) {
-  const size_t row = get_global_id(0);
-  if (row >= (size_t)n_rays * n_samples) return;
+// gaussian_fwd's items (the host's choice per device, ops/gaussian.hpp): GAUSSIAN_SAMPLES_PER_VECTOR = 0, one per row;
+// = 1, one per 16 consecutive samples of a ray as float16 (a ray's last, shorter run of samples row by row), which
+// PoCL runs in full-width vector registers where it ran the per-row kernel's float3 values an item at a time.
+#ifndef GAUSSIAN_SAMPLES_PER_VECTOR
+#define GAUSSIAN_SAMPLES_PER_VECTOR 0
+#endif
+
+inline void store_row_gaussian(__global const float* origins, __global const float* directions,
+                               __global const float* radii, __global const float* t_edges, __global float* means,
+                               __global float* covs, uint row, uint n_samples) {
   float3 mean, cov;
   row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
   store3(means, row, mean);
   store3(covs, row, cov);
+}
+
+// Samples first .. first + 15 of ray `ray`: lift_gaussian's operations per lane, its per-ray terms computed as it
+// computes them.
+inline void store_vector_gaussian(__global const float* origins, __global const float* directions,
+                                  __global const float* radii, __global const float* t_edges, __global float* means,
+                                  __global float* covs, uint ray, uint first, uint n_samples) {
+  __global const float* t = t_edges + ray * (n_samples + 1) + first;
+  const float16 t0 = vload16(0, t), t1 = vload16(0, t + 1);
+  float16 t_mean, t_var, r_var;
+#if RAY_SHAPE == RAY_SHAPE_CYLINDER
+  cylinder_moments_of(t0, t1, radii[ray], &t_mean, &t_var, &r_var);
+#else
+  frustum_moments(t0, t1, radii[ray], &t_mean, &t_var, &r_var);
+#endif
+  const float3 origin = load3(origins, ray), dir = load3(directions, ray);
+  const float3 d2 = dir * dir;
+  const float d_mag_sq = fmax(1e-10f, d2.x + d2.y + d2.z);
+  const float3 null_outer = (float3)(d2.y + d2.z, d2.x + d2.z, d2.x + d2.y) / d_mag_sq;
+  const uint row = ray * n_samples + first;
+  store_channels16(means, row, origin.x + t_mean * dir.x, origin.y + t_mean * dir.y, origin.z + t_mean * dir.z);
+  store_channels16(covs, row, t_var * d2.x + r_var * null_outer.x, t_var * d2.y + r_var * null_outer.y,
+                   t_var * d2.z + r_var * null_outer.z);
+}
+
+__kernel void gaussian_fwd(__global const float* origins, __global const float* directions,
+                           __global const float* radii, __global const float* t_edges, __global float* means,
+                           __global float* covs, const uint n_rays, const uint n_samples) {
+#if GAUSSIAN_SAMPLES_PER_VECTOR
+  const uint runs = (n_samples + 15) / 16;  // per ray
+  const size_t item = get_global_id(0);
+  if (item >= (size_t)n_rays * runs) return;
+  const uint ray = (uint)item / runs, first = (uint)item % runs * 16;
+  if (first + 16 <= n_samples) {
+    store_vector_gaussian(origins, directions, radii, t_edges, means, covs, ray, first, n_samples);
+    return;
+  }
+  for (uint i = first; i < n_samples; ++i) {
+    store_row_gaussian(origins, directions, radii, t_edges, means, covs, ray * n_samples + i, n_samples);
+  }
+#else
+  const size_t row = get_global_id(0);
+  if (row >= (size_t)n_rays * n_samples) return;
+  store_row_gaussian(origins, directions, radii, t_edges, means, covs, (uint)row, n_samples);
+#endif
 }
 
 // NeRF's point samples: mean = o + t_mid·d at the interval midpoint t_mid = (t0 + t1)/2, covariance 0 (so the

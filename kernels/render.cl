@@ -160,23 +160,6 @@ ALWAYS_INLINE float16 render_density16(__global const float* density, uint at, R
   return from_raw ? density_activation(noisy_raw_density(value, density_noise_vector(noise, i))) : value;
 }
 
-// Samples at .. at + 15's three channels from their interleaved [.][3] values, and back.
-ALWAYS_INLINE void load_channels16(__global const float* rgb, uint at, float16* red, float16* green, float16* blue) {
-  const float16 a = vload16(0, rgb + 3 * at), b = vload16(0, rgb + 3 * at + 16), c = vload16(0, rgb + 3 * at + 32);
-  *red = (float16)(a.s0, a.s3, a.s6, a.s9, a.sc, a.sf, b.s2, b.s5, b.s8, b.sb, b.se, c.s1, c.s4, c.s7, c.sa, c.sd);
-  *green = (float16)(a.s1, a.s4, a.s7, a.sa, a.sd, b.s0, b.s3, b.s6, b.s9, b.sc, b.sf, c.s2, c.s5, c.s8, c.sb, c.se);
-  *blue = (float16)(a.s2, a.s5, a.s8, a.sb, a.se, b.s1, b.s4, b.s7, b.sa, b.sd, c.s0, c.s3, c.s6, c.s9, c.sc, c.sf);
-}
-
-ALWAYS_INLINE void store_channels16(__global float* rgb, uint at, float16 r, float16 g, float16 b) {
-  vstore16((float16)(r.s0, g.s0, b.s0, r.s1, g.s1, b.s1, r.s2, g.s2, b.s2, r.s3, g.s3, b.s3, r.s4, g.s4, b.s4, r.s5),
-           0, rgb + 3 * at);
-  vstore16((float16)(g.s5, b.s5, r.s6, g.s6, b.s6, r.s7, g.s7, b.s7, r.s8, g.s8, b.s8, r.s9, g.s9, b.s9, r.sa, g.sa),
-           0, rgb + 3 * at + 16);
-  vstore16((float16)(b.sa, r.sb, g.sb, b.sb, r.sc, g.sc, b.sc, r.sd, g.sd, b.sd, r.se, g.se, b.se, r.sf, g.sf, b.sf),
-           0, rgb + 3 * at + 32);
-}
-
 // The length of direction `ray`, which turns depth t into distance.
 ALWAYS_INLINE float direction_norm(__global const float* directions, uint ray) {
   const float x = directions[3 * ray], y = directions[3 * ray + 1], z = directions[3 * ray + 2];

@@ -10,8 +10,24 @@ ocl::BuildOptions gaussian_build_options(const GaussianOptions& options) {
   return ocl::BuildOptions().define("RAY_SHAPE", static_cast<int>(options.ray_shape));
 }
 
-Gaussian::Gaussian(ocl::Context& ctx, const GaussianOptions& options) : ctx_(&ctx), options_(options) {
-  auto& program = ctx.program({"common.cl", "gaussian.cl"}, gaussian_build_options(options_));
+namespace {
+
+GaussianItems choose_items(const ocl::Context& ctx, GaussianItems items) {
+  if (items != GaussianItems::device_default) return items;
+  const auto& device = ctx.device_info();
+  const bool pocl_cpu = (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
+  return pocl_cpu ? GaussianItems::per_vector : GaussianItems::per_row;
+}
+
+constexpr size_t kSamplesPerVector = 16;  // gaussian.cl's per-vector items
+
+}  // namespace
+
+Gaussian::Gaussian(ocl::Context& ctx, const GaussianOptions& options, GaussianItems items)
+    : ctx_(&ctx), options_(options), items_(choose_items(ctx, items)) {
+  auto& program = ctx.program({"common.cl", "gaussian.cl"},
+                              gaussian_build_options(options_).define("GAUSSIAN_SAMPLES_PER_VECTOR",
+                                                                      items_ == GaussianItems::per_vector ? 1 : 0));
   fwd_ = &program.kernel("gaussian_fwd");
   points_ = &program.kernel("gaussian_points_fwd");
 }
@@ -31,7 +47,10 @@ void Gaussian::fwd(const GaussianInputs& in, const GaussianOutputs& out) {
   check(in, out, where, true);
   ocl::set_args(*fwd_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, out.means, out.covs,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
-  ocl::launch_1d(*ctx_, *fwd_, in.n_rays * in.n_samples, where);
+  const size_t items = items_ == GaussianItems::per_vector
+                           ? in.n_rays * ((in.n_samples + kSamplesPerVector - 1) / kSamplesPerVector)
+                           : in.n_rays * in.n_samples;
+  ocl::launch_1d(*ctx_, *fwd_, items, where);
 }
 
 void Gaussian::points(const GaussianInputs& in, const GaussianOutputs& out) {

@@ -25,10 +25,17 @@ struct GaussianOutputs {
   ocl::DeviceArray<float>& covs;   // [R][N][3] diagonal covariance
 };
 
+// gaussian_fwd's items (GAUSSIAN_SAMPLES_PER_VECTOR of gaussian.cl): one per row, or one per 16 consecutive samples of
+// a ray as float16, which PoCL's CPU device runs in full-width vector registers
+// (bench/results/kernel_runtimes_xeon.md). The same floats either way, bit for bit.
+enum class GaussianItems { device_default, per_row, per_vector };
+
 class Gaussian {
  public:
-  Gaussian(ocl::Context& ctx, const GaussianOptions& options);
+  // device_default: per vector on PoCL's CPU device, per row elsewhere.
+  Gaussian(ocl::Context& ctx, const GaussianOptions& options, GaussianItems items = GaussianItems::device_default);
   const GaussianOptions& options() const { return options_; }
+  GaussianItems items() const { return items_; }
 
   // Enqueues gaussian_fwd (supplement eq. 23, or the cylinder).
   void fwd(const GaussianInputs& in, const GaussianOutputs& out);
@@ -39,6 +46,7 @@ class Gaussian {
   void check(const GaussianInputs& in, const GaussianOutputs& out, const std::string& where, bool radii) const;
   ocl::Context* ctx_;
   GaussianOptions options_;
+  GaussianItems items_;  // never device_default
   ::cl::Kernel* fwd_;
   ::cl::Kernel* points_;
 };

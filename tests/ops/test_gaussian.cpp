@@ -54,7 +54,8 @@ struct Gaussians {
   std::vector<float> means, covs;
 };
 
-Gaussians run_device(const GaussianOptions& options, const Rays& r, bool points = false) {
+Gaussians run_device(const GaussianOptions& options, const Rays& r, bool points = false,
+                     ops::GaussianItems items = ops::GaussianItems::device_default) {
   auto& ctx = test::test_context();
   ops::RayBundle rays(ctx, r.n_rays);
   rays.origins.upload(ctx, r.origins);
@@ -63,7 +64,8 @@ Gaussians run_device(const GaussianOptions& options, const Rays& r, bool points 
   auto t_edges = test::upload(ctx, r.t_edges, "t_edges");
   const size_t rows = r.n_rays * r.n_samples;
   auto means = test::filled(ctx, 3 * rows, 7.0f, "means"), covs = test::filled(ctx, 3 * rows, 7.0f, "covs");
-  ops::Gaussian stage(ctx, options);
+  ops::Gaussian stage(ctx, options, items);
+  REQUIRE((items == ops::GaussianItems::device_default || stage.items() == items));
   const ops::GaussianInputs in{rays, t_edges, r.n_rays, r.n_samples};
   if (points) {
     stage.points(in, {means, covs});
@@ -127,7 +129,7 @@ std::vector<Frustum> hard_frustums() {
 Rays axis_zero_and_zero_radius_rays(size_t n_samples, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0), signed_unit(-1.0, 1.0);
-  const std::vector<std::array<float, 3>> fixed = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1},
+  const std::vector<std::array<float, 3>> fixed = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0}, {0, -1, 0},    {0, 0, 1},
                                                    {0, 0, -1}, {0, 0, -2}, {3, 0, 0}, {0, -0.5f, 0}, {0, 0, 0}};
   Rays r;
   r.n_samples = n_samples;
@@ -169,8 +171,8 @@ void gaussian_tolerances(RayShape shape, const Rays& r, std::vector<double>& mea
                                              : ref::cylinder_moments(t0, t1, double(r.radii[ray]));
       for (int a = 0; a < 3; ++a) {
         const size_t at = 3 * (ray * r.n_samples + i) + a;
-        mean_tol[at] = 2 * (2 * kUnitRoundoff * std::abs(r.origins[3 * ray + a]) +
-                            12 * kUnitRoundoff * std::abs(m.t_mean * d[a]));
+        mean_tol[at] =
+            2 * (2 * kUnitRoundoff * std::abs(r.origins[3 * ray + a]) + 12 * kUnitRoundoff * std::abs(m.t_mean * d[a]));
         cov_tol[at] = 2 * 35 * kUnitRoundoff * (m.t_var * d[a] * d[a] + m.r_var * (1 - d[a] * d[a] / d_sq)) + 1e-44;
       }
     }
@@ -197,6 +199,19 @@ TEST_CASE("gaussian: cone and cylinder Gaussians match the CPU reference on 12,8
     gaussian_tolerances(shape, r, mean_scale, cov_scale);
     MIPNERF_CHECK_CLOSE("means", dev.means, means, [&](size_t i) { return mean_scale[i]; });
     MIPNERF_CHECK_CLOSE("covs", dev.covs, covs, [&](size_t i) { return cov_scale[i]; });
+  }
+}
+
+TEST_CASE("gaussian: an item per 16 samples gives the per-row Gaussians bit for bit, with shorter last runs") {
+  // 37 samples per ray: two runs of 16 as float16, then 5 samples row by row; the same operations per lane as the
+  // per-row kernel (gaussian.cl), so the same floats.
+  const Rays r = random_rays(120, 37, 36);
+  for (auto shape : {RayShape::cone, RayShape::cylinder}) {
+    INFO("ray shape " << static_cast<int>(shape));
+    const auto per_row = run_device({shape}, r, false, ops::GaussianItems::per_row);
+    const auto per_vector = run_device({shape}, r, false, ops::GaussianItems::per_vector);
+    CHECK(per_vector.means == per_row.means);
+    CHECK(per_vector.covs == per_row.covs);
   }
 }
 
@@ -382,6 +397,5 @@ TEST_CASE("gaussian: undersized buffers are refused with the buffer's name") {
   ops::RayBundle rays(ctx, 2);
   ocl::DeviceArray<float> t_edges(ctx, 2 * 5, "t_edges"), means(ctx, 3 * 8, "means"), covs(ctx, 3 * 7, "covs [short]");
   ops::Gaussian stage(ctx, {});
-  CHECK_THROWS_WITH_AS(stage.fwd({rays, t_edges, 2, 4}, {means, covs}),
-                       doctest::Contains("covs [short]"), Error);
+  CHECK_THROWS_WITH_AS(stage.fwd({rays, t_edges, 2, 4}, {means, covs}), doctest::Contains("covs [short]"), Error);
 }
