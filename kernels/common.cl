@@ -12,6 +12,9 @@
 // A helper every caller gets inlined: PoCL vectorises a kernel across work-items only when the work-item loop has
 // no calls left, and its inliner leaves out functions it finds too costly (stable_softplus: cost 300 > 225).
 #define ALWAYS_INLINE inline __attribute__((always_inline))
+// A function defined for several value types (float and float16, uint and uint16), each definition written once in a
+// macro over the type (below).
+#define OVERLOADABLE __attribute__((overloadable))
 
 // Loads/stores a packed 3-vector at element index i (i.e. floats 3i..3i+2).
 // load3_component: component `axis` (0..2) of that vector alone, for kernels with an item per axis.
@@ -76,25 +79,29 @@ ALWAYS_INLINE void store_channels16(__global float* rgb, uint at, float16 r, flo
 #define RNG_STREAM_SUBPIXEL 3u    /* sub-pixel position of a ray (supersampling) */
 #define RNG_STREAM_DENSITY_NOISE 4u /* noise added to the raw density while training (render.cl) */
 
-// One Philox call on four scalar words, in place: counter (c0..c3) in, random words out. Scalars, because PoCL's
-// vectoriser cannot widen vector-typed values such as uint4 (a kernel it should vectorise across work-items takes
-// these); out-parameters rather than a returned struct, whose inlining oclgrind 21.10 cannot run
-// (llvm.experimental.noalias.scope.decl).
-ALWAYS_INLINE void philox4x32_10_words(uint* c0, uint* c1, uint* c2, uint* c3, uint k0, uint k1) {
-  __attribute__((opencl_unroll_hint)) for (int round = 0; round < 10; ++round) {
-    // Each 32 x 32 → 64-bit product once, its halves taken apart: the built-in mul_hi is a call PoCL does not
-    // always inline (its remarks), and a call in the work-item loop stops the vectoriser.
-    const ulong product0 = (ulong)0xD2511F53u * *c0, product1 = (ulong)0xCD9E8D57u * *c2;
-    const uint hi0 = (uint)(product0 >> 32), lo0 = (uint)product0;
-    const uint hi1 = (uint)(product1 >> 32), lo1 = (uint)product1;
-    *c0 = hi1 ^ *c1 ^ k0;
-    *c1 = lo1;
-    *c2 = hi0 ^ *c3 ^ k1;
-    *c3 = lo0;
-    k0 += 0x9E3779B9u;
-    k1 += 0xBB67AE85u;
+// One Philox call on four words, in place: counter (c0..c3) in, random words out; for scalar words and for uint16
+// (sixteen independent calls lane by lane, the sampler's per-vector items), written once. Scalars where a kernel
+// should be vectorised by PoCL across work-items, which cannot widen vector-typed values such as uint4;
+// out-parameters rather than a returned struct, whose inlining oclgrind 21.10 cannot run
+// (llvm.experimental.noalias.scope.decl). Each 32 x 32 → 64-bit product once, its halves taken apart: the built-in
+// mul_hi is a call PoCL does not always inline (its remarks), and a call in the work-item loop stops the vectoriser.
+#define DEFINE_PHILOX4X32_10_WORDS(U, W)                                                                        \
+  ALWAYS_INLINE OVERLOADABLE void philox4x32_10_words(U* c0, U* c1, U* c2, U* c3, uint k0, uint k1) {           \
+    __attribute__((opencl_unroll_hint)) for (int round = 0; round < 10; ++round) {                              \
+      const ulong##W product0 = convert_ulong##W(*c0) * 0xD2511F53UL;                                           \
+      const ulong##W product1 = convert_ulong##W(*c2) * 0xCD9E8D57UL;                                           \
+      const U hi0 = convert_uint##W(product0 >> 32), lo0 = convert_uint##W(product0 & 0xFFFFFFFFUL);            \
+      const U hi1 = convert_uint##W(product1 >> 32), lo1 = convert_uint##W(product1 & 0xFFFFFFFFUL);            \
+      *c0 = hi1 ^ *c1 ^ k0;                                                                                     \
+      *c1 = lo1;                                                                                                \
+      *c2 = hi0 ^ *c3 ^ k1;                                                                                     \
+      *c3 = lo0;                                                                                                \
+      k0 += 0x9E3779B9u;                                                                                        \
+      k1 += 0xBB67AE85u;                                                                                        \
+    }                                                                                                           \
   }
-}
+DEFINE_PHILOX4X32_10_WORDS(uint, )
+DEFINE_PHILOX4X32_10_WORDS(uint16, 16)
 
 ALWAYS_INLINE uint4 philox4x32_10(uint4 counter, uint2 key) {
   uint c0 = counter.x, c1 = counter.y, c2 = counter.z, c3 = counter.w;
@@ -104,7 +111,12 @@ ALWAYS_INLINE uint4 philox4x32_10(uint4 counter, uint2 key) {
 
 // A uniform float in [0, 1) from one word: its top 24 bits, so every value is exact in float32 and 1.0 is never
 // returned.
-ALWAYS_INLINE float rng_uniform_of_word(uint word) { return (float)(word >> 8) * (1.0f / 16777216.0f); }
+#define DEFINE_RNG_UNIFORM_OF_WORD(U, V, W)                       \
+  ALWAYS_INLINE OVERLOADABLE V rng_uniform_of_word(U word) {      \
+    return convert_float##W(word >> 8) * (1.0f / 16777216.0f);    \
+  }
+DEFINE_RNG_UNIFORM_OF_WORD(uint, float, )
+DEFINE_RNG_UNIFORM_OF_WORD(uint16, float16, 16)
 
 // The four words of rng_uniform4's call (the same counter and key), for rng_uniform_of_word: w0..w3 are set.
 ALWAYS_INLINE void rng_words(ulong seed, uint item, uint step, uint slot, uint stream, uint* w0, uint* w1, uint* w2,
@@ -142,12 +154,11 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // double references (tests/ops/test_activations.cpp and test_render.cpp sweep every binade).
 
 // Overloads: the element-wise math below is defined for float and for float16, the explicit vectors of the
-// activations' per-vector items (activations.cl). Each such function is written once, in a macro over its value type
+// per-vector items (activations.cl, render.cl, gaussian.cl). Each such function is written once, in a macro over its value type
 // V (float or float16) and W, the width's suffix of the conversion built-ins (empty or 16): the vector version runs
 // the same operations lane by lane, so a lane gets the same float, bit for bit, as the scalar version (the tests'
 // exact comparisons of fused and separate kernels rely on it). Comments inside the macros are /* */, which a
 // continued line cannot end early.
-#define OVERLOADABLE __attribute__((overloadable))
 
 // reduce_by_ln2(x, n): x = n·ln2 + r for x ≤ 0 clamped: sets *n = rint(x·log2 e) and returns r, by two fma steps (ln2
 // split into its float and the remainder), |r| ≤ ln2/2 + tiny. (An out-parameter, not a returned struct: see

@@ -27,11 +27,18 @@ struct MergeInputs {
   size_t len_b;
 };
 
+// sample_stratified_fwd's items (SAMPLE_GROUPS_PER_VECTOR of sample.cl): one per group of 4 edges, or one per 16
+// consecutive groups of a ray as uint16/float16, which PoCL's CPU device runs in full-width vector registers
+// (bench/results/kernel_runtimes_xeon.md). The same edges either way, bit for bit.
+enum class SampleItems { device_default, per_group, per_vector };
+
 // Stratified sampling and merging for one specialisation (lindisp or not; built on construction).
 class Sample {
  public:
-  Sample(ocl::Context& ctx, const SampleOptions& options);
+  // device_default: per vector on PoCL's CPU device, per group elsewhere.
+  Sample(ocl::Context& ctx, const SampleOptions& options, SampleItems items = SampleItems::device_default);
   const SampleOptions& options() const { return options_; }
+  SampleItems items() const { return items_; }
 
   // Enqueues sample_stratified_fwd: t_edges [R][N+1] (options().randomized chooses jitter; `key` keys it).
   void stratified(const StratifiedInputs& in, ocl::DeviceArray<float>& t_edges, const RngKey& key = {});
@@ -41,6 +48,7 @@ class Sample {
  private:
   ocl::Context* ctx_;
   SampleOptions options_;
+  SampleItems items_;  // never device_default
   ::cl::Kernel* stratified_;
   ::cl::Kernel* merge_;
 };

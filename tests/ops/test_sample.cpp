@@ -32,8 +32,9 @@ Ranges random_ranges(size_t n_rays, unsigned seed) {
   return r;
 }
 
-std::vector<float> run_stratified(const SampleOptions& options, const Ranges& r, size_t n_samples,
-                                  const RngKey& key, size_t first = 0, size_t count = SIZE_MAX) {
+std::vector<float> run_stratified(const SampleOptions& options, const Ranges& r, size_t n_samples, const RngKey& key,
+                                  size_t first = 0, size_t count = SIZE_MAX,
+                                  ops::SampleItems items = ops::SampleItems::device_default) {
   auto& ctx = test::test_context();
   count = std::min(count, r.near.size() - first);
   const std::vector<float> near(r.near.begin() + first, r.near.begin() + first + count);
@@ -42,7 +43,9 @@ std::vector<float> run_stratified(const SampleOptions& options, const Ranges& r,
   rays.near.upload(ctx, near);
   rays.far.upload(ctx, far);
   auto t_edges = test::filled(ctx, count * (n_samples + 1), 7.0f, "t_edges");
-  ops::Sample(ctx, options).stratified({rays, count, n_samples}, t_edges, key);
+  ops::Sample stage(ctx, options, items);
+  REQUIRE((items == ops::SampleItems::device_default || stage.items() == items));
+  stage.stratified({rays, count, n_samples}, t_edges, key);
   return t_edges.download(ctx);
 }
 
@@ -83,6 +86,25 @@ TEST_CASE("sample: stratified edges match the CPU reference, linear in depth or 
   }
 }
 
+TEST_CASE("sample: an item per 16 groups of edges gives the per-group edges bit for bit, with shorter last runs") {
+  // 128 samples: 129 edges in 33 groups of 4, two runs of 16 groups as uint16/float16 and the last group alone;
+  // 70 samples: 71 edges, one run and 2 groups (the last with 3 edges). Sixteen Philox calls lane by lane and the
+  // edge formula per lane (sample.cl), so the same edges.
+  const size_t n_rays = test::batch_for_device(700, 40);
+  const Ranges r = random_ranges(n_rays, 64);
+  const RngKey key{77, 9, 1200};
+  for (const size_t n : {size_t(128), size_t(70)}) {
+    for (bool lindisp : {false, true}) {
+      for (bool randomized : {false, true}) {
+        INFO(n << " samples, lindisp " << lindisp << ", randomized " << randomized);
+        const SampleOptions options{lindisp, randomized};
+        CHECK(run_stratified(options, r, n, key, 0, SIZE_MAX, ops::SampleItems::per_vector) ==
+              run_stratified(options, r, n, key, 0, SIZE_MAX, ops::SampleItems::per_group));
+      }
+    }
+  }
+}
+
 TEST_CASE("sample: near = far and far < near give the reference's edges, finite, in depth or disparity") {
   // Degenerate ranges: near = far (positive, and both 0), far < near (both positive, and far = 0), and near = 0 <
   // far (an NDC scene's [0, 1] sampled in disparity). In disparity a zero bound is the guarded case: the official
@@ -90,7 +112,7 @@ TEST_CASE("sample: near = far and far < near give the reference's edges, finite,
   // limit (0 at every edge the zero bound's term reaches). Elsewhere the edges are the official formula's,
   // decreasing when far < near.
   const std::vector<std::pair<float, float>> ranges = {{2.0f, 2.0f}, {0.5f, 0.5f}, {1e-3f, 1e-3f}, {7.25f, 7.25f},
-                                                       {0.0f, 0.0f}, {6.0f, 2.0f}, {3.0f, 0.5f}, {1.0f, 0.999f},
+                                                       {0.0f, 0.0f}, {6.0f, 2.0f}, {3.0f, 0.5f},   {1.0f, 0.999f},
                                                        {2.0f, 0.0f}, {0.0f, 1.0f}};
   const size_t n = 16, copies = 50;  // each range on 50 rays, so the jitter draws differ
   Ranges r;
