@@ -37,6 +37,13 @@ inline void store3(__global float* p, size_t i, float3 v) {
   p[3 * i + 2] = v.z;
 }
 
+// STEP(k) for the lanes k = 0 .. f of a 16-wide vector (component .sk), in order, or from the last.
+#define FOR_EACH_LANE(STEP) \
+  STEP(0) STEP(1) STEP(2) STEP(3) STEP(4) STEP(5) STEP(6) STEP(7) STEP(8) STEP(9) STEP(a) STEP(b) STEP(c) STEP(d) STEP(e) STEP(f)
+#define FOR_EACH_LANE_REVERSED(STEP) \
+  STEP(f) STEP(e) STEP(d) STEP(c) STEP(b) STEP(a) STEP(9) STEP(8) STEP(7) STEP(6) STEP(5) STEP(4) STEP(3) STEP(2) STEP(1) STEP(0)
+
+
 // Rows at .. at + 15 of a [rows][3] array as three float16 (its interleaved components apart), and back.
 ALWAYS_INLINE void load_channels16(__global const float* rgb, uint at, float16* red, float16* green, float16* blue) {
   const float16 a = vload16(0, rgb + 3 * at), b = vload16(0, rgb + 3 * at + 16), c = vload16(0, rgb + 3 * at + 32);

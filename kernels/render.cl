@@ -73,11 +73,6 @@
 #error "SAMPLES_PER_VECTOR and SAMPLES_IN_LOCKSTEP are two ways of walking the samples: choose one"
 #endif
 #define SAMPLE_VECTOR 16 /* samples per float16 */
-// STEP(k) for the lanes k = 0 .. f of a float16 (component .sk), in sample order, or from the last.
-#define FOR_EACH_LANE(STEP) \
-  STEP(0) STEP(1) STEP(2) STEP(3) STEP(4) STEP(5) STEP(6) STEP(7) STEP(8) STEP(9) STEP(a) STEP(b) STEP(c) STEP(d) STEP(e) STEP(f)
-#define FOR_EACH_LANE_REVERSED(STEP) \
-  STEP(f) STEP(e) STEP(d) STEP(c) STEP(b) STEP(a) STEP(9) STEP(8) STEP(7) STEP(6) STEP(5) STEP(4) STEP(3) STEP(2) STEP(1) STEP(0)
 
 #define DENSITY_NOISE_LEVEL_SHIFT 24 /* slot = level·2^24 + sample/4: 256 levels of up to 2^26 samples */
 

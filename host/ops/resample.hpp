@@ -18,9 +18,16 @@ struct ResampleInputs {
 };
 
 // Hierarchical resampling (no compile-time options; the ResampleOptions are kernel arguments).
+// resample_fwd's items (RESAMPLE_RAYS_PER_VECTOR of resample.cl): one per ray, or one per 16 rays walked together
+// lane by lane, which PoCL's CPU device runs without a mispredicted branch per step of a ray's walk
+// (bench/results/kernel_runtimes_xeon.md). The same edges either way, bit for bit.
+enum class ResampleItems { device_default, per_ray, per_vector };
+
 class Resample {
  public:
-  explicit Resample(ocl::Context& ctx);
+  // device_default: per vector on PoCL's CPU device, per ray elsewhere.
+  explicit Resample(ocl::Context& ctx, ResampleItems items = ResampleItems::device_default);
+  ResampleItems items() const { return items_; }
 
   // Enqueues resample_fwd: t_new [R][M+1], sorted, a constant for the gradient.
   void fwd(const ResampleOptions& options, const ResampleInputs& in, ocl::DeviceArray<float>& t_new,
@@ -28,6 +35,7 @@ class Resample {
 
  private:
   ocl::Context* ctx_;
+  ResampleItems items_;  // never device_default
   ::cl::Kernel* fwd_;
 };
 
