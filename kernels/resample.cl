@@ -79,7 +79,7 @@ inline void resample_rays16(__global const float* t_edges, __global const float*
   float16 cdf_hi = n == 1 ? (float16)(1.0f) : fmin(partial, 1.0f);
   const float eps = FLT_EPSILON;
   const float stratum = 1.0f / (float)n_out;
-  float16 xi0 = 0.0f, xi1 = 0.0f, xi2 = 0.0f, xi3 = 0.0f;  // the draws of the current group of 4 u's
+  float16 xi0 = 0.0f, xi1 = 0.0f, xi2 = 0.0f, xi3 = 0.0f;  // the draws of u_j .. to the end of j's group of 4
   for (uint j = 0; j < n_out; ++j) {
     float16 u;
     if (randomized) {
@@ -91,8 +91,12 @@ inline void resample_rays16(__global const float* t_edges, __global const float*
         xi2 = rng_uniform_of_word(w2);
         xi3 = rng_uniform_of_word(w3);
       }
-      const float16 xi = j % 4 == 0 ? xi0 : j % 4 == 1 ? xi1 : j % 4 == 2 ? xi2 : xi3;
-      u = (float)j * stratum + xi * (stratum - eps);
+      u = (float)j * stratum + xi0 * (stratum - eps);
+      // The next u's draw to the front: no vector chosen by a computed index (oclgrind 21.10 mis-evaluated such a
+      // choice here: every randomized edge differed from the per-ray kernel's under it, and only under it).
+      xi0 = xi1;
+      xi1 = xi2;
+      xi2 = xi3;
     } else {
       u = (float16)((float)j * ((1.0f - eps) / (float)n_new));
     }

@@ -106,7 +106,7 @@ TEST_CASE("resample: 16 rays walked together give each ray's own walk bit for bi
     const Histograms h = random_histograms(n_rays, 48, 33, nerf);
     for (bool randomized : {false, true}) {
       for (size_t m : {size_t(48), size_t(21), size_t(96)}) {
-        INFO((nerf ? "NeRF" : "mip-NeRF") << ", randomized " << randomized << ", " << m << " new intervals");
+        INFO(std::string(nerf ? "NeRF" : "mip-NeRF") << ", randomized " << randomized << ", " << m << " new intervals");
         const auto options = nerf ? nerf_options(randomized) : mipnerf_options(randomized);
         const auto per_ray = run_device(options, h, key, 0, SIZE_MAX, m, ops::ResampleItems::per_ray);
         CHECK(run_device(options, h, key, 0, SIZE_MAX, m, ops::ResampleItems::per_vector) == per_ray);
