@@ -59,7 +59,9 @@
     return (1.0f + 2.0f * RGB_PADDING) * stable_sigmoid_grad(raw);                                                 \
   }
 DEFINE_ACTIVATIONS(float)
+#if VECTOR_ITEMS
 DEFINE_ACTIVATIONS(float16)
+#endif
 
 // The element-wise kernels' items (the host chooses per device, ops/activations.hpp), ACTIVATION_ITEMS:
 //  - ACTIVATION_ITEMS_PER_VALUE: one item per value: the colour values' items first (flat index j of rgb), padded to
@@ -101,8 +103,11 @@ inline int colour_item(uint colour_items, uint* index) {
     return colour ? rgb_activation(raw) : density_activation(raw);                               \
   }
 DEFINE_ACTIVATION_OF(float)
+#if VECTOR_ITEMS
 DEFINE_ACTIVATION_OF(float16)
+#endif
 
+#if VECTOR_ITEMS
 // Per-vector item v of n values: out = activation_of(raw, d) for values 16v .. 16v + 15, or those of them below n.
 // `d` is read only when `backward`.
 ALWAYS_INLINE void activate_vector_item(__global const float* raw, __global const float* d, __global float* out,
@@ -115,6 +120,7 @@ ALWAYS_INLINE void activate_vector_item(__global const float* raw, __global cons
   }
   for (uint k = first; k < n; ++k) out[k] = activation_of(raw[k], backward ? d[k] : 0.0f, colour, backward);
 }
+#endif
 
 // Forward (backward = 0): density[i] = density_activation(raw_density[i]), rgb[i][c] = rgb_activation(raw_rgb[i][c]).
 // Backward: d_raw_density [rows], d_raw_rgb [rows][3], each derivative recomputed from the raw values (the forward

@@ -16,6 +16,16 @@
 // macro over the type (below).
 #define OVERLOADABLE __attribute__((overloadable))
 
+// VECTOR_ITEMS: the program has a stage with explicit vector items (activations, render, gaussian, sample, resample:
+// their *_PER_VECTOR / ACTIVATION_ITEMS = 2 switches, which the host sets on PoCL's CPU device). Only then are the
+// float16 and uint16 definitions compiled: a program that does not use them does not carry them.
+#if SAMPLES_PER_VECTOR || GAUSSIAN_SAMPLES_PER_VECTOR || SAMPLE_GROUPS_PER_VECTOR || RESAMPLE_RAYS_PER_VECTOR || \
+    (defined(ACTIVATION_ITEMS) && ACTIVATION_ITEMS == 2 /* ACTIVATION_ITEMS_PER_VECTOR */)
+#define VECTOR_ITEMS 1
+#else
+#define VECTOR_ITEMS 0
+#endif
+
 // Loads/stores a packed 3-vector at element index i (i.e. floats 3i..3i+2).
 // load3_component: component `axis` (0..2) of that vector alone, for kernels with an item per axis.
 #ifndef MIPNERF_TEST_FAULT
@@ -44,6 +54,7 @@ inline void store3(__global float* p, size_t i, float3 v) {
   STEP(f) STEP(e) STEP(d) STEP(c) STEP(b) STEP(a) STEP(9) STEP(8) STEP(7) STEP(6) STEP(5) STEP(4) STEP(3) STEP(2) STEP(1) STEP(0)
 
 
+#if VECTOR_ITEMS
 // Rows at .. at + 15 of a [rows][3] array as three float16 (its interleaved components apart), and back.
 ALWAYS_INLINE void load_channels16(__global const float* rgb, uint at, float16* red, float16* green, float16* blue) {
   const float16 a = vload16(0, rgb + 3 * at), b = vload16(0, rgb + 3 * at + 16), c = vload16(0, rgb + 3 * at + 32);
@@ -60,6 +71,7 @@ ALWAYS_INLINE void store_channels16(__global float* rgb, uint at, float16 r, flo
   vstore16((float16)(b.sa, r.sb, g.sb, b.sb, r.sc, g.sc, b.sc, r.sd, g.sd, b.sd, r.se, g.se, b.se, r.sf, g.sf, b.sf),
            0, rgb + 3 * at + 32);
 }
+#endif
 
 // Packed camera layout, [C][CAMERA_STRIDE] floats; mirrors host/data/camera.hpp (camera_layout).
 #define CAMERA_TO_WORLD 0 /* 12 floats, 3x4 row-major, OpenGL axes (camera looks down -z) */
@@ -108,7 +120,9 @@ ALWAYS_INLINE void store_channels16(__global float* rgb, uint at, float16 r, flo
     }                                                                                                           \
   }
 DEFINE_PHILOX4X32_10_WORDS(uint, )
+#if VECTOR_ITEMS
 DEFINE_PHILOX4X32_10_WORDS(uint16, 16)
+#endif
 
 ALWAYS_INLINE uint4 philox4x32_10(uint4 counter, uint2 key) {
   uint c0 = counter.x, c1 = counter.y, c2 = counter.z, c3 = counter.w;
@@ -123,7 +137,9 @@ ALWAYS_INLINE uint4 philox4x32_10(uint4 counter, uint2 key) {
     return convert_float##W(word >> 8) * (1.0f / 16777216.0f);    \
   }
 DEFINE_RNG_UNIFORM_OF_WORD(uint, float, )
+#if VECTOR_ITEMS
 DEFINE_RNG_UNIFORM_OF_WORD(uint16, float16, 16)
+#endif
 
 // The four words of rng_uniform4's call (the same counter and key), for rng_uniform_of_word: w0..w3 are set.
 ALWAYS_INLINE void rng_words(ulong seed, uint item, uint step, uint slot, uint stream, uint* w0, uint* w1, uint* w2,
@@ -198,7 +214,9 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
     return isnan(x) ? x : scaled;                                                                             \
   }
 DEFINE_EXP_NONPOSITIVE(float, )
+#if VECTOR_ITEMS
 DEFINE_EXP_NONPOSITIVE(float16, 16)
+#endif
 
 // expm1_nonpositive(x): e^x − 1 for x ≤ 0 (NaN stays NaN; −∞ gives −1), without the cancellation of exp(x) − 1 near
 // 0. The same reduction as exp_nonpositive, x = n·ln2 + r, and e^x − 1 = 2^n·(e^r − 1) + (2^n − 1) with
@@ -224,7 +242,9 @@ DEFINE_EXP_NONPOSITIVE(float16, 16)
     return isnan(x) ? x : result;                                                                         \
   }
 DEFINE_EXPM1_NONPOSITIVE(float, )
+#if VECTOR_ITEMS
 DEFINE_EXPM1_NONPOSITIVE(float16, 16)
+#endif
 
 // log1p_unit(y): log(1 + y) for y in [0, 1] (the softplus of exp_nonpositive's results): 2·atanh(s) with
 // s = y/(2 + y) in [0, 1/3], an identity with no cancellation, so small y keeps its relative accuracy (s ≈ y/2).
@@ -242,6 +262,8 @@ DEFINE_EXPM1_NONPOSITIVE(float16, 16)
     return 2.0f * s * p;                                                      \
   }
 DEFINE_LOG1P_UNIT(float)
+#if VECTOR_ITEMS
 DEFINE_LOG1P_UNIT(float16)
+#endif
 
 #endif

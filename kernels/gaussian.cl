@@ -54,7 +54,9 @@
     *r_var = (V)(0.25f * radius * radius);                                                                         \
   }
 DEFINE_INTERVAL_MOMENTS(float)
+#if VECTOR_ITEMS
 DEFINE_INTERVAL_MOMENTS(float16)
+#endif
 
 inline float3 conical_frustum_moments(float t0, float t1, float radius) {
   float t_mean, t_var, r_var;
@@ -132,6 +134,7 @@ inline void store_row_gaussian(__global const float* origins, __global const flo
   store3(covs, row, cov);
 }
 
+#if GAUSSIAN_SAMPLES_PER_VECTOR
 // Samples first .. first + 15 of ray `ray`: lift_gaussian's operations per lane, its per-ray terms computed as it
 // computes them.
 inline void store_vector_gaussian(__global const float* origins, __global const float* directions,
@@ -154,6 +157,7 @@ inline void store_vector_gaussian(__global const float* origins, __global const 
   store_channels16(covs, row, t_var * d2.x + r_var * null_outer.x, t_var * d2.y + r_var * null_outer.y,
                    t_var * d2.z + r_var * null_outer.z);
 }
+#endif
 
 __kernel void gaussian_fwd(__global const float* origins, __global const float* directions,
                            __global const float* radii, __global const float* t_edges, __global float* means,

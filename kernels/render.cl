@@ -111,11 +111,13 @@ inline float4 density_noise_group_reversed(RayNoiseKey key, uint i) {
   return reversed;
 }
 
+#if SAMPLES_PER_VECTOR
 // The draws of samples i .. i + 15 (i a multiple of 4), in order.
 inline float16 density_noise_vector(RayNoiseKey key, uint i) {
   return (float16)(density_noise_group(key, i / 4), density_noise_group(key, i / 4 + 1),
                    density_noise_group(key, i / 4 + 2), density_noise_group(key, i / 4 + 3));
 }
+#endif
 
 // noisy_raw_density(raw, z): raw density `raw` as the activation sees it: raw + DENSITY_NOISE·z (z: the sample's
 // draw) with DENSITY_NOISE, else raw.
@@ -134,7 +136,9 @@ inline float16 density_noise_vector(RayNoiseKey key, uint i) {
     return delta > 0.0f ? density * delta : (V)0.0f;                                                    \
   }
 DEFINE_RENDER_SAMPLE_MATH(float)
+#if VECTOR_ITEMS
 DEFINE_RENDER_SAMPLE_MATH(float16)
+#endif
 
 // Density `at`: activated from a raw value with its noise draw z, or as given.
 ALWAYS_INLINE float render_density(__global const float* density, uint at, float z, const int from_raw) {
@@ -148,12 +152,14 @@ ALWAYS_INLINE float render_channel(__global const float* rgb, uint at, int c, co
   return from_raw ? rgb_activation(value) : value;
 }
 
+#if SAMPLES_PER_VECTOR
 // Samples at .. at + 15's densities: activated from raw values with their draws (samples i ..), or as given.
 ALWAYS_INLINE float16 render_density16(__global const float* density, uint at, RayNoiseKey noise, uint i,
                                        const int from_raw) {
   const float16 value = vload16(0, density + at);
   return from_raw ? density_activation(noisy_raw_density(value, density_noise_vector(noise, i))) : value;
 }
+#endif
 
 // The length of direction `ray`, which turns depth t into distance.
 ALWAYS_INLINE float direction_norm(__global const float* directions, uint ray) {
@@ -161,6 +167,7 @@ ALWAYS_INLINE float direction_norm(__global const float* directions, uint ray) {
   return sqrt(x * x + y * y + z * z);
 }
 
+#if SAMPLES_PER_VECTOR
 // Σ of a float16's lanes, pairwise (8 + 8, 4 + 4, 2 + 2, 1 + 1).
 ALWAYS_INLINE float sum16(float16 v) {
   const float8 a = v.lo + v.hi;
@@ -219,6 +226,7 @@ ALWAYS_INLINE void render_vector_fwd(__global const float* rgb, __global const f
   sums->acc += w;
   sums->t_weighted += w * (0.5f * (t_near + t_far));
 }
+#endif
 
 // The forward pass of ray `ray`; `from_raw` (a constant at each call site) applies the activations to the
 // inputs first, with the ray's density noise (`noise`, used only from raw values). Writes acc, distance and weights
@@ -287,6 +295,7 @@ ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const floa
   comp_rgb[3 * ray + 2] = blue;
 }
 
+#if SAMPLES_PER_VECTOR
 // The backward's reverse sweep over samples i .. i + 15 of ray `ray` (the per-vector walk, entered with the sums over
 // the samples after them): what render_ray_bwd's loop does for them, its suffix sums advanced from the last lane to the
 // first with the loop's own expressions.
@@ -326,6 +335,7 @@ ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const f
   store_channels16(d_rgb, at, d_red_i, d_green_i, d_blue_i);
   vstore16(d_sigma, 0, d_density + at);
 }
+#endif
 
 // The backward pass of ray `ray`. With g_i = ∂L/∂w_i = d_comp·c_i + d_acc_total (d_acc_total = d_acc, minus
 // Σ_c d_comp_c on a white background because comp also holds 1 − acc):

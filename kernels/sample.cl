@@ -41,7 +41,9 @@
     return STRATIFIED_EDGE_OF(V, s);                                                             \
   }
 DEFINE_STRATIFIED_EDGE(uint, float, )
+#if VECTOR_ITEMS
 DEFINE_STRATIFIED_EDGE(uint16, float16, 16)
+#endif
 
 // Edge k = 4·group + j of a ray: jittered by u (its group's draw j) unless not randomized.
 #define DEFINE_STRATIFIED_JITTERED_EDGE(U, V)                                                                     \
@@ -54,7 +56,9 @@ DEFINE_STRATIFIED_EDGE(uint16, float16, 16)
     return lower + (upper - lower) * u;                                                                             \
   }
 DEFINE_STRATIFIED_JITTERED_EDGE(uint, float)
+#if VECTOR_ITEMS
 DEFINE_STRATIFIED_JITTERED_EDGE(uint16, float16)
+#endif
 
 // One item per (ray, group of 4 edges): one Philox call gives the 4 jitters of a group. The four edges are written
 // out one by one (no private array, no loop with a break: either keeps PoCL from vectorising across items).
@@ -85,6 +89,7 @@ inline void store_edge_group(__global float* out, float t_near, float t_far, uin
   }
 }
 
+#if SAMPLE_GROUPS_PER_VECTOR
 // Groups first .. first + 15 of ray `ray` (edges 4·first .. 4·first + 63, all below N + 1): store_edge_group's
 // operations lane by lane (lane = group), the four edges of each group then interleaved back into edge order.
 inline void store_edge_groups16(__global float* out, float t_near, float t_far, uint ray, uint first,
@@ -104,6 +109,7 @@ inline void store_edge_groups16(__global float* out, float t_near, float t_far, 
   vstore16(((float16)(e0.s89ab, e1.s89ab, e2.s89ab, e3.s89ab)).s048c159d26ae37bf, 0, at + 32);
   vstore16(((float16)(e0.scdef, e1.scdef, e2.scdef, e3.scdef)).s048c159d26ae37bf, 0, at + 48);
 }
+#endif
 
 __kernel void sample_stratified_fwd(__global const float* near, __global const float* far,
                                     __global float* t_edges, const uint n_rays, const uint n_samples,
