@@ -125,15 +125,6 @@ inline void row_gaussian(__global const float* origins, __global const float* di
 #define GAUSSIAN_SAMPLES_PER_VECTOR 0
 #endif
 
-inline void store_row_gaussian(__global const float* origins, __global const float* directions,
-                               __global const float* radii, __global const float* t_edges, __global float* means,
-                               __global float* covs, uint row, uint n_samples) {
-  float3 mean, cov;
-  row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
-  store3(means, row, mean);
-  store3(covs, row, cov);
-}
-
 #if GAUSSIAN_SAMPLES_PER_VECTOR
 // Samples first .. first + 15 of ray `ray`: lift_gaussian's operations per lane, its per-ray terms computed as it
 // computes them.
@@ -172,12 +163,19 @@ __kernel void gaussian_fwd(__global const float* origins, __global const float* 
     return;
   }
   for (uint i = first; i < n_samples; ++i) {
-    store_row_gaussian(origins, directions, radii, t_edges, means, covs, ray * n_samples + i, n_samples);
+    const size_t row = (size_t)ray * n_samples + i;
+    float3 mean, cov;
+    row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
+    store3(means, row, mean);
+    store3(covs, row, cov);
   }
 #else
   const size_t row = get_global_id(0);
   if (row >= (size_t)n_rays * n_samples) return;
-  store_row_gaussian(origins, directions, radii, t_edges, means, covs, (uint)row, n_samples);
+  float3 mean, cov;
+  row_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &cov);
+  store3(means, row, mean);
+  store3(covs, row, cov);
 #endif
 }
 

@@ -37,7 +37,7 @@
 #endif
 #define DEFINE_STRATIFIED_EDGE(U, V, W)                                                          \
   ALWAYS_INLINE OVERLOADABLE V stratified_edge(float near, float far, U k, uint n_samples) {     \
-    const V s = convert_float##W(k) / (float)n_samples;                                          \
+    const V s = CONVERT_FLOAT##W(k) / (float)n_samples;                                          \
     return STRATIFIED_EDGE_OF(V, s);                                                             \
   }
 DEFINE_STRATIFIED_EDGE(uint, float, )
@@ -71,7 +71,7 @@ DEFINE_STRATIFIED_JITTERED_EDGE(uint16, float16)
 #endif
 
 // Group `group` of ray `ray`: edges 4·group .. 4·group + 3 (those below N + 1), from one Philox call's four words.
-inline void store_edge_group(__global float* out, float t_near, float t_far, uint ray, uint group, uint n_samples,
+ALWAYS_INLINE void store_edge_group(__global float* out, float t_near, float t_far, uint ray, uint group, uint n_samples,
                              const uint randomized, const ulong seed, const uint step, const uint first_ray) {
   const uint n_edges = n_samples + 1;
   uint u0 = 0, u1 = 0, u2 = 0, u3 = 0;  // the group's random words, drawn only when randomized
@@ -133,9 +133,10 @@ __kernel void sample_stratified_fwd(__global const float* near, __global const f
   }
 #else
   if (item >= (size_t)n_rays * groups) return;
-  const uint ray = (uint)(item / groups), group = (uint)(item % groups);
-  store_edge_group(t_edges + (size_t)ray * n_edges, near[ray], far[ray], ray, group, n_samples, randomized, seed,
-                   step, first_ray);
+  const size_t ray = item / groups;
+  const uint group = (uint)(item % groups);
+  store_edge_group(t_edges + ray * n_edges, near[ray], far[ray], (uint)ray, group, n_samples, randomized, seed, step,
+                   first_ray);
 #endif
 }
 
