@@ -3,6 +3,7 @@
 
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
+#include "ops/vector_items.hpp"
 
 namespace mipnerf::ops {
 
@@ -15,11 +16,10 @@ ocl::BuildOptions activation_build_options(const ActivationOptions& options) {
 
 namespace {
 
-ActivationItems choose_items(const ocl::Context& ctx, ActivationItems items) {
-  if (items != ActivationItems::device_default) return items;
-  const auto& device = ctx.device_info();
-  if ((device.type & CL_DEVICE_TYPE_CPU) == 0) return ActivationItems::per_value;
-  return device.is_pocl() ? ActivationItems::per_vector : ActivationItems::per_row;
+// Other CPU runtimes per row, GPUs per value (ActivationItems).
+ActivationItems items_without_vectors(const ocl::Context& ctx) {
+  const bool cpu = (ctx.device_info().type & CL_DEVICE_TYPE_CPU) != 0;
+  return cpu ? ActivationItems::per_row : ActivationItems::per_value;
 }
 
 // ACTIVATION_ITEMS of activations.cl.
@@ -34,15 +34,13 @@ int items_define(ActivationItems items) {
   }
 }
 
-constexpr size_t kValuesPerVector = 16;  // VALUES_PER_VECTOR of activations.cl
-
 }  // namespace
 
 // Per value or per vector (activations.cl): the colour items' work-groups first, then the densities' from the next
 // group on, so no group holds both (the kernel tells them apart by group id, from the local size given here).
 void Activations::launch(::cl::Kernel& kernel, size_t n_rows, const std::string& where) {
   if (items_ == ActivationItems::per_row) return ocl::launch_1d(*ctx_, kernel, n_rows, where);
-  const size_t per_item = items_ == ActivationItems::per_vector ? kValuesPerVector : 1;
+  const size_t per_item = items_ == ActivationItems::per_vector ? kVectorWidth : 1;
   const auto items_for = [&](size_t values) { return (values + per_item - 1) / per_item; };
   const size_t local = ctx_->traits().local_size_1d;
   const size_t n_items = ocl::round_up(items_for(3 * n_rows), local) + items_for(n_rows);
@@ -52,7 +50,9 @@ void Activations::launch(::cl::Kernel& kernel, size_t n_rows, const std::string&
 }
 
 Activations::Activations(ocl::Context& ctx, const ActivationOptions& options, ActivationItems items)
-    : ctx_(&ctx), options_(options), items_(choose_items(ctx, items)) {
+    : ctx_(&ctx),
+      options_(options),
+      items_(items_for_device(ctx, items, ActivationItems::per_vector, items_without_vectors(ctx))) {
   auto& program = ctx.program({"common.cl", "activations.cl"},
                               activation_build_options(options_).define("ACTIVATION_ITEMS", items_define(items_)));
   fwd_ = &program.kernel("activations_fwd");

@@ -3,6 +3,7 @@
 
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
+#include "ops/vector_items.hpp"
 
 namespace mipnerf::ops {
 
@@ -10,21 +11,10 @@ ocl::BuildOptions gaussian_build_options(const GaussianOptions& options) {
   return ocl::BuildOptions().define("RAY_SHAPE", static_cast<int>(options.ray_shape));
 }
 
-namespace {
-
-GaussianItems choose_items(const ocl::Context& ctx, GaussianItems items) {
-  if (items != GaussianItems::device_default) return items;
-  const auto& device = ctx.device_info();
-  const bool pocl_cpu = (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
-  return pocl_cpu ? GaussianItems::per_vector : GaussianItems::per_row;
-}
-
-constexpr size_t kSamplesPerVector = 16;  // gaussian.cl's per-vector items
-
-}  // namespace
-
 Gaussian::Gaussian(ocl::Context& ctx, const GaussianOptions& options, GaussianItems items)
-    : ctx_(&ctx), options_(options), items_(choose_items(ctx, items)) {
+    : ctx_(&ctx),
+      options_(options),
+      items_(items_for_device(ctx, items, GaussianItems::per_vector, GaussianItems::per_row)) {
   auto& program = ctx.program({"common.cl", "gaussian.cl"},
                               gaussian_build_options(options_).define("GAUSSIAN_SAMPLES_PER_VECTOR",
                                                                       items_ == GaussianItems::per_vector ? 1 : 0));
@@ -48,7 +38,7 @@ void Gaussian::fwd(const GaussianInputs& in, const GaussianOutputs& out) {
   ocl::set_args(*fwd_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, out.means, out.covs,
                 detail::to_uint(in.n_rays, where, "rays"), detail::to_uint(in.n_samples, where, "samples"));
   const size_t items = items_ == GaussianItems::per_vector
-                           ? in.n_rays * ((in.n_samples + kSamplesPerVector - 1) / kSamplesPerVector)
+                           ? in.n_rays * ((in.n_samples + kVectorWidth - 1) / kVectorWidth)
                            : in.n_rays * in.n_samples;
   ocl::launch_1d(*ctx_, *fwd_, items, where);
 }

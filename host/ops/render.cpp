@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "ops/activations.hpp"
 #include "ops/stage_checks.hpp"
+#include "ops/vector_items.hpp"
 
 namespace mipnerf::ops {
 namespace {
@@ -54,20 +55,11 @@ ocl::BuildOptions render_build_options(const RenderOptions& options, const Activ
   return build;
 }
 
-namespace {
-
-RenderSampleLoop choose_sample_loop(const ocl::Context& ctx, RenderSampleLoop loop) {
-  if (loop != RenderSampleLoop::device_default) return loop;
-  const auto& device = ctx.device_info();
-  const bool pocl_cpu = (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
-  return pocl_cpu ? RenderSampleLoop::per_vector : RenderSampleLoop::per_ray;
-}
-
-}  // namespace
-
 Render::Render(ocl::Context& ctx, const RenderOptions& options, const ActivationOptions& activation,
                RenderSampleLoop loop)
-    : ctx_(&ctx), options_(options), loop_(choose_sample_loop(ctx, loop)) {
+    : ctx_(&ctx),
+      options_(options),
+      loop_(items_for_device(ctx, loop, RenderSampleLoop::per_vector, RenderSampleLoop::per_ray)) {
   auto& program = ctx.program({"common.cl", "activations.cl", "render.cl"},
                               render_build_options(options, activation)
                                   .define("SAMPLES_IN_LOCKSTEP", loop_ == RenderSampleLoop::lockstep ? 1 : 0)

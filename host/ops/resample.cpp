@@ -5,23 +5,12 @@
 
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
+#include "ops/vector_items.hpp"
 
 namespace mipnerf::ops {
 
-namespace {
-
-ResampleItems choose_items(const ocl::Context& ctx, ResampleItems items) {
-  if (items != ResampleItems::device_default) return items;
-  const auto& device = ctx.device_info();
-  const bool pocl_cpu = (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
-  return pocl_cpu ? ResampleItems::per_vector : ResampleItems::per_ray;
-}
-
-constexpr size_t kRaysPerVector = 16;  // resample.cl's per-vector items
-
-}  // namespace
-
-Resample::Resample(ocl::Context& ctx, ResampleItems items) : ctx_(&ctx), items_(choose_items(ctx, items)) {
+Resample::Resample(ocl::Context& ctx, ResampleItems items)
+    : ctx_(&ctx), items_(items_for_device(ctx, items, ResampleItems::per_vector, ResampleItems::per_ray)) {
   const auto options =
       ocl::BuildOptions().define("RESAMPLE_RAYS_PER_VECTOR", items_ == ResampleItems::per_vector ? 1 : 0);
   fwd_ = &ctx.program({"common.cl", "resample.cl"}, options).kernel("resample_fwd");
@@ -47,7 +36,7 @@ void Resample::fwd(const ResampleOptions& options, const ResampleInputs& in, ocl
                 static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));
   if (items_ == ResampleItems::per_vector) {
     detail::to_uint(in.n_rays * (std::max(in.n_samples, in.new_samples) + 1), where, "edges");  // 32-bit lane indices
-    return ocl::launch_1d(*ctx_, *fwd_, (in.n_rays + kRaysPerVector - 1) / kRaysPerVector, where);
+    return ocl::launch_1d(*ctx_, *fwd_, (in.n_rays + kVectorWidth - 1) / kVectorWidth, where);
   }
   ocl::launch_1d(*ctx_, *fwd_, in.n_rays, where);
 }

@@ -3,6 +3,7 @@
 
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
+#include "ops/vector_items.hpp"
 
 namespace mipnerf::ops {
 
@@ -10,21 +11,10 @@ ocl::BuildOptions sample_build_options(const SampleOptions& options) {
   return ocl::BuildOptions().define("SAMPLE_LINDISP", options.lindisp ? 1 : 0);
 }
 
-namespace {
-
-SampleItems choose_items(const ocl::Context& ctx, SampleItems items) {
-  if (items != SampleItems::device_default) return items;
-  const auto& device = ctx.device_info();
-  const bool pocl_cpu = (device.type & CL_DEVICE_TYPE_CPU) != 0 && device.is_pocl();
-  return pocl_cpu ? SampleItems::per_vector : SampleItems::per_group;
-}
-
-constexpr size_t kGroupsPerVector = 16;  // sample.cl's per-vector items
-
-}  // namespace
-
 Sample::Sample(ocl::Context& ctx, const SampleOptions& options, SampleItems items)
-    : ctx_(&ctx), options_(options), items_(choose_items(ctx, items)) {
+    : ctx_(&ctx),
+      options_(options),
+      items_(items_for_device(ctx, items, SampleItems::per_vector, SampleItems::per_group)) {
   auto& program = ctx.program(
       {"common.cl", "sample.cl"},
       sample_build_options(options_).define("SAMPLE_GROUPS_PER_VECTOR", items_ == SampleItems::per_vector ? 1 : 0));
@@ -42,8 +32,7 @@ void Sample::stratified(const StratifiedInputs& in, ocl::DeviceArray<float>& t_e
                 detail::to_uint(in.n_samples, where, "samples"), static_cast<cl_uint>(options_.randomized ? 1 : 0),
                 static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));
   const size_t groups = (in.n_samples + 1 + 3) / 4;  // of 4 edges, per ray
-  const size_t items_per_ray =
-      items_ == SampleItems::per_vector ? (groups + kGroupsPerVector - 1) / kGroupsPerVector : groups;
+  const size_t items_per_ray = items_ == SampleItems::per_vector ? (groups + kVectorWidth - 1) / kVectorWidth : groups;
   ocl::launch_1d(*ctx_, *stratified_, in.n_rays * items_per_ray, where);
 }
 

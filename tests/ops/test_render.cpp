@@ -244,19 +244,24 @@ const char* loop_name(ops::RenderSampleLoop loop) {
   }
 }
 
-// The device's forward and backward against the reference bounds, both ways of walking the samples.
+// Every output of a device run against the reference within its bounds.
+void check_within_bounds(const DeviceResult& dev, const RefResult& r, const Bounds& bounds) {
+  MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
+  MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
+  MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
+  MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
+  MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
+  MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+}
+
+// The device's forward and backward against the reference bounds, every way of walking the samples.
 void check_against_reference(const RenderOptions& options, const Batch& b, bool with_d_acc) {
   const auto r = run_ref(options, b, with_d_acc);
   const auto bounds = float_bounds(options, b, r, with_d_acc);
   for (const auto loop : kSampleLoops) {
     INFO(loop_name(loop));
     const auto dev = run_device(options, b, with_d_acc, false, {}, {}, loop);
-    MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
-    MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
-    MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
-    MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
-    MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
-    MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+    check_within_bounds(dev, r, bounds);
   }
 }
 
@@ -700,12 +705,7 @@ TEST_CASE(
     const auto r = run_ref(options, b, true);
     const auto bounds = float_bounds(options, b, r, true);
     const auto dev = run_device(options, b, true, false, {}, {}, ops::RenderSampleLoop::per_vector);
-    MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
-    MIPNERF_CHECK_CLOSE("comp_rgb", dev.comp_rgb, r.comp_rgb, from(bounds.comp_rgb));
-    MIPNERF_CHECK_CLOSE("acc", dev.acc, r.acc, from(bounds.acc));
-    MIPNERF_CHECK_CLOSE("distance", dev.distance, r.distance, from(bounds.distance));
-    MIPNERF_CHECK_CLOSE("d_rgb", dev.d_rgb, r.d_rgb, from(bounds.d_rgb));
-    MIPNERF_CHECK_CLOSE("d_density", dev.d_density, r.d_density, from(bounds.d_density));
+    check_within_bounds(dev, r, bounds);
     const auto per_ray = run_backward_on(options, b, dev.weights, ops::RenderSampleLoop::per_ray);
     CHECK(per_ray.d_rgb == dev.d_rgb);
     CHECK(per_ray.d_density == dev.d_density);
