@@ -208,7 +208,7 @@ TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 fe
     std::vector<double> features;
     ref::pe_fwd(options, test::to_double(*x), features, rows);
     for (auto items : row_and_axis_items(test::test_context())) {
-      INFO("degrees 0.." << max_deg - 1 << ", items " << encoding_items_name(items));
+      INFO("degrees 0.." << options.max_deg - 1 << ", items " << encoding_items_name(items));
       const auto dev = run_pe(options, *x, items);
       MIPNERF_CHECK_CLOSE("pe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
     }
