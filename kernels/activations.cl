@@ -72,7 +72,7 @@ DEFINE_ACTIVATIONS(float16)
 //    items did a colour value and a density, masked, on the AVX-512 Xeon). GPUs read consecutive floats with
 //    consecutive items.
 //  - ACTIVATION_ITEMS_PER_ROW: one item per row, which Intel's CPU runtime vectorises 4x faster than the above.
-//  - ACTIVATION_ITEMS_PER_VECTOR: one item per VALUES_PER_VECTOR consecutive values, as a float16 (the last item of
+//  - ACTIVATION_ITEMS_PER_VECTOR: one item per VECTOR_WIDTH (16) consecutive values, as a float16 (the last item of
 //    each kind takes what is left one value at a time), the colour and density items split by work-group as per
 //    value. PoCL runs each item's float16 code as it is, in full-width vector registers; its own vectorisation
 //    across items of the per-value kernel ran 8 wide with long dependent chains (2.2 ms forward on the AVX-512
@@ -83,7 +83,6 @@ DEFINE_ACTIVATIONS(float16)
 #ifndef ACTIVATION_ITEMS
 #define ACTIVATION_ITEMS ACTIVATION_ITEMS_PER_VALUE
 #endif
-#define VALUES_PER_VECTOR 16
 
 // Per-value and per-vector items: whether this item is a colour item (its work-group is among the first
 // ⌈colour_items / group size⌉) and, in *index, its index among the colour items or among the density items
@@ -112,8 +111,8 @@ DEFINE_ACTIVATION_OF(float16)
 // `d` is read only when `backward`.
 ALWAYS_INLINE void activate_vector_item(__global const float* raw, __global const float* d, __global float* out,
                                         uint v, uint n, const int colour, const int backward) {
-  const uint first = v * VALUES_PER_VECTOR;
-  if (first + VALUES_PER_VECTOR <= n) {
+  const uint first = v * VECTOR_WIDTH;
+  if (first + VECTOR_WIDTH <= n) {
     const float16 d_values = backward ? vload16(v, d) : (float16)(0.0f);
     vstore16(activation_of(vload16(v, raw), d_values, colour, backward), v, out);
     return;
@@ -135,7 +134,7 @@ ALWAYS_INLINE void activations(__global const float* raw_density, __global const
   for (int c = 0; c < 3; ++c) rgb[3 * i + c] = activation_of(raw_rgb[3 * i + c], backward ? d_rgb[3 * i + c] : 0.0f, 1, backward);
 #elif ACTIVATION_ITEMS == ACTIVATION_ITEMS_PER_VECTOR
   uint v;
-  if (colour_item((3 * n_rows + VALUES_PER_VECTOR - 1) / VALUES_PER_VECTOR, &v)) {
+  if (colour_item((3 * n_rows + VECTOR_WIDTH - 1) / VECTOR_WIDTH, &v)) {
     activate_vector_item(raw_rgb, d_rgb, rgb, v, 3 * n_rows, 1, backward);
   } else {
     activate_vector_item(raw_density, d_density, density, v, n_rows, 0, backward);

@@ -60,6 +60,10 @@ inline void store3(__global float* p, size_t i, float3 v) {
   p[3 * i + 2] = v.z;
 }
 
+// Lanes of the explicit-vector items (float16, uint16): values, samples, groups or rays per item (the host's
+// ops::kVectorWidth).
+#define VECTOR_WIDTH 16
+
 // STEP(k) for the lanes k = 0 .. f of a 16-wide vector (component .sk), in order, or from the last.
 #define FOR_EACH_LANE(STEP) \
   STEP(0) STEP(1) STEP(2) STEP(3) STEP(4) STEP(5) STEP(6) STEP(7) STEP(8) STEP(9) STEP(a) STEP(b) STEP(c) STEP(d) STEP(e) STEP(f)

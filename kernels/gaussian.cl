@@ -154,11 +154,11 @@ __kernel void gaussian_fwd(__global const float* origins, __global const float* 
                            __global const float* radii, __global const float* t_edges, __global float* means,
                            __global float* covs, const uint n_rays, const uint n_samples) {
 #if GAUSSIAN_SAMPLES_PER_VECTOR
-  const uint runs = (n_samples + 15) / 16;  // per ray
+  const uint runs = (n_samples + VECTOR_WIDTH - 1) / VECTOR_WIDTH;  // per ray
   const size_t item = get_global_id(0);
   if (item >= (size_t)n_rays * runs) return;
-  const uint ray = (uint)item / runs, first = (uint)item % runs * 16;
-  if (first + 16 <= n_samples) {
+  const uint ray = (uint)item / runs, first = (uint)item % runs * VECTOR_WIDTH;
+  if (first + VECTOR_WIDTH <= n_samples) {
     store_vector_gaussian(origins, directions, radii, t_edges, means, covs, ray, first, n_samples);
     return;
   }

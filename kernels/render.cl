@@ -72,7 +72,6 @@
 #if SAMPLES_PER_VECTOR && SAMPLES_IN_LOCKSTEP
 #error "SAMPLES_PER_VECTOR and SAMPLES_IN_LOCKSTEP are two ways of walking the samples: choose one"
 #endif
-#define SAMPLE_VECTOR 16 /* samples per float16 */
 
 #define DENSITY_NOISE_LEVEL_SHIFT 24 /* slot = level·2^24 + sample/4: 256 levels of up to 2^26 samples */
 
@@ -247,7 +246,7 @@ ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const floa
   uint first_scalar = 0;  // the samples before it go by vectors
 #if SAMPLES_PER_VECTOR
   LaneSums sums = {(float16)(0.0f), (float16)(0.0f), (float16)(0.0f), (float16)(0.0f), (float16)(0.0f)};
-  for (; first_scalar + SAMPLE_VECTOR <= n_samples; first_scalar += SAMPLE_VECTOR) {
+  for (; first_scalar + VECTOR_WIDTH <= n_samples; first_scalar += VECTOR_WIDTH) {
     render_vector_fwd(rgb, density, t_edges, weights, ray, first_scalar, n_samples, dir_norm, noise, from_raw,
                       with_colour, &optical_depth, &sums);
   }
@@ -361,9 +360,9 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
   d_acc_total -= d_red + d_green + d_blue;
 #endif
   float optical_depth = 0.0f;
-  const uint vector_end = SAMPLES_PER_VECTOR ? n_samples / SAMPLE_VECTOR * SAMPLE_VECTOR : 0;  // by vectors before it
+  const uint vector_end = SAMPLES_PER_VECTOR ? n_samples / VECTOR_WIDTH * VECTOR_WIDTH : 0;  // by vectors before it
 #if SAMPLES_PER_VECTOR
-  for (uint i = 0; i < vector_end; i += SAMPLE_VECTOR) {
+  for (uint i = 0; i < vector_end; i += VECTOR_WIDTH) {
     const uint t_at = t_first_at + i;
     const float16 s = optical_thickness(render_density16(density, ray * n_samples + i, noise, i, from_raw),
                                         vload16(0, t_edges + t_at), vload16(0, t_edges + t_at + 1), dir_norm);
@@ -419,8 +418,8 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
     END_OF_SAMPLE_STEP();
   }
 #if SAMPLES_PER_VECTOR
-  for (uint i = vector_end; i > 0; i -= SAMPLE_VECTOR) {
-    render_vector_bwd(rgb, density, t_edges, weights, d_rgb, d_density, ray, i - SAMPLE_VECTOR, n_samples, dir_norm,
+  for (uint i = vector_end; i > 0; i -= VECTOR_WIDTH) {
+    render_vector_bwd(rgb, density, t_edges, weights, d_rgb, d_density, ray, i - VECTOR_WIDTH, n_samples, dir_norm,
                       noise, from_raw, d_red, d_green, d_blue, d_acc_total, trans_last, &weight_after,
                       &grad_weight_after);
   }

@@ -128,8 +128,8 @@ __kernel void resample_fwd(__global const float* t_edges, __global const float* 
                            const uint first_ray) {
 #if RESAMPLE_RAYS_PER_VECTOR
   const size_t item = get_global_id(0);
-  if (16 * item >= n_rays || n_samples == 0 || n_new == 0) return;
-  resample_rays16(t_edges, weights, t_new, 16 * (uint)item, n_rays, n_samples, n_new, padding, blur, randomized, seed,
+  if (VECTOR_WIDTH * item >= n_rays || n_samples == 0 || n_new == 0) return;
+  resample_rays16(t_edges, weights, t_new, VECTOR_WIDTH * (uint)item, n_rays, n_samples, n_new, padding, blur, randomized, seed,
                   step, first_ray);
   return;
 #endif

@@ -119,12 +119,12 @@ __kernel void sample_stratified_fwd(__global const float* near, __global const f
   const uint groups = (n_edges + 3) / 4;
   const size_t item = get_global_id(0);
 #if SAMPLE_GROUPS_PER_VECTOR
-  const uint runs = (groups + 15) / 16;  // per ray
+  const uint runs = (groups + VECTOR_WIDTH - 1) / VECTOR_WIDTH;  // per ray
   if (item >= (size_t)n_rays * runs) return;
-  const uint ray = (uint)item / runs, first = (uint)item % runs * 16;
+  const uint ray = (uint)item / runs, first = (uint)item % runs * VECTOR_WIDTH;
   __global float* out = t_edges + (size_t)ray * n_edges;
   const float t_near = near[ray], t_far = far[ray];
-  if (4 * (first + 16) <= n_edges) {
+  if (4 * (first + VECTOR_WIDTH) <= n_edges) {
     store_edge_groups16(out, t_near, t_far, ray, first, n_samples, randomized, seed, step, first_ray);
     return;
   }

@@ -10,7 +10,7 @@
 
 namespace mipnerf::ops {
 
-constexpr size_t kVectorWidth = 16;  // values, samples, groups or rays per explicit-vector item (float16, uint16)
+constexpr size_t kVectorWidth = 16;  // lanes per explicit-vector item: VECTOR_WIDTH of common.cl (float16, uint16)
 
 inline bool explicit_vector_items(const ocl::Context& ctx) {
   const auto& device = ctx.device_info();
