@@ -200,6 +200,20 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // exact comparisons of fused and separate kernels rely on it). Comments inside the macros are /* */, which a
 // continued line cannot end early.
 
+// round_half_even(x): rint(x) for |x| ≤ 2^22 (the reductions below: |x| ≤ 151), as (x + 1.5·2^23) − 1.5·2^23. The
+// sum lies in [2^23, 2^24), where floats are the integers, so the addition itself rounds x to the nearest integer,
+// ties to even, as rint does in the default rounding mode; the subtraction is exact. (x's product is a separate
+// operation before the call, never contracted into the addition.) Why not rint: PoCL 3.1's CPU device emits rint as
+// a sequence of conversions, compares and masked adds (no vrndscaleps), several times the cost of two additions. The
+// one difference: a result of zero is +0 where rint gives −0 for x in (−0.5, −0]; the callers only multiply it by
+// constants and add it to x, where the sign of that zero cannot change a nonzero result.
+#define DEFINE_ROUND_HALF_EVEN(V)                                                                      \
+  ALWAYS_INLINE OVERLOADABLE V round_half_even(V x) { return (x + 12582912.0f) - 12582912.0f; }
+DEFINE_ROUND_HALF_EVEN(float)
+#if VECTOR_ITEMS
+DEFINE_ROUND_HALF_EVEN(float16)
+#endif
+
 // reduce_by_ln2(x, n): x = n·ln2 + r for x ≤ 0 clamped: sets *n = rint(x·log2 e) and returns r, by two fma steps (ln2
 // split into its float and the remainder), |r| ≤ ln2/2 + tiny. (An out-parameter, not a returned struct: see
 // philox4x32_10_words.)
@@ -213,7 +227,7 @@ inline float4 rng_normal4(ulong seed, uint item, uint step, uint slot, uint stre
 // in the reduction). n in [−150, 0] after the clamp, so both factors are ≥ 2^-75.
 #define DEFINE_EXP_NONPOSITIVE(V, W)                                                                          \
   ALWAYS_INLINE OVERLOADABLE V reduce_by_ln2(V x, V* n) {                                                     \
-    *n = rint(x * 1.44269504f);                                                                               \
+    *n = round_half_even(x * 1.44269504f);                                                                    \
     return fma(*n, (V)(-1.90465430e-9f), fma(*n, (V)(-0.693147182f), x));                                     \
   }                                                                                                           \
   ALWAYS_INLINE OVERLOADABLE V exp_nonpositive(V x) {                                                         \

@@ -68,7 +68,9 @@ inline double doubling_error_bound(int doublings) {
 // polynomials' error over every float r).
 inline double reduce_by_half_pi(float y, double* n) {
   const double y_wide = static_cast<double>(y);
-  *n = std::rint(y_wide * 0.6366197723675814);
+  // rint as the kernel's round_half_even_wide computes it (|x| < 2^51): one rounding to the nearest, ties to even.
+  const double scaled = y_wide * 0.6366197723675814;
+  *n = (scaled + 6755399441055744.0) - 6755399441055744.0;
   const double r_wide = std::fma(-*n, 6.123233995736766e-17, std::fma(-*n, 1.5707963267948966, y_wide));
   return std::fma(-*n, -1.4973849048591698e-33, r_wide);
 }
@@ -104,8 +106,7 @@ void ipe_fwd(const EncodingOptions& options, const std::vector<double>& means, c
              std::vector<double>& features, size_t n_rows);
 
 // Mirror of pe_fwd (official pos_enc): features [rows][3·identity + 6L] from x [rows][3], identity first.
-void pe_fwd(const EncodingOptions& options, const std::vector<double>& x, std::vector<double>& features,
-            size_t n_rows);
+void pe_fwd(const EncodingOptions& options, const std::vector<double>& x, std::vector<double>& features, size_t n_rows);
 
 // Mirror of gaussian_ipe_fwd: ref::gaussian_fwd then ref::ipe_fwd.
 void gaussian_ipe_fwd(const GaussianOptions& gaussian_options, const EncodingOptions& options,
