@@ -247,59 +247,44 @@ __kernel void gaussian_concat_pe_fwd(__global const float* origins, __global con
 // That is inside the 4 ulp the tests and the doubling bound assume for a sincos. Beyond 2^40 the first reduction step
 // stays exact to |y| ≈ 2^54, but no bound is claimed there.
 
-// Written once over the value type (V float or float16, D double or double16, W the width's suffix), as common.cl's
-// exp_nonpositive: a lane of the float16 version runs the float version's operations, so it gets the same floats.
-// reduce_by_half_pi(y, &n): y = n·π/2 + r, sets *n and returns r, both in double.
-// sincos_of_reduced(r, &sin_r, &cos_r): sin r and cos r for |r| ≲ π/4.
-#define DEFINE_SINCOS_REDUCED_IN_DOUBLE(V, D, W)                                                      \
-  ALWAYS_INLINE OVERLOADABLE D reduce_by_half_pi(V y, D* n) {                                         \
-    const D y_wide = CONVERT_DOUBLE##W(y);                                                            \
-    *n = round_half_even_wide(y_wide * 0.6366197723675814);                                           \
-    const D r_wide = fma(-*n, (D)6.123233995736766e-17, fma(-*n, (D)1.5707963267948966, y_wide));     \
-    return fma(-*n, (D)-1.4973849048591698e-33, r_wide);                                              \
-  }                                                                                                   \
-  ALWAYS_INLINE OVERLOADABLE void sincos_of_reduced(V r, V* sin_r, V* cos_r) {                        \
-    const V r2 = r * r;                                                                               \
-    V ps = fma(r2, (V)-2.50521084e-8f, (V)2.75573192e-6f); /* −1/11!, 1/9! */                         \
-    ps = fma(ps, r2, (V)-1.98412698e-4f);                    /* −1/7! */                              \
-    ps = fma(ps, r2, (V)8.33333333e-3f);                     /* 1/5! */                               \
-    ps = fma(ps, r2, (V)-1.66666667e-1f);                    /* −1/3! */                              \
-    *sin_r = fma(r * r2, ps, r);                                                                      \
-    V pc = fma(r2, (V)2.08767570e-9f, (V)-2.75573192e-7f); /* 1/12!, −1/10! */                        \
-    pc = fma(pc, r2, (V)2.48015873e-5f);                     /* 1/8! */                               \
-    pc = fma(pc, r2, (V)-1.38888889e-3f);                    /* −1/6! */                              \
-    pc = fma(pc, r2, (V)4.16666667e-2f);                     /* 1/4! */                               \
-    pc = fma(pc, r2, (V)-0.5f);                                                                       \
-    *cos_r = fma(pc, r2, (V)1.0f);                                                                    \
-  }                                                                                                   \
-  ALWAYS_INLINE OVERLOADABLE void sincos_reduced_in_double(V y, V* sin_out, V* cos_out) {             \
-    D n;                                                                                              \
-    const V r = CONVERT_FLOAT##W(reduce_by_half_pi(y, &n));                                           \
-    V sin_r, cos_r;                                                                                   \
-    sincos_of_reduced(r, &sin_r, &cos_r);                                                             \
-    /* sin y = sin r, cos r, −sin r, −cos r for n mod 4 = 0..3 */                                     \
-    const int##W quadrant = CONVERT_INT##W(CONVERT_LONG##W(n) & 3);                                   \
-    const V sin_abs = select(sin_r, cos_r, (quadrant & 1) != 0);                                      \
-    const V cos_abs = select(cos_r, sin_r, (quadrant & 1) != 0);                                      \
-    *sin_out = select(sin_abs, -sin_abs, (quadrant & 2) != 0);                                        \
-    *cos_out = select(cos_abs, -cos_abs, ((quadrant + 1) & 2) != 0);                                  \
-  }
-// round_half_even_wide(x): rint(x) for a double |x| < 2^51 (here |y·2/π| < 2^40), as common.cl's round_half_even:
-// (x + 1.5·2^52) − 1.5·2^52, one rounding to the nearest integer, ties to even (PoCL's rint is a longer sequence).
-#define DEFINE_ROUND_HALF_EVEN_WIDE(D) \
-  ALWAYS_INLINE OVERLOADABLE D round_half_even_wide(D x) { return (x + 6755399441055744.0) - 6755399441055744.0; }
-DEFINE_ROUND_HALF_EVEN_WIDE(double)
-#if PE_VALUES_PER_VECTOR
-DEFINE_ROUND_HALF_EVEN_WIDE(double16)
-#endif
-#define CONVERT_DOUBLE(x) ((double)(x))
-#define CONVERT_DOUBLE16(x) convert_double16(x)
-#define CONVERT_LONG(x) ((long)(x))
-#define CONVERT_LONG16(x) convert_long16(x)
-DEFINE_SINCOS_REDUCED_IN_DOUBLE(float, double, )
-#if PE_VALUES_PER_VECTOR
-DEFINE_SINCOS_REDUCED_IN_DOUBLE(float16, double16, 16)
-#endif
+// rint(x) for a double |x| < 2^51 (here |y·2/π| < 2^40), as common.cl's round_half_even: (x + 1.5·2^52) − 1.5·2^52,
+// one rounding to the nearest integer, ties to even (PoCL's rint is a longer sequence).
+ALWAYS_INLINE double round_half_even_wide(double x) { return (x + 6755399441055744.0) - 6755399441055744.0; }
+
+// y = n·π/2 + r: sets *n and returns r, both in double.
+ALWAYS_INLINE double reduce_by_half_pi(float y, double* n) {
+  const double y_wide = (double)y;
+  *n = round_half_even_wide(y_wide * 0.6366197723675814);
+  const double r_wide = fma(-*n, 6.123233995736766e-17, fma(-*n, 1.5707963267948966, y_wide));
+  return fma(-*n, -1.4973849048591698e-33, r_wide);
+}
+
+// sin r and cos r for |r| ≲ π/4.
+ALWAYS_INLINE void sincos_of_reduced(float r, float* sin_r, float* cos_r) {
+  const float r2 = r * r;
+  float ps = fma(r2, -2.50521084e-8f, 2.75573192e-6f);  // −1/11!, 1/9!
+  ps = fma(ps, r2, -1.98412698e-4f);                      // −1/7!
+  ps = fma(ps, r2, 8.33333333e-3f);                       // 1/5!
+  ps = fma(ps, r2, -1.66666667e-1f);                      // −1/3!
+  *sin_r = fma(r * r2, ps, r);
+  float pc = fma(r2, 2.08767570e-9f, -2.75573192e-7f);  // 1/12!, −1/10!
+  pc = fma(pc, r2, 2.48015873e-5f);                       // 1/8!
+  pc = fma(pc, r2, -1.38888889e-3f);                      // −1/6!
+  pc = fma(pc, r2, 4.16666667e-2f);                       // 1/4!
+  pc = fma(pc, r2, -0.5f);
+  *cos_r = fma(pc, r2, 1.0f);
+}
+
+ALWAYS_INLINE void sincos_reduced_in_double(float y, float* sin_out, float* cos_out) {
+  double n;
+  const float r = (float)reduce_by_half_pi(y, &n);
+  float sin_r, cos_r;
+  sincos_of_reduced(r, &sin_r, &cos_r);
+  const int quadrant = (int)((long)n & 3);  // sin y = sin r, cos r, −sin r, −cos r for n mod 4 = 0..3
+  const float sin_abs = (quadrant & 1) ? cos_r : sin_r, cos_abs = (quadrant & 1) ? sin_r : cos_r;
+  *sin_out = (quadrant & 2) ? -sin_abs : sin_abs;
+  *cos_out = ((quadrant + 1) & 2) ? -cos_abs : cos_abs;
+}
 
 // Row `row`'s Gaussian along `axis` (0..2): the mean and variance lift_gaussian gives that axis, computed for it
 // alone. |d|² by fma from d_x² (no two same-shape products of neighbouring loads, see above); the sum of the other two
@@ -381,52 +366,6 @@ __kernel void pe_axis_fwd(__global const float* x, __global float* features, con
   if (identity) features[row_at + axis] = value;
   encode_axis_degrees(value, 0.0f, features, row_at + identity + axis);
 }
-
-#if PE_VALUES_PER_VECTOR
-// pe_fwd per VECTOR_WIDTH consecutive values of x [rows][3] (x seen flat, value e = row·3 + axis), as one float16:
-// the host's choice on PoCL's CPU device (ops/vector_items.hpp), whose own vectorisation of pe_axis_fwd gathers and
-// scatters per item. Each lane runs pe_axis_fwd's operations for its value: the sincos above per degree, and no
-// attenuation, since pe_axis_fwd's is exp_nonpositive(−0) = 1 exactly and 1·s = s: the same features, bit for bit.
-// The last item's lanes past the 3·rows values load 0 and store nothing.
-__kernel void pe_values_fwd(__global const float* x, __global float* features, const uint n_rows,
-                            const uint append_identity) {
-  const uint v = get_global_id(0), n_values = 3 * n_rows, first = v * VECTOR_WIDTH;
-  if (first >= n_values) return;
-  const uint lanes = min((uint)VECTOR_WIDTH, n_values - first);
-  const uint identity = append_identity ? 3 : 0, row_width = identity + 6 * IPE_AXIS_DEGREES;
-  const uint16 value_id = first + (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const uint16 row = value_id / 3;
-  const uint16 axis_at = row * row_width + (value_id - 3 * row);  // the value's identity feature; + identity: degree 0
-  float16 value;
-  if (lanes == VECTOR_WIDTH) {
-    value = vload16(v, x);
-  } else {
-#define PE_LOAD_LANE(k) value.s##k = 0x##k < lanes ? x[first + 0x##k] : 0.0f;
-    FOR_EACH_LANE(PE_LOAD_LANE)
-#undef PE_LOAD_LANE
-  }
-  if (identity) {
-#define PE_STORE_IDENTITY(k) \
-  if (0x##k < lanes) features[axis_at.s##k] = value.s##k;
-    FOR_EACH_LANE(PE_STORE_IDENTITY)
-#undef PE_STORE_IDENTITY
-  }
-  const uint16 sin_at = axis_at + identity, cos_at = sin_at + 3 * IPE_AXIS_DEGREES;
-#pragma unroll
-  for (uint l = 0; l < IPE_AXIS_DEGREES; ++l) {
-    const float scale = as_float((uint)(IPE_AXIS_MIN_DEG + l + 127) << 23);  // 2^degree, exact (degree ≤ 60)
-    float16 s, c;
-    sincos_reduced_in_double(value * scale, &s, &c);  // exact argument: a power-of-two scaling
-#define PE_STORE_LANE(k)                         \
-  if (0x##k < lanes) {                           \
-    features[sin_at.s##k + 3 * l] = s.s##k;      \
-    features[cos_at.s##k + 3 * l] = c.s##k;      \
-  }
-    FOR_EACH_LANE(PE_STORE_LANE)
-#undef PE_STORE_LANE
-  }
-}
-#endif
 #endif
 
 #endif

@@ -5,7 +5,6 @@
 
 #include "cl/launch.hpp"
 #include "ops/stage_checks.hpp"
-#include "ops/vector_items.hpp"
 
 namespace mipnerf::ops {
 namespace {
@@ -51,9 +50,7 @@ Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTu
     : ctx_(&ctx),
       gaussian_options_(options),
       fused_items_(choose_fused_items(ctx, tuning)),
-      sincos_every_(choose_sincos_every(ctx, tuning, fused_items_)),
-      pe_items_(items_for_device(ctx, tuning.pe_items, EncodeTuning::PeItems::per_vector,
-                                 EncodeTuning::PeItems::per_row_and_axis)) {
+      sincos_every_(choose_sincos_every(ctx, tuning, fused_items_)) {
   if (sincos_every_ < 1 || sincos_every_ > 8) {
     throw Error("Encode: sincos_every = " + std::to_string(sincos_every_) + " is not 1 to 8 (degrees per sincos)");
   }
@@ -73,13 +70,12 @@ Encode::Encode(ocl::Context& ctx, const GaussianOptions& options, const EncodeTu
   auto found = axis_kernels_.find(key);
   if (found != axis_kernels_.end()) return *found->second;
   // Its own program: the degrees are compiled in, and denormals are flushed in it only (encode.cl says why).
-  auto build_options = gaussian_build_options(gaussian_options_)
-                           .define("IPE_SINCOS_EVERY", sincos_every)
-                           .define("IPE_AXIS_MIN_DEG", options.min_deg)
-                           .define("IPE_AXIS_MAX_DEG", options.max_deg)
-                           .flag("-cl-denorms-are-zero");
-  if (name == "pe_values_fwd") build_options.define("PE_VALUES_PER_VECTOR", 1);
-  auto& program = ctx_->program({"common.cl", "gaussian.cl", "encode.cl"}, build_options);
+  auto& program =
+      ctx_->program({"common.cl", "gaussian.cl", "encode.cl"}, gaussian_build_options(gaussian_options_)
+                                                                   .define("IPE_SINCOS_EVERY", sincos_every)
+                                                                   .define("IPE_AXIS_MIN_DEG", options.min_deg)
+                                                                   .define("IPE_AXIS_MAX_DEG", options.max_deg)
+                                                                   .flag("-cl-denorms-are-zero"));
   ::cl::Kernel* kernel = &program.kernel(name);
   axis_kernels_.emplace(key, kernel);
   return *kernel;
@@ -114,11 +110,9 @@ void Encode::pe(const EncodingOptions& options, const PeInputs& in, ocl::DeviceA
   const cl_uint append_identity = options.append_identity ? 1 : 0;
   if (fused_items_ == EncodeTuning::FusedItems::per_row_and_axis) {
     detail::to_uint(in.n_rows * options.pe_width(), where, "features");  // the kernel indexes them in 32 bits
-    const bool per_vector = pe_items_ == EncodeTuning::PeItems::per_vector;
-    auto& kernel = axis_kernel(options, per_vector ? "pe_values_fwd" : "pe_axis_fwd", 1);
+    auto& kernel = axis_kernel(options, "pe_axis_fwd", 1);
     ocl::set_args(kernel, where, in.x, features, n_rows, append_identity);
-    const size_t values = 3 * in.n_rows;
-    return ocl::launch_1d(*ctx_, kernel, per_vector ? (values + kVectorWidth - 1) / kVectorWidth : values, where);
+    return ocl::launch_1d(*ctx_, kernel, 3 * in.n_rows, where);
   }
   const size_t items = in.n_rows * std::max(1, options.degrees());
   ocl::set_args(*pe_, where, in.x, features, n_rows, static_cast<cl_int>(options.min_deg),

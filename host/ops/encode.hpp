@@ -43,11 +43,6 @@ struct EncodeTuning {
   // Build the concatenated-PE kernel (MIPNERF_CONCAT_PE) into the program: only a scene that uses it pays for its
   // compilation; without it the program is the one every other scene builds.
   bool concat_pe = false;
-  // pe_fwd's items where they are per (row, axis) (fused_items per_row_and_axis): per (row, axis), or per 16
-  // consecutive values as one float16 (pe_values_fwd, the same features bit for bit). Default: per vector on PoCL's
-  // CPU device (ops/vector_items.hpp), per (row, axis) elsewhere.
-  enum class PeItems { device_default, per_row_and_axis, per_vector };
-  PeItems pe_items = PeItems::device_default;
 };
 
 // Degrees are kernel arguments (EncodingOptions per call: positions and view directions differ); the program is
@@ -59,7 +54,6 @@ class Encode {
   bool fused_per_row() const { return fused_items_ == EncodeTuning::FusedItems::per_row; }
   EncodeTuning::FusedItems fused_items() const { return fused_items_; }
   int sincos_every() const { return sincos_every_; }
-  EncodeTuning::PeItems pe_items() const { return pe_items_; }
 
   // Enqueues ipe_fwd: features [rows][options.ipe_width()].
   void ipe(const EncodingOptions& options, const IpeInputs& in, ocl::DeviceArray<float>& features);
@@ -88,7 +82,6 @@ class Encode {
   GaussianOptions gaussian_options_;
   EncodeTuning::FusedItems fused_items_;
   int sincos_every_;
-  EncodeTuning::PeItems pe_items_;
   std::map<AxisKernelKey, ::cl::Kernel*> axis_kernels_;
   ::cl::Kernel* ipe_;
   ::cl::Kernel* pe_;

@@ -97,8 +97,7 @@ struct StageDescription {
 // in: on CPUs with fp64 the "gaussian_ipe_fwd (fused)" row times it, as Encode::gaussian_ipe runs it there in place of
 // gaussian_ipe_fwd (test_encode.cpp checks it against the reference and its sin/cos against long double).
 // ipe_axis_fwd and pe_axis_fwd, the same program's IPE and PE per (row, axis), likewise stand in for ipe_fwd and
-// pe_fwd there, and their rows time them (test_encode.cpp's IPE and PE tests run them on such devices); on PoCL's
-// CPU device pe_values_fwd (PE per 16 values, pe_axis_fwd's features bit for bit) is the one the "pe_fwd" row times.
+// pe_fwd there, and their rows time them (test_encode.cpp's IPE and PE tests run them on such devices).
 const std::vector<StageDescription>& ray_math_stages();
 
 }  // namespace mipnerf::ops

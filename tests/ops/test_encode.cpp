@@ -3,11 +3,8 @@
 // IPE = PE wherever a zero radius, an axis-aligned or a zero direction leaves no variance.
 #include <doctest/doctest.h>
 
-#include <algorithm>
 #include <array>
 #include <cfloat>
-#include <cstring>
-#include <tuple>
 #include <vector>
 
 #include "kernel_checks.hpp"
@@ -36,22 +33,14 @@ std::vector<float> run_ipe(const EncodingOptions& options, const std::vector<flo
   return features.download(ctx);
 }
 
-// How pe_fwd runs: its items as Encode chooses them from the fused kernel's items, and where those are per (row,
-// axis), per (row, axis) or per 16 values (pe_values_fwd).
-struct PeLayout {
-  ops::EncodeTuning::FusedItems items = ops::EncodeTuning::FusedItems::device_default;
-  ops::EncodeTuning::PeItems pe_items = ops::EncodeTuning::PeItems::device_default;
-  const char* name = "the device's default";
-};
-
-std::vector<float> run_pe(const EncodingOptions& options, const std::vector<float>& x, const PeLayout& layout = {}) {
+std::vector<float> run_pe(const EncodingOptions& options, const std::vector<float>& x,
+                          ops::EncodeTuning::FusedItems items = ops::EncodeTuning::FusedItems::device_default) {
   auto& ctx = test::test_context();
   const size_t rows = x.size() / 3;
   auto x_dev = test::upload(ctx, x, "x");
   auto features = test::filled(ctx, rows * options.pe_width(), 7.0f, "pe_features");
   ops::EncodeTuning tuning;
-  tuning.fused_items = layout.items;
-  tuning.pe_items = layout.pe_items;
+  tuning.fused_items = items;
   ops::Encode(ctx, {}, tuning).pe(options, {x_dev, rows}, features);
   return features.download(ctx);
 }
@@ -105,18 +94,6 @@ std::vector<ops::EncodeTuning::FusedItems> row_and_axis_items(ocl::Context& ctx)
 
 const char* items_name(ops::EncodeTuning::FusedItems items) {
   return items == ops::EncodeTuning::FusedItems::per_row_and_axis ? "per (row, axis)" : "per row";
-}
-
-// Every way pe_fwd runs on the device: per (row, degree), and with fp64 per (row, axis) and per 16 values.
-std::vector<PeLayout> pe_layouts(ocl::Context& ctx) {
-  using Items = ops::EncodeTuning::FusedItems;
-  using PeItems = ops::EncodeTuning::PeItems;
-  std::vector<PeLayout> layouts = {{Items::per_row, PeItems::device_default, "per (row, degree)"}};
-  if (ctx.device_info().has_fp64) {
-    layouts.push_back({Items::per_row_and_axis, PeItems::per_row_and_axis, "per (row, axis)"});
-    layouts.push_back({Items::per_row_and_axis, PeItems::per_vector, "per 16 values"});
-  }
-  return layouts;
 }
 
 // ipe_fwd and pe_fwd's items under `items`, for messages.
@@ -230,9 +207,9 @@ TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 fe
     REQUIRE(options.pe_width() == (max_deg == 4 ? 27 : 63));
     std::vector<double> features;
     ref::pe_fwd(options, test::to_double(*x), features, rows);
-    for (const auto& layout : pe_layouts(test::test_context())) {
-      INFO("degrees 0.." << options.max_deg - 1 << ", items " << layout.name);
-      const auto dev = run_pe(options, *x, layout);
+    for (auto items : row_and_axis_items(test::test_context())) {
+      INFO("degrees 0.." << options.max_deg - 1 << ", items " << encoding_items_name(items));
+      const auto dev = run_pe(options, *x, items);
       MIPNERF_CHECK_CLOSE("pe_features", dev, features, [&](size_t i) { return feature_tolerance(features[i]); });
     }
   }
@@ -240,45 +217,7 @@ TEST_CASE("encode: PE of view directions (27 features) and NeRF positions (63 fe
   EncodingOptions identity_only;
   identity_only.max_deg = 0;
   identity_only.append_identity = true;
-  for (const auto& layout : pe_layouts(test::test_context())) {
-    INFO("items " << layout.name);
-    CHECK(run_pe(identity_only, dirs, layout) == dirs);
-  }
-}
-
-TEST_CASE("encode: PE per 16 values gives the per-(row, axis) features bit for bit, a partial last vector too") {
-  if (!test::test_context().device_info().has_fp64) return;  // both layouts need fp64 (pe_layouts)
-  std::mt19937 rng(26);
-  std::uniform_real_distribution<float> value(-3.0e4f, 3.0e4f);  // up to |y| = 2^9·3e4: far from a trivial reduction
-  using Items = ops::EncodeTuning::FusedItems;
-  using PeItems = ops::EncodeTuning::PeItems;
-  const PeLayout per_axis{Items::per_row_and_axis, PeItems::per_row_and_axis, "per (row, axis)"};
-  const PeLayout per_vector{Items::per_row_and_axis, PeItems::per_vector, "per 16 values"};
-  // 3·rows values: 16·k exactly, 11 past a multiple of 16, fewer than one vector.
-  for (size_t rows : {size_t{1024}, size_t{1001}, size_t{2}}) {
-    std::vector<float> x(3 * rows);
-    for (auto& v : x) v = value(rng);
-    x[0] = -0.0f;
-    if (rows > 2) x[5] = NAN;
-    for (const auto& [min_deg, max_deg, identity] :
-         {std::tuple{0, 4, true}, std::tuple{0, 10, false}, std::tuple{3, 10, true}}) {
-      EncodingOptions options;
-      options.min_deg = min_deg;
-      options.max_deg = max_deg;
-      options.append_identity = identity;
-      // (The options, not the structured bindings, in INFO: clang cannot capture those in its lambda.)
-      INFO(rows << " rows, degrees " << options.min_deg << ".." << options.max_deg - 1
-                << (options.append_identity ? " and identity" : ""));
-      const auto expected = run_pe(options, x, per_axis), got = run_pe(options, x, per_vector);
-      REQUIRE(got.size() == expected.size());
-      size_t differing = 0;
-      for (size_t i = 0; i < got.size(); ++i) {
-        differing += std::memcmp(&got[i], &expected[i], sizeof(float)) != 0 ? 1 : 0;
-      }
-      CHECK(differing == 0);
-      CHECK(std::find(got.begin(), got.end(), 7.0f) == got.end());  // every feature written (the fill is 7)
-    }
-  }
+  for (auto items : row_and_axis_items(test::test_context())) CHECK(run_pe(identity_only, dirs, items) == dirs);
 }
 
 TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge variance gives 0 not NaN") {
@@ -291,15 +230,8 @@ TEST_CASE("encode: IPE with zero variance equals PE bit for bit, and a huge vari
   for (auto items : row_and_axis_items(test::test_context())) {
     INFO("items " << encoding_items_name(items));
     const auto ipe = run_ipe(options, means, std::vector<float>(3 * rows, 0.0f), items);
-    for (const auto& layout : pe_layouts(test::test_context())) {
-      if ((layout.items == ops::EncodeTuning::FusedItems::per_row_and_axis) !=
-          (items == ops::EncodeTuning::FusedItems::per_row_and_axis)) {
-        continue;  // per (row, axis) IPE against PE per (row, axis) or per vector; per (row, degree) against itself
-      }
-      INFO("PE items " << layout.name);
-      const auto pe = run_pe(options, means, layout);  // no identity: the same 96 features
-      CHECK(ipe == pe);
-    }
+    const auto pe = run_pe(options, means, items);  // no identity: the same 96 features
+    CHECK(ipe == pe);
   }
   // σ² = 1e12 (4^l·σ² up to 1e21) and σ² = +∞: every attenuation is exactly 0.
   for (float var : {1e12f, INFINITY}) {
