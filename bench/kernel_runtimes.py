@@ -5,7 +5,9 @@ Runs build/bench/bench_kernels (the paper's batch: 4,096 rays x 128 samples) on 
 `--rounds` rounds, and also the fused Gaussian + IPE kernel with a sincos per degree (MIPNERF_IPE_SINCOS_EVERY=1:
 what it was before angle doubling) beside the device default. Per kernel: the median over the rounds of each
 round's best call, PoCL / Intel, and whether PoCL is within 1.5x (issue 28's target). Intel's runtime comes from
-scripts/install-intel-opencl.sh (PyPI), as in the test command.
+scripts/install-intel-opencl.sh (PyPI), as in the test command. Each round also runs PoCL twice as a diagnostic of its
+short launches, reported in a table of their own and never in the verdict: on one worker thread
+(POCL_MAX_PTHREAD_COUNT=1), and with every CPU kept busy by SCHED_IDLE spinners (bench_kernels --keep-cores-awake 1).
 
     python3 bench/kernel_runtimes.py [--rounds 3] [--reps 10] [--build build] [--name kernel_runtimes] [--report-only]
 
@@ -67,13 +69,13 @@ def device_of(text):
     return ""
 
 
-def run_bench(exe, platform, env, reps, sincos_every=None):
+def run_bench(exe, platform, env, reps, sincos_every=None, extra_args=()):
     environment = dict(os.environ, **env)
     environment.pop("MIPNERF_IPE_SINCOS_EVERY", None)
     if sincos_every is not None:
         environment["MIPNERF_IPE_SINCOS_EVERY"] = str(sincos_every)
-    out = subprocess.run([exe, "--device", f"platform={platform}", "--reps", str(reps)], capture_output=True,
-                         text=True, env=environment, check=True).stdout
+    out = subprocess.run([exe, "--device", f"platform={platform}", "--reps", str(reps), *extra_args],
+                         capture_output=True, text=True, env=environment, check=True).stdout
     return parse_kernel_table(out), device_of(out)
 
 
@@ -91,9 +93,22 @@ def measure(args):
                              "sincos_every": sincos_every or "default", "load_1min": load, "stages": rows})
                 print(f"round {round_index} {name} sincos_every={sincos_every or 'default'}: "
                       f"{len(rows)} stages, load {load:.2f}", file=sys.stderr)
+        # The diagnostics of PoCL's short launches: its work on one worker thread, and with no CPU left idle.
+        for variant, env, extra in DIAGNOSTICS:
+            load = os.getloadavg()[0]
+            rows, device = run_bench(exe, POCL, env, args.reps, None, extra)
+            runs.append({"round": round_index, "runtime": "pocl", "variant": variant, "platform": POCL,
+                         "device": device, "sincos_every": "default", "load_1min": load, "stages": rows})
+            print(f"round {round_index} pocl {variant}: {len(rows)} stages, load {load:.2f}", file=sys.stderr)
     return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "commit": study_common.commit_of(ROOT), "rounds": args.rounds, "reps": args.reps,
             "command": "python3 bench/kernel_runtimes.py " + " ".join(sys.argv[1:]), "name": args.name, "runs": runs}
+
+
+# PoCL diagnostics per round (variant, environment, bench_kernels arguments): one worker thread
+# (POCL_MAX_PTHREAD_COUNT=1), and every CPU kept busy by SCHED_IDLE spinners (bench_kernels --keep-cores-awake 1).
+DIAGNOSTICS = (("one worker", {"POCL_MAX_PTHREAD_COUNT": "1"}, ()),
+               ("cores kept awake", {}, ("--keep-cores-awake", "1")))
 
 
 def summary(record):
@@ -101,6 +116,8 @@ def summary(record):
     table = {}
     for run in record["runs"]:
         key = run["runtime"] + ("" if run["sincos_every"] == "default" else f" K={run['sincos_every']}")
+        if run.get("variant"):
+            key += " " + run["variant"]
         for stage, (best, _median) in run["stages"].items():
             table.setdefault(stage, {}).setdefault(key, []).append(best)
     return {stage: {key: statistics.median(values) for key, values in by.items()} for stage, by in table.items()}
@@ -144,6 +161,19 @@ def write_markdown(record):
         for stage, by in fused:
             lines.append(f"| {stage} | {by['pocl K=1']:.3f} | {by['pocl']:.3f} | {by.get('intel K=1', float('nan')):.3f}"
                          f" | {by['intel']:.3f} |")
+    diagnosed = [(stage, by) for stage, by in s.items() if "pocl one worker" in by and "pocl cores kept awake" in by]
+    if diagnosed:
+        lines += ["", "PoCL's short launches (diagnostics, same rounds): on one worker thread "
+                  "(`POCL_MAX_PTHREAD_COUNT=1`), and with every CPU kept busy by a spinning SCHED_IDLE thread "
+                  "(`bench_kernels --keep-cores-awake 1`), so that no worker waits for an idle CPU to wake:", "",
+                  "| kernel | PoCL ms | PoCL one worker ms | PoCL cores kept awake ms | Intel ms | "
+                  "kept awake / Intel |", "|---|---:|---:|---:|---:|---:|"]
+        for stage, by in diagnosed:
+            if "intel" not in by:
+                continue
+            awake = by["pocl cores kept awake"]
+            lines.append(f"| {stage} | {by['pocl']:.3f} | {by['pocl one worker']:.3f} | {awake:.3f} | "
+                         f"{by['intel']:.3f} | {awake / by['intel']:.2f} |")
     return "\n".join(lines) + "\n"
 
 
