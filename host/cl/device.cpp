@@ -3,7 +3,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
+#include <mutex>
 #include <sstream>
+#ifdef __linux__
+#include <sched.h>
+#include <unistd.h>
+#endif
 
 #include "cl/error.hpp"
 
@@ -41,14 +47,12 @@ DeviceInfo describe(const ::cl::Platform& platform, const ::cl::Device& device, 
   info.name = clean(query<CL_DEVICE_NAME, std::string>(device, "CL_DEVICE_NAME"));
   info.vendor = clean(query<CL_DEVICE_VENDOR, std::string>(device, "CL_DEVICE_VENDOR"));
   info.driver_version = clean(query<CL_DRIVER_VERSION, std::string>(device, "CL_DRIVER_VERSION"));
-  info.opencl_c_version =
-      clean(query<CL_DEVICE_OPENCL_C_VERSION, std::string>(device, "CL_DEVICE_OPENCL_C_VERSION"));
+  info.opencl_c_version = clean(query<CL_DEVICE_OPENCL_C_VERSION, std::string>(device, "CL_DEVICE_OPENCL_C_VERSION"));
   info.type = query<CL_DEVICE_TYPE, cl_device_type>(device, "CL_DEVICE_TYPE");
   info.compute_units = query<CL_DEVICE_MAX_COMPUTE_UNITS, cl_uint>(device, "CL_DEVICE_MAX_COMPUTE_UNITS");
   info.global_mem_bytes = query<CL_DEVICE_GLOBAL_MEM_SIZE, cl_ulong>(device, "CL_DEVICE_GLOBAL_MEM_SIZE");
   info.max_alloc_bytes = query<CL_DEVICE_MAX_MEM_ALLOC_SIZE, cl_ulong>(device, "CL_DEVICE_MAX_MEM_ALLOC_SIZE");
-  info.max_work_group_size =
-      query<CL_DEVICE_MAX_WORK_GROUP_SIZE, size_t>(device, "CL_DEVICE_MAX_WORK_GROUP_SIZE");
+  info.max_work_group_size = query<CL_DEVICE_MAX_WORK_GROUP_SIZE, size_t>(device, "CL_DEVICE_MAX_WORK_GROUP_SIZE");
   // fp64 is reported either as a non-zero double config (1.2+) or through the cl_khr_fp64 extension.
   cl_device_fp_config fp64 = 0;
   status = clGetDeviceInfo(device(), CL_DEVICE_DOUBLE_FP_CONFIG, sizeof(fp64), &fp64, nullptr);
@@ -77,7 +81,30 @@ bool DeviceInfo::is_pocl() const {
          lower(opencl_c_version).find("pocl") != std::string::npos;
 }
 
+// PoCL's CPU device runs a kernel on worker threads that Linux places as it likes; waking the second one for a short
+// launch, the scheduler often puts it on the CPU of the first (which is busy), so the launch runs on one thread:
+// on the 2-core machine of bench/results/kernel_runtimes_xeon.md the sampler, render_fwd and the activations measured
+// either their two-thread or their one-thread time from run to run. PoCL pins worker i to CPU i when POCL_AFFINITY=1
+// (PoCL ≥ 1.6), which the tiny preset's training measured +30 % rays/s with (render −15 % s/MP; quick unchanged). So
+// it is the default here, set before PoCL reads it (at its first platform query), unless the user set
+// POCL_AFFINITY, and only where this process may run on every CPU: PoCL aborts if it cannot pin (a CPU outside a
+// restricted affinity mask, e.g. under taskset or a container's cpuset).
+void pin_pocl_workers_by_default() {
+#ifdef __linux__
+  if (std::getenv("POCL_AFFINITY")) return;
+  const long configured = sysconf(_SC_NPROCESSORS_CONF);
+  cpu_set_t allowed;
+  if (configured < 1 || configured > CPU_SETSIZE || sched_getaffinity(0, sizeof(allowed), &allowed) != 0) return;
+  for (long cpu = 0; cpu < configured; ++cpu) {
+    if (!CPU_ISSET(static_cast<int>(cpu), &allowed)) return;
+  }
+  setenv("POCL_AFFINITY", "1", 0);
+#endif
+}
+
 std::vector<DeviceInfo> list_devices() {
+  static std::once_flag pocl_environment;
+  std::call_once(pocl_environment, pin_pocl_workers_by_default);
   std::vector<::cl::Platform> platforms;
   const cl_int status = ::cl::Platform::get(&platforms);
   if (status == -1001 /* CL_PLATFORM_NOT_FOUND_KHR */ || (status == CL_SUCCESS && platforms.empty())) {
@@ -134,7 +161,8 @@ size_t platform_count(const std::vector<const DeviceInfo*>& matches) {
   return names.size();
 }
 
-[[noreturn]] void no_match(const std::vector<DeviceInfo>& devices, const std::string& selector, const std::string& why) {
+[[noreturn]] void no_match(const std::vector<DeviceInfo>& devices, const std::string& selector,
+                           const std::string& why) {
   throw Error("--device '" + selector + "' " + why + "; the devices are: " + describe_devices(devices) +
               " (give an index, part of a name, or platform=NAME[:N])");
 }
@@ -161,14 +189,15 @@ const DeviceInfo& choose_by_platform(const std::vector<DeviceInfo>& devices, con
   }
   if (matches.empty()) no_match(devices, selector, "matches no platform");
   if (platform_count(matches) > 1) {
-    no_match(devices, selector, "is part of several platforms' names (" + platforms_of(matches) +
-                                    "): give more of the one you mean");
+    no_match(devices, selector,
+             "is part of several platforms' names (" + platforms_of(matches) + "): give more of the one you mean");
   }
   for (const auto* d : matches) {
     if (d->index_in_platform == index) return *d;
   }
-  no_match(devices, selector, "asks for device " + std::to_string(index) + " of platform '" +
-                                  matches.front()->platform_name + "', which has " + std::to_string(matches.size()));
+  no_match(devices, selector,
+           "asks for device " + std::to_string(index) + " of platform '" + matches.front()->platform_name +
+               "', which has " + std::to_string(matches.size()));
 }
 
 }  // namespace
@@ -211,8 +240,9 @@ DeviceInfo choose_device(const std::vector<DeviceInfo>& devices, const std::stri
   }
   if (matches.empty()) no_match(devices, selector, "matches no OpenCL device");
   if (platform_count(matches) > 1) {
-    no_match(devices, selector, "is ambiguous: it is part of names on several platforms (" + platforms_of(matches) +
-                                    "): choose one with platform=NAME[:N] or an index");
+    no_match(devices, selector,
+             "is ambiguous: it is part of names on several platforms (" + platforms_of(matches) +
+                 "): choose one with platform=NAME[:N] or an index");
   }
   return *matches.front();
 }

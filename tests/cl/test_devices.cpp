@@ -2,6 +2,14 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+#ifdef __linux__
+#include <sched.h>
+#include <unistd.h>
+#endif
 
 #include "cl/device.hpp"
 #include "cl/error.hpp"
@@ -27,6 +35,41 @@ TEST_CASE("devices: enumeration finds a CPU device with sane properties") {
   }
   CHECK(has_cpu);
 }
+
+#ifdef __linux__
+TEST_CASE("devices: PoCL's workers are pinned by default, unless POCL_AFFINITY was set or the CPUs are restricted") {
+  // The environment this process started with (/proc/self/environ: setenv does not change it).
+  std::ifstream environ_file("/proc/self/environ", std::ios::binary);
+  const std::string initial((std::istreambuf_iterator<char>(environ_file)), std::istreambuf_iterator<char>());
+  std::string given;
+  bool was_set = false;
+  for (size_t at = 0; at < initial.size();) {
+    const size_t end = std::min(initial.find('\0', at), initial.size());
+    const std::string entry = initial.substr(at, end - at);
+    if (entry.rfind("POCL_AFFINITY=", 0) == 0) {
+      was_set = true;
+      given = entry.substr(14);
+    }
+    at = end + 1;
+  }
+  cpu_set_t allowed;
+  REQUIRE(sched_getaffinity(0, sizeof(allowed), &allowed) == 0);
+  bool every_cpu = true;
+  for (long cpu = 0; cpu < sysconf(_SC_NPROCESSORS_CONF); ++cpu) every_cpu = every_cpu && CPU_ISSET(cpu, &allowed);
+  ocl::list_devices();
+  const char* now = std::getenv("POCL_AFFINITY");
+  INFO("POCL_AFFINITY at start: " << (was_set ? given : "unset") << ", every CPU allowed: " << every_cpu);
+  if (was_set) {
+    REQUIRE(now != nullptr);
+    CHECK(std::string(now) == given);
+  } else if (every_cpu) {
+    REQUIRE(now != nullptr);
+    CHECK(std::string(now) == "1");
+  } else {
+    CHECK(now == nullptr);
+  }
+}
+#endif
 
 TEST_CASE("devices: choice by default, index and name substring") {
   const auto devices = ocl::list_devices();
@@ -104,18 +147,19 @@ TEST_CASE("devices: a whole name wins over the same text inside an earlier devic
   CHECK(ocl::choose_device(devices, "amd epyc").index == 1);
   CHECK(ocl::choose_device(devices, "intel").index == 1);  // the platform's name
   CHECK(ocl::choose_device(devices, "haswell").index == 0);
-  CHECK(ocl::choose_device(devices, "pocl").index == 0);   // the platform's vendor
+  CHECK(ocl::choose_device(devices, "pocl").index == 0);  // the platform's vendor
   // A part of names on both platforms is refused, not resolved by the order the ICD loader happened to list them.
-  CHECK(refusal(devices, "EPYC").find("is ambiguous: it is part of names on several platforms "
-                                      "('Portable Computing Language', 'Intel(R) OpenCL')") != std::string::npos);
+  CHECK(refusal(devices, "EPYC")
+            .find("is ambiguous: it is part of names on several platforms "
+                  "('Portable Computing Language', 'Intel(R) OpenCL')") != std::string::npos);
 }
 
 // On an Intel host PoCL names its CPU device after the processor, so "Intel" is part of both implementations' names
 // and the first match depends on the ICD loader's platform order, which it does not fix: a stage that asked for
 // Intel's runtime could run on PoCL. Here with PoCL listed first, then last.
 TEST_CASE("devices: PoCL's device named after an Intel processor never stands in for Intel's runtime") {
-  const auto pocl = mock_device(0, 0, "pthread-skylake-avx512-Intel(R) Xeon(R) Processor", "Portable Computing Language",
-                                "The pocl project");
+  const auto pocl = mock_device(0, 0, "pthread-skylake-avx512-Intel(R) Xeon(R) Processor",
+                                "Portable Computing Language", "The pocl project");
   const auto intel = mock_device(1, 0, "Intel(R) Xeon(R) Processor", "Intel(R) OpenCL", "Intel(R) Corporation");
   for (bool pocl_first : {true, false}) {
     CAPTURE(pocl_first);
@@ -133,8 +177,9 @@ TEST_CASE("devices: PoCL's device named after an Intel processor never stands in
     CHECK(ocl::choose_device(devices, ocl::exact_selector(devices[1])).index == 1);
     CHECK(refusal(devices, "Intel").find("is ambiguous") != std::string::npos);
     CHECK(refusal(devices, "Xeon").find("is ambiguous") != std::string::npos);
-    CHECK(refusal(devices, "platform=Intel(R) OpenCL:1").find("asks for device 1 of platform 'Intel(R) OpenCL', "
-                                                             "which has 1") != std::string::npos);
+    CHECK(refusal(devices, "platform=Intel(R) OpenCL:1")
+              .find("asks for device 1 of platform 'Intel(R) OpenCL', "
+                    "which has 1") != std::string::npos);
     CHECK(refusal(devices, "platform=o").find("is part of several platforms' names") != std::string::npos);
     CHECK(refusal(devices, "platform=nosuch").find("matches no platform") != std::string::npos);
     CHECK(refusal(devices, "platform=").find("names no platform") != std::string::npos);
