@@ -30,11 +30,12 @@ void MappedBuffers::map() {
     cl_int status = CL_SUCCESS;
     const cl_map_flags flags = m.write ? (CL_MAP_READ | CL_MAP_WRITE) : CL_MAP_READ;
     const size_t bytes = std::max<size_t>(1, m.array->size()) * sizeof(float);
-    void* p = clEnqueueMapBuffer(ctx_.raw_queue(), m.array->raw(), CL_TRUE, flags, 0, bytes, 0, nullptr, nullptr,
-                                 &status);
+    void* p =
+        clEnqueueMapBuffer(ctx_.raw_queue(), m.array->raw(), CL_FALSE, flags, 0, bytes, 0, nullptr, nullptr, &status);
     ocl::check(status, "clEnqueueMapBuffer(" + m.array->name() + ") for " + what_);
-    m.pointer = p;
+    m.pointer = p;  // valid once the map has run: after the clFinish below (the destructor unmaps it either way)
   }
+  ocl::check(clFinish(ctx_.raw_queue()), "clFinish (the maps of " + what_ + ")");
 }
 
 float* MappedBuffers::at(const ocl::DeviceArray<float>* array) const {
