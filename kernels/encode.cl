@@ -247,14 +247,14 @@ __kernel void gaussian_concat_pe_fwd(__global const float* origins, __global con
 // That is inside the 4 ulp the tests and the doubling bound assume for a sincos. Beyond 2^40 the first reduction step
 // stays exact to |y| ≈ 2^54, but no bound is claimed there.
 
-// rint(x) for a double |x| < 2^51 (here |y·2/π| < 2^40), as common.cl's round_half_even: (x + 1.5·2^52) − 1.5·2^52,
-// one rounding to the nearest integer, ties to even (PoCL's rint is a longer sequence).
-ALWAYS_INLINE double round_half_even_wide(double x) { return (x + 6755399441055744.0) - 6755399441055744.0; }
+// common.cl's round_half_even for a double: rint(x) for |x| < 2^51 (here |y·2/π| < 2^40), as (x + 1.5·2^52) − 1.5·2^52,
+// one rounding to the nearest integer, ties to even.
+ALWAYS_INLINE OVERLOADABLE double round_half_even(double x) { return (x + 6755399441055744.0) - 6755399441055744.0; }
 
 // y = n·π/2 + r: sets *n and returns r, both in double.
 ALWAYS_INLINE double reduce_by_half_pi(float y, double* n) {
   const double y_wide = (double)y;
-  *n = round_half_even_wide(y_wide * 0.6366197723675814);
+  *n = round_half_even(y_wide * 0.6366197723675814);
   const double r_wide = fma(-*n, 6.123233995736766e-17, fma(-*n, 1.5707963267948966, y_wide));
   return fma(-*n, -1.4973849048591698e-33, r_wide);
 }

@@ -53,7 +53,7 @@ inline float resample_weight(__global const float* w, uint i, uint n, const uint
 // ALWAYS_INLINE (with resample_rays16): PoCL's inliner left both as calls inside the walk (cost 565 against its
 // threshold 562, POCL_VECTORIZER_REMARKS=1); inlined, resample_fwd on one thread 4.4 → 3.75 ms (4,096 rays).
 ALWAYS_INLINE float16 resample_weight16(__global const float* w, uint16 base, uint16 i, uint n, const uint blur,
-                                 const float padding) {
+                                        const float padding) {
   const float16 mid = GATHER16(w, base + i);
   if (!blur) return mid + padding;
   const float16 left = GATHER16(w, base + select(i - 1, (uint16)(0), i == 0));
@@ -62,10 +62,10 @@ ALWAYS_INLINE float16 resample_weight16(__global const float* w, uint16 base, ui
 }
 
 // Rays 16·item .. 16·item + 15 (those below n_rays; the lanes past them repeat the last ray and store nothing).
-ALWAYS_INLINE void resample_rays16(__global const float* t_edges, __global const float* weights, __global float* t_new,
-                            const uint first, const uint n_rays, const uint n, const uint n_new, const float padding,
-                            const uint blur, const uint randomized, const ulong seed, const uint step,
-                            const uint first_ray) {
+ALWAYS_INLINE void resample_rays16(__global const float* t_edges, __global const float* weights,
+                                   __global float* t_new, const uint first, const uint n_rays, const uint n,
+                                   const uint n_new, const float padding, const uint blur, const uint randomized,
+                                   const ulong seed, const uint step, const uint first_ray) {
   const uint n_out = n_new + 1;
   const uint16 lane_ray = first + (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const uint16 ray = min(lane_ray, (uint16)(n_rays - 1));
@@ -131,8 +131,8 @@ __kernel void resample_fwd(__global const float* t_edges, __global const float* 
 #if RESAMPLE_RAYS_PER_VECTOR
   const size_t item = get_global_id(0);
   if (VECTOR_WIDTH * item >= n_rays || n_samples == 0 || n_new == 0) return;
-  resample_rays16(t_edges, weights, t_new, VECTOR_WIDTH * (uint)item, n_rays, n_samples, n_new, padding, blur, randomized, seed,
-                  step, first_ray);
+  resample_rays16(t_edges, weights, t_new, VECTOR_WIDTH * (uint)item, n_rays, n_samples, n_new, padding, blur,
+                  randomized, seed, step, first_ray);
   return;
 #endif
   const size_t ray = get_global_id(0);

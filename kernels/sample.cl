@@ -95,8 +95,8 @@ ALWAYS_INLINE void store_edge_group(__global float* out, float t_near, float t_f
 // ALWAYS_INLINE: PoCL's inliner left it a call (cost 565 against its threshold 562, POCL_VECTORIZER_REMARKS=1);
 // inlined, the sampler on one thread 0.68 → 0.59 ms (4,096 rays × 128 samples).
 ALWAYS_INLINE void store_edge_groups16(__global float* out, float t_near, float t_far, uint ray, uint first,
-                                uint n_samples, const uint randomized, const ulong seed, const uint step,
-                                const uint first_ray) {
+                                       uint n_samples, const uint randomized, const ulong seed, const uint step,
+                                       const uint first_ray) {
   const uint16 group = first + (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   uint16 w0 = (uint16)(first_ray + ray), w1 = (uint16)(step), w2 = group, w3 = (uint16)(RNG_STREAM_STRATIFIED);
   if (randomized) philox4x32_10_words(&w0, &w1, &w2, &w3, (uint)seed, (uint)(seed >> 32));

@@ -86,7 +86,7 @@ GemmBenchResult run_gemm_bench(ocl::Context& ctx, const GemmBenchOptions& option
 // The device configurations for a device: CLBlast's defaults, then the tuned file when `tuning` holds one.
 std::vector<GemmConfig> clblast_configs(const std::optional<gemm::GemmTuning>& tuning);
 
-// The host GEMM backend (mlp::gemm with gemm_backend=host: blocking maps of the device buffers, the CPU BLAS,
+// The host GEMM backend (mlp::gemm with gemm_backend=host: maps of the device buffers, a clFinish, the CPU BLAS,
 // unmaps, clFinish), as a configuration beside CLBlast's; nothing when ctx's device cannot run it. Each timed call
 // switches ctx to the host backend and back, so the other configurations keep CLBlast. ctx must outlive the result.
 std::optional<GemmConfig> host_backend_config(ocl::Context& ctx);

@@ -64,7 +64,7 @@ GemmBackend choose_gemm_backend(ocl::Context& ctx, GemmBackend wanted) {
   const GemmBackend backend = resolve_gemm_backend(measured.value_or(wanted), ctx.device_info(), host_blas_available());
   if (backend == GemmBackend::host) {
     // Threads: the device's kernels (PoCL's pthread pool, one worker per compute unit) and the BLAS never run at the
-    // same time, because every host product starts with a blocking map that drains the queue and ends before the
+    // same time, because every host product starts by mapping its buffers and draining the queue, and ends before the
     // next kernel is enqueued (host_gemm.hpp). So each may use every core while it runs: the BLAS gets as many
     // threads as the device has compute units (the cores PoCL was given), not more, so the two pools stay the same
     // size on the same cores. OpenBLAS's idle workers spin (sched_yield) for 2^OPENBLAS_THREAD_TIMEOUT cycles after

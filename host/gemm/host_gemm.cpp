@@ -1,4 +1,4 @@
-// The host GEMM backend: map (blocking), cblas_sgemm, unmap. See host_gemm.hpp for the queue ordering.
+// The host GEMM backend: map (then wait for the queue), cblas_sgemm, unmap. See host_gemm.hpp for the queue ordering.
 #include "gemm/host_gemm.hpp"
 
 #include "cl/error.hpp"

@@ -2,8 +2,9 @@
 // themselves, mapped into host memory (zero-copy on devices with unified memory, see cl/buffer.hpp).
 //
 // Queue ordering, which is what makes this safe next to the device's kernels on the same in-order queue:
-//  1. every buffer the product touches is mapped with a BLOCKING clEnqueueMapBuffer. The queue is in order, so the
-//     map completes only after every command enqueued before it (the kernels that wrote A, B or C) has finished;
+//  1. every buffer the product touches is mapped (MappedBuffers::map: the maps enqueued, then one clFinish). The
+//     queue is in order, so that returns only after every command enqueued before the maps (the kernels that wrote
+//     A, B or C) and the maps themselves have finished;
 //  2. cblas_sgemm runs on the host while the buffers are mapped; nothing else is enqueued meanwhile (one host
 //     thread drives the queue, and this function returns only after step 3);
 //  3. the buffers are unmapped with clEnqueueUnmapMemObject. Commands enqueued afterwards (the kernels that read

@@ -68,7 +68,7 @@ inline double doubling_error_bound(int doublings) {
 // polynomials' error over every float r).
 inline double reduce_by_half_pi(float y, double* n) {
   const double y_wide = static_cast<double>(y);
-  // rint as the kernel's round_half_even_wide computes it (|x| < 2^51): one rounding to the nearest, ties to even.
+  // rint as the kernel's round_half_even (double) computes it (|x| < 2^51): one rounding to the nearest, ties to even.
   const double scaled = y_wide * 0.6366197723675814;
   *n = (scaled + 6755399441055744.0) - 6755399441055744.0;
   const double r_wide = std::fma(-*n, 6.123233995736766e-17, std::fma(-*n, 1.5707963267948966, y_wide));
