@@ -79,11 +79,14 @@ void run_view(const ViewArgs& args) {
   view::HandlerOptions handler_options;
   handler_options.run_folder = args.run;
   handler_options.token = token;
+  handler_options.bound.host = args.host;
+  handler_options.bound.port = args.port;
   view::Handler handler(handler_options, renderer.get());
   view::ServerOptions server_options;
   server_options.host = args.host;
   server_options.port = args.port;
   view::HttpServer server(handler, server_options);
+  handler.set_port(server.port());  // --port 0: the port the system gave
 
   const std::string shown_host = args.host.find(':') != std::string::npos ? "[" + args.host + "]" : args.host;
   const std::string what = renderer ? "step " + std::to_string(renderer->step()) : "no checkpoint yet";

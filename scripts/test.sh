@@ -6,7 +6,9 @@
 #   oclgrind   the kernel tests under the oclgrind simulator
 #   sanitizer  the suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh), but
 #              the `quality` tests
-#   fuzz       each fuzz target for 12 s, in that build
+#   fuzz       each fuzz target for 12 s, in that build, each with at least 1,000 inputs run
+#   tsan       the tests whose code starts threads (label `threads`: the viewer, its server, the scene writers, the host
+#              MLP's threads in training) built with clang++ under ThreadSanitizer (scripts/test-tsan.sh), on PoCL
 #   intel      the suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI), but the
 #              `quality` tests and the tests of what does not depend on the OpenCL runtime: the CLI's (arguments,
 #              files, messages; the device work they start is the one the library's tests run here), the layering
@@ -22,13 +24,22 @@
 #              graph tests again, the same sources, which the pocl and intel stages run), and on Intel's runtime also
 #              the one check only the self-test has: training steps compared with PoCL's device (--cross-device)
 # Every stage runs on a platform it names and checks (MIPNERF_TEST_PLATFORM); a test that cannot run reports skipped.
-# The command fails when a stage fails, runs no test, or could not run. A stage may be left out only by naming it,
-# MIPNERF_SKIP=intel,oclgrind; with CI=true nothing may be left out and a skipped test fails the command.
+# The command fails when a stage fails, runs no test, could not run or recorded nothing (scripts/stage_table.py knows
+# every stage), when a test CTest did not run (a missing executable, a failed fixture), and when a test was skipped or
+# a stage left out (MIPNERF_SKIP=intel,oclgrind). For local work, `--allow-skips` lets skipped tests and stages left out
+# by MIPNERF_SKIP pass, and the table and its last line say so; CI=true refuses it and MIPNERF_SKIP.
 # Day to day, the PoCL suite alone: ctest --test-dir build -j2 -LE '^(oclgrind|mpi)$'
 set -uo pipefail
 cd "$(dirname "$0")/.."
-stages="pocl mpi oclgrind sanitizer fuzz intel selftest browser"
+stages="pocl mpi oclgrind sanitizer fuzz tsan intel selftest browser"
 ci="${CI:-false}"
+allow_skips=""
+for argument in "$@"; do
+  case "$argument" in
+    --allow-skips) allow_skips="--allow-skips" ;;
+    *) echo "test: unknown argument '$argument' (the one option is --allow-skips, for local work)" >&2; exit 2 ;;
+  esac
+done
 skip_names="${MIPNERF_SKIP:-}"
 skip_list=",$skip_names,"
 for name in ${skip_names//,/ }; do
@@ -36,6 +47,10 @@ for name in ${skip_names//,/ }; do
 done
 if [ "$ci" = true ] && [ "$skip_list" != ",," ]; then
   echo "test: MIPNERF_SKIP='$skip_names' with CI=true: in CI every stage must run" >&2
+  exit 2
+fi
+if [ "$ci" = true ] && [ -n "$allow_skips" ]; then
+  echo "test: --allow-skips with CI=true: in CI every test must run" >&2
   exit 2
 fi
 ./scripts/install-deps.sh --for-tests || exit 1
@@ -134,6 +149,16 @@ if wanted sanitizer || wanted fuzz; then
   fi
 fi
 
+# The thread-sanitizer build (clang++, TSan, no MPI): the tests labelled `threads` and the fixtures they need.
+if wanted tsan; then
+  tsan_dir="${TSAN_BUILD_DIR:-build-tsan}"
+  if ./scripts/test-tsan.sh --build-only; then
+    run_ctest tsan "$pocl_platform" "$tsan_dir" -L '^threads$'
+  else
+    record tsan "-" "" "could not run: the thread-sanitizer build failed (above)"
+  fi
+fi
+
 # Intel's CPU OpenCL runtime, installed into a cache folder from PyPI; its platform name comes from the runtime.
 if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
@@ -146,4 +171,4 @@ if wanted intel; then
 fi
 
 # The closing table, and the command's status.
-python3 scripts/stage_table.py "$results/rows.tsv" --ci "$ci" --seconds $(( $(date +%s) - start_all ))
+python3 scripts/stage_table.py "$results/rows.tsv" $allow_skips --seconds $(( $(date +%s) - start_all ))

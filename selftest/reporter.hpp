@@ -11,6 +11,7 @@ struct CheckResult {
   std::string name;  // the suite's test case, e.g. "render: forward matches the reference ..."
   bool passed = false;
   bool skipped = false;  // support/skip.hpp: it could not run on this device or build
+  std::string skip_reason;  // why, when skipped and known
   double seconds = 0.0;
   std::string worst_what;    // the compared quantity closest to its bound ("" when the check compares no arrays)
   double worst_ratio = 0.0;  // its max |device − reference| / bound: ≤ 1 passes

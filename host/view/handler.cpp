@@ -19,6 +19,13 @@ Response text(int status, const std::string& message) {
   return r;
 }
 
+// What refuse_foreign returns when a request may go on to its route.
+Response not_refused() {
+  Response r;
+  r.status = 0;
+  return r;
+}
+
 // Renders and paths before the run's first checkpoint has loaded.
 Response no_checkpoint_yet() {
   return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
@@ -135,12 +142,24 @@ bool same_secret(const std::string& a, const std::string& b) {
   return diff == 0;
 }
 
-Handler::Handler(HandlerOptions options, RenderBackend* backend) : options_(std::move(options)), backend_(backend) {
+Handler::Handler(HandlerOptions options, RenderBackend* backend)
+    : options_(std::move(options)), port_(options_.bound.port), backend_(backend) {
   std::error_code ec;
   run_root_ = fs::canonical(options_.run_folder, ec).string();
 }
 
 Response Handler::handle(const Request& request) const {
+  Response response = answer(request);
+  // No other page may frame the viewer (a click on its buttons through an invisible frame), guess a type for a run
+  // file, or learn the token from a Referer.
+  response.headers.emplace_back("X-Frame-Options", "DENY");
+  response.headers.emplace_back("Content-Security-Policy", "frame-ancestors 'none'");
+  response.headers.emplace_back("X-Content-Type-Options", "nosniff");
+  response.headers.emplace_back("Referrer-Policy", "no-referrer");
+  return response;
+}
+
+Response Handler::answer(const Request& request) const {
   try {
     if (request.target.size() > options_.max_target_bytes) return text(414, "request target too long");
     if (request.body.size() > options_.max_body_bytes) return text(413, "request body too large");
@@ -150,6 +169,8 @@ Response Handler::handle(const Request& request) const {
     const std::string query = q == std::string::npos ? "" : request.target.substr(q + 1);
     std::string path;
     if (!percent_decode(raw_path, path)) return text(400, "malformed percent-encoding in the path");
+    Response refused = refuse_foreign(request);
+    if (refused.status != 0) return refused;
     if (!options_.token.empty() && !same_secret(query_value(query, "token"), options_.token)) {
       return text(403, "this viewer needs its token: open the URL `mipnerf-cl view` printed (…?token=…)");
     }
@@ -159,6 +180,25 @@ Response Handler::handle(const Request& request) const {
   } catch (...) {
     return text(500, "internal error");
   }
+}
+
+Response Handler::refuse_foreign(const Request& request) const {
+  BoundAddress bound = options_.bound;
+  bound.port = port_.load();
+  if (!host_allowed(request.host, bound)) {
+    return text(403, "this viewer answers only requests addressed to it (Host " + bound.host + ":" +
+                         std::to_string(bound.port) + ", localhost or 127.0.0.1); open the URL `mipnerf-cl view` printed");
+  }
+  if (request.method == "GET" || request.method == "HEAD") return not_refused();
+  // A request that changes state (renders, paths written into the run folder): never from another web page.
+  if (!origin_allowed(request.origin, bound) || request.sec_fetch_site == "cross-site" ||
+      request.sec_fetch_site == "same-site") {
+    return text(403, "this viewer takes requests from its own page only, not from another origin");
+  }
+  if (!is_json_content_type(request.content_type)) {
+    return text(415, "a request that changes state must be sent as Content-Type: application/json");
+  }
+  return not_refused();
 }
 
 Response Handler::route(const std::string& method, const std::string& path, const Request& request) const {

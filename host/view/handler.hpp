@@ -11,14 +11,21 @@
 #include <utility>
 #include <vector>
 
+#include "view/request_guard.hpp"
+
 namespace mipnerf::view {
 
 // What the HTTP server passes in: the method, the request target as the client sent it (path and query, still
-// percent-encoded: the handler decodes it, once) and the body.
+// percent-encoded: the handler decodes it, once), the body, and the headers the handler checks (empty when absent;
+// a header sent twice arrives empty, so it fails the checks that need it).
 struct Request {
   std::string method;  // "GET", "POST", ...
   std::string target;  // "/run/val/000_scale0.png?token=..."
   std::string body;
+  std::string host;            // Host: "127.0.0.1:8000"
+  std::string origin;          // Origin: "http://127.0.0.1:8000", or empty
+  std::string content_type;    // Content-Type: "application/json"
+  std::string sec_fetch_site;  // Sec-Fetch-Site: "same-origin", "cross-site", … (browsers send it), or empty
 };
 
 struct Response {
@@ -85,6 +92,8 @@ class RenderBackend {
 struct HandlerOptions {
   std::string run_folder;       // the run: every file served under /run/ lies inside it
   std::string token;            // when not empty, every request must carry ?token=<this>
+  BoundAddress bound;           // every request's Host must name it (view/request_guard.hpp); its port may be set
+                                // once the server has bound (Handler::set_port)
   size_t max_body_bytes = 1 << 16;   // a render request's camera is < 1 KB
   size_t max_target_bytes = 4096;    // path and query
   size_t max_file_bytes = 64 << 20;  // a run folder's image or log
@@ -96,16 +105,25 @@ class Handler {
   // `view` serves the run before its first checkpoint exists and sets the backend once one loads).
   Handler(HandlerOptions options, RenderBackend* backend);
   void set_backend(RenderBackend* backend) { backend_.store(backend); }
+  // The port the server bound (with --port 0 known only after binding); before it is set, options().bound.port.
+  void set_port(int port) { port_.store(port); }
+  // Every request: 403 unless its Host names the bound address (request_guard.hpp) and it carries the token when
+  // one is set; a request that changes state (any method but GET and HEAD) also 403 when it comes from another
+  // origin (Origin, Sec-Fetch-Site) and 415 unless its body is declared JSON.
   Response handle(const Request& request) const;
   const HandlerOptions& options() const { return options_; }
 
  private:
+  Response answer(const Request& request) const;  // handle, without the headers every response carries
   Response route(const std::string& method, const std::string& path, const Request& request) const;
   Response serve_run_file(const std::string& relative) const;
   Response render(const std::string& body) const;
   Response start_path(const std::string& body) const;
+  // The Host, Origin and Content-Type checks; a response to send instead of routing, or status 0 when all pass.
+  Response refuse_foreign(const Request& request) const;
 
   HandlerOptions options_;
+  std::atomic<int> port_;
   std::string run_root_;  // canonical run folder
   std::atomic<RenderBackend*> backend_;
 };

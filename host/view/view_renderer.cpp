@@ -144,6 +144,7 @@ ViewRenderer::ViewRenderer(ocl::Context& ctx, ViewRendererOptions options) : ctx
 
 ViewRenderer::~ViewRenderer() {
   path_cancel_ = true;
+  std::lock_guard<std::mutex> starting(path_start_mutex_);  // no start is storing a thread meanwhile
   if (path_thread_.joinable()) path_thread_.join();
 }
 
@@ -172,10 +173,12 @@ RenderReply ViewRenderer::render(const RenderRequest& request) {
   if (superseded()) return answer(RenderReply::Status::superseded);
   if (path_running_) {
     std::lock_guard<std::mutex> lock(path_mutex_);
-    return answer(RenderReply::Status::busy, "the device is rendering the recorded path (frame " +
-                                                 std::to_string(path_status_.frames_done + 1) + "/" +
-                                                 std::to_string(path_status_.frames) +
-                                                 "); the free camera renders again once it ends or is cancelled");
+    const std::string what = path_status_.state == "rendering"
+                                 ? "rendering the recorded path (frame " + std::to_string(path_status_.frames_done + 1) +
+                                       "/" + std::to_string(path_status_.frames) + ")"
+                                 : "starting a recorded path";
+    return answer(RenderReply::Status::busy,
+                  "the device is " + what + "; the free camera renders again once it ends or is cancelled");
   }
   if (waiting_.fetch_add(1) >= options_.max_waiting) {
     waiting_.fetch_sub(1);
@@ -223,12 +226,31 @@ RenderReply ViewRenderer::render(const RenderRequest& request) {
 
 PathReply ViewRenderer::start_path(const PathRequest& request) {
   PathReply reply;
-  if (path_running_) {
+  // One start at a time, held until the new thread is in path_thread_: a second caller meanwhile is told "busy" at
+  // once. Checking path_running_ and setting it after the device wait let two requests both move-assign a joinable
+  // path_thread_ (std::terminate: a double-click on "render the path"); and a claim by the flag alone let a path that
+  // ended at once (cancelled) free it before its starter had stored the thread, so the next start joined or replaced
+  // a thread still being assigned (ThreadSanitizer's report on the concurrency test).
+  std::unique_lock<std::mutex> starting(path_start_mutex_, std::try_to_lock);
+  if (!starting.owns_lock() || path_running_) {
     reply.status = PathReply::Status::busy;
     reply.message = "a path is rendering already: wait for it, or cancel it first";
     return reply;
   }
-  if (path_thread_.joinable()) path_thread_.join();  // the previous path's thread has ended
+  // Set before anything that can fail, given back on every way out but the new thread's start (a bad request, or a
+  // throw from the file system or std::thread), so no failure leaves the viewer "busy" for good; render() reads it to
+  // answer "busy" meanwhile.
+  path_running_ = true;
+  struct Claim {
+    std::atomic<bool>& running;
+    bool kept = false;
+    ~Claim() {
+      if (!kept) running = false;
+    }
+  } claim{path_running_};
+  path_cancel_ = false;  // a cancel from here on stops this path
+  // The previous path's thread cleared the flag as its last step, so it has ended or is about to.
+  if (path_thread_.joinable()) path_thread_.join();
   eval::ViewFrames frames;
   eval::VideoOutput video;
   const std::string folder = new_path_folder(options_.run_folder);
@@ -262,11 +284,10 @@ PathReply ViewRenderer::start_path(const PathRequest& request) {
     path_status_.frames = frames.cameras.size();
     path_status_.folder = folder;
   }
-  path_cancel_ = false;
-  path_running_ = true;
   path_thread_ = std::thread([this, frames = std::move(frames), folder, video]() mutable {
     render_path(std::move(frames), folder, video);
   });
+  claim.kept = true;  // the thread clears path_running_ when it ends
   return reply;
 }
 

@@ -73,8 +73,9 @@ class ViewRenderer : public RenderBackend {
   double warm_up_seconds_ = 0.0;
   std::atomic<uint64_t> newest_generation_{0};
   std::atomic<size_t> waiting_{0};
+  std::mutex path_start_mutex_;  // held by start_path from its check to storing path_thread_
   std::thread path_thread_;
-  std::atomic<bool> path_running_{false};
+  std::atomic<bool> path_running_{false};  // from a start's claim until its path thread's last step
   std::atomic<bool> path_cancel_{false};
   mutable std::mutex path_mutex_;  // path_status_
   PathStatus path_status_;

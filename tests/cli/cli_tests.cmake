@@ -27,6 +27,12 @@ function(mipnerf_add_cli_error_test name)
   mipnerf_add_checked_test("cli: ${name}" ONE_LINE EXIT nonzero EXPECT "${T_PATTERN}" COMMAND mipnerf-cl ${T_ARGS})
 endfunction()
 
+# An error test must fail when the program crashes after printing the expected line (a signal, or a status above
+# 125): tests/cli/expect_crash_fails.cmake drives the runner with such commands.
+add_test(NAME "cli: an error test fails when the program crashes after its message" COMMAND ${CMAKE_COMMAND}
+  "-DRUNNER=${CMAKE_CURRENT_SOURCE_DIR}/cli/run_checked.cmake" "-DSHELL=/bin/sh"
+  -P "${CMAKE_CURRENT_SOURCE_DIR}/cli/expect_crash_fails.cmake")
+
 # The executable runs on the platform the test stage asked for (MIPNERF_TEST_PLATFORM; scripts/test.sh sets it with
 # MIPNERF_DEVICE and MIPNERF_TEST_DEVICE), so a CLI test never passes on another OpenCL implementation.
 add_test(NAME "cli: the executable selects a device of the stage's platform" COMMAND ${CMAKE_COMMAND}
@@ -247,6 +253,15 @@ mipnerf_add_checked_test("cli: render: train a model to render" EXPECT "trained 
   --out "${MIPNERF_RENDER_RUN}" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
 set_tests_properties("cli: render: clear the run folder" PROPERTIES FIXTURES_SETUP cli_render_clean)
 set_tests_properties("cli: render: train a model to render" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_render_clean" FIXTURES_SETUP cli_render_model)
+# `view` through its socket (tests/view/test_server.py, on a copy of the run): forged Host, Origin and content types,
+# oversized and compressed bodies, many ranges, idle connections, simultaneous path starts and renders, the token off
+# loopback, Ctrl-C. Label `threads`: the thread-sanitizer stage runs it on its own build of the executable.
+find_package(Python3 COMPONENTS Interpreter REQUIRED)
+add_test(NAME "cli: view answers forged, oversized and simultaneous requests, and wants its token off loopback"
+  COMMAND Python3::Interpreter "${CMAKE_CURRENT_SOURCE_DIR}/view/test_server.py" --exe $<TARGET_FILE:mipnerf-cl>
+  --run "${MIPNERF_RENDER_RUN}")
+set_tests_properties("cli: view answers forged, oversized and simultaneous requests, and wants its token off loopback"
+  PROPERTIES FIXTURES_REQUIRED cli_render_model LABELS "cli;threads" TIMEOUT 600 ENVIRONMENT "${MIPNERF_TEST_ENV}")
 mipnerf_add_checked_test("cli: render an orbit from a training folder" EXPECT "rendered 4 frames of an orbit \\(24x24\\) from step 4 .*render_orbit"
   COMMAND mipnerf-cl render --checkpoint "${MIPNERF_RENDER_RUN}"
   --path orbit --frames 4 --size 24x24 --format both)

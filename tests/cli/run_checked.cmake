@@ -1,7 +1,8 @@
 # cmake -P script: runs one command and checks all of what it did, for the tests of the executable (cli_tests.cmake).
 #   -DCOMMAND=program|arg|...   the command, its arguments separated by '|'
 #   -DEXPECT=regex              the output (stdout and stderr merged, in order) must match it (optional)
-#   -DEXIT=0|nonzero            the exit status it must have (default 0)
+#   -DEXIT=0|nonzero            the exit status it must have (default 0); nonzero means an error exit, 1..125: a
+#                               signal or a status above 125 (a crash, a program that could not run) fails
 #   -DONE_LINE=ON               stderr must be exactly one line (the CLI's errors), matched by EXPECT alone
 #   -DREPORT=regex              a sanitizer report's first line (tests/CMakeLists.txt); any match fails
 # CTest's PASS_REGULAR_EXPRESSION would make CTest ignore the exit status, and a line printed before a crash, a
@@ -22,8 +23,15 @@ if(REPORT AND output MATCHES "${REPORT}")
   message(FATAL_ERROR "a sanitizer reported (${CMAKE_MATCH_0}) in: ${shown}")
 endif()
 if(EXIT STREQUAL "nonzero")
-  if(status EQUAL 0)
+  # An error the program reports exits 1..125; a crash is not one. CMake gives a signal as text ("Segmentation
+  # fault", "Child aborted"), and 126..255 are the shell's "cannot run", "not found" and 128 + signal.
+  if(NOT status MATCHES "^[0-9]+$")
+    message(FATAL_ERROR "expected an error exit status (1..125), but the program died: '${status}', from: ${shown}")
+  elseif(status EQUAL 0)
     message(FATAL_ERROR "expected a non-zero exit status, got 0, from: ${shown}")
+  elseif(status GREATER 125)
+    message(FATAL_ERROR "expected an error exit status (1..125), got ${status} (a crash, or a program that could "
+      "not run), from: ${shown}")
   endif()
 elseif(NOT "${status}" STREQUAL "${EXIT}")
   message(FATAL_ERROR "expected exit status ${EXIT}, got '${status}', from: ${shown}")

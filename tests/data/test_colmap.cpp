@@ -265,7 +265,7 @@ TEST_CASE("colmap: known cameras far from the origin import (text and binary ali
   CHECK(data::load_dataset(dir / "out_binary").split("test").num_images() == 1);
 }
 
-TEST_CASE("colmap: a forward-facing capture is centred on the median of its points; overrides of near/far") {
+TEST_CASE("colmap: a forward-facing capture is centred on the median of its points, and near/far can be overridden") {
   test::TempDir dir;
   KnownCapture capture({0, 0, 0}, 1.0, 0);
   // Four parallel cameras 10 units before a wall of points, looking along -y (OpenGL: -z is forward).
@@ -310,7 +310,7 @@ TEST_CASE("colmap: a forward-facing capture is centred on the median of its poin
   CHECK(given.centre[1] == 10.0);
 }
 
-TEST_CASE("colmap: lens cameras import with their model; unknown, non-finite and folding lenses are refused") {
+TEST_CASE("colmap: lens cameras import with their model, and unknown, non-finite and folding lenses are refused") {
   test::TempDir dir;
   KnownCapture capture({0, 0, 0}, 4.0, 2);
   capture.write_images(dir / "images");
@@ -339,7 +339,7 @@ TEST_CASE("colmap: lens cameras import with their model; unknown, non-finite and
   capture.model.cameras[0] = {1, "RADIAL", 3, 8, 6, {7.0, 4.0, 3.0, -0.02, std::numeric_limits<double>::infinity()}};
   test::write_colmap_model(dir / "infinite", capture.model, true);
   CHECK(import_error(dir / "infinite", dir / "images", dir / "out") ==
-        dir / "infinite/cameras.bin" + ": camera 1: a RADIAL coefficient is not finite");
+        dir / "infinite/cameras.bin" + ": camera record 1 of 2: camera 1: its RADIAL parameter 5 of 5 is not finite");
   // k1 = −3 folds at r = 1/3 (normalised); the 8×6 image at focal 3 px reaches r = 1.6 at its corners.
   capture.model.cameras[0] = {1, "SIMPLE_RADIAL", 2, 8, 6, {3.0, 4.0, 3.0, -3.0}};
   test::write_colmap_model(dir / "fold", capture.model, false);
@@ -453,8 +453,8 @@ TEST_CASE("colmap: malformed text files are one line naming the file, the line a
       {"1 PINHOLE 8 6 7 7.5 4 3 9\n", "m/cameras.txt:1: camera 1: PINHOLE takes 4 parameters, the line has 5"},
       {"\n7 FANCY 8 6 1 2 3\n", "m/cameras.txt:2: camera 7: unknown camera model 'FANCY'"},
       {"x PINHOLE 8 6 7 7 4 3\n", "m/cameras.txt:1: CAMERA_ID must be a non-negative integer, got 'x'"},
-      {"1 PINHOLE 8 6 nan 7 4 3\n", "m/cameras.txt:1: a parameter is not finite ('nan')"},
-      {"1 PINHOLE 8 6 7 7 4 3e999\n", "m/cameras.txt:1: a parameter must be a number, got '3e999'"},
+      {"1 PINHOLE 8 6 nan 7 4 3\n", "m/cameras.txt:1: camera 1: its PINHOLE parameter 1 of 4 is not finite ('nan')"},
+      {"1 PINHOLE 8 6 7 7 4 3e999\n", "m/cameras.txt:1: camera 1: its PINHOLE parameter 4 of 4 must be a number, got '3e999'"},
       {"1 PINHOLE 0 6 7 7 4 3\n", "m/cameras.txt:1: camera 1: image size 0x6 is not a camera's"},
       {"1 PINHOLE 8\n", "m/cameras.txt:1: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got 3 fields"},
       {"99999999999 PINHOLE 8 6 7 7 4 3\n", "m/cameras.txt:1: CAMERA_ID '99999999999' is out of range"},
@@ -584,7 +584,7 @@ TEST_CASE("colmap: malformed binary files: huge counts, unknown models, bad quat
   CHECK(
       contains(cameras_error(patched(cameras, 8 + 4 + 4, uint64_t{0})), "camera 1: image size 0x6 is not a camera's"));
   CHECK(cameras_error(patched(cameras, 8 + 24, std::numeric_limits<double>::quiet_NaN())) ==
-        "m/cameras.bin: camera record 1 of 2: a parameter is not finite");
+        "m/cameras.bin: camera record 1 of 2: camera 1: its PINHOLE parameter 1 of 4 is not finite");
   // The quaternion of image record 1 (after its id): zero, then scaled by 2.
   std::string zero = images;
   for (int k = 0; k < 4; ++k) zero = patched(zero, 8 + 4 + 8 * k, 0.0);

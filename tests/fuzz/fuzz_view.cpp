@@ -1,10 +1,14 @@
 // Fuzz target: `mipnerf-cl view`'s request handler (view::Handler), the part of the viewer that reads what a browser,
-// or anyone who can reach the port, sends. The input is one request: its first byte chooses the method (G: GET, P: POST, H: HEAD, else PUT), the bytes up
-// to the first newline are the target (path and query, percent-encoded), the rest is the body. The run folder holds
-// a log, a config and an image, and a symlink to a file outside it. Every request must get a status in 200..599;
-// no response may contain the outside file's text; a render request's camera is read by the camera path reader the
-// real renderer uses (data::parse_camera_path), whose errors must be mipnerf::Error.
+// or anyone who can reach the port, sends. The input is one request: its first byte chooses the method (G: GET, P:
+// POST, H: HEAD, else PUT), the bytes up to the first newline are the target (path and query, percent-encoded), then
+// any lines that start "Host:", "Origin:", "Content-Type:" or "Sec-Fetch-Site:" are those headers (without a Host line
+// the page's own, 127.0.0.1:8000, and without a Content-Type line application/json), and the rest is the body. The
+// run folder holds a log, a config and an image, and a symlink to a file outside it. Every request must get a status
+// in 200..599; no response may contain the outside file's text; only a request whose Host names the viewer may get a
+// 2xx, and a state-changing one only from its own origin with a JSON body; a render request's camera is read by the
+// camera path reader the real renderer uses (data::parse_camera_path), whose errors must be mipnerf::Error.
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -14,6 +18,7 @@
 #include "data/keyframes.hpp"
 #include "fuzz_support.hpp"
 #include "view/handler.hpp"
+#include "view/request_guard.hpp"
 
 namespace {
 
@@ -73,28 +78,55 @@ const fs::path& run_folder() {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static CameraReadingBackend backend;
+  static const view::BoundAddress bound{"127.0.0.1", 8000};
   static const view::Handler handler = [] {
     view::HandlerOptions options;
     options.run_folder = run_folder().string();
+    options.bound = bound;
     return view::Handler(options, &backend);
   }();
   static const view::Handler with_token = [] {
     view::HandlerOptions options;
     options.run_folder = run_folder().string();
     options.token = "abc123";
+    options.bound = bound;
     return view::Handler(options, &backend);
   }();
   const std::string input(reinterpret_cast<const char*>(data), size);
   view::Request request;
   const char first = size == 0 ? 'G' : input[0];
   request.method = first == 'G' ? "GET" : first == 'P' ? "POST" : first == 'H' ? "HEAD" : "PUT";
-  const std::string rest = size == 0 ? "" : input.substr(1);
-  const size_t newline = rest.find('\n');
+  std::string rest = size == 0 ? "" : input.substr(1);
+  size_t newline = rest.find('\n');
   request.target = rest.substr(0, newline);
-  request.body = newline == std::string::npos ? "" : rest.substr(newline + 1);
+  rest = newline == std::string::npos ? "" : rest.substr(newline + 1);
+  request.host = "127.0.0.1:8000";
+  request.content_type = "application/json";
+  const std::pair<const char*, std::string view::Request::*> headers[] = {{"Host:", &view::Request::host},
+                                                                          {"Origin:", &view::Request::origin},
+                                                                          {"Content-Type:", &view::Request::content_type},
+                                                                          {"Sec-Fetch-Site:", &view::Request::sec_fetch_site}};
+  for (bool more = true; more;) {
+    more = false;
+    for (const auto& [name, field] : headers) {
+      if (rest.rfind(name, 0) != 0) continue;
+      newline = rest.find('\n');
+      request.*field = rest.substr(std::strlen(name), newline == std::string::npos ? std::string::npos
+                                                                                     : newline - std::strlen(name));
+      rest = newline == std::string::npos ? "" : rest.substr(newline + 1);
+      more = true;
+    }
+  }
+  request.body = rest;
+  const bool changes_state = request.method != "GET" && request.method != "HEAD";
   for (const view::Handler* h : {&handler, &with_token}) {
     const view::Response response = h->handle(request);
     fuzz::check(response.status >= 200 && response.status < 600, "a response without a valid status");
+    const bool served = response.status < 300;
+    fuzz::check(!served || view::host_allowed(request.host, bound), "a request for another Host was served");
+    fuzz::check(!served || !changes_state ||
+                    (view::origin_allowed(request.origin, bound) && view::is_json_content_type(request.content_type)),
+                "a state-changing request from another origin, or not JSON, was served");
     // (A 404 names the path it was asked for: the text may come back only when the request held it.)
     fuzz::check(response.body.find(kSecret) == std::string::npos || input.find(kSecret) != std::string::npos,
                 "a file outside the run folder was served");

@@ -235,7 +235,7 @@ TEST_CASE("concat-pe: the layout written out for one ray along x (zero off-diago
   }
 }
 
-TEST_CASE("concat-pe: only an Encode asked for it builds the kernel; others refuse the call by name") {
+TEST_CASE("concat-pe: only an Encode asked for it builds the kernel, and others refuse the call by name") {
   auto& ctx = test::test_context();
   Rays r;
   r.n_rays = 1;

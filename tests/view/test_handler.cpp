@@ -77,12 +77,24 @@ struct FakeBackend : RenderBackend {
 HandlerOptions options_for(const RunFixture& f) {
   HandlerOptions options;
   options.run_folder = f.run.string();
+  options.bound = {"127.0.0.1", 8000};
   return options;
 }
 
-Response get(const Handler& h, const std::string& target) { return h.handle({"GET", target, ""}); }
+// A request as the viewer's own page sends it to a viewer on 127.0.0.1:8000: its Host, and for a POST the page's
+// origin and a JSON body.
+Request from_page(const std::string& method, const std::string& target, const std::string& body) {
+  Request r{method, target, body, "127.0.0.1:8000", "", "", ""};
+  if (method != "GET" && method != "HEAD") {
+    r.origin = "http://127.0.0.1:8000";
+    r.content_type = "application/json";
+    r.sec_fetch_site = "same-origin";
+  }
+  return r;
+}
+Response get(const Handler& h, const std::string& target) { return h.handle(from_page("GET", target, "")); }
 Response post(const Handler& h, const std::string& target, const std::string& body) {
-  return h.handle({"POST", target, body});
+  return h.handle(from_page("POST", target, body));
 }
 
 const char* kCamera = R"({"frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]],
@@ -180,6 +192,144 @@ TEST_CASE("handler: without a token, loopback serves everything") {
   RunFixture f;
   const Handler h(options_for(f), nullptr);
   CHECK(get(h, "/?token=anything").status == 200);
+}
+
+// DNS rebinding: a page on attacker.example rebinds its name to 127.0.0.1; the browser then sends the attacker's name
+// as Host. Every request naming another host or port is refused before any route, file or render.
+TEST_CASE("handler: a request whose Host is not the viewer's is refused, whatever it asks") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  for (const std::string& host :
+       {std::string("attacker.example:8000"), std::string("attacker.example"), std::string("127.0.0.1:8001"),
+        std::string("127.0.0.1"), std::string("localhost:80"), std::string(""), std::string("127.0.0.1:8000x"),
+        std::string("127.0.0.1:08000x"), std::string("[::1]"), std::string("::1:8000"), std::string("127.0.0.2:8000"),
+        std::string("localhost.attacker.example:8000"), std::string("127.0.0.1:8000, attacker.example"),
+        std::string("127.0.0.1:65536"), std::string("127.0.0.1:-8000")}) {
+    CAPTURE(host);
+    for (const char* target : {"/", "/api/run", "/run/val/000_scale0.png", "/api/cameras", "/api/path"}) {
+      Request r = from_page("GET", target, "");
+      r.host = host;
+      const Response response = h.handle(r);
+      CHECK(response.status == 403);
+      CHECK(response.body.find("PNGDATA") == std::string::npos);
+    }
+    Request r = from_page("POST", "/api/render", render_body(kCamera, 1, 1));
+    r.host = host;
+    CHECK(h.handle(r).status == 403);
+  }
+  CHECK(backend.calls == 0);
+  // The names of this machine's loopback, with the bound port, in any case.
+  for (const char* host : {"127.0.0.1:8000", "localhost:8000", "LocalHost:8000", "[::1]:8000", " 127.0.0.1:8000"}) {
+    CAPTURE(host);
+    Request r = from_page("GET", "/run/val/000_scale0.png", "");
+    r.host = host;
+    CHECK(h.handle(r).body == "PNGDATA");
+  }
+}
+
+TEST_CASE("handler: Host names the bound address, or on every address any name with the token") {
+  RunFixture f;
+  HandlerOptions options = options_for(f);
+  options.bound = {"192.168.1.5", 8080};
+  const Handler lan(options, nullptr);
+  Request r = from_page("GET", "/api/run", "");
+  for (const auto& host_status : std::vector<std::pair<std::string, int>>{
+           {"192.168.1.5:8080", 200}, {"localhost:8080", 200}, {"192.168.1.6:8080", 403}, {"192.168.1.5:8000", 403}}) {
+    CAPTURE(host_status.first);
+    r.host = host_status.first;
+    CHECK(lan.handle(r).status == host_status.second);
+  }
+  options.bound = {"::1", 8000};
+  const Handler v6(options, nullptr);
+  r.host = "[::1]:8000";
+  CHECK(v6.handle(r).status == 200);
+  // Bound to every address (--host 0.0.0.0), the machine's names are unknown: the token, always set there, guards.
+  options.bound = {"0.0.0.0", 8000};
+  options.token = "0123456789abcdef";
+  const Handler everywhere(options, nullptr);
+  r.host = "my-laptop.lan:8000";
+  CHECK(everywhere.handle(r).status == 403);  // no token
+  r.target = "/api/run?token=0123456789abcdef";
+  CHECK(everywhere.handle(r).status == 200);
+  r.host = "my-laptop.lan:9000";
+  CHECK(everywhere.handle(r).status == 403);  // not its port
+  // The port the server bound after the handler was made (--port 0).
+  options.bound = {"127.0.0.1", 0};
+  options.token.clear();
+  Handler later(options, nullptr);
+  r = from_page("GET", "/api/run", "");
+  r.host = "127.0.0.1:43210";
+  CHECK(later.handle(r).status == 403);  // not bound yet: nothing matches
+  later.set_port(43210);
+  CHECK(later.handle(r).status == 200);
+}
+
+// A page on another site can POST to the viewer (a form, or fetch with text/plain: no CORS preflight) though it cannot
+// read the answer; such a POST would start renders that write into the run folder.
+TEST_CASE("handler: a state-changing request from another origin, or not declared JSON, is refused") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const std::string path_body =
+      std::string(R"({"keyframes": )") + kCamera + R"(, "frames": 12, "divisor": 2, "fps": 24})";
+  for (const std::string& origin :
+       {std::string("http://attacker.example"), std::string("http://attacker.example:8000"), std::string("null"),
+        std::string("https://127.0.0.1:8000"), std::string("http://127.0.0.1:8001"), std::string("file://"),
+        std::string("http://127.0.0.1:8000/x"), std::string("http://localhost.attacker.example:8000")}) {
+    CAPTURE(origin);
+    for (const std::string target : {"/api/path", "/api/path/cancel", "/api/render"}) {
+      Request r = from_page("POST", target, target == "/api/render" ? render_body(kCamera, 1, 1) : path_body);
+      r.origin = origin;
+      r.sec_fetch_site = "";
+      CHECK(h.handle(r).status == 403);
+    }
+  }
+  for (const char* site : {"cross-site", "same-site"}) {
+    Request r = from_page("POST", "/api/path", path_body);
+    r.sec_fetch_site = site;
+    r.origin = "";
+    CHECK(h.handle(r).status == 403);
+  }
+  for (const std::string& type : {std::string("text/plain"), std::string("application/x-www-form-urlencoded"),
+                                  std::string("multipart/form-data; boundary=x"), std::string(""),
+                                  std::string("application/jsonx"), std::string("text/plain; application/json")}) {
+    CAPTURE(type);
+    Request r = from_page("POST", "/api/path", path_body);
+    r.content_type = type;
+    CHECK(h.handle(r).status == 415);
+    r = from_page("POST", "/api/path/cancel", "{}");
+    r.content_type = type;
+    CHECK(h.handle(r).status == 415);
+  }
+  CHECK(backend.calls == 0);
+  CHECK_FALSE(backend.path_rendering);
+  CHECK_FALSE(backend.path_cancelled);
+  // The page's own requests, and a client that sends no Origin (curl): accepted, in any JSON spelling.
+  Request own = from_page("POST", "/api/path", path_body);
+  own.content_type = "Application/JSON; charset=utf-8";
+  CHECK(h.handle(own).status == 202);
+  Request curl = from_page("POST", "/api/render", render_body(kCamera, 1, 1));
+  curl.origin = curl.sec_fetch_site = "";
+  CHECK(h.handle(curl).status == 200);
+  // A GET from another origin changes nothing and its answer is not the other page's to read: served.
+  Request image = from_page("GET", "/run/val/000_scale0.png", "");
+  image.origin = "http://attacker.example";
+  CHECK(h.handle(image).body == "PNGDATA");
+}
+
+TEST_CASE("handler: every response forbids framing, type sniffing and the Referer") {
+  RunFixture f;
+  const Handler h(options_for(f), nullptr);
+  for (const Response& r : {get(h, "/"), get(h, "/nowhere"), post(h, "/api/path", "{}")}) {
+    auto has = [&r](const std::string& name, const std::string& value) {
+      return std::find(r.headers.begin(), r.headers.end(), std::make_pair(name, value)) != r.headers.end();
+    };
+    CHECK(has("X-Frame-Options", "DENY"));
+    CHECK(has("Content-Security-Policy", "frame-ancestors 'none'"));
+    CHECK(has("X-Content-Type-Options", "nosniff"));
+    CHECK(has("Referrer-Policy", "no-referrer"));
+  }
 }
 
 TEST_CASE("handler: bounds the request size") {
@@ -300,7 +450,7 @@ TEST_CASE("handler: percent-decoding and query values") {
   CHECK(query_value("", "token").empty());
 }
 
-TEST_CASE("handler: before the run's first checkpoint, renders wait (503); the renderer set later serves them") {
+TEST_CASE("handler: before the run's first checkpoint, renders wait (503), and the renderer set later serves them") {
   RunFixture f;
   Handler h(options_for(f), nullptr);
   CHECK(get(h, "/api/cameras").status == 503);
@@ -317,6 +467,7 @@ TEST_CASE("handler: a run folder made after the viewer started is served once it
   io::TemporaryFolder scratch{fs::temp_directory_path(), "mipnerf-view-test-"};
   HandlerOptions options;
   options.run_folder = (fs::path(scratch.path()) / "later").string();
+  options.bound = {"127.0.0.1", 8000};
   const Handler h(options, nullptr);
   CHECK(get(h, "/run/val/a.png").status == 404);
   CHECK(get(h, "/api/run").status == 200);
@@ -342,8 +493,8 @@ TEST_CASE("handler: a recorded path starts once, reports its progress, and can b
   CHECK(get(h, "/api/path").body.find("rendering") != std::string::npos);
   CHECK(post(h, "/api/path/cancel", "").status == 200);
   CHECK(backend.path_cancelled);
-  CHECK(h.handle({"PUT", "/api/path", ""}).status == 405);
-  CHECK(h.handle({"GET", "/api/path/cancel", ""}).status == 405);
+  CHECK(h.handle(from_page("PUT", "/api/path", "")).status == 405);
+  CHECK(h.handle(from_page("GET", "/api/path/cancel", "")).status == 405);
 }
 
 TEST_CASE("handler: a malformed path request is refused before the renderer sees it") {

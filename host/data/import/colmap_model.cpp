@@ -281,6 +281,12 @@ std::string id_at(const std::string& at, const char* kind, uint64_t id) {
   return at + ": " + kind + " " + std::to_string(id);
 }
 
+// "camera 3: its RADIAL parameter 5 of 5", for the messages about one of a camera's parameters.
+std::string parameter_name(const ColmapCamera& camera, size_t index) {
+  return "camera " + std::to_string(camera.id) + ": its " + camera.model->name + " parameter " +
+         std::to_string(index + 1) + " of " + std::to_string(camera.model->num_params);
+}
+
 }  // namespace
 
 const ColmapCameraModel* find_colmap_camera_model(int id) {
@@ -322,7 +328,9 @@ std::vector<ColmapCamera> parse_colmap_cameras_text(std::string_view text, const
                   std::to_string(camera.model->num_params) + " parameters, the line has " +
                   std::to_string(f.size() - 4));
     }
-    for (size_t k = 4; k < f.size(); ++k) camera.params.push_back(parse_number(f[k], "a parameter", at));
+    for (size_t k = 4; k < f.size(); ++k) {
+      camera.params.push_back(parse_number(f[k], parameter_name(camera, k - 4).c_str(), at));
+    }
     cameras.push_back(std::move(camera));
   }
   return cameras;
@@ -345,7 +353,9 @@ std::vector<ColmapCamera> parse_colmap_cameras_binary(std::string_view bytes, co
     camera.width = in.u64("WIDTH");
     camera.height = in.u64("HEIGHT");
     check_size(camera.width, camera.height, at);
-    for (int k = 0; k < camera.model->num_params; ++k) camera.params.push_back(in.f64("a parameter"));
+    for (int k = 0; k < camera.model->num_params; ++k) {
+      camera.params.push_back(in.f64(parameter_name(camera, static_cast<size_t>(k)).c_str()));
+    }
     cameras.push_back(std::move(camera));
   }
   in.check_end();

@@ -1,0 +1,174 @@
+// The viewer's real renderer (view::ViewRenderer, not a test double) under what a browser and a hostile client do at
+// once: renders, path starts, cancels and status polls from several threads. Run in the thread-sanitizer stage too
+// (scripts/test.sh, `tsan`), where any data race fails it; here a double start of the path thread ended the process
+// (std::terminate from assigning a joinable std::thread).
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support/temp_scene.hpp"
+#include "support/test_context.hpp"
+#include "train/config.hpp"
+#include "train/trainer.hpp"
+#include "view/view_renderer.hpp"
+
+namespace fs = std::filesystem;
+using namespace mipnerf;
+
+namespace {
+
+// A run folder of the tiny preset trained 4 steps on a 16x16 procedural scene: what `view` serves.
+const std::string& tiny_run() {
+  static const std::string run = [] {
+    const std::string scene = test::write_temp_scene("view-scene", {16, 4, 1, 1, 2});
+    const fs::path out = test::fresh_temp_dir("view-run");
+    const auto config = train::resolve_config("tiny", "mipnerf", {{"steps", "4"}, {"batch_size", "64"}});
+    train::Trainer trainer(test::test_context(), config, scene, out.string(), false);
+    trainer.run();
+    return out.string();
+  }();
+  return run;
+}
+
+const char* kCamera = R"({"frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]],
+  "fl_x": 20, "fl_y": 20, "cx": 8, "cy": 8, "w": 16, "h": 16}]})";
+const char* kKeyframes = R"({"frames": [
+  {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": 20, "fl_y": 20, "cx": 8, "cy": 8, "w": 16, "h": 16},
+  {"transform_matrix": [[1,0,0,0.5],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": 20, "fl_y": 20, "cx": 8, "cy": 8, "w": 16, "h": 16}]})";
+
+// A path of `frames` frames at 16x16 (H.264 wants even sizes).
+view::PathRequest small_path(uint32_t frames = 3) {
+  view::PathRequest request;
+  request.keyframes_json = kKeyframes;
+  request.frames = frames;
+  request.divisor = 1;
+  return request;
+}
+
+std::string path_state(view::ViewRenderer& renderer) {
+  return nlohmann::json::parse(renderer.path_status_json()).at("state").get<std::string>();
+}
+
+// Polls until no path renders (the path thread ended), at most `seconds`.
+bool wait_for_path(view::ViewRenderer& renderer, double seconds) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < until) {
+    const std::string state = path_state(renderer);
+    if (state != "rendering") return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("view renderer: path starts sent at once start one path, and the others are told busy") {
+  view::ViewRendererOptions options;
+  options.run_folder = tiny_run();
+  view::ViewRenderer renderer(test::test_context(), options);
+  for (int round = 0; round < 4; ++round) {
+    CAPTURE(round);
+    constexpr int kThreads = 4;
+    std::atomic<int> ready{0};
+    std::atomic<int> started{0}, busy{0}, other{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t) {
+      threads.emplace_back([&] {
+        // Every thread asks at the same moment: a double-click, or a script.
+        ++ready;
+        while (ready.load() < kThreads) std::this_thread::yield();
+        // Long enough that no thread finds the first path already done (it is cancelled below).
+        const view::PathReply reply = renderer.start_path(small_path(600));
+        (reply.status == view::PathReply::Status::started ? started
+         : reply.status == view::PathReply::Status::busy  ? busy
+                                                          : other)++;
+      });
+    }
+    for (auto& thread : threads) thread.join();
+    CHECK(started.load() == 1);
+    CHECK(busy.load() == kThreads - 1);
+    CHECK(other.load() == 0);
+    renderer.cancel_path();
+    REQUIRE(wait_for_path(renderer, 120.0));
+    CHECK(path_state(renderer) == "cancelled");
+  }
+}
+
+TEST_CASE("view renderer: renders, path starts, cancels and status polls from several threads") {
+  view::ViewRendererOptions options;
+  options.run_folder = tiny_run();
+  options.max_waiting = 2;
+  view::ViewRenderer renderer(test::test_context(), options);
+  std::atomic<bool> stop{false};
+  std::atomic<uint64_t> generation{0};
+  std::atomic<int> rendered{0}, paths_started{0}, bad{0};
+  auto renders = [&] {
+    while (!stop) {
+      view::RenderRequest request;
+      request.camera_json = kCamera;
+      request.divisor = 2;
+      request.generation = ++generation;
+      const view::RenderReply reply = renderer.render(request);
+      if (reply.status == view::RenderReply::Status::ok) {
+        ++rendered;
+        if (reply.png.empty() || reply.width != 8 || reply.height != 8) ++bad;
+      } else if (reply.status == view::RenderReply::Status::bad_request ||
+                 reply.status == view::RenderReply::Status::failed) {
+        ++bad;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));  // a page's pace, so some renders complete
+    }
+  };
+  // Path starts a page might send (a path every 100 ms is far more than a user clicks), so the device is free for
+  // the renders between them.
+  auto paths = [&] {
+    while (!stop) {
+      if (renderer.start_path(small_path()).status == view::PathReply::Status::started) ++paths_started;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  };
+  auto cancels_and_polls = [&] {
+    for (int i = 0; !stop; ++i) {
+      if (i % 7 == 0) renderer.cancel_path();
+      const auto status = nlohmann::json::parse(renderer.path_status_json());
+      const std::string state = status.at("state").get<std::string>();
+      if (state != "idle" && state != "rendering" && state != "done" && state != "cancelled") ++bad;
+      const auto info = nlohmann::json::parse(renderer.status_json());
+      if (info.at("step").get<int64_t>() != 4) ++bad;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  };
+  std::vector<std::thread> threads;
+  // One page's renders (its requests are numbered; two pages' numbers would supersede each other's), against paths
+  // started from two threads and cancels and polls from two more.
+  threads.emplace_back(renders);
+  threads.emplace_back(paths);
+  threads.emplace_back(paths);
+  threads.emplace_back(cancels_and_polls);
+  threads.emplace_back(cancels_and_polls);
+  // Until each kind of work has happened a few times (or 60 s, which fails below).
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < until && (rendered < 3 || paths_started < 3)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  stop = true;
+  for (auto& thread : threads) thread.join();
+  CHECK(bad.load() == 0);
+  CHECK(rendered.load() >= 3);
+  CHECK(paths_started.load() >= 3);
+  REQUIRE(wait_for_path(renderer, 120.0));
+  // The viewer still works as before: a free-camera render, then a whole path.
+  view::RenderRequest request;
+  request.camera_json = kCamera;
+  request.generation = generation + 1;
+  CHECK(renderer.render(request).status == view::RenderReply::Status::ok);
+  REQUIRE(renderer.start_path(small_path()).status == view::PathReply::Status::started);
+  REQUIRE(wait_for_path(renderer, 120.0));
+  CHECK(path_state(renderer) == "done");
+}
