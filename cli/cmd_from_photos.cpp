@@ -72,7 +72,7 @@ std::string find_colmap(const std::string& name) {
     }
   }
   throw Error("COLMAP was not found (`" + name + "`): install the Debian package 'colmap' (scripts/install-deps.sh "
-              "--for-tests installs it), or run COLMAP yourself and import its model with `mipnerf-cl dataset "
+              "--with-colmap installs it), or run COLMAP yourself and import its model with `mipnerf-cl dataset "
               "import-colmap`");
 }
 

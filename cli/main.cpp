@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 
 #include "core/error.hpp"
+#include "data/path_policy.hpp"
+#include "io/image_budget.hpp"
 #include "common.hpp"
 #include "parallel/world.hpp"
 #include "planted_fault.hpp"
@@ -35,6 +37,16 @@ int main(int argc, char** argv) {
                  "first GPU, else the first CPU)")
       ->envname("MIPNERF_DEVICE");
   app.add_flag("-v,--verbose", global.verbose, "Print debug messages and full kernel build logs");
+  app.add_option_function<uint64_t>(
+         "--max-image-mib", [](uint64_t mib) { io::set_image_budget_bytes(mib << 20); },
+         "The most memory one image's decode may take, in MiB (default 2048): a PNG or JPEG whose header declares "
+         "more is refused before anything is allocated for it")
+      ->envname("MIPNERF_MAX_IMAGE_MIB")
+      ->check(CLI::Range(uint64_t{1}, uint64_t{1} << 24));
+  app.add_flag_callback(
+      "--allow-outside-paths", [] { data::set_outside_paths_allowed(true); },
+      "Let a dataset's files (transforms.json, metadata.json, a COLMAP model) name images outside its folder (absolute "
+      "paths, or ../): refused by default, so a downloaded dataset cannot make the tool read your other files");
   app.require_subcommand(1);
   // Global options may follow the subcommand: `mipnerf-cl devices --device 1`.
   app.fallthrough();

@@ -64,7 +64,7 @@ if [ "$report_only" = 0 ]; then
     start=$(date +%s.%N)
     # shellcheck disable=SC2046
     "$build_dir/tests/fuzz_$name" "$work/corpus" -runs="$runs" -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10 \
-      -print_final_stats=1 -artifact_prefix="$work/" $(dictionary_for "$name") >"$work/log" 2>&1 || status=$?
+      -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/" $(dictionary_for "$name") >"$work/log" 2>&1 || status=$?
     end=$(date +%s.%N)
     echo "$status" >"$work/status"
     echo "$start $end" | awk '{printf "%.0f\n", $2 - $1}' >"$work/seconds"

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Installs the Debian packages mipnerf-cl needs: to build and run it (the quick start), and with --for-tests also
-# what the test command's stages need (oclgrind, clang with its sanitizer runtimes, Open MPI), plus any package named
-# as an argument (bench/setup.sh adds what the studies need: scripts/install-deps.sh python3-matplotlib).
+# Installs the Debian packages mipnerf-cl needs: to build and run it (the quick start); with --with-colmap also COLMAP,
+# which `dataset from-photos` runs (a large package: Qt and Ceres come with it, so the quick start leaves it out); with
+# --for-tests also what the test command's stages need (oclgrind, clang with its sanitizer runtimes, Open MPI, COLMAP,
+# Chromium), plus any package named as an argument (bench/setup.sh adds what the studies need:
+# scripts/install-deps.sh python3-matplotlib).
 # Idempotent and non-interactive: packages already installed are skipped; uses sudo when not root.
 set -euo pipefail
 
@@ -24,11 +26,12 @@ test_packages=(
   chromium chromium-driver  # the browser stage: `mipnerf-cl view` in headless Chromium (tests/browser)
 )
 for argument in "$@"; do
-  if [ "$argument" = "--for-tests" ]; then
-    packages+=("${test_packages[@]}")
-  else
-    packages+=("$argument")
-  fi
+  case "$argument" in
+    --for-tests) packages+=("${test_packages[@]}") ;;
+    --with-colmap) packages+=(colmap) ;;
+    -*) echo "install-deps: unknown option '$argument' (--with-colmap, --for-tests, or package names)" >&2; exit 2 ;;
+    *) packages+=("$argument") ;;
+  esac
 done
 
 missing=()

@@ -17,10 +17,11 @@ import xml.etree.ElementTree as ElementTree
 # stage from test.sh fails it too, until it is removed here (and from docs/testing.md) on purpose.
 STAGES = ("pocl", "mpi", "oclgrind", "sanitizer", "fuzz", "tsan", "intel", "selftest", "browser")
 
-# CTest's message for a test that ended with its SKIP_RETURN_CODE (tests/support/skip.hpp: it could not run here).
+# CTest's messages for a test that said it could not run here: it ended with its SKIP_RETURN_CODE
+# (tests/support/skip.hpp), or printed its SKIP_REGULAR_EXPRESSION (the CLI's COLMAP tests in a build without COLMAP).
 # Any other test CTest did not run ("Unable to find executable", "Fixture dependency failed", disabled) is a test
 # that was meant to run and did not.
-CTEST_SKIP_MESSAGE = "SKIP_RETURN_CODE="
+CTEST_SKIP_MESSAGES = ("SKIP_RETURN_CODE=", "SKIP_REGULAR_EXPRESSION_MATCHED")
 
 
 def classify(case):
@@ -33,7 +34,7 @@ def classify(case):
     skipped = case.find("skipped")
     if status == "notrun":
         message = skipped.get("message", "") if skipped is not None else ""
-        return "skipped" if message.startswith(CTEST_SKIP_MESSAGE) else "not run"
+        return "skipped" if message.startswith(CTEST_SKIP_MESSAGES) else "not run"
     if skipped is not None:  # mipnerf-selftest's JUnit: a check it could not run on this device or build
         return "skipped"
     return "passed"

@@ -53,7 +53,10 @@ class Context {
   void set_profiler(StageProfiler* profiler);  // needs a queue made with profiling on
   bool profiling_queue() const { return profiling_queue_; }
 
-  void set_log(LogFn log) { log_ = std::move(log); }
+  void set_log(LogFn log) {
+    log_ = log;
+    programs_.set_log(std::move(log));
+  }
   void log(LogLevel level, const std::string& message) const {
     if (log_) log_(level, message);
   }

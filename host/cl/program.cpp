@@ -6,6 +6,7 @@
 #include <regex>
 #include <sstream>
 
+#include "cl/compiler_output.hpp"
 #include "cl/error.hpp"
 #include "cl/kernel_sources.hpp"
 
@@ -144,8 +145,13 @@ Program& ProgramCache::get(const std::vector<SourceFile>& files, const BuildOpti
   cl_int status = CL_SUCCESS;
   ::cl::Program program(context_, source, false, &status);
   check(status, "clCreateProgramWithSource(" + label + ")");
-  const cl_int build_status = program.build({device_}, options.str().c_str());
+  cl_int build_status = CL_SUCCESS;
+  const std::string compiler_output =
+      capture_stderr([&] { build_status = program.build({device_}, options.str().c_str()); });
   ++builds_;
+  if (!compiler_output.empty() && log_) {
+    log_(LogLevel::debug, "the compiler's output building " + label + ": " + compiler_output);
+  }
   if (build_status != CL_SUCCESS) {
     cl_int log_status = CL_SUCCESS;
     const std::string log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device_, &log_status);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cl/opencl.hpp"
+#include "core/log.hpp"
 
 namespace mipnerf::ocl {
 
@@ -68,8 +69,11 @@ class ProgramCache {
   Program& get(const std::vector<SourceFile>& files, const BuildOptions& options);
   size_t size() const { return programs_.size(); }
   size_t builds() const { return builds_; }  // how many get() calls actually compiled
+  // Where what the compiler writes to stderr during a build goes (debug level; cl/compiler_output.hpp).
+  void set_log(LogFn log) { log_ = std::move(log); }
 
  private:
+  LogFn log_;
   ::cl::Context context_;
   ::cl::Device device_;
   std::string device_name_;

@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "data/frames.hpp"
+#include "data/path_policy.hpp"
 
 namespace mipnerf::data::detail {
 namespace fs = std::filesystem;
@@ -63,6 +64,7 @@ std::vector<std::string> wanted_splits(const LoadOptions& options) {
 }
 
 std::string resolve_image_path(const std::string& base_dir, const std::string& file_path, const std::string& where) {
+  check_inside_folder(base_dir, file_path, where, "file_path");
   const fs::path given = fs::path(base_dir) / file_path;
   const fs::path with_png = fs::path(given.string() + ".png");
   const std::string extension = lower(given.extension().string());

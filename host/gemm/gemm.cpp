@@ -3,6 +3,7 @@
 
 #include <clblast.h>
 
+#include "cl/compiler_output.hpp"
 #include "cl/error.hpp"
 #include "core/error.hpp"
 #include "gemm/clblast_check.hpp"
@@ -38,10 +39,18 @@ void sgemm(ocl::Context& ctx, GemmBackend backend, const GemmShape& s, float alp
   if (profile) {
     ocl::check(clEnqueueMarkerWithWaitList(queue, 0, nullptr, &before), "clEnqueueMarkerWithWaitList (profiling)");
   }
-  const auto status = clblast::Gemm<float>(
-      clblast::Layout::kRowMajor, s.transpose_a ? Transpose::kYes : Transpose::kNo,
-      s.transpose_b ? Transpose::kYes : Transpose::kNo, s.m, s.n, s.k, alpha, a.array->raw(), a.offset, a.ld,
-      b.array->raw(), b.offset, b.ld, beta, c.array->raw(), c.offset, c.ld, &queue, profile ? &after : nullptr);
+  // CLBlast compiles its kernels on a routine's first use, through the same in-process compiler as ours: what that
+  // writes to stderr goes to the log (cl/compiler_output.hpp).
+  clblast::StatusCode status = clblast::StatusCode::kSuccess;
+  const std::string compiler_output = ocl::capture_stderr([&] {
+    status = clblast::Gemm<float>(
+        clblast::Layout::kRowMajor, s.transpose_a ? Transpose::kYes : Transpose::kNo,
+        s.transpose_b ? Transpose::kYes : Transpose::kNo, s.m, s.n, s.k, alpha, a.array->raw(), a.offset, a.ld,
+        b.array->raw(), b.offset, b.ld, beta, c.array->raw(), c.offset, c.ld, &queue, profile ? &after : nullptr);
+  });
+  if (!compiler_output.empty()) {
+    ctx.log(LogLevel::debug, "the compiler's output in CLBlast's " + what + ": " + compiler_output);
+  }
   if (profile) profiler->add_event_span(::cl::Event(before), ::cl::Event(after));  // takes both references
   check_clblast(status, "clblast::Gemm(" + what + ", m=" + std::to_string(s.m) + " n=" + std::to_string(s.n) +
                             " k=" + std::to_string(s.k) + ")");

@@ -2,6 +2,8 @@
 // is C, and its default handler exits the process).
 #include "io/jpeg.hpp"
 
+#include <algorithm>
+#include <climits>
 #include <csetjmp>
 #include <cstdlib>
 #include <cstdio>
@@ -11,11 +13,16 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/file.hpp"
+#include "io/image_budget.hpp"
 
 namespace mipnerf::io {
 namespace {
 
-constexpr uint64_t kMaxPixels = uint64_t{1} << 28;
+// What decoding one pixel allocates, checked against the image budget (io/image_budget.hpp) from the header alone,
+// before libjpeg allocates anything for the image: its 8-bit RGB rows (3 bytes), our float RGB (12), the float RGBA the
+// dataset reader makes of it (16), and a progressive file's coefficient buffer, which libjpeg allocates whole when
+// the decode starts (up to 3 components of 2-byte coefficients: 6). A tiny progressive file can declare 65535x65535.
+constexpr uint64_t kBytesPerPixel = 3 + 12 + 16 + 6;
 
 struct ErrorManager {
   jpeg_error_mgr base;  // first: libjpeg sees an ErrorManager* as a jpeg_error_mgr*
@@ -46,6 +53,7 @@ extern "C" void on_jpeg_warning(j_common_ptr info, int level) {
 // allocation.
 bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std::vector<unsigned char>& samples,
                  ErrorManager& manager, bool& too_large, bool& cmyk, bool header_only) {
+  const uint64_t budget = image_budget_bytes();
   jpeg_decompress_struct info;
   info.err = jpeg_std_error(&manager.base);
   manager.base.error_exit = on_jpeg_error;
@@ -55,11 +63,18 @@ bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std:
     return false;
   }
   jpeg_create_decompress(&info);
+  // libjpeg's own allocations (the coefficient buffer, its work rows) stop at the budget with an error, too.
+  info.mem->max_memory_to_use = static_cast<long>(std::min<uint64_t>(budget, LONG_MAX));
   jpeg_mem_src(&info, bytes, static_cast<unsigned long>(size));
   jpeg_read_header(&info, TRUE);
+  image.width = info.image_width;
+  image.height = info.image_height;
   if (header_only) {
-    image.width = info.image_width;
-    image.height = info.image_height;
+    jpeg_destroy_decompress(&info);
+    return true;
+  }
+  if (static_cast<uint64_t>(info.image_width) * info.image_height > budget / kBytesPerPixel) {
+    too_large = true;
     jpeg_destroy_decompress(&info);
     return true;
   }
@@ -70,11 +85,6 @@ bool decode_into(const unsigned char* bytes, size_t size, JpegImage& image, std:
   }
   info.out_color_space = JCS_RGB;
   jpeg_start_decompress(&info);
-  if (static_cast<uint64_t>(info.output_width) * info.output_height > kMaxPixels) {
-    too_large = true;
-    jpeg_destroy_decompress(&info);
-    return true;
-  }
   image.width = info.output_width;
   image.height = info.output_height;
   const size_t row_samples = static_cast<size_t>(image.width) * 3;
@@ -107,7 +117,10 @@ JpegImage decode(const unsigned char* bytes, size_t size, const std::string& nam
     throw Error(name + ": unreadable JPEG (" + manager.message + ")");
   }
   if (cmyk) throw Error(name + ": a CMYK JPEG; save it as RGB");
-  if (too_large) throw Error(name + ": a JPEG of more than 2^28 pixels; downsample it first");
+  if (too_large) {
+    check_image_budget(name, image.width, image.height, kBytesPerPixel, "8-bit rows, float RGB and RGBA");
+    throw Error(name + ": the JPEG is larger than one image may be");  // not reached: the check above throws
+  }
   image.rgb.resize(samples.size());
   for (size_t k = 0; k < samples.size(); ++k) image.rgb[k] = samples[k] / 255.0f;
   return image;

@@ -17,6 +17,7 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/image_budget.hpp"
 #include "io/file.hpp"
 
 namespace mipnerf::io {
@@ -189,6 +190,10 @@ PngImage decode_png(const unsigned char* bytes, size_t size, const std::string& 
   if (header.row_bytes != static_cast<size_t>(header.width) * 4 * bytes_per_sample) {
     throw unreadable(name, "unexpected row size after expansion to RGBA");
   }
+  // What the decode allocates below, whatever the file's size: the samples expanded to 8- or 16-bit RGBA, and their
+  // float copy. A valid file can describe a huge image in a few KB (a 1-bit image of one colour).
+  check_image_budget(name, header.width, header.height, 4 * bytes_per_sample + 4 * sizeof(float),
+                     bytes_per_sample == 2 ? "16-bit RGBA and float RGBA" : "8-bit RGBA and float RGBA");
   std::vector<unsigned char> raw(header.row_bytes * header.height);
   std::vector<png_bytep> rows(header.height);
   for (png_uint_32 y = 0; y < header.height; ++y) rows[y] = raw.data() + y * header.row_bytes;

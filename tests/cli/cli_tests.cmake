@@ -253,10 +253,18 @@ mipnerf_add_checked_test("cli: render: train a model to render" EXPECT "trained 
   --out "${MIPNERF_RENDER_RUN}" --preset tiny --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml")
 set_tests_properties("cli: render: clear the run folder" PROPERTIES FIXTURES_SETUP cli_render_clean)
 set_tests_properties("cli: render: train a model to render" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_render_clean" FIXTURES_SETUP cli_render_model)
+find_package(Python3 COMPONENTS Interpreter REQUIRED)
+# Hostile datasets through the executable (tests/cli/test_hostile_inputs.py): decompression bombs (the fuzz corpus's
+# PNG and JPEG regression seeds) and a file_path out of the dataset, each one line and exit 1 with bounded peak RSS.
+add_test(NAME "cli: decompression bombs and paths out of a dataset are one line each, with bounded memory"
+  COMMAND Python3::Interpreter "${CMAKE_CURRENT_SOURCE_DIR}/cli/test_hostile_inputs.py" --exe $<TARGET_FILE:mipnerf-cl>
+  --corpus "${CMAKE_CURRENT_SOURCE_DIR}/fuzz/corpus" --work "${CMAKE_CURRENT_BINARY_DIR}/cli-hostile")
+set_tests_properties("cli: decompression bombs and paths out of a dataset are one line each, with bounded memory"
+  PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV}")
+
 # `view` through its socket (tests/view/test_server.py, on a copy of the run): forged Host, Origin and content types,
 # oversized and compressed bodies, many ranges, idle connections, simultaneous path starts and renders, the token off
 # loopback, Ctrl-C. Label `threads`: the thread-sanitizer stage runs it on its own build of the executable.
-find_package(Python3 COMPONENTS Interpreter REQUIRED)
 add_test(NAME "cli: view answers forged, oversized and simultaneous requests, and wants its token off loopback"
   COMMAND Python3::Interpreter "${CMAKE_CURRENT_SOURCE_DIR}/view/test_server.py" --exe $<TARGET_FILE:mipnerf-cl>
   --run "${MIPNERF_RENDER_RUN}")

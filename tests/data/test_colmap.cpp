@@ -216,9 +216,12 @@ TEST_CASE("colmap: known cameras far from the origin import (text and binary ali
   for (size_t k = 0; k < 6; ++k) {
     CAPTURE(k);
     const Camera& camera = split.cameras[k];
-    CHECK(split.files[k] == (std::filesystem::path(dir.path()) / "images" / ("img_" + std::to_string(k) + ".png"))
-                                .lexically_normal()
+    // Each frame's file is a link in OUT/images to the photo (a dataset names only files in its own folder).
+    CHECK(split.files[k] == (std::filesystem::path(dir.path()) / "out_text/images" /
+                             ("0000" + std::to_string(k) + "_img_" + std::to_string(k) + ".png"))
                                 .string());
+    CHECK(std::filesystem::canonical(split.files[k]) ==
+          std::filesystem::canonical(std::filesystem::path(dir.path()) / "images" / ("img_" + std::to_string(k) + ".png")));
     // Pose: the rotation as made, the centre moved and scaled.
     for (int row = 0; row < 3; ++row) {
       for (int col = 0; col < 3; ++col) {
@@ -368,7 +371,7 @@ TEST_CASE("colmap: images missing, not PNG, or of another size than their camera
   capture.model.images[2].name = "img_2.jpg";
   test::write_colmap_model(dir / "sparse", capture.model, false);
   CHECK_NOTHROW(data::import_colmap(dir / "sparse", dir / "images", dir / "out"));
-  CHECK(io::read_json(dir / "out/transforms.json")["frames"][2]["file_path"] == "../images/img_2.png");
+  CHECK(io::read_json(dir / "out/transforms.json")["frames"][2]["file_path"] == "images/00002_img_2.png");
   {
     const data::RgbaImage png = data::load_rgba_image(dir / "images/img_2.png");
     std::vector<float> rgb;
@@ -376,7 +379,7 @@ TEST_CASE("colmap: images missing, not PNG, or of another size than their camera
     test::write_jpeg(dir / "images/img_2.jpg", png.width, png.height, rgb);
   }
   CHECK_NOTHROW(data::import_colmap(dir / "sparse", dir / "images", dir / "out"));
-  CHECK(io::read_json(dir / "out/transforms.json")["frames"][2]["file_path"] == "../images/img_2.jpg");
+  CHECK(io::read_json(dir / "out/transforms.json")["frames"][2]["file_path"] == "images/00002_img_2.jpg");
   // Images are told apart by their content, as the loader reads them: a PNG named .jpg is the PNG it is, and a
   // file that is neither, named .jpg, is refused as a JPEG, naming it.
   std::filesystem::remove(dir / "images/img_2.jpg");
@@ -663,4 +666,32 @@ TEST_CASE("colmap: every truncation and random damage of a file parses or is a m
       outcome(damaged);
     }
   }
+}
+
+// A dataset names only files in its own folder (data/path_policy.hpp): the importer links the photos into OUT/images
+// and names those; an image name in the model that climbs out of the images folder is refused.
+TEST_CASE("colmap: the imported transforms.json names links inside its folder, and a name out of the images is refused") {
+  test::TempDir dir;
+  KnownCapture capture({0, 0, 0}, 4.0);
+  capture.write_images(dir / "images");
+  test::write_colmap_model(dir / "sparse", capture.model, false);
+  data::ColmapImportOptions options;
+  options.layout = data::ImportLayout::transforms_json;
+  data::import_colmap(dir / "sparse", dir / "images", dir / "out", options);
+  const io::Json written = io::read_json(dir / "out/transforms.json");
+  for (const auto& frame : written["frames"]) {
+    const std::string path = frame["file_path"].get<std::string>();
+    CAPTURE(path);
+    CHECK(path.rfind("images/", 0) == 0);
+    CHECK(std::filesystem::exists(std::filesystem::path(dir / "out") / path));
+  }
+  CHECK(data::load_dataset(dir / "out/transforms.json", all_frames()).split("train").cameras.size() ==
+        capture.model.images.size());
+
+  // One image named "../images/img_0.png": it exists, but outside the images folder given.
+  capture.model.images[0].name = "../images/" + capture.model.images[0].name;
+  test::write_colmap_model(dir / "escape", capture.model, false);
+  const std::string message = import_error(dir / "escape", dir / "images", dir / "out2");
+  CHECK(contains(message, "escape/images.txt: image 100's name '../images/img_0.png' lies outside " + dir / "images"));
+  CHECK(message.find('\n') == std::string::npos);
 }

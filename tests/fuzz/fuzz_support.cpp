@@ -71,6 +71,20 @@ const fs::path& scratch_folder() {
   return folder->path();
 }
 
+const fs::path& nested_folder() {
+  static const fs::path nested = [] {
+    const fs::path folder = scratch_folder() / "nested";
+    write_images(folder);
+    return folder;
+  }();
+  return nested;
+}
+
+bool lies_inside(const fs::path& file, const fs::path& folder) {
+  const fs::path relative = file.lexically_normal().lexically_relative(folder.lexically_normal());
+  return !relative.empty() && *relative.begin() != "..";
+}
+
 void write_input(const fs::path& path, const uint8_t* data, size_t size) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));

@@ -20,6 +20,13 @@ namespace mipnerf::fuzz {
 // llff/images/00{0,1,2}.png (4x4) and llff/images_2/00{0,1,2}.png (2x2).
 const std::filesystem::path& scratch_folder();
 
+// scratch_folder()/nested: the same images again, one level down. A dataset file written here that names
+// "../images/0.png" names a real image outside its own folder, which a reader must refuse (data/path_policy.hpp).
+const std::filesystem::path& nested_folder();
+
+// Whether `file` lies inside `folder`, lexically (no `..` out of it once normalised): what a dataset may read.
+bool lies_inside(const std::filesystem::path& file, const std::filesystem::path& folder);
+
 // Writes the input to `path` (replacing what was there).
 void write_input(const std::filesystem::path& path, const uint8_t* data, size_t size);
 

@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "data/image.hpp"
+#include "io/image_budget.hpp"
 #include "io/jpeg.hpp"
 #include "support/jpeg_writer.hpp"
 #include "support/temp_scene.hpp"
@@ -70,11 +71,15 @@ TEST_CASE("jpeg: a smooth image decodes within JPEG's loss, as RGB or as an RGBA
     patched[sof + 8] = static_cast<char>(claimed_width & 0xff);
     return patched;
   };
-  // Over the limit: refused from the header, before anything is decoded.
-  CHECK_THROWS_WITH_AS(decode(claiming(20000, 20000)), doctest::Contains("damaged.jpg: a JPEG of more than 2^28 pixels"),
-                       Error);
-  // Under it but far more than the data codes: stops where the scan's data ends at the end-of-image marker (rows
-  // are allocated as they decode, so this costs nothing like the 3 GB the claimed size would take as floats).
+  // Over the image budget (2 GiB; 37 bytes a pixel through the dataset reader): refused from the header, before
+  // anything is decoded (tests/io/test_image_budget.cpp measures that nothing is allocated).
+  CHECK_THROWS_WITH_AS(decode(claiming(20000, 20000)),
+                       doctest::Contains("damaged.jpg: a 20000x20000 image needs 14115 MiB to decode"), Error);
+  // Within a budget raised for it but far more than the data codes: stops where the scan's data ends at the
+  // end-of-image marker (rows are allocated as they decode, so this costs nothing like the 9 GB the claimed size
+  // would take).
+  io::set_image_budget_bytes(uint64_t{16} << 30);
   CHECK_THROWS_WITH_AS(decode(claiming(16000, 16000)), doctest::Contains("premature end of data segment"), Error);
+  io::set_image_budget_bytes(io::kDefaultImageBudgetBytes);
   fs::remove_all(dir);
 }

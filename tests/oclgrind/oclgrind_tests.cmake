@@ -8,6 +8,18 @@ if(NOT MIPNERF_OCLGRIND)
   return()
 endif()
 
+# Each entry lists the kernels it launched in MIPNERF_LAUNCH_LOGS; after the last of them, a check requires every
+# kernel of kernels/*.cl in the union (below), so a kernel no entry runs fails the stage instead of passing unchecked.
+set(MIPNERF_LAUNCH_LOGS "${CMAKE_CURRENT_BINARY_DIR}/oclgrind-launches")
+add_test(NAME "oclgrind: clear the kernel launch lists" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_LAUNCH_LOGS}")
+set_tests_properties("oclgrind: clear the kernel launch lists" PROPERTIES LABELS oclgrind
+  FIXTURES_SETUP oclgrind_launches)
+add_test(NAME "oclgrind: every kernel of kernels/ ran under the simulator" COMMAND ${CMAKE_COMMAND}
+  "-DKERNELS=${CMAKE_SOURCE_DIR}/kernels" "-DLOGS=${MIPNERF_LAUNCH_LOGS}"
+  -P "${CMAKE_CURRENT_SOURCE_DIR}/oclgrind/check_kernels_ran.cmake")
+set_tests_properties("oclgrind: every kernel of kernels/ ran under the simulator" PROPERTIES LABELS oclgrind
+  FIXTURES_CLEANUP oclgrind_launches)
+
 # mipnerf_add_oclgrind_test(name executable filter label uninitialized [canary]); MIPNERF_OCLGRIND_EXCLUDE, when set,
 # is a filter of test cases to leave out. The tests run on oclgrind's platform, checked (MIPNERF_TEST_PLATFORM).
 function(mipnerf_add_oclgrind_test name exe filter label uninitialized)
@@ -15,16 +27,21 @@ function(mipnerf_add_oclgrind_test name exe filter label uninitialized)
   if(ARGN)
     set(canary ON)
   endif()
+  string(MAKE_C_IDENTIFIER "${label}_${name}" log_name)
   add_test(NAME "${label}: ${name}" COMMAND ${CMAKE_COMMAND} "-DOCLGRIND=${MIPNERF_OCLGRIND}"
     "-DEXE=$<TARGET_FILE:${exe}>" "-DFILTER=${filter}" "-DUNINITIALIZED=${uninitialized}"
-    "-DEXCLUDE=${MIPNERF_OCLGRIND_EXCLUDE}" "-DCANARY=${canary}"
+    "-DEXCLUDE=${MIPNERF_OCLGRIND_EXCLUDE}" "-DCANARY=${canary}" "-DLAUNCH_LOG=${MIPNERF_LAUNCH_LOGS}/${log_name}.txt"
     -P "${CMAKE_CURRENT_SOURCE_DIR}/oclgrind/run_under_oclgrind.cmake")
   set_tests_properties("${label}: ${name}" PROPERTIES LABELS ${label} TIMEOUT 1800
     ENVIRONMENT "MIPNERF_TEST_DEVICE=platform=Oclgrind;MIPNERF_TEST_PLATFORM=Oclgrind")
+  if(label STREQUAL "oclgrind" AND NOT canary)
+    set_tests_properties("${label}: ${name}" PROPERTIES FIXTURES_REQUIRED oclgrind_launches)
+  endif()
 endfunction()
 
 # Every kernel test (tests/ops: the ray-math stages; tests/mlp: the MLP's element-wise kernels and Adam, whose
-# products are CLBlast's; tests/cl: buffers, program building, the profiler's events), one entry per stage so they
+# products are CLBlast's; tests/data and tests/core: the batch sampler and the RNG; tests/cl: buffers, program
+# building, the profiler's events), one entry per stage so they
 # spread over the cores. Label `oclgrind` (in the README's test command, a few minutes on 2 cores): API misuse,
 # races, out-of-bounds accesses, and uninitialised reads for the stages whose tests are small enough under that
 # plugin. With -DMIPNERF_OCLGRIND_UNINITIALIZED_ALL=ON, entries labelled `uninitialized_all` check the other stages
@@ -68,6 +85,19 @@ endforeach()
 # moments, filled inputs), and oclgrind 21.10's plugin does not count a fill as a write (a kernel reading a filled
 # buffer is reported, the same kernel reading an uploaded one is not: checked by hand), so it reports every read.
 mipnerf_add_oclgrind_test("mlp and adam kernels" test_mlp "mlp kernels:*,adam:*" oclgrind OFF)
+# The kernels outside the ray-math stages and the MLP: the batch sampler's index gather (kernels/batch.cl, in both
+# batching modes, and feeding the ray kernel) and the Philox generator (the RNG tests' device draws). The sampler's
+# statistical tests (chi-square over many draws: 60 s and 23 s under the simulator) run the same kernel as the exact
+# comparison with the CPU mirror, which is what runs here.
+mipnerf_add_oclgrind_test("batch sampler kernels" test_data
+  "batch sampler: the device equals the CPU mirror*,device dataset:*" oclgrind ON)
+# The sampler feeding the ray kernel, in a process of its own: run after the mirror comparison in one process,
+# oclgrind 21.10 reports rays_fwd's reads of the batch (camera and pixel ids the sampler wrote in full) as
+# uninitialised for ~250 rays, while the same test alone, or after the device-dataset tests, reports nothing, and
+# every ray's origin, direction and radius match the reference in that very run. Not understood (a tiny kernel pair
+# of the sampler's 64-bit arithmetic and a branch on its result reports nothing); noted in docs/testing.md.
+mipnerf_add_oclgrind_test("batch sampler and ray kernels" test_data "batch sampler + ray kernel*" oclgrind ON)
+mipnerf_add_oclgrind_test("rng kernels" test_core "rng:*" oclgrind ON)
 # The two program tests that make the OpenCL API fail on purpose (a build error, an unknown kernel) are left out:
 # --check-api reports exactly those failures.
 set(MIPNERF_OCLGRIND_EXCLUDE "program: a compile error*,program: an unknown kernel*")

@@ -1,5 +1,6 @@
 # Runs a test executable's cases under oclgrind and fails on any report.
 #   -DOCLGRIND=path -DEXE=path -DFILTER=doctest test-case filter -DUNINITIALIZED=ON|OFF [-DEXCLUDE=filter]
+#   [-DLAUNCH_LOG=file: the kernels launched are listed there]
 #   [-DCANARY=ON]: the other way round, for the canary (tests/oclgrind/canary.cpp, FILTER empty): passes only when oclgrind
 #   reports the canary's own invalid write in its kernel, so oclgrind failing to start, or failing for any other
 #   reason, fails it.
@@ -21,6 +22,13 @@ endif()
 set(filter "")
 if(FILTER)
   set(filter "--test-case=${FILTER}")
+endif()
+# The kernels this entry launches, for the check that every kernel ran under the simulator (oclgrind_tests.cmake).
+if(LAUNCH_LOG)
+  get_filename_component(log_folder "${LAUNCH_LOG}" DIRECTORY)
+  file(MAKE_DIRECTORY "${log_folder}")
+  file(REMOVE "${LAUNCH_LOG}")
+  set(ENV{MIPNERF_KERNEL_LAUNCH_LOG} "${LAUNCH_LOG}")
 endif()
 execute_process(COMMAND "${OCLGRIND}" ${checks} "${EXE}" ${filter} ${exclude}
   RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)

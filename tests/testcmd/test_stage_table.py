@@ -20,7 +20,8 @@ STAGES = ("pocl", "mpi", "oclgrind", "sanitizer", "fuzz", "tsan", "intel", "self
 
 
 def junit(path, cases):
-    """A CTest-style JUnit file; each case is 'pass', 'fail', 'skip' (SKIP_RETURN_CODE), 'missing' (Unable to find
+    """A CTest-style JUnit file; each case is 'pass', 'fail', 'skip' (SKIP_RETURN_CODE), 'skip-regex'
+    (SKIP_REGULAR_EXPRESSION), 'missing' (Unable to find
     executable), 'fixture' (Fixture dependency failed), 'disabled' or 'selftest-skip' (mipnerf-selftest's row)."""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', f'<testsuite tests="{len(cases)}">']
     for i, case in enumerate(cases):
@@ -31,6 +32,9 @@ def junit(path, cases):
             lines.append(f'<testcase {name} status="fail"><failure message=""/></testcase>')
         elif case == "skip":
             lines.append(f'<testcase {name} status="notrun"><skipped message="SKIP_RETURN_CODE=77"/></testcase>')
+        elif case == "skip-regex":
+            lines.append(f'<testcase {name} status="notrun"><skipped message="SKIP_REGULAR_EXPRESSION_MATCHED"/>'
+                         '</testcase>')
         elif case == "missing":
             lines.append(f'<testcase {name} status="notrun"><skipped message="Unable to find executable"/></testcase>')
         elif case == "fixture":
@@ -103,6 +107,8 @@ def main():
         expect("a skipped test: fails", 1, "1 tests skipped", stage_cases=skipped)
         expect("a skipped test with --allow-skips: passes, saying so", 0, "passed with skips allowed",
                stage_cases=skipped, allow_skips=True)
+        expect("a test skipped by its output (SKIP_REGULAR_EXPRESSION): fails", 1, "1 tests skipped",
+               stage_cases=dict(every, pocl=["pass", "skip-regex"]))
         expect("a skipped self-test check: fails", 1, "1 tests skipped",
                stage_cases=dict(every, selftest=["pass", "selftest-skip"]))
         for kind, text in (("missing", "Unable to find executable"), ("fixture", "Fixture dependency failed"),

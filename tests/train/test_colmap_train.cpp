@@ -109,8 +109,9 @@ TEST_CASE("train: a COLMAP model of the procedural scene in a moved, turned, sca
   const data::Split split = data::load_dataset(imported.transforms_path, all).split("train");
   REQUIRE(split.num_images() == blender.num_images());
   for (size_t i = 0; i < split.num_images(); ++i) {
+    // The imported frame's file is a link in the dataset's images/ folder to the photo it names.
     const auto original = std::find_if(blender.files.begin(), blender.files.end(), [&](const std::string& file) {
-      return fs::path(file).filename() == fs::path(split.files[i]).filename();
+      return fs::canonical(file) == fs::canonical(split.files[i]);
     });
     REQUIRE(original != blender.files.end());
     const Camera& expected = blender.cameras[original - blender.files.begin()];

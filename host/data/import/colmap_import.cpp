@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "data/lens_tables.hpp"
 #include "data/image.hpp"
+#include "data/path_policy.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
 #include "io/npy.hpp"
@@ -238,6 +239,8 @@ std::vector<fs::path> image_files(const ColmapModel& model, const std::vector<co
   std::vector<std::string> missing, other_type;
   std::vector<fs::path> paths(images.size());
   for (size_t i = 0; i < images.size(); ++i) {
+    check_inside_folder(images_dir, images[i]->name, model.file("images"), "image " + std::to_string(images[i]->id) +
+                                                                                "'s name");
     const ImageFile found = find_image(fs::path(images_dir) / images[i]->name, paths[i]);
     if (found == ImageFile::missing) missing.push_back(images[i]->name);
     if (found == ImageFile::other_type) other_type.push_back(images[i]->name);
@@ -385,8 +388,28 @@ io::Json provenance_json(const ColmapModel& model, const std::string& images_dir
           {"near_far", near_far}};
 }
 
-// OUT/transforms.json: the intrinsics (global when one camera, else per frame), near/far, each frame's image path
-// (relative to OUT) and pose in scene units, and the provenance.
+// OUT/images/: a link to each registered photo, named so that name order is pose order (the LLFF loader lists the
+// folder sorted); a copy where links are not possible. The dataset names only files inside its folder (a file_path
+// out of it is refused when read: data/path_policy.hpp). Returns the links' names.
+std::vector<std::string> link_images(const std::vector<fs::path>& image_paths, const fs::path& images_out) {
+  std::error_code ec;
+  fs::remove_all(images_out, ec);
+  io::make_directories(images_out.string());
+  std::vector<std::string> names;
+  for (size_t i = 0; i < image_paths.size(); ++i) {
+    char prefix[32];
+    std::snprintf(prefix, sizeof(prefix), "%05zu_", i);
+    const fs::path link = images_out / (prefix + image_paths[i].filename().string());
+    const fs::path target = fs::absolute(image_paths[i]).lexically_normal();
+    fs::create_symlink(fs::relative(target, images_out), link, ec);
+    if (ec) fs::copy_file(target, link, fs::copy_options::overwrite_existing);
+    names.push_back(link.filename().string());
+  }
+  return names;
+}
+
+// OUT/transforms.json: the intrinsics (global when one camera, else per frame), near/far, each frame's image (a link
+// in OUT/images/) and pose in scene units, and the provenance.
 void write_transforms(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
                       const std::vector<fs::path>& image_paths, std::vector<Matrix34> poses,
                       const std::map<uint32_t, Intrinsics>& intrinsics, const std::string& images_dir,
@@ -399,9 +422,10 @@ void write_transforms(const ColmapModel& model, const std::vector<const ColmapIm
   if (intrinsics.size() == 1) root.update(intrinsics_json(intrinsics.begin()->second));
   root["near"] = result.near;
   root["far"] = result.far;
+  const std::vector<std::string> linked = link_images(image_paths, out / "images");
   io::Json frames = io::Json::array();
   for (size_t i = 0; i < images.size(); ++i) {
-    io::Json frame = {{"file_path", relative_path(image_paths[i], out)},
+    io::Json frame = {{"file_path", "images/" + linked[i]},
                       {"transform_matrix", pose_to_json(poses[i])},
                       {"colmap_image_id", images[i]->id},
                       {"colmap_camera_id", images[i]->camera_id}};
@@ -462,22 +486,6 @@ std::vector<std::array<double, 2>> llff_bounds(const ColmapModel& model, const s
     bounds.push_back({quantile(depths[i], 0.001), quantile(depths[i], 0.999)});
   }
   return bounds;
-}
-
-// OUT/images/: a link to each registered photo, named so that name order is pose order (the LLFF loader lists the
-// folder sorted); a copy where links are not possible.
-void link_images(const std::vector<fs::path>& image_paths, const fs::path& images_out) {
-  std::error_code ec;
-  fs::remove_all(images_out, ec);
-  io::make_directories(images_out.string());
-  for (size_t i = 0; i < image_paths.size(); ++i) {
-    char prefix[32];
-    std::snprintf(prefix, sizeof(prefix), "%05zu_", i);
-    const fs::path link = images_out / (prefix + image_paths[i].filename().string());
-    const fs::path target = fs::absolute(image_paths[i]).lexically_normal();
-    fs::create_symlink(fs::relative(target, images_out), link, ec);
-    if (ec) fs::copy_file(target, link, fs::copy_options::overwrite_existing);
-  }
 }
 
 // OUT/poses_bounds.npy and OUT/images/ (see the header), poses in COLMAP's world (the LLFF loader recentres and

@@ -6,7 +6,8 @@
 //    and every official LLFF convention (data/llff.hpp).
 //  - anything else becomes OUT/transforms.json: poses converted from COLMAP's world-to-camera (OpenCV axes) to
 //    camera-to-world in OpenGL/Blender axes, the world recentred and rescaled, pinhole intrinsics per camera,
-//    near/far from the sparse points' depths, image paths relative to the output folder.
+//    near/far from the sparse points' depths, and OUT/images/ (links to the registered photos) that its frames name:
+//    a dataset names only files inside its folder (data/path_policy.hpp).
 #pragma once
 
 #include <array>
