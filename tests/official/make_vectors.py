@@ -39,6 +39,7 @@ Fixtures (each < 200 kB; all together well under 2 MB):
   sample.json        mip.sample_along_rays (randomized with our draws / not; lindisp on / off)
   resample.json      mip.resample_along_rays (blur-pool, padding 0.01; randomized with our draws / not)
   render.json        mip.volumetric_rendering (white_bkgd True / False)
+  render_grad.json   jax.vjp of mip.volumetric_rendering w.r.t. rgb and density, for given comp_rgb and acc cotangents
   blender_rays.json  datasets.Blender on a 2-view 7x5 scene written here: pixels and _generate_rays
   ndc.json           datasets.LLFF._generate_rays (convert_to_ndc, near = 1) for two forward-facing cameras
   llff.json          datasets.LLFF on a 10-view poses_bounds.npy + 8x6 images written here (train/test split, recentred
@@ -309,6 +310,32 @@ def make_render(off, commit):
                                               "acc": tolist(acc), "weights": tolist(weights)}
     return {**header(commit, "mip.volumetric_rendering(rgb, density, t_vals, dirs, white_bkgd)"),
             "inputs": {"rgb": tolist(rgb), "density": tolist(density), "t_vals": tolist(t), "dirs": tolist(dirs)},
+            "outputs": out}
+
+
+def make_render_grad(off, commit):
+    """jax.vjp of mip.volumetric_rendering with respect to rgb and density, on render.json's inputs, for fixed
+    cotangents of comp_rgb and acc (those our render backward takes; distance and weights get none)."""
+    jax, jnp = off.jax, off.jnp
+    render = make_render(off, commit)["inputs"]
+    rgb, density = np.array(render["rgb"]), np.array(render["density"])
+    t, dirs = np.array(render["t_vals"]), np.array(render["dirs"])
+    rng = np.random.default_rng(SEED + 15)
+    n_rays = density.shape[0]
+    d_comp = f32(rng.normal(0, 1, (n_rays, 3)))
+    d_acc = f32(rng.normal(0, 1, n_rays))
+    require_f32("volumetric_rendering cotangents", d_comp, d_acc)
+    out = {}
+    for white in [True, False]:
+        def comp_and_acc(rgb_, density_):
+            comp_rgb, _, acc, _ = off.mip.volumetric_rendering(rgb_, density_[..., None], t, dirs, white)
+            return comp_rgb, acc
+        _, vjp = jax.vjp(comp_and_acc, jnp.asarray(rgb), jnp.asarray(density))
+        d_rgb, d_density = vjp((jnp.asarray(d_comp), jnp.asarray(d_acc)))
+        out["white" if white else "black"] = {"d_rgb": tolist(d_rgb), "d_density": tolist(d_density)}
+    return {**header(commit, "jax.vjp of mip.volumetric_rendering(rgb, density, t_vals, dirs, white_bkgd) -> "
+                             "(comp_rgb, acc) with respect to (rgb, density), float64, on render.json's inputs"),
+            "inputs": "render.json inputs", "cotangents": {"d_comp_rgb": tolist(d_comp), "d_acc": tolist(d_acc)},
             "outputs": out}
 
 
@@ -621,6 +648,7 @@ def main(argv):
         "sample.json": lambda tmp: make_sample(off, commit),
         "resample.json": lambda tmp: make_resample(off, commit),
         "render.json": lambda tmp: make_render(off, commit),
+        "render_grad.json": lambda tmp: make_render_grad(off, commit),
         "blender_rays.json": lambda tmp: make_blender(off, commit, os.path.join(tmp, "blender")),
         "ndc.json": lambda tmp: make_ndc(off, commit),
         "llff.json": lambda tmp: make_llff(off, commit, os.path.join(tmp, "llff")),
