@@ -44,6 +44,11 @@ Fixtures (each < 200 kB; all together well under 2 MB):
   ndc.json           datasets.LLFF._generate_rays (convert_to_ndc, near = 1) for two forward-facing cameras
   llff.json          datasets.LLFF on a 10-view poses_bounds.npy + 8x6 images written here (train/test split, recentred
                      poses, rescaled bounds, spiral render poses, test rays), and on a 12-view 360° set with spherify
+  model.json         models.MipNerfModel.apply with fixed weights on 16 rays of multicam.json's scene, both levels, and
+                     each output's first-order sensitivity to every stage's float32 error (model_vectors.py)
+  noise.json         the same with density_noise 1 while randomized, given our uniform and normal draws
+  adam.json          train.train_step: the losses (lossmult, coarse weight 0.1), the gradient, and the Adam update
+                     with clipping off and on (model_vectors.py)
   multicam.json      datasets.Multicam on a 2-view x 3-scale scene written here (metadata.json as
                      scripts/convert_blender_data.py writes it): pixels, rays, radii, lossmult, near, far per image
   schedule.json      math.learning_rate_decay
@@ -656,6 +661,10 @@ def main(argv):
         "schedule.json": lambda tmp: make_schedule(off, commit),
         "metrics.json": lambda tmp: make_metrics(off, commit),
     }
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import model_vectors
+    model_makers = model_vectors.makers(sys.modules[__name__], off, commit)
+    makers.update(model_makers)
     wanted = list(makers) if not args.only else args.only.split(",")
     for name in wanted:
         if name not in makers:
@@ -668,7 +677,8 @@ def main(argv):
                 "numpy": np.__version__, "pillow": PIL.__version__}
     total = 0
     for name, value in fixtures.items():
-        value["stubs"] = [{"name": n, "what": w} for n, w in STUBS]
+        stubs = STUBS + (model_vectors.STUBS if name in model_makers else [])
+        value["stubs"] = [{"name": n, "what": w} for n, w in stubs]
         value["versions"] = versions
         text = dump(value) + "\n"
         with open(os.path.join(args.out, name), "w") as f:
