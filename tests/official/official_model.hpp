@@ -41,24 +41,23 @@ inline train::TrainConfig model_config(const io::Json& fx, bool randomized, cons
   REQUIRE(m.at("use_viewdirs").get<bool>());
   REQUIRE_FALSE(m.at("disable_integration").get<bool>());
   REQUIRE(mlp.at("net_depth_condition").get<int>() == 1);  // ours: one view-branch layer, as the paper's
-  train::Bundle settings = {
-      {"num_samples", setting_text(m.at("num_samples"))},
-      {"num_levels", setting_text(m.at("num_levels"))},
-      {"resample_padding", setting_text(m.at("resample_padding"))},
-      {"lindisp", setting_text(m.at("lindisp"))},
-      {"ray_shape", setting_text(m.at("ray_shape"))},
-      {"pos_min_deg", setting_text(m.at("min_deg_point"))},
-      {"pos_max_deg", setting_text(m.at("max_deg_point"))},
-      {"view_max_deg", setting_text(m.at("deg_view"))},
-      {"density_bias", setting_text(m.at("density_bias"))},
-      {"rgb_padding", setting_text(m.at("rgb_padding"))},
-      {"density_noise", setting_text(m.value("density_noise", io::Json(0.0)))},
-      {"mlp_depth", setting_text(mlp.at("net_depth"))},
-      {"mlp_width", setting_text(mlp.at("net_width"))},
-      {"mlp_skip", setting_text(mlp.at("skip_layer"))},
-      {"view_branch_width", setting_text(mlp.at("net_width_condition"))},
-      {"randomized", randomized ? "true" : "false"},
-      {"background", "white"}};
+  train::Bundle settings = {{"num_samples", setting_text(m.at("num_samples"))},
+                            {"num_levels", setting_text(m.at("num_levels"))},
+                            {"resample_padding", setting_text(m.at("resample_padding"))},
+                            {"lindisp", setting_text(m.at("lindisp"))},
+                            {"ray_shape", setting_text(m.at("ray_shape"))},
+                            {"pos_min_deg", setting_text(m.at("min_deg_point"))},
+                            {"pos_max_deg", setting_text(m.at("max_deg_point"))},
+                            {"view_max_deg", setting_text(m.at("deg_view"))},
+                            {"density_bias", setting_text(m.at("density_bias"))},
+                            {"rgb_padding", setting_text(m.at("rgb_padding"))},
+                            {"density_noise", setting_text(m.value("density_noise", io::Json(0.0)))},
+                            {"mlp_depth", setting_text(mlp.at("net_depth"))},
+                            {"mlp_width", setting_text(mlp.at("net_width"))},
+                            {"mlp_skip", setting_text(mlp.at("skip_layer"))},
+                            {"view_branch_width", setting_text(mlp.at("net_width_condition"))},
+                            {"randomized", randomized ? "true" : "false"},
+                            {"background", "white"}};
   for (const auto& [name, value] : overrides) settings[name] = value;
   return train::resolve_config("paper", "mipnerf", settings);
 }
@@ -179,10 +178,19 @@ inline std::vector<double> model_output_bounds(const io::Json& fx, const mlp::Ml
   const double n = fx.at("model").at("num_samples").get<double>();
   const auto layout = mlp::parameter_layout(mlp_config);
   const auto layers = layout.all();
-  std::vector<std::pair<std::string, double>> constants = {
-      {"directions", 16},     {"radii", 8},  {"viewdirs", 16}, {"t", 16},       {"resample", 4 * n + 8},
-      {"means", 16},          {"covs", 64},  {"ipe", 16},      {"pe", 8},       {"density", 16},
-      {"rgb", 16},            {"coarse_weights", n + 16},      {"noise", 36}};
+  std::vector<std::pair<std::string, double>> constants = {{"directions", 16},
+                                                           {"radii", 8},
+                                                           {"viewdirs", 16},
+                                                           {"t", 16},
+                                                           {"resample", 4 * n + 8},
+                                                           {"means", 16},
+                                                           {"covs", 64},
+                                                           {"ipe", 16},
+                                                           {"pe", 8},
+                                                           {"density", 16},
+                                                           {"rgb", 16},
+                                                           {"coarse_weights", n + 16},
+                                                           {"noise", 36}};
   for (size_t k = 0; k < layers.size(); ++k) {
     constants.push_back({"dense/Dense_" + std::to_string(k), static_cast<double>(layers[k]->in) + 2});
   }

@@ -124,9 +124,9 @@ GradientBounds gradient_bounds(const RenderGradCase& c, bool white) {
       const double delta = (c.t[r * (N + 1) + k + 1] - c.t[r * (N + 1) + k]) * norm;
       const double T = T_after[k];
       b.d_density[r * N + k] =
-          delta * (std::abs(g[k]) * (dT_N + wb_after + N * kU * T) + gwb_after + 4 * kU * gGw_after +
-                   4 * kU * G[k] * T + (N + 6) * kU * (std::abs(g[k]) * T + gw_after) +
-                   (N + 2) * kFloor * (G[k] + G_after)) +
+          delta *
+              (std::abs(g[k]) * (dT_N + wb_after + N * kU * T) + gwb_after + 4 * kU * gGw_after + 4 * kU * G[k] * T +
+               (N + 6) * kU * (std::abs(g[k]) * T + gw_after) + (N + 2) * kFloor * (G[k] + G_after)) +
           kFloor;
       wb_after += wb[k];
       gwb_after += std::abs(g[k]) * wb[k];
@@ -160,8 +160,8 @@ TEST_CASE("volumetric_rendering gradient: without the acc cotangent, or with the
   const auto bounds = gradient_bounds(c, true);
   const auto bound = [&](size_t i) { return bounds.d_density[i]; };
   // d_acc ~ N(0, 1) dropped from every g_k: the densities' gradients move by O(δ·T).
-  OFFICIAL_CHECK_DISAGREES("d_density without d_acc", run_bwd(c, Background::white, false).d_density, d_density,
-                           100.0, bound);
+  OFFICIAL_CHECK_DISAGREES("d_density without d_acc", run_bwd(c, Background::white, false).d_density, d_density, 100.0,
+                           bound);
   // A black background leaves Σ_c d_comp_c out of every g_k.
   OFFICIAL_CHECK_DISAGREES("d_density on black", run_bwd(c, Background::black, true).d_density, d_density, 100.0,
                            bound);

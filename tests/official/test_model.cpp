@@ -1,7 +1,7 @@
 // Our whole model (the host graph: rays, sampling, resampling, IPE, the MLP, activations and rendering, coarse and
 // fine) against the official MipNerfModel's own outputs with the same weights (tests/official/fixtures/model.json and
-// noise.json, written by make_vectors.py / model_vectors.py from google/mipnerf): every level's colour, accumulation and
-// distance on 16 rays of the multiscale scene of multicam.json, deterministic and with llff.gin's density noise and
+// noise.json, written by make_vectors.py / model_vectors.py from google/mipnerf): every level's colour, accumulation
+// and distance on 16 rays of the multiscale scene of multicam.json, deterministic and with llff.gin's density noise and
 // randomized sampling given our draws. The bound of each output is derived from the official model's own per-stage
 // sensitivities (official_model.hpp, model_output_bounds); changed conventions (concatenation orders, density_bias,
 // background, no noise, no rgb_padding) must not match.
@@ -47,7 +47,8 @@ TEST_CASE("MipNerfModel: our graph renders the official model's coarse and fine 
   const auto config = official::model_config(fx, false);
   const auto bound = official::model_output_bounds(fx, train::make_graph_spec(config, true).mlps[0]);
   for (const auto backend : test::supported_gemm_backends(test::test_context())) {
-    CAPTURE(enum_name(backend));
+    const std::string backend_name = enum_name(backend);
+    CAPTURE(backend_name);
     OFFICIAL_CHECK_AGREES("outputs [level][ray][rgb, acc, distance]", render_model(fx, backend), expected,
                           [&](size_t i) { return bound[i]; });
   }
@@ -189,8 +190,8 @@ NoisyRender render_noisy_level(const NoisyLevel& c, const DensityNoiseKey& key, 
   auto t = official::upload(ctx, official::as_float(c.t), "t_edges [R][N+1]");
   ocl::DeviceArray<float> comp(ctx, c.R * 3, "comp_rgb [R][3]"), acc(ctx, c.R, "acc [R]"),
       distance(ctx, c.R, "distance [R]"), weights(ctx, c.R * c.N, "weights [R][N]");
-  ops::Render(ctx, options, activation).raw_fwd({raw_rgb, raw_density, t, rays, c.R, c.N}, {comp, acc, distance, weights},
-                                                key);
+  ops::Render(ctx, options, activation)
+      .raw_fwd({raw_rgb, raw_density, t, rays, c.R, c.N}, {comp, acc, distance, weights}, key);
   return {weights.download(ctx), acc.download(ctx), comp.download(ctx)};
 }
 

@@ -33,8 +33,8 @@ std::vector<double> concat_images(const io::Json& outputs, const std::string& ke
 // A per-image scalar of the official rays (lossmult, near, far: broadcast to every pixel) per pixel.
 std::vector<double> per_pixel(const io::Json& outputs, const std::string& key) {
   std::vector<double> out;
-  for (const auto& image : outputs) out.resize(out.size() + image.at("radii").size() * image.at("radii").at(0).size(),
-                                              image.at(key).get<double>());
+  for (const auto& image : outputs)
+    out.resize(out.size() + image.at("radii").size() * image.at("radii").at(0).size(), image.at(key).get<double>());
   return out;
 }
 

@@ -49,9 +49,10 @@ StepResult graph_step(const io::Json& fx, gemm::GemmBackend backend, const train
 }
 
 // The bound of each level's loss L = Σ_r m_r·Σ_c (c_rc − t_rc)² / Σ_r m_r: our colours within model.json's derived
-// bound B_rc of the official ones (official_model.hpp) and our pixels within 4u of the official loader's (test_multicam;
-// measured equal), so first order Σ_r m_r·Σ_c 2·|c_rc − t_rc|·(B_rc + 4u) / Σ m, plus (B + 4u)² for the second order
-// and 16u·L for the squares and the sums (float products, 6 tree levels of 64 rays, the host's double sums).
+// bound B_rc of the official ones (official_model.hpp) and our pixels within 4u of the official loader's
+// (test_multicam; measured equal), so first order Σ_r m_r·Σ_c 2·|c_rc − t_rc|·(B_rc + 4u) / Σ m, plus (B + 4u)² for the
+// second order and 16u·L for the squares and the sums (float products, 6 tree levels of 64 rays, the host's double
+// sums).
 std::vector<double> loss_bounds(const io::Json& model_fx, const official::ModelBatch& batch) {
   const auto config = official::model_config(model_fx, false);
   const auto bound = official::model_output_bounds(model_fx, train::make_graph_spec(config, true).mlps[0]);
@@ -127,10 +128,12 @@ TEST_CASE("train_step gradient: our graph's parameter gradient is the official j
     return std::sqrt(diff) / norm;
   };
   for (const auto backend : test::supported_gemm_backends(test::test_context())) {
-    CAPTURE(enum_name(backend));
+    const std::string backend_name = enum_name(backend);
+    CAPTURE(backend_name);
     const double error = relative_error(graph_step(fx, backend).grads);
     INFO("relative error " << error << " = " << error / 1e-3 << " x bound");
-    if (std::getenv("MIPNERF_TEST_VERBOSE")) MESSAGE("gradient: relative error " << error << " = " << error / 1e-3 << " x bound");
+    if (std::getenv("MIPNERF_TEST_VERBOSE"))
+      MESSAGE("gradient: relative error " << error << " = " << error / 1e-3 << " x bound");
     CHECK(error <= 1e-3);
   }
   // The coarse level's gradient at weight 1 instead of 0.1.
@@ -277,7 +280,8 @@ TEST_CASE("train_step Adam: our update of the official weights and gradient is t
     const auto new_params = flat(c.at("new_params")), new_m = flat(c.at("new_m")), new_v = flat(c.at("new_v"));
     OFFICIAL_CHECK_AGREES("new parameters", at_indices(ours.params, compared), new_params,
                           [&](size_t k) { return p_bound[k]; });
-    OFFICIAL_CHECK_AGREES("new first moments", at_indices(ours.m, compared), new_m, [&](size_t k) { return m_bound[k]; });
+    OFFICIAL_CHECK_AGREES("new first moments", at_indices(ours.m, compared), new_m,
+                          [&](size_t k) { return m_bound[k]; });
     OFFICIAL_CHECK_AGREES("new second moments", at_indices(ours.v, compared), new_v,
                           [&](size_t k) { return v_bound[k]; });
     if (max_norm > 0) {
