@@ -26,18 +26,21 @@ __kernel void grad_norm_partial(__global const float* grad, const uint n, __glob
 
 // One Adam step on element i of the flat buffers. grad_scale multiplies the gradient first (global-norm
 // clipping: min(1, max_norm / norm); 1 without clipping). inv_bias1 = 1 / (1 − β1^t), inv_bias2 =
-// 1 / (1 − β2^t) for the 1-based step t, computed by the host in double. 1-D launch over n.
+// 1 / (1 − β2^t) for the 1-based step t, computed by the host in double. one_minus_beta1 and one_minus_beta2 are
+// 1 − β computed by the host in double and then rounded: 1.0f − beta2 here would be 1 − float(0.999) =
+// 0.00099998713, 1.3e-5 off the 0.001 the official code multiplies g² by (tests/official, adam.json). 1-D launch over n.
 __kernel void adam_step(__global float* params, __global const float* grad, __global float* m, __global float* v,
-                        const uint n, const float lr, const float beta1, const float beta2, const float epsilon,
+                        const uint n, const float lr, const float beta1, const float beta2,
+                        const float one_minus_beta1, const float one_minus_beta2, const float epsilon,
                         const float inv_bias1, const float inv_bias2, const float grad_scale) {
   const uint i = get_global_id(0);
   if (i >= n) return;
   const float g = grad[i] * grad_scale;
-  const float m_new = beta1 * m[i] + (1.0f - beta1) * g;
+  const float m_new = beta1 * m[i] + one_minus_beta1 * g;
   // Guard: ((1 − β2)·g)·g, not (1 − β2)·g². g² overflows float32 for |g| > 1.8e19, while the term it feeds stays
   // representable up to |g| ≈ 5.8e20 (β2 = 0.999); the official flax Adam squares first (lax.square), stores
   // v = +∞ there, and from then on every update of that parameter is m̂/∞ = 0. The same two roundings either way.
-  const float v_new = beta2 * v[i] + (1.0f - beta2) * g * g;
+  const float v_new = beta2 * v[i] + one_minus_beta2 * g * g;
   m[i] = m_new;
   v[i] = v_new;
   // Guard: √v̂ as √v·√(1/(1 − β2^t)), not √(v/(1 − β2^t)). v̂ = v·inv_bias2 overflows float32 for v > 3.4e35 at

@@ -58,7 +58,7 @@ Adam::Adam(ocl::Context& ctx, size_t n_params, const AdamHyper& hyper)
       sumsq_partials_(ctx, n_partials_, "gradient sum-of-squares partials [slices]"),
       non_finite_partials_(ctx, n_partials_, "gradient non-finite counts [slices]"),
       kernels_(std::make_unique<ops::AdamKernels>(ctx)) {
-  if (!(hyper.beta1 >= 0.0f && hyper.beta1 < 1.0f) || !(hyper.beta2 >= 0.0f && hyper.beta2 < 1.0f)) {
+  if (!(hyper.beta1 >= 0.0 && hyper.beta1 < 1.0) || !(hyper.beta2 >= 0.0 && hyper.beta2 < 1.0)) {
     throw Error("Adam: beta1 and beta2 must be in [0, 1)");
   }
   if (!(hyper.epsilon > 0.0f)) throw Error("Adam: epsilon must be positive");
@@ -97,12 +97,15 @@ void Adam::step(ocl::DeviceArray<float>& params, const ocl::DeviceArray<float>& 
   const int64_t t = step_ + 1;
   ops::AdamStepArgs args;
   args.lr = static_cast<float>(lr);
-  args.beta1 = hyper_.beta1;
-  args.beta2 = hyper_.beta2;
+  args.beta1 = static_cast<float>(hyper_.beta1);
+  args.beta2 = static_cast<float>(hyper_.beta2);
+  // 1 − β in double, then rounded: float(0.001), not 1.0f − float(0.999) (1.3e-5 off; tests/official adam.json).
+  args.one_minus_beta1 = static_cast<float>(1.0 - hyper_.beta1);
+  args.one_minus_beta2 = static_cast<float>(1.0 - hyper_.beta2);
   args.epsilon = hyper_.epsilon;
-  // Bias corrections in double from the float betas the kernel uses.
-  args.inv_bias1 = static_cast<float>(1.0 / (1.0 - std::pow(static_cast<double>(hyper_.beta1), t)));
-  args.inv_bias2 = static_cast<float>(1.0 / (1.0 - std::pow(static_cast<double>(hyper_.beta2), t)));
+  // Bias corrections in double from the hyperparameters (from float(0.999), 1 − β2^t would be 1.3e-5 off at t = 42).
+  args.inv_bias1 = static_cast<float>(1.0 / (1.0 - std::pow(hyper_.beta1, t)));
+  args.inv_bias2 = static_cast<float>(1.0 / (1.0 - std::pow(hyper_.beta2, t)));
   if (hyper_.grad_max_norm > 0.0) {
     // The official clip: mult = min(1, max_norm / (1e-7 + norm)); the 1e-7 keeps a zero gradient finite.
     args.grad_scale = static_cast<float>(std::min(1.0, hyper_.grad_max_norm / (1e-7 + stats->norm)));

@@ -35,8 +35,10 @@ struct LrSchedule {
 double learning_rate(const LrSchedule& schedule, int64_t step);
 
 struct AdamHyper {
-  float beta1 = 0.9f;          // first-moment decay β1
-  float beta2 = 0.999f;        // second-moment decay β2
+  // The decays as the official code gives them (flax Adam's Python floats); the kernel gets β and 1 − β each rounded
+  // to float from these, and the bias corrections are computed from them in double.
+  double beta1 = 0.9;          // first-moment decay β1
+  double beta2 = 0.999;        // second-moment decay β2
   float epsilon = 1e-8f;       // ε added to √v̂
   double grad_max_norm = 0.0;  // clip the global gradient norm to this (official: mult = min(1, max / (1e-7 + norm))); 0 = off
 };

@@ -36,7 +36,7 @@ void AdamKernels::adam_step(ocl::DeviceArray<float>& params, const ocl::DeviceAr
   m.require_size(n, where);
   v.require_size(n, where);
   ocl::set_args(*adam_step_, where, params, grad, m, v, detail::to_uint(n, where, "n"), a.lr, a.beta1, a.beta2,
-                a.epsilon, a.inv_bias1, a.inv_bias2, a.grad_scale);
+                a.one_minus_beta1, a.one_minus_beta2, a.epsilon, a.inv_bias1, a.inv_bias2, a.grad_scale);
   ocl::launch_1d(*ctx_, *adam_step_, n, where);
 }
 

@@ -11,13 +11,15 @@ namespace mipnerf::ops {
 
 // The per-step scalars of adam_step, grouped (they are set as kernel arguments in one place).
 struct AdamStepArgs {
-  float lr = 0.0f;          // learning rate of this step
-  float beta1 = 0.9f;       // first-moment decay
-  float beta2 = 0.999f;     // second-moment decay
-  float epsilon = 1e-8f;    // added to √v̂
-  float inv_bias1 = 1.0f;   // 1 / (1 − β1^t)
-  float inv_bias2 = 1.0f;   // 1 / (1 − β2^t)
-  float grad_scale = 1.0f;  // multiplies the gradient (clipping); 1 = none
+  float lr = 0.0f;                 // learning rate of this step
+  float beta1 = 0.9f;              // first-moment decay
+  float beta2 = 0.999f;            // second-moment decay
+  float one_minus_beta1 = 0.1f;    // 1 − β1, computed in double and rounded (not 1.0f − beta1)
+  float one_minus_beta2 = 0.001f;  // 1 − β2, likewise: 1.0f − 0.999f would be 1.3e-5 off 0.001
+  float epsilon = 1e-8f;           // added to √v̂
+  float inv_bias1 = 1.0f;          // 1 / (1 − β1^t)
+  float inv_bias2 = 1.0f;          // 1 / (1 − β2^t)
+  float grad_scale = 1.0f;         // multiplies the gradient (clipping); 1 = none
 };
 
 class AdamKernels {

@@ -7,12 +7,14 @@
 #include <cstdlib>
 #include <functional>
 #include <random>
+#include <set>
 
 #include "data/device_dataset.hpp"
 #include "data/forward_facing.hpp"
 #include "graph/graph.hpp"
 #include "ops/batch.hpp"
 #include "ref/encode.hpp"
+#include "ref/gaussian.hpp"
 #include "ref/loss.hpp"
 #include "ref/mlp.hpp"
 #include "ref/rays.hpp"
@@ -44,7 +46,8 @@ struct MeanPerturbation {
 
 // Bounds on |t_float − t| for a level's edges [R][N+1], from the stage tests' float32 bounds (without their 2×):
 // stratified 12u·(near + far) (test_sample), resampled (2N + 6)u·(the CDF's slope around the edge) + 4u·|t|
-// (test_resample; N the previous level's intervals, its CDF the reference's).
+// (test_resample; N the previous level's intervals, its CDF the reference's). A union level (NeRF's fine) holds the
+// previous level's stratified edges too, copied by the merge: the larger of both bounds.
 std::vector<double> edge_error_bounds(const graph::GraphSpec& spec, const graph::LevelSpec& level,
                                       const std::vector<double>& t, size_t R, size_t n, const std::vector<double>& near,
                                       const std::vector<double>& far, const std::vector<double>& t_prev,
@@ -66,22 +69,28 @@ std::vector<double> edge_error_bounds(const graph::GraphSpec& spec, const graph:
       while (k + 1 < n_prev && tp[k + 1] <= value && cdf[k + 1] < 1) ++k;
       const double max_slope = std::max({slope(k), k > 0 ? slope(k - 1) : 0.0, slope(k + 1)});
       bounds[ray * (n + 1) + j] = (2 * n_prev + 6) * kU * max_slope + 4 * kU * std::abs(value);
+      if (level.sampling == graph::Sampling::resample_union) {
+        bounds[ray * (n + 1) + j] = std::max(bounds[ray * (n + 1) + j], 12 * kU * (near[ray] + far[ray]));
+      }
     }
   }
   return bounds;
 }
 
-// Moves every PE-of-the-mean feature of a concatenated-PE level as the device's float32 mean error would, by a
-// shift ±β_a of each row's mean (random signs): (sin y, cos y) → (sin(y + 2^l·Δ), cos(y + 2^l·Δ)), exactly. β_a
+// Moves every PE-of-the-mean feature of a PE level (concatenated PE, PE of the frustum's mean, PE of the interval's
+// midpoint; `width` features a row) as the device's float32 mean error would, by a shift ±β_a of each row's mean
+// (random signs): the identity x → x + Δ, (sin y, cos y) → (sin(y + 2^l·Δ), cos(y + 2^l·Δ)), exactly. β_a
 // bounds |μ_float − μ| per axis (float32 bounds of the stage tests, without their 2×): the Gaussian's 2u·|o_a| +
 // 12u·|t_mean·d_a| (test_gaussian), the direction's 8u·1.8·|d|₁ times t_mean (test_rays), and the edges' error
-// times |d_a| (edge_error_bounds). The covariance's features (degrees 0..1) are left as they are.
-void perturb_mean_features(const graph::GraphSpec& spec, std::vector<double>& features, const std::vector<double>& t,
-                           const std::vector<double>& edge_bounds, const std::vector<double>& origins,
-                           const std::vector<double>& directions, size_t R, size_t n, std::mt19937& rng) {
+// times |d_a| (edge_error_bounds); for midpoints the same bound (fewer operations). The concatenated covariance's
+// features (degrees 0..1) are left as they are.
+void perturb_mean_features(const graph::GraphSpec& spec, std::vector<double>& features, size_t width,
+                           const std::vector<double>& t, const std::vector<double>& edge_bounds,
+                           const std::vector<double>& origins, const std::vector<double>& directions, size_t R,
+                           size_t n, std::mt19937& rng) {
   const auto& enc = spec.position_encoding;
   const int L = enc.degrees();
-  const size_t width = enc.concat_pe_width(), first = enc.append_identity ? 3 : 0;
+  const size_t first = enc.append_identity ? 3 : 0;
   std::uniform_int_distribution<int> coin(0, 1);
   for (size_t row = 0; row < R * n; ++row) {
     const size_t ray = row / n, i = row % n;
@@ -93,6 +102,7 @@ void perturb_mean_features(const graph::GraphSpec& spec, std::vector<double>& fe
       const double beta = 2 * kU * std::abs(origins[3 * ray + a]) + 12 * kU * t_mean * std::abs(d[a]) +
                           8 * 1.8 * kU * t_mean * d1 + std::abs(d[a]) * dt;
       const double shift = coin(rng) ? beta : -beta;
+      if (enc.append_identity) features[row * width + a] += shift;
       for (int l = 0; l < L; ++l) {
         const double phi = std::ldexp(shift, enc.min_deg + l);
         double& sine = features[row * width + first + 3 * l + a];
@@ -132,28 +142,45 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
   size_t n_prev = 0;
   for (size_t l = 0; l < spec.levels.size(); ++l) {
     const auto& level = spec.levels[l];
-    REQUIRE((level.encoding == graph::Encoding::integrated || level.encoding == graph::Encoding::concat_pe));
     std::vector<double> t;
-    size_t n = level.new_samples;
+    const size_t n = level.intervals(n_prev);
     if (fixed_t_edges && l > 0) {
       // The stop-gradient between levels, for finite differences: later levels keep the edges the unperturbed
       // step drew, as the analytic gradient treats them (no gradient flows through resampling).
       t = (*fixed_t_edges)[l];
     } else if (level.sampling == graph::Sampling::stratified) {
       ref::sample_stratified_fwd(spec.sample, near, far, t, R, n, key);
-    } else {
-      REQUIRE(level.sampling == graph::Sampling::resample);
+    } else if (level.sampling == graph::Sampling::resample) {
       ref::resample_fwd(spec.resample, t_prev, weights_prev, t, R, n_prev, n, key);
+    } else {
+      // NeRF's fine level: new_samples + 1 edges drawn from the previous level's weights, merged with its edges.
+      std::vector<double> drawn;
+      ref::resample_fwd(spec.resample, t_prev, weights_prev, drawn, R, n_prev, level.new_samples, key);
+      ref::sample_merge_fwd(t_prev, drawn, t, R, n_prev + 1, level.new_samples + 1);
     }
     std::vector<double> features, raw_density, raw_rgb, comp, acc, distance, weights;
-    if (level.encoding == graph::Encoding::integrated) {
-      ref::gaussian_ipe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R, n);
-    } else {
-      ref::gaussian_concat_pe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R, n);
-      if (perturb) {
-        const auto edge_bounds = edge_error_bounds(spec, level, t, R, n, near, far, t_prev, weights_prev, n_prev);
-        perturb_mean_features(spec, features, t, edge_bounds, origins, directions, R, n, perturb->rng);
-      }
+    std::vector<double> means, covs;
+    switch (level.encoding) {
+      case graph::Encoding::integrated:
+        ref::gaussian_ipe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R, n);
+        break;
+      case graph::Encoding::concat_pe:
+        ref::gaussian_concat_pe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R,
+                                    n);
+        break;
+      case graph::Encoding::frustum_mean_pe:  // mip-NeRF "w/o IPE": the Gaussian's mean, its covariance unused
+        ref::gaussian_fwd(spec.gaussian, origins, directions, radii, t, means, covs, R, n);
+        ref::pe_fwd(spec.position_encoding, means, features, R * n);
+        break;
+      case graph::Encoding::midpoint_pe:  // NeRF: the interval's midpoint on the ray
+        ref::gaussian_points_fwd(origins, directions, t, means, covs, R, n);
+        ref::pe_fwd(spec.position_encoding, means, features, R * n);
+        break;
+    }
+    if (perturb && level.encoding != graph::Encoding::integrated) {
+      const auto edge_bounds = edge_error_bounds(spec, level, t, R, n, near, far, t_prev, weights_prev, n_prev);
+      perturb_mean_features(spec, features, spec.feature_width(level.encoding), t, edge_bounds, origins, directions, R,
+                            n, perturb->rng);
     }
     const auto& mlp_config = spec.mlps[level.mlp_index];
     ref::MlpTape tape;
@@ -233,7 +260,8 @@ void check_step_against_reference_on(gemm::GemmBackend backend, const std::strin
   const auto expected = reference_step(spec, params, cameras, camera_ids, pixel_ids, target, ref_lossmult,
                                        device_data.num_cameras(), key);
   REQUIRE(losses.size() == expected.level_loss.size());
-  // The concatenated PE of the mean is not attenuated as IPE is, so at degree l its features carry 2^l times the
+  // The PE of a mean (concatenated PE, PE of the frustum's mean, NeRF's PE of the midpoint) is not attenuated as IPE
+  // is, so at degree l its features carry 2^l times the
   // float32 error of the mean at full amplitude (2^11·~3e-6 ≈ 6e-3 rad at the shipped degree 11), and the step's
   // float32 result differs from the exact one by the network's response to that. That response is measured on the
   // reference: the step again with every such feature moved by its derived bound (perturb_mean_features, the later
@@ -241,10 +269,10 @@ void check_step_against_reference_on(gemm::GemmBackend backend, const std::strin
   // errors are not aligned with the loss's gradient). Each quantity below may differ from the reference by twice
   // the largest response, on top of the rounding bound the IPE variants are held to; as first-order responses to
   // feature errors at their bound, these exceed the device's (measured: 1/5 of one draw for the gradients, 1/10 to
-  // 1/40 for the losses). Without a concatenated-PE level the responses are 0.
+  // 1/40 for the losses). Without a PE level (IPE everywhere) the responses are 0.
   std::vector<ReferenceStep> responses;
   for (const auto& level : spec.levels) {
-    if (!with_response || level.encoding != graph::Encoding::concat_pe) continue;
+    if (!with_response || level.encoding == graph::Encoding::integrated) continue;
     for (unsigned draw = 0; draw < 3; ++draw) {
       MeanPerturbation perturb{std::mt19937(1000 + draw)};
       responses.push_back(reference_step(spec, params, cameras, camera_ids, pixel_ids, target, ref_lossmult,
@@ -362,6 +390,37 @@ TEST_CASE("graph: the host backend's step equals the reference on every CPU GEMM
 TEST_CASE("graph: with the area loss on multiscale data and two networks, still the reference") {
   check_step_against_reference("mipnerf-two-mlps",
                                (std::filesystem::path(test::small_scene()) / "multiscale").string());
+}
+
+// Every --variant of the registry (train::variants(), the rows of the paper's tables), so a new variant cannot ship
+// without its step checked: each one's whole step (its sampling, encoding, networks, activations, resampling and area
+// loss) against the reference at the bounds above, the response of its PE features included. On the multiscale scene,
+// where the area loss is on for the variants that keep it (lossmult 1, 4, 16, 64) and off for the others.
+TEST_CASE("graph: every training variant's step equals the CPU reference (the whole variant registry)") {
+  const auto& registry = train::variants();
+  REQUIRE(registry.size() == train::enum_names(train::Variant{}).size());
+  const std::string multiscale = (std::filesystem::path(test::small_scene()) / "multiscale").string();
+  std::set<graph::Encoding> encodings;
+  std::set<graph::Sampling> samplings;
+  for (const auto& [variant, bundle] : registry) {
+    CAPTURE(variant);
+    const auto spec = train::make_graph_spec(train::resolve_config("tiny", variant, {}), true);
+    INFO(spec.describe());
+    bool pe_of_means = false;
+    for (const auto& level : spec.levels) {
+      encodings.insert(level.encoding);
+      samplings.insert(level.sampling);
+      pe_of_means = pe_of_means || level.encoding != graph::Encoding::integrated;
+    }
+    check_step_against_reference(variant, multiscale);
+    // The PE-of-means variants' shipped degrees need the response in their bounds (above), which would absorb a
+    // wiring error of a few percent; at degrees 0..7 (the mean's float32 error ×2^7 ≈ 5e-4 rad) they are held to the
+    // IPE variants' bounds alone, as the concatenated-PE test below.
+    if (pe_of_means) check_step_against_reference(variant, multiscale, {{"pos_max_deg", "8"}}, {}, false);
+  }
+  // The registry reaches every encoding and every sampling the graph has (reference_step writes each out).
+  CHECK(encodings.size() == 4);
+  CHECK(samplings.size() == 3);
 }
 
 // The concatenated-PE variant (supplement §7): its features feed the shared MLP; nothing before the encoding is

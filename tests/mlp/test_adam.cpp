@@ -48,9 +48,9 @@ void check_adam_against_reference(double grad_max_norm, unsigned seed) {
     double norm_sq = 0.0;
     for (double x : g) norm_sq += x * x;
     const double scale = grad_max_norm > 0.0 ? std::min(1.0, grad_max_norm / (1e-7 + std::sqrt(norm_sq))) : 1.0;
-    const double b1 = hyper.beta1, b2 = hyper.beta2;  // the float values, as the kernel uses them
+    const double b1 = hyper.beta1, b2 = hyper.beta2;  // the kernel gets β and 1 − β each rounded to float
     const auto before = params;
-    ref::adam_step(params.data(), g.data(), m.data(), v.data(), n, lr, b1, b2, hyper.epsilon,
+    ref::adam_step(params.data(), g.data(), m.data(), v.data(), n, lr, b1, b2, 1 - b1, 1 - b2, hyper.epsilon,
                    1.0 / (1.0 - std::pow(b1, t)), 1.0 / (1.0 - std::pow(b2, t)), scale);
     for (size_t i = 0; i < n; ++i) max_update = std::max(max_update, std::abs(params[i] - before[i]));
   }
@@ -143,7 +143,8 @@ TEST_CASE("adam: denormal moments, moments around 1e30 and gradients whose squar
     const double inv_bias2 = static_cast<float>(1.0 / (1.0 - std::pow(b2, t)));
     const auto g = test::as_double(grads);
     const auto m_before = m, v_before = v;
-    ref::adam_step(params.data(), g.data(), m.data(), v.data(), n, lr, b1, b2, eps, inv_bias1, inv_bias2, 1.0);
+    ref::adam_step(params.data(), g.data(), m.data(), v.data(), n, lr, b1, b2, 1 - b1, 1 - b2, eps, inv_bias1,
+                   inv_bias2, 1.0);
     for (size_t i = 0; i < n; ++i) {
       e_m[i] = b1 * e_m[i] + 3 * kU * (b1 * std::abs(m_before[i]) + (1 - b1) * std::abs(g[i])) + 3 * floor;
       e_v[i] = b2 * e_v[i] + 3 * kU * (b2 * v_before[i] + (1 - b2) * g[i] * g[i]) + 3 * floor;

@@ -15,6 +15,8 @@ Command used for the committed fixtures (the checkout is a `git archive` of that
   ~/.cache/mipnerf-cl/vs-official-venv/bin/python tests/official/make_vectors.py --official /tmp/official \\
       --official-commit 84c969e0a623edd183b75693aed72a7e7c22902d --out tests/official/fixtures
 
+--only NAME,NAME writes just those fixtures (the others keep their bytes).
+
 Inputs: every input comes from numpy.random.default_rng(SEED + k) with a fixed k per fixture (see each make_*), and is
 rounded to float32 first, so our float32 kernels and the official functions receive exactly the same numbers.
 
@@ -37,10 +39,18 @@ Fixtures (each < 200 kB; all together well under 2 MB):
   sample.json        mip.sample_along_rays (randomized with our draws / not; lindisp on / off)
   resample.json      mip.resample_along_rays (blur-pool, padding 0.01; randomized with our draws / not)
   render.json        mip.volumetric_rendering (white_bkgd True / False)
+  render_grad.json   jax.vjp of mip.volumetric_rendering w.r.t. rgb and density, for given comp_rgb and acc cotangents
   blender_rays.json  datasets.Blender on a 2-view 7x5 scene written here: pixels and _generate_rays
   ndc.json           datasets.LLFF._generate_rays (convert_to_ndc, near = 1) for two forward-facing cameras
   llff.json          datasets.LLFF on a 10-view poses_bounds.npy + 8x6 images written here (train/test split, recentred
                      poses, rescaled bounds, spiral render poses, test rays), and on a 12-view 360° set with spherify
+  model.json         models.MipNerfModel.apply with fixed weights on 16 rays of multicam.json's scene, both levels, and
+                     each output's first-order sensitivity to every stage's float32 error (model_vectors.py)
+  noise.json         the same with density_noise 1 while randomized, given our uniform and normal draws
+  adam.json          train.train_step: the losses (lossmult, coarse weight 0.1), the gradient, and the Adam update
+                     with clipping off and on (model_vectors.py)
+  multicam.json      datasets.Multicam on a 2-view x 3-scale scene written here (metadata.json as
+                     scripts/convert_blender_data.py writes it): pixels, rays, radii, lossmult, near, far per image
   schedule.json      math.learning_rate_decay
   metrics.json       math.mse_to_psnr and math.compute_ssim(max_val=1) as train.py/eval.py call them
 """
@@ -308,6 +318,32 @@ def make_render(off, commit):
             "outputs": out}
 
 
+def make_render_grad(off, commit):
+    """jax.vjp of mip.volumetric_rendering with respect to rgb and density, on render.json's inputs, for fixed
+    cotangents of comp_rgb and acc (those our render backward takes; distance and weights get none)."""
+    jax, jnp = off.jax, off.jnp
+    render = make_render(off, commit)["inputs"]
+    rgb, density = np.array(render["rgb"]), np.array(render["density"])
+    t, dirs = np.array(render["t_vals"]), np.array(render["dirs"])
+    rng = np.random.default_rng(SEED + 15)
+    n_rays = density.shape[0]
+    d_comp = f32(rng.normal(0, 1, (n_rays, 3)))
+    d_acc = f32(rng.normal(0, 1, n_rays))
+    require_f32("volumetric_rendering cotangents", d_comp, d_acc)
+    out = {}
+    for white in [True, False]:
+        def comp_and_acc(rgb_, density_):
+            comp_rgb, _, acc, _ = off.mip.volumetric_rendering(rgb_, density_[..., None], t, dirs, white)
+            return comp_rgb, acc
+        _, vjp = jax.vjp(comp_and_acc, jnp.asarray(rgb), jnp.asarray(density))
+        d_rgb, d_density = vjp((jnp.asarray(d_comp), jnp.asarray(d_acc)))
+        out["white" if white else "black"] = {"d_rgb": tolist(d_rgb), "d_density": tolist(d_density)}
+    return {**header(commit, "jax.vjp of mip.volumetric_rendering(rgb, density, t_vals, dirs, white_bkgd) -> "
+                             "(comp_rgb, acc) with respect to (rgb, density), float64, on render.json's inputs"),
+            "inputs": "render.json inputs", "cotangents": {"d_comp_rgb": tolist(d_comp), "d_acc": tolist(d_acc)},
+            "outputs": out}
+
+
 def rotation(rng, max_angle):
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
@@ -467,6 +503,73 @@ def make_llff(off, commit, tmp):
             "spherify": {"inputs": inputs360, "outputs": spherified}}
 
 
+def write_multicam_scene(tmp):
+    """A tiny multiscale Blender scene as scripts/convert_blender_data.py lays it out (metadata.json + images_train/):
+    2 views x 3 scales (8x12, 4x6, 2x3), each image random RGBA; near and far vary per image, so a loader must read
+    them per image. Every image is at least 3 rows high: Multicam pads its row differences with the second-to-last
+    one (dx[-2:-1]), which a 2-row image does not have (its radii would come out one row short).
+    Returns the train split's metadata and the images (RGBA8)."""
+    from PIL import Image
+    rng = np.random.default_rng(SEED + 11)
+    w0, h0, n_views, n_scales = 8, 12, 2, 3
+    camera_angle_x = 0.6911112070083618
+    focal0 = 0.5 * w0 / np.tan(0.5 * camera_angle_x)
+    keys = ["file_path", "cam2world", "width", "height", "focal", "label", "near", "far", "lossmult"]
+    meta = {k: [] for k in keys}
+    images = []
+    os.makedirs(os.path.join(tmp, "images_train"))
+    for k in range(n_views):
+        angle = 0.9 * k + 0.2
+        eye = np.array([4 * np.cos(angle), 4 * np.sin(angle), 0.8 + 0.6 * k])
+        pose = f32(np.concatenate([look_at(eye, np.zeros(3), np.array([0, 0, 1.0])), [[0, 0, 0, 1]]], 0))
+        for j in range(n_scales):
+            w, h = w0 >> j, h0 >> j
+            rgba = rng.integers(0, 256, (h, w, 4), dtype=np.uint8)
+            rgba[0, 0, 3], rgba[-1, -1, 3] = 0, 255
+            name = f"images_train/{k:03d}_d{j}.png"
+            Image.fromarray(rgba, "RGBA").save(os.path.join(tmp, name))
+            images.append(rgba.tolist())
+            for key, value in zip(keys, [name, tolist(pose), w, h, focal0 / 2**j, j, 2.0 + 0.25 * k, 6.0 - 0.5 * j,
+                                         4.0**j]):
+                meta[key].append(value)
+    # pix2cam exactly as convert_blender_data.py writes it: the inverse intrinsics, principal point at the centre.
+    fx = fy = np.array(meta["focal"])
+    cx, cy = np.array(meta["width"]) * .5, np.array(meta["height"]) * .5
+    zero, one = np.zeros_like(cx), np.ones_like(cx)
+    meta["pix2cam"] = np.moveaxis(np.array([[one / fx, zero, -cx / fx], [zero, -one / fy, cy / fy],
+                                            [zero, zero, -one]]), -1, 0).tolist()
+    with open(os.path.join(tmp, "metadata.json"), "w") as f:
+        json.dump({"train": meta}, f)
+    return meta, images
+
+
+def load_multicam(off, tmp):
+    """datasets.Multicam on the scene in `tmp`: _load_renderings (white_bkgd) and _generate_rays, as _train_init
+    runs them (the per-image arrays, before its flattening)."""
+    ds = off.datasets.Multicam.__new__(off.datasets.Multicam)
+    ds.split, ds.data_dir = "train", tmp
+    ds._load_renderings(off.config(dataset_loader="multicam", white_bkgd=True, render_path=False))
+    ds._generate_rays()
+    return ds
+
+
+def make_multicam(off, commit, tmp):
+    meta, images = write_multicam_scene(tmp)
+    ds = load_multicam(off, tmp)
+    r = ds.rays
+    outputs = []
+    for i in range(len(images)):
+        outputs.append({"pixels": tolist(ds.images[i]), "origins": tolist(r.origins[i]),
+                        "directions": tolist(r.directions[i]), "viewdirs": tolist(r.viewdirs[i]),
+                        "radii": tolist(r.radii[i][..., 0]), "lossmult": float(r.lossmult[i][0, 0, 0]),
+                        "near": float(r.near[i][0, 0, 0]), "far": float(r.far[i][0, 0, 0])})
+    return {**header(commit, "datasets.Multicam._load_renderings (white_bkgd) and _generate_rays on the multiscale "
+                             "scene given here: metadata.json (as scripts/convert_blender_data.py writes it) + "
+                             "images_train/<view>_d<scale>.png"),
+            "inputs": {"metadata": {"train": meta}, "rgba8": images},
+            "outputs": outputs}
+
+
 def make_schedule(off, commit):
     steps = [0, 1, 2, 100, 511, 512, 513, 1250, 2499, 2500, 2501, 100000, 249999, 250000, 500000, 999999, 1000000,
              1000001, 2000000]
@@ -534,6 +637,7 @@ def main(argv):
     p.add_argument("--official", required=True, help="checkout of github:google/mipnerf (holds internal/mip.py)")
     p.add_argument("--official-commit", help="its commit, when --official is not a git work tree (a git archive)")
     p.add_argument("--out", required=True, help="folder for the fixtures (tests/official/fixtures)")
+    p.add_argument("--only", help="comma-separated fixture names (e.g. model.json,adam.json): write only these")
     args = p.parse_args(argv)
     if not os.path.isfile(os.path.join(args.official, "internal", "mip.py")):
         fail(f"--official {args.official}: no internal/mip.py there; pass a google/mipnerf checkout")
@@ -543,26 +647,38 @@ def main(argv):
               file=sys.stderr)
     off = Official(args.official)
     os.makedirs(args.out, exist_ok=True)
+    makers = {
+        "cast_rays.json": lambda tmp: make_cast_rays(off, commit),
+        "encode.json": lambda tmp: make_encode(off, commit),
+        "sample.json": lambda tmp: make_sample(off, commit),
+        "resample.json": lambda tmp: make_resample(off, commit),
+        "render.json": lambda tmp: make_render(off, commit),
+        "render_grad.json": lambda tmp: make_render_grad(off, commit),
+        "blender_rays.json": lambda tmp: make_blender(off, commit, os.path.join(tmp, "blender")),
+        "ndc.json": lambda tmp: make_ndc(off, commit),
+        "llff.json": lambda tmp: make_llff(off, commit, os.path.join(tmp, "llff")),
+        "multicam.json": lambda tmp: make_multicam(off, commit, os.path.join(tmp, "multicam")),
+        "schedule.json": lambda tmp: make_schedule(off, commit),
+        "metrics.json": lambda tmp: make_metrics(off, commit),
+    }
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import model_vectors
+    model_makers = model_vectors.makers(sys.modules[__name__], off, commit)
+    makers.update(model_makers)
+    wanted = list(makers) if not args.only else args.only.split(",")
+    for name in wanted:
+        if name not in makers:
+            fail(f"--only: no fixture '{name}'; the fixtures are {', '.join(makers)}")
     with tempfile.TemporaryDirectory(prefix="mipnerf_official_") as tmp:
-        fixtures = {
-            "cast_rays.json": make_cast_rays(off, commit),
-            "encode.json": make_encode(off, commit),
-            "sample.json": make_sample(off, commit),
-            "resample.json": make_resample(off, commit),
-            "render.json": make_render(off, commit),
-            "blender_rays.json": make_blender(off, commit, os.path.join(tmp, "blender")),
-            "ndc.json": make_ndc(off, commit),
-            "llff.json": make_llff(off, commit, os.path.join(tmp, "llff")),
-            "schedule.json": make_schedule(off, commit),
-            "metrics.json": make_metrics(off, commit),
-        }
+        fixtures = {name: makers[name](tmp) for name in wanted}
     import flax
     import PIL
     versions = {"python": sys.version.split()[0], "jax": off.jax.__version__, "flax": flax.__version__,
                 "numpy": np.__version__, "pillow": PIL.__version__}
     total = 0
     for name, value in fixtures.items():
-        value["stubs"] = [{"name": n, "what": w} for n, w in STUBS]
+        stubs = STUBS + (model_vectors.STUBS if name in model_makers else [])
+        value["stubs"] = [{"name": n, "what": w} for n, w in stubs]
         value["versions"] = versions
         text = dump(value) + "\n"
         with open(os.path.join(args.out, name), "w") as f:

@@ -19,6 +19,7 @@
 #include "io/npy.hpp"
 #include "io/png.hpp"
 #include "official_fixtures.hpp"
+#include "official_scenes.hpp"
 #include "ops/ray_bundle.hpp"
 #include "ops/rays.hpp"
 #include "support/data_fixtures.hpp"
@@ -29,42 +30,11 @@
 using namespace mipnerf;
 using official::flat;
 using official::kU;
+using official::norm1_at;
+using official::norm2_at;
+using official::run_rays;
 
 namespace {
-
-struct RayArrays {
-  std::vector<float> origins, directions, viewdirs, radii;
-};
-
-// Our rays for every pixel of every camera, camera-major then row-major (the official [C][H][W] order).
-RayArrays run_rays(const std::vector<Camera>& cameras, const RaysOptions& options) {
-  auto& ctx = test::test_context();
-  std::vector<uint32_t> camera_ids, pixel_ids;
-  for (size_t c = 0; c < cameras.size(); ++c) {
-    for (uint32_t p = 0; p < cameras[c].width_px * cameras[c].height_px; ++p) {
-      camera_ids.push_back(static_cast<uint32_t>(c));
-      pixel_ids.push_back(p);
-    }
-  }
-  const size_t n = camera_ids.size();
-  auto packed = official::upload(ctx, pack_cameras(cameras), "cameras [C][24]");
-  auto ids = official::upload(ctx, camera_ids, "camera_ids [R]");
-  auto pixels = official::upload(ctx, pixel_ids, "pixel_ids [R]");
-  ops::RayBundle rays(ctx, n);
-  ops::Rays(ctx, options).fwd({packed, ids, pixels, n}, rays);
-  return {rays.origins.download(ctx), rays.directions.download(ctx), rays.viewdirs.download(ctx),
-          rays.radii.download(ctx)};
-}
-
-// An L1 norm of the 3-vector holding element i of a [..][3] array.
-double norm1_at(const std::vector<double>& v, size_t i) {
-  const size_t base = 3 * (i / 3);
-  return std::abs(v[base]) + std::abs(v[base + 1]) + std::abs(v[base + 2]);
-}
-double norm2_at(const std::vector<double>& v, size_t i) {
-  const size_t base = 3 * (i / 3);
-  return std::sqrt(v[base] * v[base] + v[base + 1] * v[base + 1] + v[base + 2] * v[base + 2]);
-}
 
 // The camera-to-world matrices of `cameras` (or `poses`), [C][3][4] flat.
 std::vector<double> poses_of(const std::vector<Camera>& cameras) {

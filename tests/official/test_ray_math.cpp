@@ -1,15 +1,14 @@
 // Our ray-math kernels (host/ops) against the official mip.py functions' own outputs (tests/official/fixtures,
 // written by make_vectors.py from google/mipnerf): Gaussians (cast_rays), IPE and PE, stratified sampling,
-// resampling and volume rendering (also with the LLFF density noise). The official values are float64 evaluations on
-// float32 inputs, so each bound below is our float32 error alone, derived in the comment beside it. Random draws: the
-// official functions were given our Philox draws (the fixture's xi); each test first checks that our RNG gives exactly
-// those draws for the fixture's key.
+// resampling and volume rendering (the density noise: test_model.cpp, from the official model's own noisy output). The
+// official values are float64 evaluations on float32 inputs, so each bound below is our float32 error alone, derived
+// in the comment beside it. Random draws: the official functions were given our Philox draws (the fixture's xi); each
+// test first checks that our RNG gives exactly those draws for the fixture's key.
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "core/rng.hpp"
@@ -390,111 +389,4 @@ TEST_CASE("volumetric_rendering: our composite, accumulation, distance and weigh
       return (rel + 2 * N * kU) * std::abs(distance[r]);
     });
   }
-}
-
-// The official MipNerfModel with density_noise (models.py, configs/llff.gin: 1), written out here in double: while
-// randomized, `raw_density += density_noise * random.normal(key, raw_density.shape)`, then rgb = sigmoid(raw_rgb)·(1 +
-// 2·rgb_padding) − rgb_padding and density = softplus(raw_density + density_bias), rendered by volumetric_rendering
-// (mip.py). The normal draws are ours, fixed (jax's own cannot be reproduced): rng_normal4 of the level's key, as the
-// fused kernel keys them. Our fused render_raw_fwd with DENSITY_NOISE = 1 must give the same weights, acc and colour.
-TEST_CASE(
-    "density noise: our fused render with noise 1 is models.py's noisy raw density through softplus and "
-    "volumetric_rendering, given the same draws") {
-  auto& ctx = test::test_context();
-  const size_t R = 64, N = 24;
-  const double density_noise = 1.0, density_bias = -1.0, rgb_padding = 0.001;
-  std::mt19937 rng(424242);
-  std::normal_distribution<double> normal(0.0, 2.0);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<double> raw_density(R * N), raw_rgb(3 * R * N), t(R * (N + 1)), dirs(3 * R);
-  for (auto& x : raw_density) x = static_cast<float>(normal(rng));
-  for (auto& x : raw_rgb) x = static_cast<float>(normal(rng));
-  for (size_t r = 0; r < R; ++r) {
-    for (size_t k = 0; k <= N; ++k)
-      t[r * (N + 1) + k] = static_cast<float>(2.0 + 4.0 * (k + 0.5 * unit(rng)) / (N + 1));
-    for (int a = 0; a < 3; ++a) dirs[3 * r + a] = static_cast<float>(a == 2 ? -1.0 : unit(rng) - 0.5);
-  }
-  // Our draws for a fine level (1) of a chunk starting at batch ray 512: sample i of ray r takes draw i % 4 of
-  // rng_normal4(seed, 512 + r, step, 1·2^24 + i/4, RNG_STREAM_DENSITY_NOISE) (kernels/render.cl).
-  const DensityNoiseKey key{{20200823, 41, 512}, 1};
-  std::vector<double> z(R * N);
-  for (size_t r = 0; r < R; ++r) {
-    for (size_t i = 0; i < N; ++i) {
-      z[r * N + i] = rng_normal4(key.rng.seed, key.rng.first_ray + static_cast<uint32_t>(r), key.rng.step,
-                                 (key.level << 24) + static_cast<uint32_t>(i / 4), rng_stream_density_noise)[i % 4];
-    }
-  }
-
-  // models.py and mip.py, literally (float64 here, as the fixtures are).
-  std::vector<double> weights(R * N), acc(R, 0.0), comp(3 * R, 0.0), tau_after(R * N), eps_density(R * N);
-  const auto sigmoid = [](double x) { return 1.0 / (1.0 + std::exp(-x)); };
-  for (size_t r = 0; r < R; ++r) {
-    const double norm =
-        std::sqrt(dirs[3 * r] * dirs[3 * r] + dirs[3 * r + 1] * dirs[3 * r + 1] + dirs[3 * r + 2] * dirs[3 * r + 2]);
-    double cumsum = 0;  // Σ_{j<i} density_delta_j
-    for (size_t i = 0; i < N; ++i) {
-      const size_t at = r * N + i;
-      const double noisy = raw_density[at] + density_noise * z[at];
-      const double density = std::log1p(std::exp(noisy + density_bias));  // jax.nn.softplus
-      const double delta = (t[r * (N + 1) + i + 1] - t[r * (N + 1) + i]) * norm;
-      const double density_delta = density * delta;
-      const double alpha = 1 - std::exp(-density_delta);
-      weights[at] = alpha * std::exp(-cumsum);
-      cumsum += density_delta;
-      tau_after[at] = cumsum;
-      acc[r] += weights[at];
-      for (int c = 0; c < 3; ++c) {
-        comp[3 * r + c] += weights[at] * (sigmoid(raw_rgb[3 * at + c]) * (1 + 2 * rgb_padding) - rgb_padding);
-      }
-      // Our float32 density's relative error, for the bound below: the draw (within 36u·|z| of this one, tests/ops),
-      // the sums raw + z and + bias (u each, times softplus'/softplus ≤ 1) and softplus itself (12u).
-      eps_density[at] = (36 * kU * std::abs(z[at]) + kU * std::abs(noisy) + kU * std::abs(noisy + density_bias)) *
-                            sigmoid(noisy + density_bias) / density +
-                        12 * kU;
-    }
-  }
-
-  auto rays = make_rays(ctx, R, {}, dirs, {});
-  auto raw_rgb_dev = official::upload(ctx, official::as_float(raw_rgb), "raw_rgb [R][N][3]");
-  auto raw_density_dev = official::upload(ctx, official::as_float(raw_density), "raw_density [R][N]");
-  auto t_dev = official::upload(ctx, official::as_float(t), "t_edges [R][N+1]");
-  ocl::DeviceArray<float> comp_dev(ctx, R * 3, "comp_rgb [R][3]"), acc_dev(ctx, R, "acc [R]"),
-      distance_dev(ctx, R, "distance [R]"), weights_dev(ctx, R * N, "weights [R][N]");
-  RenderOptions options;
-  options.background = Background::black;  // llff.gin: white_bkgd = False
-  options.density_noise = static_cast<float>(density_noise);
-  ops::Render(ctx, options)
-      .raw_fwd({raw_rgb_dev, raw_density_dev, t_dev, rays, R, N}, {comp_dev, acc_dev, distance_dev, weights_dev}, key);
-
-  // Weight i: the volumetric_rendering bound of the test above, (N + 16)·u·(1 + τ_{i+1}), plus the densities' errors
-  // ε_j: ∂ln w_i/∂ln σ_i = s_i·e^{−s_i}/α_i ≤ 1 and ∂ln w_i/∂ln σ_j = −s_j for j < i, so ε_i + Σ_{j<i} ε_j·s_j.
-  std::vector<double> weight_bound(R * N), ray_weight_bound(R, 0.0);
-  for (size_t r = 0; r < R; ++r) {
-    double earlier = 0, tau_before = 0;  // Σ_{j<i} ε_j·s_j, Σ_{j<i} s_j
-    for (size_t i = 0; i < N; ++i) {
-      const size_t at = r * N + i;
-      const double s = tau_after[at] - tau_before;
-      weight_bound[at] =
-          ((static_cast<double>(N) + 16) * kU * (1 + tau_after[at]) + eps_density[at] + earlier) * weights[at];
-      earlier += eps_density[at] * s;
-      tau_before = tau_after[at];
-      ray_weight_bound[r] += weight_bound[at];
-    }
-  }
-  OFFICIAL_CHECK_AGREES("noisy weights", weights_dev.download(ctx), weights,
-                        [&](size_t i) { return weight_bound[i] + 1e-30; });
-  OFFICIAL_CHECK_AGREES("noisy acc", acc_dev.download(ctx), acc,
-                        [&](size_t r) { return ray_weight_bound[r] + N * kU * acc[r] + 1e-30; });
-  // comp = Σ w·c with |c| ≤ 1: the weights' bounds, the colours' float32 error (the widened stable sigmoid: ≤ 16u) and
-  // 2N·u of the sums.
-  OFFICIAL_CHECK_AGREES("noisy comp_rgb", comp_dev.download(ctx), comp, [&](size_t i) {
-    return ray_weight_bound[i / 3] + 16 * kU * acc[i / 3] + 2 * N * kU * acc[i / 3] + 1e-30;
-  });
-  // Without the noise (the same kernel, DENSITY_NOISE off) the weights are not the official noisy ones.
-  RenderOptions quiet = options;
-  quiet.density_noise = 0.0f;
-  ops::Render(ctx, quiet)
-      .raw_fwd({raw_rgb_dev, raw_density_dev, t_dev, rays, R, N}, {comp_dev, acc_dev, distance_dev, weights_dev}, key);
-  OFFICIAL_CHECK_DISAGREES("weights without the noise", weights_dev.download(ctx), weights, 100.0,
-                           [&](size_t i) { return weight_bound[i] + 1e-30; });
 }
