@@ -402,7 +402,8 @@ TEST_CASE("graph: every training variant's step equals the CPU reference (the wh
   const std::string multiscale = (std::filesystem::path(test::small_scene()) / "multiscale").string();
   std::set<graph::Encoding> encodings;
   std::set<graph::Sampling> samplings;
-  for (const auto& [variant, bundle] : registry) {
+  for (const auto& entry : registry) {
+    const std::string& variant = entry.first;  // clang cannot capture a structured binding in doctest's CAPTURE
     CAPTURE(variant);
     const auto spec = train::make_graph_spec(train::resolve_config("tiny", variant, {}), true);
     INFO(spec.describe());
