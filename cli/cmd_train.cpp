@@ -14,7 +14,9 @@
 #include "eval/report.hpp"
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"
+#include "io/checkpoint_file.hpp"
 #include "gemm/gemm_tuning.hpp"
+#include "train/checkpoint.hpp"
 #include "train/config_file.hpp"
 #include "train/scene_effects.hpp"
 #include "interrupt.hpp"
@@ -105,15 +107,78 @@ void write_profile(const ocl::StageProfile& profile, const train::TrainConfig& c
   std::cerr << "mipnerf-cl: where a step's time goes (also in " << path << "):\n\n" << table << "\n";
 }
 
-void run_train(TrainArgs& args, CLI::App& cmd) {
+// The run OUT holds: the header of its newest checkpoint that reads (the trainer reports and sets aside one that does
+// not verify), or nothing when it has none.
+std::optional<train::CheckpointHeader> run_in(const std::string& out) {
+  const auto found = train::list_checkpoints((fs::path(out) / "checkpoints").string());
+  for (auto it = found.rbegin(); it != found.rend(); ++it) {
+    try {
+      return train::read_checkpoint_header(io::read_checkpoint_file(it->second), it->second);
+    } catch (const Error&) {
+      continue;
+    }
+  }
+  return std::nullopt;
+}
+
+// What to train and on which data. A new run: the preset, the variant, the settings given and the effects the data
+// calls for. `--resume` without --preset or --variant: the run as its checkpoint recorded it (its settings, and its
+// data unless --data is given, which the trainer then checks by content), with the settings given on top (more
+// steps, say); nothing is generated, not even the built-in scene.
+struct WhatToTrain {
+  train::TrainConfig config;
+  std::string data_path;
+  std::optional<train::CheckpointHeader> previous;  // the run continued, when there is one
+};
+
+WhatToTrain what_to_train(const TrainArgs& args, CLI::App& cmd) {
   const auto settings = explicit_settings(args, cmd);
+  WhatToTrain what;
+  if (args.resume) what.previous = run_in(args.out);
+  const bool bundle_given = cmd.get_option("--preset")->count() > 0 || cmd.get_option("--variant")->count() > 0;
+  if (args.resume && !what.previous && args.data.empty()) {
+    throw Error("--resume: " + args.out + " holds no checkpoint to continue (checkpoints/ckpt_*.mnck of `mipnerf-cl "
+                "train --out`); check the folder, or give --data to start a run in it");
+  }
+  if (what.previous && !bundle_given) {
+    what.config = what.previous->config;
+    for (const auto& [name, value] : settings) train::set_value(what.config, name, value);
+    train::validate(what.config);
+    what.data_path = args.data.empty() ? what.previous->record.data_path : args.data;
+    if (what.data_path.empty()) {
+      throw Error("--resume: the checkpoints in " + args.out + " do not record their data (written by an older "
+                  "mipnerf-cl): give --data");
+    }
+    std::error_code ec;
+    if (args.data.empty() && !fs::exists(what.data_path, ec)) {
+      throw Error("--resume: " + args.out + " was trained on " + what.data_path + ", which is no longer there: give "
+                  "--data with the same images (they are checked by content)");
+    }
+    return what;
+  }
   const train::TrainConfig unscened = train::resolve_config(args.preset, args.variant, settings);
-  const std::string data_path = args.data.empty() ? default_scene(args.out) : args.data;
+  what.data_path = args.data.empty() ? default_scene(args.out) : args.data;
   // The effects the data calls for, where no setting was given (train/scene_effects.hpp).
   std::string scene_line;
-  const auto with_scene = train::with_scene_effects(train::scene_effects(data_path, unscened.factor), settings, scene_line);
-  train::TrainConfig config = train::resolve_config(args.preset, args.variant, with_scene);
-  config.scene_effects = scene_line;
+  const auto with_scene =
+      train::with_scene_effects(train::scene_effects(what.data_path, unscened.factor), settings, scene_line);
+  what.config = train::resolve_config(args.preset, args.variant, with_scene);
+  what.config.scene_effects = scene_line;
+  return what;
+}
+
+void run_train(TrainArgs& args, CLI::App& cmd) {
+  const WhatToTrain what = what_to_train(args, cmd);
+  const train::TrainConfig& config = what.config;
+  const std::string& data_path = what.data_path;
+  if (what.previous && what.previous->record.step >= config.steps) {
+    if (parallel::world().is_root()) {
+      std::cerr << "mipnerf-cl: " << args.out << " is already at step " << what.previous->record.step << " of "
+                << config.steps << ": nothing to train (give --steps N to train further); its scores are in "
+                << (fs::path(args.out) / "summary.json").string() << "\n";
+    }
+    return;
+  }
   auto ctx = open_context(args.profile);
   const std::string device = ctx->device_info().name;
   ocl::StageProfiler profiler;
@@ -180,7 +245,9 @@ void register_train(CLI::App& app) {
                   "Model variant, a row of the paper's tables: " + enum_choices<train::Variant>() +
                       " (recorded in OUT/config.json as variant_bundle)")
       ->capture_default_str();
-  cmd->add_flag("--resume", args->resume, "Continue from the newest checkpoint in OUT/checkpoints");
+  cmd->add_flag("--resume", args->resume,
+                "Continue the run in --out from its newest checkpoint: its own data and settings (the settings given "
+                "change it, e.g. --steps); with --data, that data must hold the same images and cameras");
   cmd->add_flag("--profile", args->profile,
                 "Time every step after the first by stage (OpenCL profiling events, host timers); print the table "
                 "and write OUT/profile.md. Profiled steps wait for the device at their end, so they run slower");

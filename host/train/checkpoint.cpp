@@ -30,6 +30,7 @@ constexpr const char* config = "config";
 constexpr const char* multiscale_data = "multiscale_data";
 constexpr const char* device = "device";
 constexpr const char* data = "data";
+constexpr const char* data_fingerprint = "data_fingerprint";
 constexpr const char* adam_steps = "adam_steps";  // one per network, in order
 }  // namespace key
 
@@ -196,6 +197,7 @@ CheckpointHeader read_checkpoint_header(const io::CheckpointFile& c, const std::
   h.record.multiscale_data = read.flag(key::multiscale_data);
   h.record.device = read.text(key::device);
   h.record.data_path = read.text(key::data);
+  h.record.data_fingerprint = read.text(key::data_fingerprint);
   h.config = config_from_json(read.required(key::config), where);
   // Only --resume needs the Adam steps (restore_training_checkpoint checks there is one per network).
   if (const nlohmann::json* steps = read.find(key::adam_steps)) {
@@ -217,6 +219,7 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
   c.header[key::multiscale_data] = record.multiscale_data;
   c.header[key::device] = record.device;
   c.header[key::data] = record.data_path;
+  c.header[key::data_fingerprint] = record.data_fingerprint;
   nlohmann::json adam_steps = nlohmann::json::array();
   for (size_t i = 0; i < networks.size(); ++i) {
     c.add(tensor_name(i, "params"), networks[i]->download_params());
@@ -230,10 +233,19 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
 }
 
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
+                                             const TrainingData& data,
                                              std::vector<std::unique_ptr<mlp::Network>>& networks,
                                              std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log) {
   const io::CheckpointFile c = io::read_checkpoint_file(path);
   const CheckpointHeader header = read_checkpoint_header(c, path);
+  // The same training data, by content, before anything else is said (older checkpoints have no fingerprint: their
+  // data is taken on trust).
+  const CheckpointRecord& saved = header.record;
+  if (!saved.data_fingerprint.empty() && saved.data_fingerprint != data.fingerprint) {
+    throw Error("--resume: " + data.path + " is not the data this run trained on until step " +
+                std::to_string(saved.step) + " (" + (saved.data_path.empty() ? "recorded in " + path : saved.data_path) +
+                "): its training images or cameras differ; resume with the run's own data, or train into a new --out");
+  }
   check_resumable(header.config, config, log);
   if (header.adam_steps.size() != networks.size()) {
     throw Error(path + ": corrupt training checkpoint: " + std::to_string(header.adam_steps.size()) +

@@ -49,6 +49,7 @@ struct CheckpointRecord {
   bool multiscale_data = false;  // the training split held several scales (decides the graph spec's area loss)
   std::string device;            // the device that trained it
   std::string data_path;         // the training data's folder or file (absolute); empty in older checkpoints
+  std::string data_fingerprint;  // data::fingerprint of the training split; empty in older checkpoints
 };
 
 // What a training checkpoint's header holds, read without a device: the record, the configuration it was trained
@@ -68,10 +69,18 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
                               const std::vector<std::unique_ptr<mlp::Network>>& networks,
                               const std::vector<std::unique_ptr<mlp::Adam>>& optimisers);
 
-// Restores networks and optimisers from `path` exactly, and returns its record. The checkpoint's configuration
-// must equal `config` except for execution settings and `steps` (logged as a warning through `log`); otherwise
-// throws mipnerf::Error naming the differing settings.
+// The data a run resumes on: its path (for messages) and data::fingerprint of its training split.
+struct TrainingData {
+  std::string path;
+  std::string fingerprint;
+};
+
+// Restores networks and optimisers from `path` exactly, and returns its record. The checkpoint's data must be `data`
+// by content (its fingerprint, where the checkpoint records one) and its configuration must equal `config` except
+// for execution settings and `steps` (logged as a warning through `log`); otherwise throws mipnerf::Error naming the
+// data, or the differing settings.
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
+                                             const TrainingData& data,
                                              std::vector<std::unique_ptr<mlp::Network>>& networks,
                                              std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log);
 

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "data/device_dataset.hpp"
+#include "data/fingerprint.hpp"
 #include "parallel/world.hpp"
 #include "graph/graph.hpp"
 #include "io/atomic_file.hpp"
@@ -71,6 +72,7 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   options.log = log;
   dataset_ = data::load_dataset(data_path, options);
   const data::Split& train = dataset_.split("train");
+  data_fingerprint_ = data::fingerprint(train);
   const bool multiscale_data = train.num_scales() > 1;
   spec_ = make_graph_spec(config_, multiscale_data);
   // The plan comes before the first allocation on the device: what does not fit stops here, naming the setting.
@@ -157,6 +159,7 @@ std::string Trainer::save_checkpoint() {
   record.device = ctx_->device_info().name;
   // Where the training data was (absolute), so render and eval find the scene without being told.
   record.data_path = fs::absolute(dataset_.path).lexically_normal().string();
+  record.data_fingerprint = data_fingerprint_;
   try {
     save_training_checkpoint(path, config_, record, networks_, optimisers_);
   } catch (const Error& e) {
@@ -174,7 +177,8 @@ std::string Trainer::save_checkpoint() {
 
 void Trainer::restore(const std::string& path) {
   LogFn log = [this](LogLevel level, const std::string& message) { ctx_->log(level, message); };
-  const CheckpointRecord record = restore_training_checkpoint(path, config_, networks_, optimisers_, log);
+  const CheckpointRecord record =
+      restore_training_checkpoint(path, config_, {dataset_.path, data_fingerprint_}, networks_, optimisers_, log);
   step_ = record.step;
   seconds_before_ = record.train_seconds;
   ctx_->log(LogLevel::info, "resuming from " + path + " at step " + std::to_string(step_));

@@ -109,6 +109,7 @@ class Trainer {
   ocl::Context* ctx_;
   TrainConfig config_;
   std::string out_dir_;
+  std::string data_fingerprint_;  // data::fingerprint of the training split, recorded in every checkpoint
   data::Dataset dataset_;
   graph::GraphSpec spec_;
   MemoryPlan memory_;

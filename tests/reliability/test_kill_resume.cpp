@@ -182,3 +182,99 @@ TEST_CASE("reliability: a file-size limit hit while checkpointing stops the run 
   CHECK(test::same_bits(after.tensor("network0.params", "after"), before.tensor("network0.params", "before")));
   fs::remove_all(root);
 }
+
+namespace {
+
+// Output into `log`, no pauses in writes.
+test::ChildOptions logged_to(const fs::path& log) {
+  test::ChildOptions options;
+  options.output_file = log.string();
+  return options;
+}
+
+// Runs `argv` (mipnerf-cl and its arguments, on the test device) to its end; its exit code, its output in `log`.
+int run_to_end(std::vector<std::string> argv, const fs::path& log) {
+  test::add_test_device(argv);
+  test::ChildProcess child(argv, logged_to(log));
+  child.wait();
+  return child.exit_code();
+}
+
+// Starts `argv` and kills it (SIGKILL) once its first checkpoint is in `checkpoints`: a run interrupted for good, as
+// a closed laptop would leave it. False when it ended before a checkpoint appeared (nothing was interrupted).
+bool kill_after_first_checkpoint(std::vector<std::string> argv, const fs::path& checkpoints, const fs::path& log) {
+  test::add_test_device(argv);
+  test::ChildProcess child(argv, logged_to(log));
+  const auto give_up = Clock::now() + std::chrono::seconds(120);
+  while (train::list_checkpoints(checkpoints.string()).empty() && !child.finished() && Clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return child.kill_now();
+}
+
+void check_same_final_model(const fs::path& a_run, const fs::path& b_run, int steps) {
+  const auto a = io::read_checkpoint_file(train::checkpoint_path((a_run / "checkpoints").string(), steps));
+  const auto b = io::read_checkpoint_file(train::checkpoint_path((b_run / "checkpoints").string(), steps));
+  for (const char* tensor : {"network0.params", "network0.adam_m", "network0.adam_v"}) {
+    CHECK_MESSAGE(test::same_bits(a.tensor(tensor, "uninterrupted"), b.tensor(tensor, "resumed")), tensor);
+  }
+  CHECK(a.header.at("adam_steps") == b.header.at("adam_steps"));
+}
+
+}  // namespace
+
+// `train --out RUN --resume` and nothing else continues the run RUN holds: its data and settings come from its
+// checkpoint (no --data: the built-in scene is not generated again; an LLFF capture keeps NDC, cylinders, black),
+// and the result is bit-equal to an uninterrupted run's. Given other data, it refuses in one line; on a finished run
+// it says so.
+TEST_CASE("reliability: train --out RUN --resume alone continues a killed run bit for bit, procedural and LLFF") {
+  const fs::path root = test::fresh_run_dir("resume-out");
+  const std::string cli = MIPNERF_CLI_PATH;
+  const std::vector<std::string> small = {"--preset", "tiny", "--steps", "24", "--batch_size", "64",
+                                          "--checkpoint_every", "4", "--log_every", "1", "--val_views", "1"};
+  auto train = [&](const fs::path& out, std::vector<std::string> data) {
+    std::vector<std::string> argv = {cli, "train", "--out", out.string()};
+    argv.insert(argv.end(), data.begin(), data.end());
+    argv.insert(argv.end(), small.begin(), small.end());
+    return argv;
+  };
+  // A forward-facing LLFF capture (NDC rays, cylinders, a black background, density noise), made by make-scene.
+  const fs::path llff = root / "llff";
+  REQUIRE(run_to_end({cli, "make-scene", llff.string(), "--forward-facing", "--size", "48", "--samples", "1"},
+                     root / "make-scene.log") == 0);
+  struct Case {
+    const char* name;
+    std::vector<std::string> data;  // empty: the built-in procedural scene, made in OUT/scene
+  };
+  for (const Case& c : {Case{"procedural", {}}, Case{"llff", {"--data", llff.string(), "--factor", "4"}}}) {
+    CAPTURE(c.name);
+    const fs::path reference = root / (std::string(c.name) + "-reference"), killed = root / (std::string(c.name) + "-killed");
+    REQUIRE_MESSAGE(run_to_end(train(reference, c.data), root / "reference.log") == 0,
+                    test::read_text(root / "reference.log"));
+    REQUIRE(kill_after_first_checkpoint(train(killed, c.data), killed / "checkpoints", root / "killed.log"));
+    const auto scene_files_before = fs::exists(killed / "scene");
+    // The resume names nothing but the run.
+    const fs::path resumed_log = root / (std::string(c.name) + "-resumed.log");
+    REQUIRE_MESSAGE(run_to_end({cli, "train", "--out", killed.string(), "--resume"}, resumed_log) == 0,
+                    test::read_text(resumed_log));
+    const std::string resumed = test::read_text(resumed_log);
+    CHECK(resumed.find("generating the built-in procedural scene") == std::string::npos);
+    CHECK(fs::exists(killed / "scene") == scene_files_before);  // nothing new in the run folder
+    CHECK(resumed.find("trained 24 steps") != std::string::npos);
+    check_same_final_model(reference, killed, 24);
+    // Finished: it says so, and trains nothing.
+    const fs::path again_log = root / (std::string(c.name) + "-again.log");
+    REQUIRE(run_to_end({cli, "train", "--out", killed.string(), "--resume"}, again_log) == 0);
+    CHECK(test::read_text(again_log).find("is already at step 24 of 24: nothing to train") != std::string::npos);
+  }
+  // Other data (by content, whatever its name): refused in one line, the run left as it was.
+  const fs::path refused_log = root / "refused.log";
+  const std::vector<std::string> other = {cli,      "train", "--out", (root / "procedural-killed").string(), "--resume",
+                                          "--data", llff.string(), "--factor", "4", "--steps", "30"};
+  CHECK(run_to_end(other, refused_log) == 1);
+  const std::string refused = test::read_text(refused_log);
+  CHECK(refused.find("is not the data this run trained on until step 24") != std::string::npos);
+  CHECK(std::count(refused.begin(), refused.end(), '\n') == 1);
+  CHECK(train::list_checkpoints((root / "procedural-killed/checkpoints").string()).back().first == 24);
+  fs::remove_all(root);
+}

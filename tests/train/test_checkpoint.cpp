@@ -216,8 +216,10 @@ TEST_CASE("checkpoint: a version-1 file written byte by byte loads for rendering
   optimisers.push_back(std::make_unique<mlp::Adam>(ctx, n));
   std::vector<std::string> warnings;
   const LogFn log = [&](LogLevel, const std::string& message) { warnings.push_back(message); };
+  // A version-1 checkpoint records no data fingerprint: any data is taken on trust.
+  const train::TrainingData any_data{"/elsewhere/scene", "fnv1a64:0123456789abcdef"};
   const auto record = train::restore_training_checkpoint(path, small_config({{"steps", "900"}, {"chunk_rays", "64"}}),
-                                                         networks, optimisers, log);
+                                                         any_data, networks, optimisers, log);
   CHECK(record.step == 7);
   CHECK(record.device == "the test device");
   REQUIRE(warnings.size() == 1);  // a longer run is allowed, with a word about the schedule; chunk_rays is silent
@@ -228,7 +230,7 @@ TEST_CASE("checkpoint: a version-1 file written byte by byte loads for rendering
   CHECK(same_bits(state.m, adam_m));
   CHECK(same_bits(state.v, adam_v));
   CHECK_THROWS_WITH_AS(
-      train::restore_training_checkpoint(path, small_config({{"lr_init", "1e-3"}}), networks, optimisers, log),
+      train::restore_training_checkpoint(path, small_config({{"lr_init", "1e-3"}}), any_data, networks, optimisers, log),
       doctest::Contains("lr_init"), Error);
   fs::remove_all(dir);
 }
@@ -238,7 +240,7 @@ TEST_CASE("checkpoint: save records the configuration as a JSON object beside th
   const auto dir = fresh_dir("ckpt-save");
   const auto config = small_config();
   const graph::GraphSpec spec = train::make_graph_spec(config, false);
-  const auto networks = train::make_networks(ctx, spec, gemm::GemmBackend::automatic);
+  auto networks = train::make_networks(ctx, spec, gemm::GemmBackend::automatic);
   std::vector<std::unique_ptr<mlp::Adam>> optimisers;
   optimisers.push_back(std::make_unique<mlp::Adam>(ctx, networks[0]->parameter_count()));
   train::CheckpointRecord record;
@@ -247,14 +249,25 @@ TEST_CASE("checkpoint: save records the configuration as a JSON object beside th
   record.multiscale_data = true;
   record.device = "dev";
   record.data_path = "/data/scene";
+  record.data_fingerprint = "fnv1a64:00000000deadbeef";
   const std::string path = train::checkpoint_path(dir.string(), 12);
   train::save_training_checkpoint(path, config, record, networks, optimisers);
 
   const auto file = io::read_checkpoint_file(path);
   std::vector<std::string> keys;
   for (const auto& item : file.header.items()) keys.push_back(item.key());
-  CHECK(keys == std::vector<std::string>{"adam_steps", "config", "data", "device", "format", "multiscale_data", "step",
-                                         "train_seconds", "version"});
+  CHECK(keys == std::vector<std::string>{"adam_steps", "config", "data", "data_fingerprint", "device", "format",
+                                         "multiscale_data", "step", "train_seconds", "version"});
+  CHECK(file.header["data_fingerprint"] == "fnv1a64:00000000deadbeef");
+  // Restoring onto other data (by content) is refused first, naming both; onto the same, it restores.
+  CHECK_THROWS_WITH_AS(train::restore_training_checkpoint(path, config, {"/data/other", "fnv1a64:0000000000000001"},
+                                                          networks, optimisers, {}),
+                       doctest::Contains("--resume: /data/other is not the data this run trained on until step 12 "
+                                         "(/data/scene): its training images or cameras differ"),
+                       Error);
+  CHECK(train::restore_training_checkpoint(path, config, {"/data/moved", "fnv1a64:00000000deadbeef"}, networks,
+                                           optimisers, {})
+            .step == 12);
   CHECK(file.header["format"] == "mipnerf-cl checkpoint");
   CHECK(file.header["version"] == 1);
   REQUIRE(file.header["config"].is_object());
