@@ -212,6 +212,25 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
     report_trained(result, device);
     if (args.profile) write_profile(profiler.profile(), config, device, args.out);
   };
+  // The val scores during training (val_every): their own progress line (a score of full-size real photos takes
+  // a minute on a CPU), kept out of the training line's ETA.
+  std::optional<Progress> periodic_val;
+  run.on_periodic_val_start = [&](int64_t step, size_t images) {
+    if (!root) return;
+    periodic_val.emplace("score val at step " + std::to_string(step) + " (" + std::to_string(images) +
+                             (images == 1 ? " image)" : " images)"), 1);
+    periodic_val->begin_at(0);  // counted in rays from 0
+  };
+  run.periodic_val_progress = [&](size_t done, size_t total) {
+    if (!periodic_val) return;
+    periodic_val->set_total(static_cast<int64_t>(total));
+    periodic_val->update(static_cast<int64_t>(done));
+  };
+  run.on_periodic_val_end = [&](double seconds) {
+    if (periodic_val) periodic_val->finish();
+    periodic_val.reset();
+    if (train_progress) train_progress->exclude_from_rate(seconds);
+  };
   run.on_val_start = [&](size_t images) { val_progress.emplace("render val", static_cast<int64_t>(images)); };
   run.val_progress = [&](size_t done, size_t) { val_progress->update(static_cast<int64_t>(done)); };
   const eval::TrainAndEvaluateResult result = eval::train_and_evaluate(*ctx, config, run);

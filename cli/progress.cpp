@@ -50,7 +50,8 @@ void Progress::draw(int64_t done, const std::string& detail, bool force) {
   const double fraction = total_ > 0 ? static_cast<double>(done) / static_cast<double>(total_) : 1.0;
   const double elapsed = elapsed_seconds();
   const int64_t done_here = done - std::max<int64_t>(start_done_, 0);
-  const double eta = done_here > 0 ? elapsed / static_cast<double>(done_here) * static_cast<double>(total_ - done) : -1;
+  const double working = std::max(0.0, elapsed - excluded_seconds_);
+  const double eta = done_here > 0 ? working / static_cast<double>(done_here) * static_cast<double>(total_ - done) : -1;
   constexpr int kBarWidth = 24;
   const int filled = static_cast<int>(std::round(std::min(1.0, std::max(0.0, fraction)) * kBarWidth));
   std::string bar = std::string(static_cast<size_t>(filled), '#') + std::string(static_cast<size_t>(kBarWidth - filled), '.');

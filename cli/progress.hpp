@@ -26,6 +26,11 @@ class Progress {
   void finish_at(int64_t done, const std::string& detail = {});
 
   double elapsed_seconds() const;
+  // The units already done when this run started (0 for work counted from its start; by default the first update
+  // is taken as one unit past the start, as a resumed run reports its first step).
+  void begin_at(int64_t done) { start_done_ = done; }
+  // Keeps `seconds` (other work meanwhile: scoring val views between steps) out of the rate the ETA is drawn from.
+  void exclude_from_rate(double seconds) { excluded_seconds_ += seconds; }
   // Sets the number of units when it is known only once the work starts (a job that counts its own rays).
   void set_total(int64_t total) { total_ = total; }
   // A job's progress callback (eval::RenderJob::progress): each call sets the total and the units done.
@@ -42,6 +47,7 @@ class Progress {
   std::string what_;
   int64_t total_;
   int64_t start_done_ = -1;  // units already done when this run started (resume)
+  double excluded_seconds_ = 0.0;  // exclude_from_rate
   bool tty_;
   bool finished_ = false;
   std::chrono::steady_clock::time_point start_;

@@ -162,24 +162,28 @@ std::vector<Camera> camera_path_from_json(const nlohmann::json& root, const std:
   return cameras;
 }
 
+io::Json camera_frame_json(const Camera& c) {
+  io::Json frame = io::Json::object();
+  frame["fl_x"] = c.focal_x_px;
+  frame["fl_y"] = c.focal_y_px;
+  frame["cx"] = c.center_x_px;
+  frame["cy"] = c.center_y_px;
+  frame["w"] = c.width_px;
+  frame["h"] = c.height_px;
+  frame["near"] = c.near;
+  frame["far"] = c.far;
+  frame["transform_matrix"] = pose_to_json(c.camera_to_world);
+  frame.update(lens_json(c.lens));  // a camera behind a lens renders through it again
+  return frame;
+}
+
 void write_camera_path(const std::string& path, const std::vector<Camera>& cameras,
                        const std::vector<std::string>& file_paths) {
   if (file_paths.size() != cameras.size()) throw Error(path + ": one file path per camera is needed");
   io::Json frames = io::Json::array();
   for (size_t i = 0; i < cameras.size(); ++i) {
-    const Camera& c = cameras[i];
-    io::Json frame = io::Json::object();
+    io::Json frame = camera_frame_json(cameras[i]);
     frame["file_path"] = file_paths[i];
-    frame["fl_x"] = c.focal_x_px;
-    frame["fl_y"] = c.focal_y_px;
-    frame["cx"] = c.center_x_px;
-    frame["cy"] = c.center_y_px;
-    frame["w"] = c.width_px;
-    frame["h"] = c.height_px;
-    frame["near"] = c.near;
-    frame["far"] = c.far;
-    frame["transform_matrix"] = pose_to_json(c.camera_to_world);
-    frame.update(lens_json(c.lens));  // a camera behind a lens renders through it again
     frames.push_back(std::move(frame));
   }
   io::Json root = io::Json::object();

@@ -54,7 +54,7 @@ struct CameraPathDefaults {
 
 // Reads a transforms-style camera path: {"frames": [{"transform_matrix": 4×4 or 3×4 camera-to-world}, ...]} with
 // intrinsics as the datasets give them (fl_x, fl_y, cx, cy, w, h, or camera_angle_x/y; global, or per frame
-// overriding the global ones; lens distortion refused) and optional near/far (global or per frame). No image is
+// overriding the global ones; a lens as transforms.json spells it, per frame) and optional near/far (global or per frame). No image is
 // read: the size is w × h, else the defaults' size. Poses are validated as the datasets' are. Every problem is
 // one mipnerf::Error naming the file and the frame.
 std::vector<Camera> read_camera_path(const std::string& path, const CameraPathDefaults& defaults);
@@ -64,6 +64,11 @@ std::vector<Camera> parse_camera_path(const std::string& text, const std::string
                                       const CameraPathDefaults& defaults);
 std::vector<Camera> camera_path_from_json(const nlohmann::json& root, const std::string& path,
                                           const CameraPathDefaults& defaults);
+
+// One camera as a camera path's frame, everything read_camera_path reads back: fl_x, fl_y, cx, cy, w, h, near, far,
+// transform_matrix and the lens (as transforms.json spells it; none for a pinhole). The one writer of a frame: the
+// render command's transforms.json and the viewer's cameras both go through it.
+io::Json camera_frame_json(const Camera& camera);
 
 // Writes `cameras` as a camera path read_camera_path accepts (per-frame fl_x, fl_y, cx, cy, w, h, near, far,
 // transform_matrix) with each frame's `file_path` (the image rendered from it), atomically.

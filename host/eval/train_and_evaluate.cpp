@@ -1,6 +1,7 @@
 // A training run followed by the val evaluation of the networks it trained.
 #include "eval/train_and_evaluate.hpp"
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -66,17 +67,26 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
 struct PeriodicVal {
   ocl::Context* ctx;
   std::string data_path;
+  const TrainAndEvaluateOptions* options;  // its periodic_val callbacks
   std::unique_ptr<data::Dataset> val_data;
   std::unique_ptr<ImageRenderer> renderer;
 
   train::ValScore operator()(train::Trainer& trainer) {
+    const auto started = std::chrono::steady_clock::now();
     if (!renderer) {
       val_data = std::make_unique<data::Dataset>(load_val(trainer.config(), data_path));
       renderer = val_renderer(*ctx, trainer, val_data->split("val"));
     }
     EvaluateOptions evaluate;
     evaluate.max_views = static_cast<size_t>(trainer.config().val_views);
+    evaluate.ray_progress = options->periodic_val_progress;
+    if (options->on_periodic_val_start) {
+      options->on_periodic_val_start(trainer.step(), select_views(val_data->split("val"), evaluate.max_views).size());
+    }
     const SplitScores scores = evaluate_split(*renderer, val_data->split("val"), evaluate);
+    if (options->on_periodic_val_end) {
+      options->on_periodic_val_end(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    }
     return {scores.mean_psnr, scores.mean_ssim, scores.images.size()};
   }
 };
@@ -92,7 +102,7 @@ TrainAndEvaluateResult train_and_evaluate(ocl::Context& ctx, const train::TrainC
   train::TrainHooks hooks = options.hooks;
   if (config.val_every > 0 && !hooks.score_val) {
     // One object the hook's copies share (std::function copies its target).
-    auto periodic = std::make_shared<PeriodicVal>(PeriodicVal{&ctx, options.data_path, nullptr, nullptr});
+    auto periodic = std::make_shared<PeriodicVal>(PeriodicVal{&ctx, options.data_path, &options, nullptr, nullptr});
     hooks.score_val = [periodic](train::Trainer& t) { return (*periodic)(t); };
   }
   result.train = trainer.run(hooks);

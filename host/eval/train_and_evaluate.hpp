@@ -30,6 +30,11 @@ struct TrainAndEvaluateOptions {
   std::string val_image_folder;                     // where each val render goes as NNN_scaleK.png; empty: nowhere
   std::function<void(size_t images)> on_val_start;  // val loaded, renderer built, before image 1
   std::function<void(size_t done_images, size_t total)> val_progress;  // after every val image
+  // The scores during training (config.val_every): before the first image, as rays render (over every image of the
+  // score), and after the last with the seconds it took (kept out of the training time).
+  std::function<void(int64_t step, size_t images)> on_periodic_val_start;
+  std::function<void(size_t done_rays, size_t total_rays)> periodic_val_progress;
+  std::function<void(double seconds)> on_periodic_val_end;
 };
 
 struct TrainAndEvaluateResult {

@@ -56,8 +56,10 @@ ViewFrames orbit_views(const train::TrainedModel& model, const OrbitRequest& req
 ViewFrames spiral_views(const train::TrainedModel& model, const std::string& checkpoint, const std::string& data,
                         uint32_t frames, const data::ResolutionRequest& resolution);
 
-// What a camera path may leave out, for this model: its near/far, and the requested size when the path gives none
-// (path_views and `mipnerf-cl view`'s cameras, so both render a page's camera alike).
+// What a camera path may leave out, for this model: its near/far (the run's settings, else NDC's 0..1 for a run of
+// cylinders, else the training cameras' own when the data is still there (it is loaded for them), else 2..6), and the
+// requested size when the path gives none (path_views and `mipnerf-cl view`'s cameras, so both render a page's camera
+// alike).
 data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
                                               const data::ResolutionRequest& resolution);
 

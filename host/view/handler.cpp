@@ -223,6 +223,10 @@ Response Handler::route(const std::string& method, const std::string& path, cons
   }
   if (method == "GET" && path.rfind("/run/", 0) == 0) return serve_run_file(path.substr(5));
   if (method == "POST" && path == "/api/render") return render(request.body);
+  if (method == "GET" && path == "/api/render/progress") {
+    if (!backend) return no_checkpoint_yet();
+    return json_response(backend->render_progress_json());
+  }
   if (path == "/api/path" || path == "/api/path/cancel") {
     if (!backend) return no_checkpoint_yet();
     if (method == "GET" && path == "/api/path") return json_response(backend->path_status_json());
@@ -233,7 +237,8 @@ Response Handler::route(const std::string& method, const std::string& path, cons
     }
     return text(405, "method not allowed");
   }
-  if (path == "/" || path == "/api/run" || path == "/api/cameras" || path == "/api/render") {
+  if (path == "/" || path == "/api/run" || path == "/api/cameras" || path == "/api/render" ||
+      path == "/api/render/progress") {
     return text(405, "method not allowed");
   }
   return text(404, "not found: " + path.substr(0, 200));

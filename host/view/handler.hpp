@@ -87,6 +87,9 @@ class RenderBackend {
   virtual std::string cameras_json() = 0;
   // The device and the checkpoint it renders, as JSON text.
   virtual std::string status_json() = 0;
+  // The render under way (a full-size frame on a CPU takes tens of seconds), as JSON text: {"rendering": bool,
+  // "generation", "divisor", "done_rays", "total_rays", "seconds"}; the last one's when none is.
+  virtual std::string render_progress_json() = 0;
 };
 
 struct HandlerOptions {

@@ -1,6 +1,7 @@
 // The viewer's renders: a run's newest checkpoint, the page's cameras, newest request first.
 #include "view/view_renderer.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -45,15 +46,9 @@ RenderReply answer(RenderReply::Status status, const std::string& message = "") 
   return reply;
 }
 
-nlohmann::json frame_json(const Camera& c) {
-  return {{"transform_matrix", data::pose_to_json(c.camera_to_world)},
-          {"fl_x", c.focal_x_px},
-          {"fl_y", c.focal_y_px},
-          {"cx", c.center_x_px},
-          {"cy", c.center_y_px},
-          {"w", c.width_px},
-          {"h", c.height_px}};
-}
+// A camera as the page receives it: everything the camera path reader reads back (near/far and the lens included:
+// a forward-facing run's cameras render between NDC's 0 and 1, not Blender's default 2..6).
+nlohmann::json frame_json(const Camera& c) { return data::camera_frame_json(c); }
 
 // Depth or accumulation as grey levels: depth over [near, far] (near white), accumulation as is.
 std::vector<float> grey_image(const eval::RenderedImage& image, const std::string& output, const Camera& camera) {
@@ -103,6 +98,18 @@ std::string start_cameras(const train::TrainedModel& model, const std::string& c
     }
   } catch (const Error&) {  // not an LLFF capture, or its data is gone: no spiral to offer
   }
+  // Where the page starts: a forward-facing capture from its first training camera (an orbit would look at it from
+  // behind its cameras, where it was never seen), cameras around the scene from the orbit fitted to them.
+  std::vector<data::Matrix34> poses;
+  for (const Camera& c : train) poses.push_back(c.camera_to_world);
+  if (!train.empty() && data::looks_forward(poses)) {
+    out["start"] = {{"view", "train"}, {"index", 0},
+                    {"why", "a forward-facing capture: its first training camera (an orbit would look from behind it)"}};
+  } else if (!train.empty()) {
+    out["start"] = {{"view", "orbit"}, {"why", "cameras around the scene: the orbit fitted to them"}};
+  } else {
+    out["start"] = {{"view", "orbit"}, {"why", "the training data is gone: the default orbit"}};
+  }
   data::OrbitOptions orbit;
   if (!train.empty()) {
     orbit = data::orbit_around(train);
@@ -139,6 +146,7 @@ ViewRenderer::ViewRenderer(ocl::Context& ctx, ViewRendererOptions options) : ctx
                                eval::RenderSettings{chunk_rays_, 1, 0});
   warm_up_seconds_ = renderer.warm_up();
   cameras_json_ = start_cameras(*model_, checkpoint_);
+  camera_defaults_ = eval::camera_path_defaults(*model_, {});
   step_ = model_->step;
 }
 
@@ -158,6 +166,7 @@ void ViewRenderer::reload_if_newer() {
   const std::string path = load_newest(*ctx_, options_.run_folder, model_->step, newer);
   if (!newer) return;
   model_ = std::move(newer);
+  // camera_defaults_ stay: a newer checkpoint of the run has the same data and settings.
   std::lock_guard<std::mutex> lock(info_mutex_);
   checkpoint_ = path;
   step_ = model_->step;
@@ -189,8 +198,7 @@ RenderReply ViewRenderer::render(const RenderRequest& request) {
   if (superseded()) return answer(RenderReply::Status::superseded);
   try {
     reload_if_newer();
-    const auto cameras = data::parse_camera_path(request.camera_json, "the page's camera",
-                                                 eval::camera_path_defaults(*model_, {}));
+    const auto cameras = data::parse_camera_path(request.camera_json, "the page's camera", camera_defaults_);
     if (cameras.size() != 1) return answer(RenderReply::Status::bad_request, "give exactly one frame");
     Camera camera = cameras.front();
     if (request.divisor > 1) {
@@ -203,7 +211,22 @@ RenderReply ViewRenderer::render(const RenderRequest& request) {
     }
     eval::ImageRenderer renderer(*ctx_, model_->spec, model_->network_pointers(), {camera},
                                  eval::RenderSettings{chunk_rays_, 1, 0});
-    const eval::RenderedImage image = renderer.render(0, [&](size_t, size_t) {
+    progress_generation_ = request.generation;
+    progress_divisor_ = request.divisor;
+    progress_done_ = 0;
+    progress_total_ = static_cast<size_t>(camera.width_px) * camera.height_px;
+    progress_started_ns_ = std::chrono::steady_clock::now().time_since_epoch().count();
+    progress_rendering_ = true;
+    struct Done {
+      ViewRenderer& self;
+      ~Done() {
+        self.progress_ended_ns_ = std::chrono::steady_clock::now().time_since_epoch().count();
+        self.progress_rendering_ = false;
+      }
+    } done_rendering{*this};
+    const eval::RenderedImage image = renderer.render(0, [&](size_t done, size_t total) {
+      progress_done_ = done;
+      progress_total_ = total;
       if (superseded()) throw Superseded{};
     });
     const std::vector<float> grey = request.output == "rgb" ? std::vector<float>() : grey_image(image, request.output, camera);
@@ -353,6 +376,21 @@ std::string ViewRenderer::path_status_json() {
 void ViewRenderer::cancel_path() { path_cancel_ = true; }
 
 std::string ViewRenderer::cameras_json() { return cameras_json_; }
+
+std::string ViewRenderer::render_progress_json() {
+  // The render's seconds so far (or, when none is under way, the last one's, up to its end).
+  const bool rendering = progress_rendering_.load();
+  const int64_t started = progress_started_ns_.load();
+  const int64_t until = rendering ? std::chrono::steady_clock::now().time_since_epoch().count() : progress_ended_ns_.load();
+  const double seconds = started == 0 ? 0.0 : static_cast<double>(std::max<int64_t>(0, until - started)) * 1e-9;
+  return nlohmann::json{{"rendering", rendering},
+                        {"generation", progress_generation_.load()},
+                        {"divisor", progress_divisor_.load()},
+                        {"done_rays", progress_done_.load()},
+                        {"total_rays", progress_total_.load()},
+                        {"seconds", seconds}}
+      .dump();
+}
 
 std::string ViewRenderer::status_json() {
   std::lock_guard<std::mutex> lock(info_mutex_);

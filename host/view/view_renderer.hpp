@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "cl/context.hpp"
+#include "data/camera_path.hpp"
 #include "eval/render_job.hpp"
 #include "eval/view_cameras.hpp"
 #include "train/checkpoint.hpp"
@@ -36,11 +37,13 @@ class ViewRenderer : public RenderBackend {
   ~ViewRenderer() override;
 
   RenderReply render(const RenderRequest& request) override;
-  // {"train": [frames of the training split, camera-path form], "orbit": {"target", "up", "radius",
-  //  "elevation_deg", "frame"}}: where the page's camera starts.
+  // {"train": [frames of the training split, camera-path form], "spiral": [frames], "orbit": {"target", "up",
+  //  "radius", "elevation_deg", "frame"}, "start": {"view": "train" | "orbit", "index", "why"}}: the cameras the
+  //  page's camera can start from, and the one it starts from (a forward-facing capture: its first training camera).
   std::string cameras_json() override;
   // {"device", "step", "checkpoint", "warm_up_seconds"}
   std::string status_json() override;
+  std::string render_progress_json() override;
 
   // A recorded path renders into RUN/view_paths/path_<UTC time>/ (frame_NNNN.png, transforms.json, render.json and,
   // in a build with video, path.mp4) on a thread of its own, holding the device frame after frame; meanwhile the free
@@ -69,9 +72,16 @@ class ViewRenderer : public RenderBackend {
   std::string checkpoint_;
   int64_t step_ = 0;
   std::string cameras_json_;
+  data::CameraPathDefaults camera_defaults_;  // what the page's camera may leave out (eval::camera_path_defaults)
   size_t chunk_rays_ = 0;
   double warm_up_seconds_ = 0.0;
   std::atomic<uint64_t> newest_generation_{0};
+  // The render under way or the last one (render_progress_json): written by the rendering thread, read by any.
+  std::atomic<bool> progress_rendering_{false};
+  std::atomic<uint64_t> progress_generation_{0};
+  std::atomic<int> progress_divisor_{0};
+  std::atomic<size_t> progress_done_{0}, progress_total_{0};
+  std::atomic<int64_t> progress_started_ns_{0}, progress_ended_ns_{0};  // steady_clock
   std::atomic<size_t> waiting_{0};
   std::mutex path_start_mutex_;  // held by start_path from its check to storing path_thread_
   std::thread path_thread_;

@@ -5,7 +5,9 @@ Trains a tiny run (a procedural scene, the tiny preset, a few steps, val scores)
 ground truth and error images (`eval`), starts `view` on a free port, loads the page, checks that the curves and
 the val images are shown, drags the camera, waits for the full-size frame and compares it with
 `mipnerf-cl render --path` of the camera the page exposes (bit-equal, or at least 50 dB), saves a screenshot, and
-stops the viewer with Ctrl-C (SIGINT), which must end it cleanly.
+stops the viewer with Ctrl-C (SIGINT), which must end it cleanly. Then a forward-facing capture (make-scene
+--forward-facing), trained briefly: the page must open on its first training camera and its first full frame must
+be >= 15 dB from that camera's photo.
 
   tests/browser/test_viewer.py --exe build/mipnerf-cl --work DIR [--junit FILE] [--screenshot FILE.png]
       [--steps 12] [--size 32]
@@ -33,7 +35,8 @@ CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
 CHECKS = ["train a tiny run", "view serves the page", "curves are drawn", "val images are shown",
           "drag renders a full-size frame", "the frame equals mipnerf-cl render",
-          "a recorded path renders as frames and a video, as render --frames does", "screenshot", "Ctrl-C stops view"]
+          "a recorded path renders as frames and a video, as render --frames does", "screenshot", "Ctrl-C stops view",
+          "a forward-facing capture opens on its first training camera, a view like its photo"]
 
 
 class Report:
@@ -285,6 +288,40 @@ def main():
         if viewer.returncode != 0 or "stopped" not in out:
             raise AssertionError(f"view exited {viewer.returncode} after Ctrl-C; stdout {out[-200:]!r} stderr {err[-200:]!r}")
 
+    def forward_facing():
+        # A forward-facing capture (make-scene --forward-facing: an LLFF capture), trained briefly: the page must open
+        # on its first training camera, say why, and its first full-size frame must look like that camera's photo
+        # (>= 15 dB against the ground truth `eval --split train` writes); an orbit looks from behind the cameras.
+        nonlocal viewer
+        capture, ff_run = work / "ff-capture", work / "ff-run"
+        run([exe, "make-scene", str(capture), "--forward-facing", "--size", "48", "--samples", "1"])
+        run([exe, "train", "--data", str(capture), "--out", str(ff_run), "--preset", "tiny", "--steps", "300",
+             "--set", "batch_size=256", "--set", "val_views=1"])
+        run([exe, "eval", "--checkpoint", str(ff_run), "--split", "train", "--views", "1"])
+        viewer = subprocess.Popen([exe, "view", str(ff_run), "--port", "0"], stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True)
+        match = re.search(r"at (http://127\.0\.0\.1:\d+/)", viewer.stdout.readline())
+        if not match:
+            raise RuntimeError("view of the forward-facing run printed no URL")
+        driver.get(match.group(1))
+        wait_for(lambda: driver.execute_script("return window.viewer && window.viewer.fullFrames >= 1"), 60,
+                 "the forward-facing run's first full-size frame")
+        why = driver.find_element(By.ID, "start-why").text
+        if "train camera 0" not in why or "forward-facing" not in why:
+            raise AssertionError(f"the page says {why!r}, not that it starts from train camera 0 of a forward-facing capture")
+        page_png = base64.b64decode(driver.execute_script("return window.viewer.lastFullPng").split(",", 1)[1])
+        a, wa, ha = decode_png_rgb8(page_png)
+        b, wb, hb = decode_png_rgb8((ff_run / "eval_train" / "images" / "000_gt.png").read_bytes())
+        if (wa, ha) != (wb, hb):
+            raise AssertionError(f"the first frame is {wa}x{ha}, the photo {wb}x{hb}")
+        db = psnr(a, b)
+        print(f"browser: forward-facing capture: the first full frame against train camera 0's photo: {db:.2f} dB",
+              flush=True)
+        if db < 15:
+            raise AssertionError(f"the first frame is {db:.2f} dB from the first training photo (< 15 dB)")
+        viewer.send_signal(signal.SIGINT)
+        viewer.communicate(timeout=15)
+
     try:
         check(CHECKS[0], train)
         check(CHECKS[1], start_view)
@@ -295,6 +332,7 @@ def main():
         check(CHECKS[6], record_path)
         check(CHECKS[7], screenshot)
         check(CHECKS[8], stop)
+        check(CHECKS[9], forward_facing)
     finally:
         if driver:
             driver.quit()

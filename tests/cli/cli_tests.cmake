@@ -404,7 +404,7 @@ set_tests_properties("cli: tune --host-gemm --if-missing keeps a file that has t
 add_test(NAME "cli: train with val_every: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf
   "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every")
 set_tests_properties("cli: train with val_every: clear the run folder" PROPERTIES FIXTURES_SETUP cli_val_every_clean)
-mipnerf_add_checked_test("cli: train with val_every scores val views during training" EXPECT "trained 6 steps"
+mipnerf_add_checked_test("cli: train with val_every scores val views during training" EXPECT "score val at step 3 \\(1 image\\) \\[#+\\] [0-9]+/[0-9]+ 100%.*score val at step 6 \\(1 image\\).*trained 6 steps"
   COMMAND mipnerf-cl train
   --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-val-every" --preset tiny
   --steps 6 --set val_every=3 --val_views 1)

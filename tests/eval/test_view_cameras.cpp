@@ -8,6 +8,8 @@
 #include "core/error.hpp"
 #include "data/camera_path.hpp"
 #include "eval/view_cameras.hpp"
+#include "io/json.hpp"
+#include "io/png.hpp"
 #include "render_fixtures.hpp"
 
 using namespace mipnerf;
@@ -115,4 +117,51 @@ TEST_CASE("view cameras: a camera path file's frames, named by index, its folder
   CHECK(frames.cameras[2].width_px == 20);
   CHECK(frames.cameras[2].camera_to_world[3] == doctest::Approx(cameras[2].camera_to_world[3]).epsilon(1e-9));
   fs::remove_all(dir);
+}
+
+// A camera path (a file, or the viewer's page) that leaves near/far out renders in the run's range: NDC's 0..1 on a
+// run of cylinders (a forward-facing capture: Blender's 2..6 there sampled beyond the far plane, and the viewer's
+// first view of such a run was 2 dB worse than the same camera's `render --split train`), the training cameras' own
+// range on a capture that records one, the run's settings when it has them.
+TEST_CASE("view cameras: a camera path without near/far takes the run's range: NDC, the capture's, or the settings'") {
+  train::TrainedModel ndc;
+  ndc.config.ray_shape = RayShape::cylinder;
+  const data::CameraPathDefaults a = eval::camera_path_defaults(ndc, {});
+  CHECK(a.near == 0.0);
+  CHECK(a.far == 1.0);
+
+  // A transforms.json capture whose cameras say near 0.5, far 8 (as an import writes them).
+  const fs::path scene = test::render_temp("near-far-scene");
+  fs::remove_all(scene);
+  fs::create_directories(scene / "images");
+  std::vector<float> rgb(4 * 4 * 3, 0.5f);
+  io::write_png((scene / "images/0.png").string(), 4, 4, 3, rgb.data());
+  io::Json frames = io::Json::array();
+  for (int k = 0; k < 2; ++k) {
+    frames.push_back({{"file_path", "images/0.png"},
+                      {"transform_matrix", {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 4.0 + k}, {0, 0, 0, 1}}}});
+  }
+  io::write_json((scene / "transforms.json").string(), {{"fl_x", 5}, {"fl_y", 5}, {"cx", 2}, {"cy", 2}, {"w", 4},
+                                                         {"h", 4}, {"near", 0.5}, {"far", 8}, {"frames", frames}});
+  train::TrainedModel capture;
+  capture.data_path = (scene / "transforms.json").string();
+  const data::CameraPathDefaults b = eval::camera_path_defaults(capture, {});
+  CHECK(b.near == 0.5);
+  CHECK(b.far == 8.0);
+  const auto cameras = data::parse_camera_path(
+      R"({"frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": 5, "w": 4, "h": 4}]})",
+      "the page's camera", b);
+  CHECK(cameras[0].near == 0.5);
+  CHECK(cameras[0].far == 8.0);
+
+  // The run's own settings win; without data or settings, Blender's range.
+  capture.config.near = 1.0;
+  capture.config.far = 3.0;
+  const data::CameraPathDefaults c = eval::camera_path_defaults(capture, {});
+  CHECK(c.near == 1.0);
+  CHECK(c.far == 3.0);
+  const data::CameraPathDefaults d = eval::camera_path_defaults(train::TrainedModel{}, {});
+  CHECK(d.near == 2.0);
+  CHECK(d.far == 6.0);
+  fs::remove_all(scene);
 }

@@ -41,6 +41,7 @@ struct CameraReadingBackend : view::RenderBackend {
   }
   std::string cameras_json() override { return "{}"; }
   std::string status_json() override { return "{}"; }
+  std::string render_progress_json() override { return R"({"rendering": false})"; }
   // A path's keyframes go through the reader and the interpolation the real renderer uses (frames capped: the
   // handler allows 3600, the fuzzer need not build them all).
   view::PathReply start_path(const view::PathRequest& request) override {

@@ -53,6 +53,7 @@ struct FakeBackend : RenderBackend {
   }
   std::string cameras_json() override { return R"({"train": []})"; }
   std::string status_json() override { return R"({"device": "fake", "step": 4})"; }
+  std::string render_progress_json() override { return R"({"rendering": true, "done_rays": 12, "total_rays": 48})"; }
   // Paths: records the request; a second start while "rendering" is busy, as the real renderer's.
   PathRequest last_path;
   bool path_rendering = false;
@@ -537,4 +538,17 @@ TEST_CASE("handler: multiscale val views are listed one per scale, each with its
     CHECK(im["error"] == "val/" + name + "_error.png");
   }
   CHECK(names == std::vector<std::string>{"001_scale0", "001_scale1", "001_scale2", "001_scale3"});
+}
+
+TEST_CASE("handler: the render under way reports its progress, read-only") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const Response r = get(h, "/api/render/progress");
+  CHECK(r.status == 200);
+  CHECK(r.content_type == "application/json");
+  CHECK(r.body.find("\"done_rays\": 12") != std::string::npos);
+  CHECK(post(h, "/api/render/progress", "{}").status == 405);
+  const Handler without_model(options_for(f), nullptr);
+  CHECK(get(without_model, "/api/render/progress").status == 503);
 }

@@ -172,3 +172,35 @@ TEST_CASE("view renderer: renders, path starts, cancels and status polls from se
   REQUIRE(wait_for_path(renderer, 120.0));
   CHECK(path_state(renderer) == "done");
 }
+
+TEST_CASE("view renderer: a render reports its rays as it goes, and the last one's when none is under way") {
+  view::ViewRendererOptions options;
+  options.run_folder = tiny_run();
+  options.chunk_rays = 64;  // 4 chunks for the 16x16 frame
+  view::ViewRenderer renderer(test::test_context(), options);
+  view::RenderRequest request;
+  request.camera_json = kCamera;
+  request.generation = 7;
+  REQUIRE(renderer.render(request).status == view::RenderReply::Status::ok);
+  const auto progress = nlohmann::json::parse(renderer.render_progress_json());
+  CHECK(progress.at("rendering") == false);
+  CHECK(progress.at("generation") == 7);
+  CHECK(progress.at("divisor") == 1);
+  CHECK(progress.at("done_rays") == 256);
+  CHECK(progress.at("total_rays") == 256);
+  CHECK(progress.at("seconds").get<double>() > 0.0);
+  // Polled from another thread while renders run: always a whole object, done never above total.
+  std::atomic<bool> stop{false};
+  std::thread poller([&] {
+    while (!stop) {
+      const auto p = nlohmann::json::parse(renderer.render_progress_json());
+      CHECK(p.at("done_rays").get<size_t>() <= std::max<size_t>(p.at("total_rays").get<size_t>(), 256));
+    }
+  });
+  for (int i = 0; i < 5; ++i) {
+    request.generation = 8 + i;
+    CHECK(renderer.render(request).status == view::RenderReply::Status::ok);
+  }
+  stop = true;
+  poller.join();
+}
