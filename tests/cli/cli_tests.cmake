@@ -53,8 +53,29 @@ mipnerf_add_cli_error_test("unknown subcommand" PATTERN "nosuch" ARGS nosuch)
 set(MIPNERF_DATA_FIXTURES "${CMAKE_CURRENT_SOURCE_DIR}/data/fixtures")
 mipnerf_add_cli_error_test("dataset inspect: missing folder" PATTERN "nowhere: no such file or folder"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/nowhere")
-mipnerf_add_cli_error_test("dataset inspect: folder without a dataset" PATTERN "fixtures: no dataset here: expected transforms_train.json"
+mipnerf_add_cli_error_test("dataset inspect: folder without a dataset" PATTERN "cli: no dataset here: expected transforms_train.json \\(Blender\\), metadata.json \\(multiscale Blender\\), transforms.json or poses_bounds.npy with images/ \\(an LLFF capture\\)"
+  ARGS dataset inspect "${CMAKE_CURRENT_SOURCE_DIR}/cli")
+# What is there decides the hint (host/data/formats/no_dataset.cpp): datasets in subfolders, photos without poses
+# (from-photos), a COLMAP workspace (import-colmap), an empty folder (make-scene), a slip in the name (did you mean).
+mipnerf_add_cli_error_test("dataset inspect: a folder of datasets names them" PATTERN "fixtures: no dataset here, but its subfolders differing_sizes, distortion, malformed_json, mirrored_pose and [0-9]+ more hold one each: give one of them, e.g. .*fixtures/differing_sizes$"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}")
+mipnerf_add_cli_error_test("dataset inspect: a folder of photos suggests from-photos" PATTERN "textureless: 4 photos \\(PNG or JPEG\\) but no camera poses. make a dataset of them with `mipnerf-cl dataset from-photos .*fixtures/textureless OUT` \\(COLMAP\\), then train on OUT$"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/textureless")
+mipnerf_add_cli_error_test("train: a folder of photos suggests from-photos" PATTERN "textureless: 4 photos \\(PNG or JPEG\\) but no camera poses. make a dataset of them with `mipnerf-cl dataset from-photos .*fixtures/textureless OUT` \\(COLMAP\\), then train on OUT$"
+  ARGS train --data "${MIPNERF_DATA_FIXTURES}/textureless" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: a COLMAP workspace suggests import-colmap" PATTERN "colmap: a COLMAP model \\(.*colmap/sparse\\) but no dataset. import it with `mipnerf-cl dataset import-colmap .*colmap/sparse .*colmap/images OUT`, then train on OUT$"
+  ARGS train --data "${MIPNERF_DATA_FIXTURES}/colmap" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: a mistyped --data names the folder meant" PATTERN "fixtures/vaild: no such file or folder. did you mean '.*fixtures/valid'\\?$"
+  ARGS train --data "${MIPNERF_DATA_FIXTURES}/vaild" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("dataset inspect: a mistyped folder on the way names the one meant" PATTERN "fixturs/valid: no such file or folder. did you mean '.*fixtures/valid'\\?$"
+  ARGS dataset inspect "${CMAKE_CURRENT_SOURCE_DIR}/data/fixturs/valid")
+mipnerf_add_cli_error_test("dataset inspect: a missing folder on the way is named" PATTERN "nowhere/valid: no such file or folder. no 'nowhere' in .*tests/data$"
+  ARGS dataset inspect "${CMAKE_CURRENT_SOURCE_DIR}/data/nowhere/valid")
+add_test(NAME "cli: an empty folder: make it" COMMAND ${CMAKE_COMMAND} -E make_directory "${CMAKE_CURRENT_BINARY_DIR}/cli-empty")
+set_tests_properties("cli: an empty folder: make it" PROPERTIES FIXTURES_SETUP cli_empty)
+mipnerf_add_cli_error_test("train: an empty --data folder suggests make-scene" PATTERN "cli-empty: an empty folder. put a dataset there, or write the built-in procedural scene into it with `mipnerf-cl make-scene .*cli-empty`$"
+  ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-empty" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+set_tests_properties("cli: train: an empty --data folder suggests make-scene" PROPERTIES FIXTURES_REQUIRED cli_empty)
 mipnerf_add_cli_error_test("dataset inspect: missing image" PATTERN "missing_image/train/r_0.png: no such file \\(listed by .*missing_image/transforms_train.json: frames\\[0\\]\\)"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/missing_image")
 mipnerf_add_cli_error_test("dataset inspect: malformed JSON" PATTERN "malformed_json/transforms_train.json: malformed JSON at line 4, column 31: "
