@@ -1,5 +1,6 @@
 // `mipnerf-cl dataset inspect DIR`: loads a dataset and prints what it holds, per split and scale, with the
-// camera geometry (centre bounds, look-at point) that makes a convention mistake visible at once.
+// camera geometry (centre bounds, the look-at point of inward-looking cameras, the viewing direction of a
+// forward-facing capture) that makes a convention mistake visible at once.
 // `mipnerf-cl dataset import-colmap SPARSE_DIR IMAGES_DIR OUT`: a COLMAP sparse model → OUT/transforms.json.
 #include <cmath>
 #include <cstdio>
@@ -51,6 +52,37 @@ std::string vec(const Vec3& v) {
   return text;
 }
 
+// Where a split's cameras look. An inward-looking capture's optical axes meet at its look-at centre, in front of every
+// camera unless a pose is wrong. A forward-facing capture's nearly parallel axes meet far away or behind the cameras,
+// which says nothing about its poses: it shows its viewing direction, and its look-at centre only where that lies in
+// front of every camera.
+void print_where_cameras_look(const data::SplitSummary& s, bool ndc) {
+  const bool centre_in_front = s.look_at && s.cameras_facing == s.images;
+  if (s.forward_facing) {
+    char spread[32];
+    std::snprintf(spread, sizeof(spread), "%.1f", s.axis_spread_deg);
+    std::cout << "  viewing direction (the mean optical axis): " << vec(s.view_direction) << ", every axis within "
+              << spread << " degrees of it: a forward-facing capture, whose axes need not meet"
+              << (centre_in_front ? "" : " (so no look-at centre)") << "\n";
+    if (!centre_in_front) return;
+  }
+  if (!s.look_at) {
+    std::cout << "  look-at centre: undefined (all optical axes are parallel)\n";
+    return;
+  }
+  std::cout << "  look-at centre (closest to all optical axes): " << vec(*s.look_at) << ", in front of "
+            << s.cameras_facing << "/" << s.images << " cameras at depth "
+            << range(s.look_at_depth_min, s.look_at_depth_max) << ", every axis passes within " << num(s.axis_miss_max)
+            << " of it\n";
+  if (s.cameras_facing < s.images) {
+    std::cout << "  WARNING: " << s.images - s.cameras_facing
+              << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
+                 "axes (x right, y up, looking down -z)?\n";
+  } else if (!ndc && (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max)) {
+    std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
+  }
+}
+
 void print_split(const data::SplitSummary& s, bool ndc) {
   const std::string pixels = s.pixels < 1000000 ? std::to_string(s.pixels) : num(s.pixels / 1e6) + " M";
   std::cout << "split " << s.name << ": " << s.images << " images, " << pixels << " pixels  ("
@@ -70,25 +102,7 @@ void print_split(const data::SplitSummary& s, bool ndc) {
   std::cout << "  camera centres: x " << range(s.center_min[0], s.center_max[0]) << ", y "
             << range(s.center_min[1], s.center_max[1]) << ", z " << range(s.center_min[2], s.center_max[2])
             << "; distance from the origin " << range(s.radius_min, s.radius_max) << "\n";
-  if (!s.look_at) {
-    std::cout << "  look-at centre: undefined (all optical axes are parallel)\n";
-  } else {
-    std::cout << "  look-at centre (closest to all optical axes): " << vec(*s.look_at) << ", in front of "
-              << s.cameras_facing << "/" << s.images << " cameras at depth "
-              << range(s.look_at_depth_min, s.look_at_depth_max) << ", every axis passes within "
-              << num(s.axis_miss_max) << " of it\n";
-    if (s.forward_facing) {
-      // Nearly parallel axes meet far away or behind the cameras: no centre to check the poses against.
-      std::cout << "  (a forward-facing capture: its optical axes are within 45 degrees of their mean and need not "
-                   "meet in front of the cameras)\n";
-    } else if (s.cameras_facing < s.images) {
-      std::cout << "  WARNING: " << s.images - s.cameras_facing
-                << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
-                   "axes (x right, y up, looking down -z)?\n";
-    } else if (!ndc && (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max)) {
-      std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
-    }
-  }
+  print_where_cameras_look(s, ndc);
   for (const auto& lens : s.lenses) std::cout << "  lens: " << lens << "\n";
   std::cout << "  mean colour " << vec({s.mean_rgb[0], s.mean_rgb[1], s.mean_rgb[2]}) << "\n";
 }
