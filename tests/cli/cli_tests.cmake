@@ -188,12 +188,35 @@ mipnerf_add_cli_error_test("train: unknown value of an enum setting" PATTERN "se
   ARGS train --ray_shape sphere --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: unknown variant" PATTERN "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-concat-pe, mipnerf-no-area-loss, mipnerf-no-ipe, mipnerf-no-misc, mipnerf-two-mlps, nerf, nerf-area, nerf-area-center, nerf-area-center-misc"
   ARGS train --variant nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
-mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'"
+mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'. did you mean 'num_samples'\\? \\(mipnerf-cl train --help lists every setting\\)$"
   ARGS train --set sampels=3 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: a mistyped setting names the one meant" PATTERN "unknown setting 'stpes'. did you mean 'steps'\\? \\(mipnerf-cl train --help lists every setting\\)$"
+  ARGS train --set stpes=10 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+# Setting flags: the dash form in --help (the underscore one still parses: the variant tests below use both), typed
+# from the settings table; --factor the same in train and dataset inspect (type, help and rule).
+mipnerf_add_checked_test("cli: train --help shows setting flags with dashes and their types" EXPECT "--data TEXT +Dataset folder: Blender, multiscale Blender, transforms.json or an LLFF capture.*--factor INT +\\[scene\\] box-downsample.*--val-every INT +\\[execution\\]"
+  COMMAND mipnerf-cl train --help)
+set_tests_properties("cli: train --help shows setting flags with dashes and their types" PROPERTIES FAIL_REGULAR_EXPRESSION "--val_every INT|VALUE")
+mipnerf_add_checked_test("cli: dataset inspect --help lists LLFF captures and types --factor as train does" EXPECT "Load a dataset \\(Blender, multiscale Blender, transforms.json or an LLFF capture\\).*--factor INT +box-downsample the stored images by this power of two"
+  COMMAND mipnerf-cl dataset inspect --help)
+mipnerf_add_cli_error_test("train: a factor that is no power of two" PATTERN "invalid configuration: factor must be a power of two, 1 to 64$"
+  ARGS train --factor 3 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("dataset inspect: a factor that is no power of two, as train says it" PATTERN "invalid configuration: factor must be a power of two, 1 to 64$"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --factor 3)
+mipnerf_add_cli_error_test("dataset inspect: a factor that is no number, as train says it" PATTERN "setting 'factor' = 'two': expected an integer$"
+  ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --factor two)
+mipnerf_add_checked_test("cli: dataset import-colmap --help names the six camera models it reads" EXPECT "of SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV or OPENCV_FISHEYE cameras"
+  COMMAND mipnerf-cl dataset import-colmap --help)
 mipnerf_add_cli_error_test("train: invalid combination" PATTERN "invalid configuration: lr_warmup_mult must be in"
   ARGS train --lr_warmup_mult 2 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: missing data" PATTERN "nowhere: no such file or folder"
   ARGS train --data "${MIPNERF_DATA_FIXTURES}/nowhere" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+# An output folder that cannot be made: one line naming it, before anything runs (a file sits where a folder must be).
+mipnerf_add_cli_error_test("train: an --out that cannot be created" PATTERN "--out .*cli_tests.cmake/run: cannot create this folder \\(Not a directory\\). give --out a folder you can write to$"
+  ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${CMAKE_CURRENT_SOURCE_DIR}/cli/cli_tests.cmake/run" --preset tiny)
+set_tests_properties("cli: train: an --out that cannot be created" PROPERTIES FIXTURES_REQUIRED cli_scene)
+mipnerf_add_cli_error_test("train: an --out that is a file" PATTERN "--out .*cli_tests.cmake: cannot create this folder \\(a file of that name is in the way\\). give --out a folder you can write to$"
+  ARGS train --out "${CMAKE_CURRENT_SOURCE_DIR}/cli/cli_tests.cmake" --preset tiny)
 mipnerf_add_cli_error_test("train: unknown key in a config file" PATTERN "bogus_key"
   ARGS train --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/unknown_key.toml" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 add_test(NAME "cli: train output starts empty" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-train")
@@ -462,9 +485,14 @@ foreach(variant mipnerf-no-ipe nerf-area-center-misc mipnerf-concat-pe)
   mipnerf_add_checked_test("cli: train --variant ${variant}" EXPECT "trained 2 steps"
   COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene"
     --out "${CMAKE_CURRENT_BINARY_DIR}/cli-variant-${variant}" --preset tiny --variant ${variant} --steps 2
-    --val_views 1 --set checkpoint_every=1000)
-  set_tests_properties("cli: train --variant ${variant}" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_variant_clean_${variant}")
+    --val-views 1 --checkpoint-every 1000)
+  set_tests_properties("cli: train --variant ${variant}" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_variant_clean_${variant}"
+    FIXTURES_SETUP cli_variant_${variant})
 endforeach()
+# The setting flags above were spelt with dashes (--val-views, --checkpoint-every): they took effect.
+mipnerf_add_checked_test("cli: train takes a setting flag spelt with dashes" EXPECT "\"checkpoint_every\": 1000,.*\"val_views\": 1,"
+  COMMAND ${CMAKE_COMMAND} -E cat "${CMAKE_CURRENT_BINARY_DIR}/cli-variant-mipnerf-no-ipe/config.json")
+set_tests_properties("cli: train takes a setting flag spelt with dashes" PROPERTIES FIXTURES_REQUIRED cli_variant_mipnerf-no-ipe)
 
 # Photos end to end (issue 26). A forward-facing capture of JPEG photos trains as an LLFF capture (--factor 2
 # box-downsamples the JPEGs: no images_2/), renders its spiral and is evaluated; `dataset inspect` shows the effects
