@@ -25,6 +25,10 @@ class Progress {
   // Ends the line at `done` units: work stopped before the end (an interrupt) shows where it stopped.
   void finish_at(int64_t done, const std::string& detail = {});
 
+  // Prints `line` ("mipnerf-cl: " first) on a line of its own above the progress line, which is redrawn at the next
+  // update; rank 0 only, as the progress line.
+  void note(const std::string& line);
+
   double elapsed_seconds() const;
   // Sets the number of units when it is known only once the work starts (a job that counts its own rays).
   void set_total(int64_t total) { total_ = total; }

@@ -334,6 +334,28 @@ mipnerf_add_cli_error_test("eval: missing checkpoint" PATTERN "nowhere: no check
   ARGS eval --checkpoint "${MIPNERF_RENDER_FIXTURES}/nowhere")
 mipnerf_add_cli_error_test("render: missing camera path file" PATTERN "nowhere.json: no such camera path file"
   ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/nowhere.json")
+# --path: a slip names the kind meant, a split name points to --split, a folder to its transforms.json.
+mipnerf_add_cli_error_test("render: a mistyped path kind names the one meant" PATTERN "--path 'sprial': did you mean 'spiral'\\? \\(--path takes orbit, spiral or a camera path file. a split's cameras: --split\\)$"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path sprial)
+mipnerf_add_cli_error_test("render: a split name as --path points to --split" PATTERN "--path 'test': a dataset split's cameras are rendered with --split test \\(--path takes orbit, spiral or a camera path file\\)$"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path test)
+mipnerf_add_cli_error_test("render: a mistyped camera path file names the one meant" PATTERN "fixtures/two_keyframe_path.json: no such camera path file. did you mean '.*fixtures/two_keyframes_path.json'\\?$"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/two_keyframe_path.json")
+# The output folder is made before the model renders anything: one line, no frame (and no estimate) before it.
+mipnerf_add_cli_error_test("render: an --out that cannot be created fails before the first frame" PATTERN "--out .*cli_tests.cmake/render: cannot create this folder \\(Not a directory\\). give --out a folder you can write to$"
+  ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --frames 2 --size 8x8 --out "${CMAKE_CURRENT_SOURCE_DIR}/cli/cli_tests.cmake/render")
+set_tests_properties("cli: render: an --out that cannot be created fails before the first frame" PROPERTIES FIXTURES_REQUIRED cli_render_model)
+# Before the first frame: the frames, their size and the time they will take, at the rate of the run's val renders.
+mipnerf_add_checked_test("cli: render estimates its time from the run's val renders before the first frame" EXPECT "rendering 3 frames of 20x20 \\(0.0012 MP\\): about [0-9hms]+ at [0-9.e+-]+ s/MP \\(the run's val renders on this device, [^\n]*cli-render-run/summary.json\\)\n.*rendered 3 frames of an orbit"
+  COMMAND mipnerf-cl render --checkpoint "${MIPNERF_RENDER_RUN}" --path orbit --frames 3 --size 20x20 --out "${MIPNERF_RENDER_RUN}/render_estimate")
+set_tests_properties("cli: render estimates its time from the run's val renders before the first frame" PROPERTIES FIXTURES_REQUIRED cli_render_model)
+# A checkpoint away from its run has no recorded rate: the estimate follows the first frame.
+add_test(NAME "cli: render: a checkpoint away from its run" COMMAND ${CMAKE_COMMAND} -E copy
+  "${MIPNERF_RENDER_RUN}/checkpoints/ckpt_000000004.mnck" "${CMAKE_CURRENT_BINARY_DIR}/cli-lone-checkpoint/model.mnck")
+set_tests_properties("cli: render: a checkpoint away from its run" PROPERTIES FIXTURES_REQUIRED cli_render_model FIXTURES_SETUP cli_lone_checkpoint)
+mipnerf_add_checked_test("cli: render without a recorded rate estimates its time after the first frame" EXPECT "rendering 3 frames of 20x20 \\(0.0012 MP\\): the time it takes follows its first frame\n.*the first frame took [0-9.e+-]+ s \\([0-9.e+-]+ s/MP\\): about [0-9hms]+ for all 3 frames\n.*rendered 3 frames of an orbit"
+  COMMAND mipnerf-cl render --checkpoint "${CMAKE_CURRENT_BINARY_DIR}/cli-lone-checkpoint/model.mnck" --path orbit --frames 3 --size 20x20)
+set_tests_properties("cli: render without a recorded rate estimates its time after the first frame" PROPERTIES FIXTURES_REQUIRED cli_lone_checkpoint)
 mipnerf_add_cli_error_test("render: malformed camera path file" PATTERN "truncated_path.json: malformed JSON at line 3"
   ARGS render --checkpoint "${MIPNERF_RENDER_RUN}" --path "${MIPNERF_RENDER_FIXTURES}/truncated_path.json")
 mipnerf_add_cli_error_test("render: camera path frame without a pose" PATTERN "pose_missing_path.json: frames\\[0\\]: missing key 'transform_matrix'"
