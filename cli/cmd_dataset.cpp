@@ -1,5 +1,6 @@
 // `mipnerf-cl dataset inspect DIR`: loads a dataset and prints what it holds, per split and scale, with the
-// camera geometry (centre bounds, look-at point) that makes a convention mistake visible at once.
+// camera geometry (centre bounds, the look-at point of inward-looking cameras, the viewing direction of a
+// forward-facing capture) that makes a convention mistake visible at once.
 // `mipnerf-cl dataset import-colmap SPARSE_DIR IMAGES_DIR OUT`: a COLMAP sparse model → OUT/transforms.json.
 #include <cmath>
 #include <cstdio>
@@ -23,7 +24,7 @@ namespace {
 struct InspectArgs {
   std::string path;
   int scales = 1;
-  int factor = 1;
+  std::string factor = "1";  // read as train reads its factor setting (train_factor)
   std::string background;  // empty: what train would choose for the scene; else parsed by its name table
   std::optional<bool> spherify;  // unset: what train would choose
   double near = 0.0, far = 0.0;
@@ -51,6 +52,37 @@ std::string vec(const Vec3& v) {
   return text;
 }
 
+// Where a split's cameras look. An inward-looking capture's optical axes meet at its look-at centre, in front of every
+// camera unless a pose is wrong. A forward-facing capture's nearly parallel axes meet far away or behind the cameras,
+// which says nothing about its poses: it shows its viewing direction, and its look-at centre only where that lies in
+// front of every camera.
+void print_where_cameras_look(const data::SplitSummary& s, bool ndc) {
+  const bool centre_in_front = s.look_at && s.cameras_facing == s.images;
+  if (s.forward_facing) {
+    char spread[32];
+    std::snprintf(spread, sizeof(spread), "%.1f", s.axis_spread_deg);
+    std::cout << "  viewing direction (the mean optical axis): " << vec(s.view_direction) << ", every axis within "
+              << spread << " degrees of it: a forward-facing capture, whose axes need not meet"
+              << (centre_in_front ? "" : " (so no look-at centre)") << "\n";
+    if (!centre_in_front) return;
+  }
+  if (!s.look_at) {
+    std::cout << "  look-at centre: undefined (all optical axes are parallel)\n";
+    return;
+  }
+  std::cout << "  look-at centre (closest to all optical axes): " << vec(*s.look_at) << ", in front of "
+            << s.cameras_facing << "/" << s.images << " cameras at depth "
+            << range(s.look_at_depth_min, s.look_at_depth_max) << ", every axis passes within " << num(s.axis_miss_max)
+            << " of it\n";
+  if (s.cameras_facing < s.images) {
+    std::cout << "  WARNING: " << s.images - s.cameras_facing
+              << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
+                 "axes (x right, y up, looking down -z)?\n";
+  } else if (!ndc && (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max)) {
+    std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
+  }
+}
+
 void print_split(const data::SplitSummary& s, bool ndc) {
   const std::string pixels = s.pixels < 1000000 ? std::to_string(s.pixels) : num(s.pixels / 1e6) + " M";
   std::cout << "split " << s.name << ": " << s.images << " images, " << pixels << " pixels  ("
@@ -70,25 +102,7 @@ void print_split(const data::SplitSummary& s, bool ndc) {
   std::cout << "  camera centres: x " << range(s.center_min[0], s.center_max[0]) << ", y "
             << range(s.center_min[1], s.center_max[1]) << ", z " << range(s.center_min[2], s.center_max[2])
             << "; distance from the origin " << range(s.radius_min, s.radius_max) << "\n";
-  if (!s.look_at) {
-    std::cout << "  look-at centre: undefined (all optical axes are parallel)\n";
-  } else {
-    std::cout << "  look-at centre (closest to all optical axes): " << vec(*s.look_at) << ", in front of "
-              << s.cameras_facing << "/" << s.images << " cameras at depth "
-              << range(s.look_at_depth_min, s.look_at_depth_max) << ", every axis passes within "
-              << num(s.axis_miss_max) << " of it\n";
-    if (s.forward_facing) {
-      // Nearly parallel axes meet far away or behind the cameras: no centre to check the poses against.
-      std::cout << "  (a forward-facing capture: its optical axes are within 45 degrees of their mean and need not "
-                   "meet in front of the cameras)\n";
-    } else if (s.cameras_facing < s.images) {
-      std::cout << "  WARNING: " << s.images - s.cameras_facing
-                << " cameras look away from the look-at centre: are the poses camera-to-world, in OpenGL/Blender "
-                   "axes (x right, y up, looking down -z)?\n";
-    } else if (!ndc && (s.look_at_depth_min < s.near_min || s.look_at_depth_max > s.far_max)) {
-      std::cout << "  WARNING: the look-at centre lies outside near..far for some cameras: check near/far\n";
-    }
-  }
+  print_where_cameras_look(s, ndc);
   for (const auto& lens : s.lenses) std::cout << "  lens: " << lens << "\n";
   std::cout << "  mean colour " << vec({s.mean_rgb[0], s.mean_rgb[1], s.mean_rgb[2]}) << "\n";
 }
@@ -99,11 +113,16 @@ Background parse_background_flag(const std::string& value) {
   return *parsed;
 }
 
+// --factor as train reads its `factor` setting: the same parser and rule, so the two flags take the same values.
+uint32_t train_factor(const std::string& text) {
+  return static_cast<uint32_t>(train::resolve_config("paper", "mipnerf", {{"factor", text}}).factor);
+}
+
 // The load options `train` would use for the dataset: the effects its scene calls for (data/formats), and any
 // explicit flag instead. `scene_line` becomes train's "scene: …" line.
 data::LoadOptions train_like_options(const InspectArgs& args, std::string& scene_line) {
   data::LoadOptions options;
-  options.factor = static_cast<uint32_t>(args.factor);
+  options.factor = train_factor(args.factor);
   const data::SceneEffects effects = data::scene_effects(args.path, options);
   auto effect = [&effects](const char* name, const char* otherwise) {
     const auto found = effects.settings.find(name);
@@ -128,7 +147,7 @@ void run_inspect(const InspectArgs& args) {
   const data::Dataset dataset = data::load_dataset(args.path, options);
   std::cout << "dataset " << dataset.path << "\n"
             << "format " << data::format_name(dataset.format) << ", background " << enum_name(options.background)
-            << (args.factor > 1 ? ", factor " + std::to_string(args.factor) : "")
+            << (options.factor > 1 ? ", factor " + std::to_string(options.factor) : "")
             << (args.scales > 1 ? ", " + std::to_string(args.scales) + " scales built on the fly" : "") << "\n"
             << scene_line << "\n";
   for (const auto& split : dataset.splits) {
@@ -195,18 +214,27 @@ void register_dataset(CLI::App& app) {
   cmd->require_subcommand(1);
   auto args = std::make_shared<InspectArgs>();
   auto* inspect = cmd->add_subcommand(
-      "inspect", "Load a dataset (Blender, multiscale Blender or transforms.json) and print its splits, image sizes "
-                 "per scale, focal lengths, near/far, camera-centre bounds and look-at centre");
-  inspect->add_option("DIR", args->path, "Dataset folder, transforms.json or metadata.json")->required();
+      "inspect",
+      "Load a dataset (Blender, multiscale Blender, transforms.json or an LLFF capture) and print its splits, image "
+      "sizes per scale, focal lengths, near/far, camera-centre bounds and where the cameras look (the look-at centre, "
+      "or a forward-facing capture's viewing direction)");
+  inspect
+      ->add_option("DIR", args->path,
+                   "Dataset folder (an LLFF capture: poses_bounds.npy and images/), transforms.json or metadata.json")
+      ->required();
   inspect->add_option("--scales", args->scales, "Build this many scales on the fly (the paper's multiscale: 4)")
       ->check(CLI::Range(1, 8));
   // The training setting's help: the dataset composites its images exactly as training does.
   inspect->add_option("--background", args->background,
                       "white | black | none; default: what train would choose for the scene (its effects)");
-  inspect->add_option("--factor", args->factor, "Downsample by this power of two (LLFF: images_<factor>/ when present)")
-      ->check(CLI::PositiveNumber);
-  inspect->add_option("--spherify", args->spherify,
-                      "LLFF: true re-poses a 360° capture around its centre; default: what train would choose");
+  // train's factor setting, as its flag reads it (type, help and rule: train_factor).
+  const train::Setting& factor = train::find_setting("factor");
+  inspect->add_option("--factor", args->factor, factor.help + "; LLFF: reads images_<factor>/ when present")
+      ->type_name(factor.type);
+  inspect
+      ->add_option("--spherify", args->spherify,
+                   "LLFF: true re-poses a 360° capture around its centre; default: what train would choose")
+      ->type_name(train::find_setting("spherify").type);
   inspect->add_option("--near", args->near, "Override near (depth along the optical axis)")
       ->check(CLI::PositiveNumber);
   inspect->add_option("--far", args->far, "Override far")->check(CLI::PositiveNumber);
@@ -216,10 +244,11 @@ void register_dataset(CLI::App& app) {
   auto import_args = std::make_shared<ImportColmapArgs>();
   auto* import = cmd->add_subcommand(
       "import-colmap",
-      "Convert a COLMAP sparse model (cameras, images, points3D; .bin or .txt) of PINHOLE or SIMPLE_PINHOLE cameras "
-      "into a dataset train, render and eval read: a forward-facing capture as an LLFF capture (OUT/poses_bounds.npy, "
-      "OUT/images/), anything else as OUT/transforms.json (poses to OpenGL axes, the world recentred and scaled, "
-      "near/far from the sparse points)");
+      "Convert a COLMAP sparse model (cameras, images, points3D; .bin or .txt) of SIMPLE_PINHOLE, PINHOLE, "
+      "SIMPLE_RADIAL, RADIAL, OPENCV or OPENCV_FISHEYE cameras (several may mix; lenses are kept) into a dataset "
+      "train, render and eval read: a forward-facing capture of one pinhole camera as an LLFF capture "
+      "(OUT/poses_bounds.npy, OUT/images/), anything else as OUT/transforms.json (poses to OpenGL axes, the world "
+      "recentred and scaled, near/far from the sparse points)");
   import->add_option("SPARSE_DIR", import_args->sparse_dir, "The model's folder (e.g. undistorted/sparse)")->required();
   import
       ->add_option("IMAGES_DIR", import_args->images_dir,

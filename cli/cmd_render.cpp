@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/suggest.hpp"
 #include "parallel/world.hpp"
 #include "common.hpp"
 #include "data/camera_path.hpp"
@@ -18,8 +19,10 @@
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
 #include "eval/view_cameras.hpp"
+#include "io/path_hint.hpp"
 #include "io/video.hpp"
 #include "progress.hpp"
+#include "render_estimate.hpp"
 #include "train/checkpoint.hpp"
 
 namespace mipnerf::cli {
@@ -109,6 +112,32 @@ void check_video_arguments(const RenderArgs& args, const CLI::App& cmd, const ev
   io::check_video_settings(args.video, args.fps, args.crf);
 }
 
+// What --path takes, for its help and its errors.
+constexpr const char* kPathKinds =
+    "orbit, spiral (an LLFF capture's official spiral) or a camera path file (a transforms-style JSON of frames, as a "
+    "render's OUT/transforms.json)";
+
+// The error for a --path that is neither a path kind nor a file: the kind or file meant, when one is close.
+std::string unknown_path_kind(const std::string& path) {
+  const std::string takes = " (--path takes orbit, spiral or a camera path file; a split's cameras: --split)";
+  const std::string kind_hint = did_you_mean(path, {"orbit", "spiral"});
+  if (!kind_hint.empty()) return "--path '" + path + "': " + kind_hint + takes;
+  for (const char* split : {"train", "val", "test"}) {
+    if (path == split) {
+      return "--path '" + path + "': a dataset split's cameras are rendered with --split " + path +
+             " (--path takes orbit, spiral or a camera path file)";
+    }
+  }
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    const std::string inside = (fs::path(path) / "transforms.json").string();
+    return path + ": a folder, not a camera path file" +
+           (fs::is_regular_file(inside, ec) ? "; did you mean '" + inside + "'?" : takes);
+  }
+  const std::string file_hint = io::missing_path_hint(path);
+  return path + ": no such camera path file" + (file_hint.empty() ? takes : "; " + file_hint);
+}
+
 // The checks that need no device, so bad input fails before anything is opened.
 void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
   if (given(cmd, "--path") && given(cmd, "--split")) {
@@ -141,9 +170,7 @@ void check_arguments(const RenderArgs& args, const CLI::App& cmd) {
   check_view_options(cmd, args.views, args.scales, args.supersample);
   if (!args.path.empty() && !orbit && !spiral) {
     std::error_code ec;
-    if (!fs::is_regular_file(args.path, ec)) {
-      throw Error(args.path + ": no such camera path file (give --path orbit, or a transforms-style JSON file)");
-    }
+    if (!fs::is_regular_file(args.path, ec)) throw Error(unknown_path_kind(args.path));
   }
   const eval::OutputFormats formats = eval::parse_output_formats(args.format);
   resolution_of(args, cmd);
@@ -187,23 +214,32 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   const train::TrainedModel model = train::load_trained_model(*ctx, checkpoint);
   eval::ViewFrames frames = frames_of(args, cmd, model, checkpoint, resolution);
   eval::apply_depth_range(frames.cameras, if_given(cmd, "--near", args.near), if_given(cmd, "--far", args.far));
-  const std::string out =
-      args.out.empty() ? (fs::path(eval::run_folder_of(found)) / frames.default_folder).string() : args.out;
+  const std::string run_folder = eval::run_folder_of(found);
+  const std::string out = args.out.empty() ? (fs::path(run_folder) / frames.default_folder).string() : args.out;
+  const bool root = parallel::world().is_root();
+  if (root) make_output_folder(out, "--out");  // before the first frame, not after it
   Progress progress("render", 0);
+  // Once the device is ready (the job's first report, after the warm-up): how much, and about how long.
+  const std::optional<RecordedRate> rate =
+      parallel::world().distributed() ? std::nullopt : recorded_rate(run_folder, ctx->device_info().name);
+  RenderEstimate estimate(frames.cameras, args.supersample, rate);
   eval::RenderJob job;
   job.model = &model;
   job.checkpoint = checkpoint;
   job.chunk_rays = args.chunk;
   job.supersample = args.supersample;
   job.seed = args.seed;
-  job.progress = progress.job_callback();
+  job.progress = [&, bar = progress.job_callback()](size_t done, size_t total, const std::string& detail) {
+    if (const std::string line = estimate.report(done); !line.empty()) progress.note(line);
+    bar(done, total, detail);
+  };
   eval::VideoOutput video;
   video.path = args.video;
   video.fps = args.fps;
   video.crf = args.crf;
   const eval::RenderedFrames rendered = eval::render_frames(*ctx, job, frames, out, formats, video);
   progress.finish();
-  if (!parallel::world().is_root()) return;
+  if (!root) return;
 
   const double seconds = rendered.seconds, megapixels = rendered.megapixels;
   const std::string device = ctx->device_info().name;
@@ -242,8 +278,9 @@ void register_render(CLI::App& app) {
   cmd->add_option("--views", args->views, "Only the first N views of the split (all their scales)");
   cmd->add_option("--scales", args->scales, "Build the multiscale pyramid with N scales (default: as trained)");
   cmd->add_option("--path", args->path,
-                  "'orbit', 'spiral' (an LLFF capture's official spiral), or a transforms-style JSON of frames (transform_matrix; fl_x/fl_y/cx/cy/w/h or "
-                  "camera_angle_x)");
+                  std::string(kPathKinds) +
+                      "; a camera path's frames give transform_matrix and fl_x/fl_y/cx/cy/w/h or camera_angle_x. A "
+                      "dataset split's cameras: --split");
   cmd->add_option("--radius", args->radius, "Orbit: distance from the target (default: the training cameras' mean)");
   cmd->add_option("--elevation", args->elevation, "Orbit: degrees above the horizontal plane")->capture_default_str();
   cmd->add_option("--azimuth", args->azimuth, "Orbit: azimuth of the first frame, degrees")->capture_default_str();

@@ -61,6 +61,7 @@ std::string default_scene(const std::string& out_dir) {
     world.barrier();
     return scene.string();
   }
+  make_output_folder(out_dir, "--out");
   if (!fs::exists(scene / "transforms_train.json")) {
     std::cerr << "mipnerf-cl: no --data given: generating the built-in procedural scene in " << scene.string() << "\n";
     data::write_procedural_scene(scene.string(), data::SceneOptions{});
@@ -179,6 +180,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
     }
     return;
   }
+  if (parallel::world().is_root()) make_output_folder(args.out, "--out");  // once the inputs are known good
   auto ctx = open_context(args.profile);
   const std::string device = ctx->device_info().name;
   ocl::StageProfiler profiler;
@@ -256,8 +258,10 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
 void register_train(CLI::App& app) {
   auto args = std::make_shared<TrainArgs>();
   auto* cmd = app.add_subcommand("train", "Train mip-NeRF (or a variant) on a scene, then score its val views");
-  cmd->add_option("--data", args->data, "Scene folder (Blender, multiscale Blender or transforms.json); "
-                                        "default: the built-in procedural scene, made in OUT/scene");
+  cmd->add_option("--data", args->data,
+                  "Dataset folder: Blender, multiscale Blender, transforms.json or an LLFF capture (poses_bounds.npy, "
+                  "images/); photos without poses: make one with `dataset from-photos`; default: the built-in "
+                  "procedural scene, made in OUT/scene");
   cmd->add_option("--out", args->out, "Output folder: checkpoints, logs, config, val renders")->capture_default_str();
   cmd->add_option("--preset", args->preset, "Settings bundle: " + train::describe_bundles())->capture_default_str();
   cmd->add_option("--variant", args->variant,
@@ -270,13 +274,15 @@ void register_train(CLI::App& app) {
   cmd->add_flag("--profile", args->profile,
                 "Time every step after the first by stage (OpenCL profiling events, host timers); print the table "
                 "and write OUT/profile.md. Profiled steps wait for the device at their end, so they run slower");
-  cmd->add_option("--set", args->sets, "Any setting as name=value (repeatable)");
+  cmd->add_option("--set", args->sets,
+                  "Any setting as name=value (repeatable); each is a flag too, spelt with dashes or as its name: "
+                  "--val-every 5 or --val_every 5");
   cmd->add_option("--config", args->config_file,
                   "TOML/INI file of settings, e.g. `num_samples = 64` (top level or a [train] table); flags win")
       ->check(CLI::ExistingFile);
   for (const auto& s : train::settings()) {
     if (s.name == "variant") continue;  // set through --variant, which also applies the variant's bundle
-    cmd->add_option("--" + s.name)->description("[" + s.group + "] " + s.help)->type_name("VALUE");
+    cmd->add_option(setting_flag_names(s.name))->description("[" + s.group + "] " + s.help)->type_name(s.type);
   }
   cmd->callback([args, cmd] { run_train(*args, *cmd); });
 }

@@ -1,7 +1,8 @@
 // Global options and the shared device opening of the CLI.
 #include "common.hpp"
 
-
+#include <algorithm>
+#include <filesystem>
 #include <iostream>
 
 #include "core/error.hpp"
@@ -99,6 +100,42 @@ std::map<std::string, std::string> parse_set_assignments(const std::vector<std::
     out[assignment.substr(0, eq)] = assignment.substr(eq + 1);
   }
   return out;
+}
+
+std::string setting_flag_names(const std::string& setting) {
+  std::string dashed = setting;
+  std::replace(dashed.begin(), dashed.end(), '_', '-');
+  return dashed == setting ? "--" + setting : "--" + dashed + ",--" + setting;
+}
+
+std::string HelpFormatter::make_option_name(const CLI::Option* option, bool is_positional) const {
+  const std::vector<std::string>& long_names = option->get_lnames();
+  auto has_dash_twin = [&](const std::string& name) {
+    std::string dashed = name;
+    std::replace(dashed.begin(), dashed.end(), '_', '-');
+    return dashed != name && std::find(long_names.begin(), long_names.end(), dashed) != long_names.end();
+  };
+  if (is_positional || std::none_of(long_names.begin(), long_names.end(), has_dash_twin)) {
+    return CLI::Formatter::make_option_name(option, is_positional);
+  }
+  std::string names;
+  for (const auto& name : option->get_snames()) names += (names.empty() ? "-" : ", -") + name;
+  for (const auto& name : long_names) {
+    if (!has_dash_twin(name)) names += (names.empty() ? "--" : ", --") + name;
+  }
+  return names;
+}
+
+void make_output_folder(const std::string& path, const std::string& flag) {
+  namespace fs = std::filesystem;
+  std::error_code ec, ignored;
+  fs::create_directories(path, ec);
+  if (fs::is_directory(path, ignored)) return;
+  const std::string why = fs::exists(path, ignored) ? "a file of that name is in the way"
+                          : ec                      ? ec.message()
+                                                    : "it is not there after creating it";
+  throw Error(flag + " " + path + ": cannot create this folder (" + why + "); give " + flag +
+              " a folder you can write to");
 }
 
 }  // namespace mipnerf::cli

@@ -36,6 +36,20 @@ void check_view_options(const CLI::App& cmd, size_t views, int scales, uint32_t 
 std::map<std::string, std::string> parse_set_assignments(const std::vector<std::string>& assignments,
                                                          const std::string& example);
 
+// A setting's flag names for CLI11: "--val-every,--val_every" (dashes, as every other flag, and the setting's own
+// name), or "--steps" for a name without '_'. --help shows the dash form alone (HelpFormatter).
+std::string setting_flag_names(const std::string& setting);
+
+// --help's formatter: an option that has both spellings of a name (--val-every, --val_every) shows the dash form.
+class HelpFormatter : public CLI::Formatter {
+ public:
+  std::string make_option_name(const CLI::Option* option, bool is_positional) const override;
+};
+
+// Creates the output folder `path` given by `flag` (and its parents), or throws a one-line mipnerf::Error naming
+// them, why, and what to do.
+void make_output_folder(const std::string& path, const std::string& flag);
+
 // Prints an error as one line ("mipnerf-cl: error: …", with the rank under mpirun); a parallel::CollectiveError, which
 // every rank raises alike, is printed by rank 0 alone. Details follow with --verbose.
 void report_error(const std::exception& e);

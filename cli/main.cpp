@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   using namespace mipnerf;
   cli::plant_fault_if_asked();  // test-only, sanitizer build only (planted_fault.hpp)
   CLI::App app{"mipnerf-cl: anti-aliased neural radiance fields (mip-NeRF) on any OpenCL device"};
+  app.formatter(std::make_shared<cli::HelpFormatter>());  // before the subcommands, which take their parent's
   app.set_version_flag("--version", std::string("mipnerf-cl ") + MIPNERF_VERSION);
   auto& global = cli::global_options();
   app.add_option("--device", global.device,

@@ -40,6 +40,12 @@ void Progress::finish_at(int64_t done, const std::string& detail) {
   finished_ = true;
 }
 
+void Progress::note(const std::string& line) {
+  if (!parallel::world().is_root()) return;
+  std::cerr << (tty_ ? "\r\033[K" : "") << "mipnerf-cl: " << line << "\n" << std::flush;
+  last_draw_ = start_ - std::chrono::hours(1);  // the bar comes back at the next update
+}
+
 void Progress::draw(int64_t done, const std::string& detail, bool force) {
   if (!parallel::world().is_root()) return;  // under mpirun the ranks progress together: rank 0 shows it
   const auto now = std::chrono::steady_clock::now();

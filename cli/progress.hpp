@@ -25,6 +25,10 @@ class Progress {
   // Ends the line at `done` units: work stopped before the end (an interrupt) shows where it stopped.
   void finish_at(int64_t done, const std::string& detail = {});
 
+  // Prints `line` ("mipnerf-cl: " first) on a line of its own above the progress line, which is redrawn at the next
+  // update; rank 0 only, as the progress line.
+  void note(const std::string& line);
+
   double elapsed_seconds() const;
   // The units already done when this run started (0 for work counted from its start; by default the first update
   // is taken as one unit past the start, as a resumed run reports its first step).

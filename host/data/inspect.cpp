@@ -75,6 +75,15 @@ SplitSummary summarize(const Split& split) {
   std::vector<Matrix34> poses;
   for (const auto& cam : split.cameras) poses.push_back(cam.camera_to_world);
   s.forward_facing = looks_forward(poses);
+  Vec3 axes_sum{0, 0, 0};
+  for (const auto& cam : split.cameras) axes_sum = add(axes_sum, optical_axis(cam));
+  if (length(axes_sum) > 1e-9 * static_cast<double>(split.cameras.size())) {
+    s.view_direction = normalize(axes_sum);
+    for (const auto& cam : split.cameras) {
+      const double cosine = std::clamp(dot(optical_axis(cam), s.view_direction), -1.0, 1.0);
+      s.axis_spread_deg = std::max(s.axis_spread_deg, std::acos(cosine) * 180.0 / M_PI);
+    }
+  }
   s.look_at = closest_point_to_axes(split.cameras);
   if (s.look_at) {
     const Vec3& p = *s.look_at;

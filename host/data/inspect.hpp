@@ -28,6 +28,11 @@ struct SplitSummary {
   Vec3 center_min{}, center_max{};   // bounds of the camera centres (world)
   double radius_min = 0, radius_max = 0;  // camera distance from the origin
   bool forward_facing = false;       // every optical axis within 45° of their mean (data::looks_forward)
+  // Where the cameras look: the mean of the optical axes (unit; zero when they cancel) and the largest angle between
+  // an axis and it, in degrees. A forward-facing capture's nearly parallel axes need not meet, so this, not the
+  // look-at centre, says where such a capture looks.
+  Vec3 view_direction{};
+  double axis_spread_deg = 0;
   std::optional<Vec3> look_at;       // least-squares point closest to all optical axes
   size_t cameras_facing = 0;         // cameras for which the look-at point lies in front (axis angle < 90°)
   double axis_miss_max = 0;          // largest distance from the look-at point to an optical axis

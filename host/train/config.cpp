@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "core/suggest.hpp"
 
 namespace mipnerf::train {
 namespace {
@@ -130,9 +131,12 @@ const Entry& find(const std::string& name) {
   for (const auto& e : table()) {
     if (e.setting.name == name) return e;
   }
-  std::string names;
-  for (const auto& e : table()) names += (names.empty() ? "" : ", ") + e.setting.name;
-  throw Error("unknown setting '" + name + "'; the settings are: " + names);
+  // The nearest names, not the whole list: 54 names would hide them (--help has the list, with what each does).
+  std::vector<std::string> names;
+  for (const auto& e : table()) names.push_back(e.setting.name);
+  const std::string hint = did_you_mean(name, names);
+  throw Error("unknown setting '" + name + "'" + (hint.empty() ? "" : "; " + hint) +
+              " (mipnerf-cl train --help lists every setting)");
 }
 
 [[noreturn]] void bad_value(const std::string& name, const std::string& value, const std::string& expected) {
@@ -175,13 +179,22 @@ E parse_enum(const std::string& name, const std::string& v) {
   return *parsed;
 }
 
-// The entry's help as --help shows it: an enum setting's allowed values, then what it does.
+// The entry as --help shows it: an enum setting's allowed values, then what it does; the type of its value.
 Setting with_full_help(const Entry& e) {
   Setting s = e.setting;
   std::visit(
       [&](auto member) {
         using T = std::decay_t<decltype(TrainConfig{}.*member)>;
-        if constexpr (has_enum_names_v<T>) s.help = enum_choices<T>() + ": " + s.help;
+        if constexpr (has_enum_names_v<T>) {
+          s.help = enum_choices<T>() + ": " + s.help;
+          s.type = "NAME";
+        } else if constexpr (std::is_same_v<T, bool>) {
+          s.type = "BOOL";
+        } else if constexpr (std::is_same_v<T, double>) {
+          s.type = "FLOAT";
+        } else {
+          s.type = "INT";
+        }
       },
       e.member);
   return s;

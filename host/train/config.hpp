@@ -140,11 +140,12 @@ struct Setting {
   std::string name;
   std::string help;   // one line; an enum setting's starts with its allowed values, "white | black | none: ..."
   std::string group;  // "scene", "model", "optimisation", "execution"
+  std::string type = {};  // of its value, for --help: INT, FLOAT, BOOL or NAME (an enum's, listed in `help`)
 };
 
 // Every setting, in a stable order.
 const std::vector<Setting>& settings();
-// The setting called `name`; throws mipnerf::Error listing the settings when there is none.
+// The setting called `name`; throws mipnerf::Error naming the closest settings ("did you mean") when there is none.
 const Setting& find_setting(const std::string& name);
 
 // Sets `name` from text; throws mipnerf::Error naming the setting, the value and the accepted values. This is

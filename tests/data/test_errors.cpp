@@ -36,11 +36,12 @@ struct BrokenSet {
 
 TEST_CASE("errors: missing folder, folder without a dataset, missing image") {
   BrokenSet set;
-  CHECK(contains(error_of([&] { data::load_dataset(set.dir / "nowhere"); }),
-                 "nowhere: no such file or folder (create a scene with `mipnerf-cl make-scene"));
-  std::filesystem::create_directories(set.dir / "empty");
-  CHECK(contains(error_of([&] { data::load_dataset(set.dir / "empty"); }),
-                 "empty: no dataset here: expected transforms_train.json (Blender), metadata.json"));
+  CHECK(error_of([&] { data::load_dataset(set.dir / "nowhere"); }) == set.dir / "nowhere: no such file or folder");
+  std::filesystem::create_directories(set.dir / "other/notes");
+  CHECK(error_of([&] { data::load_dataset(set.dir / "other"); }) ==
+        set.dir / ("other: no dataset here: expected transforms_train.json (Blender), metadata.json (multiscale "
+                   "Blender), transforms.json or poses_bounds.npy with images/ (an LLFF capture); for photos without "
+                   "poses, see `mipnerf-cl dataset from-photos`"));
   std::filesystem::remove(set.dir / "train/r_1.png");
   CHECK(set.load_error() == set.dir / "train/r_1.png: no such file (listed by " + set.json_path() + ": frames[1])");
 }
@@ -200,4 +201,52 @@ TEST_CASE("errors: multiscale metadata.json with inconsistent columns") {
   io::write_json(set.dir / "ms/metadata.json", meta);
   CHECK(error_of([&] { data::load_dataset(set.dir / "ms"); }) ==
         set.dir / "ms/metadata.json: train: 'lossmult' has 3 entries but 'file_path' has 4");
+}
+
+// Each kind of path that holds no dataset gets the hint that fits it, in one line: the name meant, the command that
+// makes a dataset of what is there, or the subfolder that holds one.
+TEST_CASE("errors: a path without a dataset says what to do with what is there") {
+  BrokenSet set;
+  const std::string d = set.dir.path();
+  const auto load_error = [](const std::string& path) {
+    const std::string message = error_of([&] { data::load_dataset(path); });
+    CHECK(message.find('\n') == std::string::npos);
+    return message;
+  };
+  const auto touch = [](const std::string& path) {
+    std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+    std::ofstream(path) << "not decoded here";
+  };
+  // A slip in the name: the sibling meant, when the path through it exists; else the folder that is missing.
+  test::write_blender_split(d + "/scenes/flower", "train", 2, 4, 4);
+  const std::string flower = d + "/scenes/flower";
+  CHECK(load_error(d + "/scenes/flwer") == d + "/scenes/flwer: no such file or folder; did you mean '" + flower + "'?");
+  CHECK(load_error(d + "/scnes/flower") == d + "/scnes/flower: no such file or folder; did you mean '" + flower + "'?");
+  CHECK(load_error(d + "/nowhere/flower") == d + "/nowhere/flower: no such file or folder; no 'nowhere' in " + d);
+  // Datasets one level down.
+  CHECK(load_error(d + "/scenes") ==
+        d + "/scenes: no dataset here, but its subfolder flower holds one: give " + flower);
+  // Photos without poses: from-photos makes a dataset of them; in images/ too.
+  touch(d + "/photos/IMG_0001.JPG");
+  touch(d + "/photos/IMG_0002.png");
+  touch(d + "/photos/notes.txt");
+  const std::string make_them = "make a dataset of them with `mipnerf-cl dataset from-photos ";
+  CHECK(load_error(d + "/photos") == d + "/photos: 2 photos (PNG or JPEG) but no camera poses; " + make_them + d +
+                                         "/photos OUT` (COLMAP), then train on OUT");
+  touch(d + "/capture/images/a.jpeg");
+  CHECK(load_error(d + "/capture") ==
+        d + "/capture: 1 photo in images/ but no camera poses (no poses_bounds.npy or transforms.json); " + make_them +
+            d + "/capture/images OUT` (COLMAP), then train on OUT");
+  // A COLMAP workspace: its model is imported, not made again.
+  touch(d + "/capture/sparse/0/cameras.bin");
+  const std::string model = d + "/capture/sparse/0";
+  CHECK(load_error(d + "/capture") == d + "/capture: a COLMAP model (" + model + ") but no dataset; import it with " +
+                                          "`mipnerf-cl dataset import-colmap " + model + " " + d +
+                                          "/capture/images OUT`, then train on OUT");
+  // An empty folder: the one place where writing the procedural scene is the likely wish.
+  std::filesystem::create_directories(d + "/empty");
+  const std::string fill_it =
+      "put a dataset there, or write the built-in procedural scene into it with `mipnerf-cl "
+      "make-scene ";
+  CHECK(load_error(d + "/empty") == d + "/empty: an empty folder; " + fill_it + d + "/empty`");
 }

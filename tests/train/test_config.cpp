@@ -206,6 +206,31 @@ TEST_CASE("config: an unknown value of an enum setting is refused with the setti
   CHECK_THROWS_WITH_AS(train::find_setting("nosuch"), doctest::Contains("unknown setting 'nosuch'"), Error);
 }
 
+TEST_CASE("config: an unknown setting names the closest, not all of them, and where the list is") {
+  CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"stpes", "10"}}),
+                       "unknown setting 'stpes'; did you mean 'steps'? (mipnerf-cl train --help lists every setting)",
+                       Error);
+  CHECK_THROWS_WITH_AS(train::find_setting("sampels"),
+                       "unknown setting 'sampels'; did you mean 'num_samples'? (mipnerf-cl train --help lists every "
+                       "setting)",
+                       Error);
+  CHECK_THROWS_WITH_AS(train::find_setting("xyzzy"),
+                       "unknown setting 'xyzzy' (mipnerf-cl train --help lists every setting)", Error);
+}
+
+TEST_CASE("config: each setting's type for --help follows its member") {
+  CHECK(train::find_setting("factor").type == "INT");
+  CHECK(train::find_setting("steps").type == "INT");
+  CHECK(train::find_setting("seed").type == "INT");
+  CHECK(train::find_setting("lr_init").type == "FLOAT");
+  CHECK(train::find_setting("spherify").type == "BOOL");
+  CHECK(train::find_setting("background").type == "NAME");
+  for (const auto& s : train::settings()) {
+    INFO(s.name);
+    CHECK((s.type == "INT" || s.type == "FLOAT" || s.type == "BOOL" || s.type == "NAME"));
+  }
+}
+
 TEST_CASE("config: JSON spells enums as before, and records the --variant bundle beside the model family") {
   const auto c = train::resolve_config("tiny", "mipnerf-no-ipe", {});
   REQUIRE(c.variant_bundle.has_value());

@@ -41,18 +41,13 @@ const FormatReader& format_reader(DatasetFormat format) {
 const FormatReader& detect_reader(const std::string& path) {
   std::error_code ec;
   const auto status = fs::status(path, ec);
-  if (!fs::exists(status)) {
-    throw Error(path + ": no such file or folder (create a scene with `mipnerf-cl make-scene " + path + "`)");
+  if (fs::exists(status)) {
+    const bool is_file = fs::is_regular_file(status);
+    for (const FormatReader* reader : format_readers()) {
+      if (reader->detect(fs::path(path), is_file)) return *reader;
+    }
   }
-  const bool is_file = fs::is_regular_file(status);
-  for (const FormatReader* reader : format_readers()) {
-    if (reader->detect(fs::path(path), is_file)) return *reader;
-  }
-  if (is_file) throw Error(path + ": not a dataset file: give a folder, a transforms.json or a metadata.json");
-  throw Error(path +
-              ": no dataset here: expected transforms_train.json (Blender), metadata.json (multiscale "
-              "Blender), transforms.json or poses_bounds.npy (LLFF); `mipnerf-cl make-scene DIR` writes a "
-              "procedural scene");
+  throw_no_dataset(path);
 }
 
 std::string format_file(const std::string& path, const char* file_name) {

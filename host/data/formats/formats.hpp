@@ -62,6 +62,11 @@ const FormatReader& format_reader(DatasetFormat format);
 // and when the path does not exist.
 const FormatReader& detect_reader(const std::string& path);
 
+// Throws the one-line error for a path that holds no dataset, saying what to do: a missing path (with the name
+// meant, when one is close), a COLMAP model (`dataset import-colmap`), photos without poses (`dataset from-photos`), an
+// empty folder (`make-scene`), datasets in its subfolders, or what a dataset folder holds (formats/no_dataset.cpp).
+[[noreturn]] void throw_no_dataset(const std::string& path);
+
 // The rows, in detection order.
 const std::vector<const FormatReader*>& format_readers();
 
