@@ -7,8 +7,11 @@
 # mipnerf_add_checked_test(name [EXPECT regex] [EXIT 0|nonzero] COMMAND program args...): `program` may be a target
 # (mipnerf-cl); the test passes when the command exits with EXIT (default 0), its output (stdout and stderr merged)
 # matches EXPECT, and no sanitizer reported.
+# A ';' in EXPECT is a list separator to CMake: PARSE_ARGV keeps the pattern whole, and it travels to the runner as
+# @SEMICOLON@ (run_checked.cmake puts the ';' back). Unparsed, `a; b` was checked as `a` alone.
 function(mipnerf_add_checked_test name)
-  cmake_parse_arguments(T "ONE_LINE" "EXPECT;EXIT" "COMMAND" ${ARGN})
+  cmake_parse_arguments(PARSE_ARGV 1 T "ONE_LINE" "EXPECT;EXIT" "COMMAND")
+  string(REPLACE ";" "@SEMICOLON@" T_EXPECT "${T_EXPECT}")
   list(GET T_COMMAND 0 program)
   if(TARGET "${program}")
     list(REMOVE_AT T_COMMAND 0)
@@ -23,8 +26,9 @@ endfunction()
 # The CLI's user-facing errors: mipnerf_add_cli_error_test(name PATTERN regex ARGS args...) expects a non-zero exit
 # and exactly one line on stderr, matching the regex.
 function(mipnerf_add_cli_error_test name)
-  cmake_parse_arguments(T "" "PATTERN" "ARGS" ${ARGN})
-  mipnerf_add_checked_test("cli: ${name}" ONE_LINE EXIT nonzero EXPECT "${T_PATTERN}" COMMAND mipnerf-cl ${T_ARGS})
+  cmake_parse_arguments(PARSE_ARGV 1 T "" "PATTERN" "ARGS")
+  string(REPLACE ";" "@SEMICOLON@" pattern "${T_PATTERN}")
+  mipnerf_add_checked_test("cli: ${name}" ONE_LINE EXIT nonzero EXPECT "${pattern}" COMMAND mipnerf-cl ${T_ARGS})
 endfunction()
 
 # An error test must fail when the program crashes after printing the expected line (a signal, or a status above
@@ -180,6 +184,11 @@ mipnerf_add_cli_error_test("dataset import-colmap: a missing argument" PATTERN "
 
 # Training (host/train, cli/cmd_train.cpp): bad settings are one line; a short run on the fixture scene trains,
 # writes its outputs, refuses to overwrite, and resumes.
+# The runner checks a pattern whole, past its ';': this one matches up to the ';' only, so its check must fail
+# (WILL_FAIL: the test passes when the runner fails).
+mipnerf_add_cli_error_test("a pattern is checked whole, past a semicolon" PATTERN "unknown preset 'nosuch'; the presets are: none of these"
+  ARGS train --preset nosuch)
+set_tests_properties("cli: a pattern is checked whole, past a semicolon" PROPERTIES WILL_FAIL TRUE)
 mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosuch'; the presets are: paper, quick, small, tiny"
   ARGS train --preset nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: bad setting value" PATTERN "setting 'num_samples' = '12x': expected an integer"

@@ -8,6 +8,7 @@
 # CTest's PASS_REGULAR_EXPRESSION would make CTest ignore the exit status, and a line printed before a crash, a
 # non-zero exit or a sanitizer report would pass: here each of them fails the test, naming which.
 string(REPLACE "|" ";" command "${COMMAND}")
+string(REPLACE "@SEMICOLON@" ";" EXPECT "${EXPECT}")  # cli_tests.cmake's encoding of a ';' in the pattern
 if(NOT DEFINED EXIT OR EXIT STREQUAL "")
   set(EXIT 0)
 endif()
