@@ -1,11 +1,11 @@
 // `mipnerf-cl dataset from-photos PHOTOS OUT`: COLMAP (Debian's `colmap`, CPU SIFT) run from the tool — feature
 // extraction, matching and mapping, with progress — then the import of its largest model (data/import): a
 // forward-facing capture becomes an LLFF capture, anything else a transforms.json. COLMAP's own output goes to
-// OUT/colmap/colmap.log; its work (database, sparse models) stays in OUT/colmap.
+// OUT/colmap/colmap.log; its work (database, sparse models) stays in OUT/colmap. The photos are read (headers only)
+// first: those of another size than most are left out, named (cli/photo_folder.hpp).
 #include <sys/wait.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -22,6 +22,7 @@
 #include "data/import/colmap_model.hpp"
 #include "dataset_import.hpp"
 #include "io/file.hpp"
+#include "photo_folder.hpp"
 #include "progress.hpp"
 
 namespace mipnerf::cli {
@@ -39,22 +40,18 @@ struct FromPhotosArgs {
   int mapper_attempts = 3;    // mapper runs while photos stay unregistered (see map_photos)
 };
 
-bool is_photo(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".jpg" || ext == ".jpeg" || ext == ".png";
-}
-
-size_t count_photos(const std::string& folder) {
-  std::error_code ec;
-  if (!fs::is_directory(folder, ec)) throw Error(folder + ": no such folder (expected the photos)");
-  size_t count = 0;
-  for (const auto& entry : fs::directory_iterator(folder, ec)) count += entry.is_regular_file() && is_photo(entry.path());
-  if (count < 3) {
-    throw Error(folder + ": " + std::to_string(count) + " photos (PNG or JPEG); COLMAP needs at least 3 overlapping "
-                "views, a capture 20 or more");
+// The photos COLMAP is given, after a warning naming any left out; at least 3.
+PhotoSelection select_photos(const std::string& folder) {
+  const PhotoSelection selection = select_photo_size(list_photos(folder), folder);
+  if (!selection.other_size.empty()) std::cerr << "mipnerf-cl: warning: " << describe_left_out(selection) << "\n";
+  if (selection.names.size() < 3) {
+    throw Error(folder + ": " + std::to_string(selection.names.size()) + " photos (PNG or JPEG)" +
+                (selection.other_size.empty() ? std::string()
+                                                : " of one size (" + std::to_string(selection.other_size.size()) +
+                                                      " of others left out)") +
+                "; COLMAP needs at least 3 overlapping views, a capture 20 or more");
   }
-  return count;
+  return selection;
 }
 
 // The colmap executable, or one line saying what to install.
@@ -167,29 +164,93 @@ void run_matcher(const MappingJob& job, bool again, std::ofstream& log) {
   progress.finish();
 }
 
-// One run of COLMAP's mapper into `out`; returns the registered count of its largest model (0: none).
-size_t run_mapper(const MappingJob& job, const fs::path& out, std::ofstream& log) {
+// COLMAP's mapper starts a model from one pair of photos: the pair with the most matches among those whose views are
+// far enough apart, Mapper.init_min_tri_angle (the median angle between the rays to their common points; default 16°),
+// and whose relative pose has enough inliers, Mapper.init_min_num_inliers (100). When no pair qualifies it relaxes
+// both, twice (COLMAP 3.8, controllers/incremental_mapper.cc): 100 → 50 → 25 inliers, 16° → 8° → 4°. A forward-facing
+// capture can have less parallax than that: in one matching of the first 15 photos of LLFF's flower at 504x378, no
+// pair qualified above 4.5° (no model from 18°, relaxed to 4.5°; 4° found one), so whether a pair makes 4° depends on
+// the run (issue 47: 0 of 15 registered three times, 13 the next time; the same photos as JPEGs of quality 75: 17 of 24
+// attempts of COLMAP's defaults kept no model, 2 runs of 9 none in 3 attempts). With still less parallax (make-scene
+// --forward-facing --grid-width 0.1 or 0.06) a pair does start a model at 4°, but every model stops growing under
+// 10 photos and is dropped (Mapper.min_model_size), in each of 7 runs. The settings for small baselines start where
+// COLMAP's relaxation ended, 2°, and so go down to 0.5° (LLFF's own COLMAP wrapper, imgs2poses, starts at 4°): they
+// registered all 12 views of both those captures (at worst after one more matching) and all 15 flower photos in each of
+// 6 runs, after one matching. Points keep COLMAP's filters (1.5° to triangulate or keep one): lowering them to 0.5°
+// as well registered no more on those captures and took twice as long.
+struct MapperSettings {
+  bool small_baseline = false;
+};
+constexpr const char* kSmallBaselineInitAngle = "2";
+
+std::vector<std::string> mapper_options(const MapperSettings& settings) {
+  if (!settings.small_baseline) return {};
+  return {"--Mapper.init_min_tri_angle", kSmallBaselineInitAngle};
+}
+
+// What one mapper run found, from its models and its log.
+struct MapperRun {
+  fs::path out;               // its output folder
+  size_t registered = 0;      // photos in its largest model (0: none)
+  bool no_matches = false;    // "No images with matches found in the database": no pair of photos matched
+  bool initialized = false;   // "Initializing with image pair": a pair started a model (which may have been dropped)
+  bool no_initial_pair = false;  // "No good initial image pair found"
+};
+
+// No model because no pair of photos qualified to start one (see MapperSettings).
+bool lacked_initial_pair(const MapperRun& run) {
+  return run.registered == 0 && !run.no_matches && !run.initialized && run.no_initial_pair;
+}
+
+// One run of COLMAP's mapper into `out`.
+MapperRun run_mapper(const MappingJob& job, const fs::path& out, const MapperSettings& settings, std::ofstream& log) {
+  std::error_code ec;
+  fs::remove_all(out, ec);
   io::make_directories(out.string());
   Progress progress("COLMAP mapping", static_cast<int64_t>(job.n_photos));
   const std::regex registered_so_far(R"(Registering image #\d+ \((\d+)\))");
+  MapperRun run;
+  run.out = out;
+  std::vector<std::string> argv = {job.colmap, "mapper", "--database_path", job.database.string(), "--image_path",
+                                   job.photos, "--output_path", out.string()};
+  for (const auto& option : mapper_options(settings)) argv.push_back(option);
   try {
-    run_step("mapping",
-             {job.colmap, "mapper", "--database_path", job.database.string(), "--image_path", job.photos,
-              "--output_path", out.string()},
-             log, [&](const std::string& line) {
-               std::smatch m;
-               if (std::regex_search(line, m, registered_so_far)) progress.update(std::stoll(m[1].str()), "registered");
-             });
+    run_step("mapping", argv, log, [&](const std::string& line) {
+      std::smatch m;
+      if (std::regex_search(line, m, registered_so_far)) progress.update(std::stoll(m[1].str()), "registered");
+      if (line.find("No images with matches found") != std::string::npos) run.no_matches = true;
+      if (line.find("Initializing with image pair") != std::string::npos) run.initialized = true;
+      if (line.find("No good initial image pair found") != std::string::npos) run.no_initial_pair = true;
+    });
   } catch (const Error&) {
     size_t none = 0;
     if (!largest_model(out, none).empty()) throw;
-    // COLMAP's mapper fails ("failed to create sparse model") when no pair of photos could start a model.
+    // COLMAP's mapper fails ("failed to create sparse model") when it kept no model.
   }
   progress.finish();
-  size_t registered = 0;
-  largest_model(out, registered);
-  return registered;
+  largest_model(out, run.registered);
+  return run;
 }
+
+// Why a run of COLMAP's default settings kept no model (photos did match), in a few words.
+std::string why_no_model(const MapperRun& run, size_t n_photos) {
+  if (lacked_initial_pair(run)) {
+    return "COLMAP's mapper found no pair of photos to start from with enough parallax (it asks for 16° between "
+           "their views, relaxed to 4°; a forward-facing capture can have less)";
+  }
+  if (run.initialized) {
+    return "COLMAP's mapper kept no model: each it started stopped growing under " +
+           std::to_string(std::min<size_t>(n_photos, 10)) + " photos and was dropped (Mapper.min_model_size)";
+  }
+  return "COLMAP's mapper kept no model";
+}
+
+// What mapping left: the run that registered the most, the last run (whose log says why when none found a model),
+// and whether the settings for small baselines were used.
+struct Mapping {
+  MapperRun best, last;
+  bool small_baseline = false;
+};
 
 // COLMAP's matching and mapping, both run again (up to `attempts` times) while photos stay unregistered; the best
 // run's models end up in OUT/colmap/sparse. Why: COLMAP's result varies from run to run (3.8 seeds its random
@@ -198,30 +259,64 @@ size_t run_mapper(const MappingJob& job, const fs::path& out, std::ofstream& log
 // suite's 20 procedural photos (stripes: repetitive features) 1 run in 6 to 8 did on a loaded machine (14 or 11 of
 // 20 registered); mapping the same matches again gave the same 11 three times, so a new attempt matches again too.
 // It costs a matching and a mapping only when a run was incomplete.
-void map_photos(const MappingJob& job, int attempts, std::ofstream& log) {
-  const fs::path sparse = job.work / "sparse";
-  const size_t n_photos = job.n_photos;
-  fs::path best;
-  size_t best_registered = 0;
-  for (int attempt = 1; attempt <= attempts; ++attempt) {
-    const fs::path out = job.work / ("mapper_attempt_" + std::to_string(attempt));
+// When the mapper kept no model though photos matched (no pair to start from, or models that stopped growing), the
+// same matches are mapped again at once with the settings for small baselines (MapperSettings), which later attempts
+// keep. When even they find no pair to start from, or no photos matched at all, matching again does not help (a trait
+// of the photos, not of the run) and mapping stops there.
+Mapping map_photos(const MappingJob& job, int attempts, std::ofstream& log) {
+  Mapping mapping;
+  MapperSettings settings;
+  const auto keep_best = [&mapping](const MapperRun& run) {
     std::error_code ec;
-    fs::remove_all(out, ec);
-    run_matcher(job, attempt > 1, log);
-    const size_t registered = run_mapper(job, out, log);
-    if (best.empty() || registered > best_registered) {
-      if (!best.empty()) fs::remove_all(best, ec);
-      best = out;
-      best_registered = registered;
+    if (mapping.best.out.empty() || run.registered > mapping.best.registered) {
+      if (!mapping.best.out.empty()) fs::remove_all(mapping.best.out, ec);
+      mapping.best = run;
     } else {
-      fs::remove_all(out, ec);
+      fs::remove_all(run.out, ec);
     }
-    if (best_registered == n_photos || attempt == attempts) break;
-    std::cerr << "mipnerf-cl: COLMAP's mapper registered " << best_registered << " of " << n_photos
+  };
+  for (int attempt = 1; attempt <= attempts; ++attempt) {
+    const std::string name = "mapper_attempt_" + std::to_string(attempt);
+    run_matcher(job, attempt > 1, log);
+    mapping.last = run_mapper(job, job.work / name, settings, log);
+    if (!settings.small_baseline && mapping.last.registered == 0 && !mapping.last.no_matches) {
+      std::cerr << "mipnerf-cl: " << why_no_model(mapping.last, job.n_photos)
+                << ": mapping the same matches again with settings for small baselines (Mapper.init_min_tri_angle "
+                << kSmallBaselineInitAngle << "°, relaxed to 0.5°), as a forward-facing capture can need\n";
+      settings.small_baseline = mapping.small_baseline = true;
+      std::error_code ec;
+      fs::remove_all(mapping.last.out, ec);
+      mapping.last = run_mapper(job, job.work / (name + "_small_baseline"), settings, log);
+    }
+    keep_best(mapping.last);
+    if (mapping.best.registered == job.n_photos || attempt == attempts) break;
+    if (mapping.best.registered == 0 && (mapping.last.no_matches || lacked_initial_pair(mapping.last))) break;
+    std::cerr << "mipnerf-cl: COLMAP's mapper registered " << mapping.best.registered << " of " << job.n_photos
               << " photos; matching and mapping again (attempt " << attempt + 1 << " of " << attempts
               << ": COLMAP's result varies from run to run)\n";
   }
-  fs::rename(best, sparse);
+  fs::rename(mapping.best.out, job.work / "sparse");
+  return mapping;
+}
+
+// Why mapping found no model, from what COLMAP's mapper said, and what to try.
+std::string no_model_message(const Mapping& mapping, size_t n_photos, const fs::path& log_path) {
+  const std::string photos = std::to_string(n_photos) + " photos", log = "COLMAP's log: " + log_path.string();
+  if (mapping.last.no_matches) {
+    return "COLMAP found no model: no two of the " + photos + " share enough matching features (too little texture, "
+           "or too little overlap between them? " + log + ")";
+  }
+  if (lacked_initial_pair(mapping.last)) {
+    return "COLMAP found no model: no pair of the " + photos + " could start one, even with settings for small "
+           "baselines: none has both 25 or more matching features and views 0.5° or more apart (take photos that "
+           "overlap more, moving the camera sideways between them; " + log + ")";
+  }
+  if (mapping.last.initialized) {
+    return "COLMAP found no model: each it started stayed under " + std::to_string(std::min<size_t>(n_photos, 10)) +
+           " photos and was dropped (its Mapper.min_model_size): too little overlap between the photos? Take more, "
+           "each overlapping its neighbours (" + log + ")";
+  }
+  return "COLMAP found no model: 0 of " + photos + " registered (" + log + ")";
 }
 
 void run_from_photos(const FromPhotosArgs& args) {
@@ -235,35 +330,40 @@ void run_from_photos(const FromPhotosArgs& args) {
     throw Error("--camera-model '" + args.camera_model + "': expected SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, "
                 "OPENCV or OPENCV_FISHEYE");
   }
-  const size_t photos = count_photos(args.photos);
+  const PhotoSelection selection = select_photos(args.photos);
+  const size_t photos = selection.names.size();
   const std::string colmap = find_colmap(args.colmap);
   const fs::path work = fs::path(args.out) / "colmap";
-  const fs::path database = work / "database.db", sparse = work / "sparse";
+  const fs::path database = work / "database.db", sparse = work / "sparse", photo_list = work / "photos.txt";
   std::error_code ec;
   fs::remove(database, ec);  // a fresh run: COLMAP appends to an existing database
   fs::remove_all(sparse, ec);
   io::make_directories(work.string());
+  {
+    // The photos COLMAP reads: by default it takes every file under the folder, subfolders included.
+    std::ofstream list(photo_list);
+    for (const auto& name : selection.names) list << name << "\n";
+    if (!list.flush()) throw Error(photo_list.string() + ": cannot write the list of photos here");
+  }
   std::ofstream log(work / "colmap.log");
   if (!log) throw Error((work / "colmap.log").string() + ": cannot write COLMAP's log here");
-  std::cerr << "mipnerf-cl: COLMAP on " << photos << " photos in " << args.photos << " (log: " << (work / "colmap.log").string()
-            << ")\n";
+  std::cerr << "mipnerf-cl: COLMAP on " << photos << " photos (" << selection.width_px << "x" << selection.height_px
+            << ") in " << args.photos << " (log: " << (work / "colmap.log").string() << ")\n";
   {
     Progress progress("COLMAP features", static_cast<int64_t>(photos));
     run_step("feature extraction",
              {colmap, "feature_extractor", "--database_path", database.string(), "--image_path", args.photos,
-              "--ImageReader.camera_model", args.camera_model, "--ImageReader.single_camera", "1",
-              "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_image_size", std::to_string(args.max_size),
-              "--SiftExtraction.max_num_features", std::to_string(args.max_features)},
+              "--image_list_path", photo_list.string(), "--ImageReader.camera_model", args.camera_model,
+              "--ImageReader.single_camera", "1", "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_image_size",
+              std::to_string(args.max_size), "--SiftExtraction.max_num_features", std::to_string(args.max_features)},
              log, counter(progress, std::regex(R"(Processed file \[(\d+)/(\d+)\])")));
     progress.finish();
   }
-  map_photos({colmap, database, args.photos, args.matcher, work, photos}, args.mapper_attempts, log);
+  const Mapping mapping = map_photos({colmap, database, args.photos, args.matcher, work, photos},
+                                     args.mapper_attempts, log);
   size_t registered = 0;
   const std::string model = largest_model(sparse, registered);
-  if (model.empty()) {
-    throw Error("COLMAP found no model: 0 of " + std::to_string(photos) + " photos registered (too little texture or "
-                "overlap between them? COLMAP's log: " + (work / "colmap.log").string() + ")");
-  }
+  if (model.empty()) throw Error(no_model_message(mapping, photos, work / "colmap.log"));
   if (registered < 3 || 2 * registered < photos) {
     throw Error("COLMAP registered only " + std::to_string(registered) + " of " + std::to_string(photos) +
                 " photos (" + model + "): take more overlapping photos, or try --matcher exhaustive");
@@ -271,6 +371,10 @@ void run_from_photos(const FromPhotosArgs& args) {
   if (registered < photos) {
     std::cerr << "mipnerf-cl: warning: COLMAP registered " << registered << " of " << photos
               << " photos; the others are left out\n";
+  }
+  if (mapping.small_baseline) {
+    std::cerr << "mipnerf-cl: COLMAP registered " << registered << " of " << photos
+              << " photos with the settings for small baselines\n";
   }
   data::ColmapImportOptions options;
   options.layout = layout;
@@ -301,7 +405,8 @@ void register_from_photos(CLI::App& dataset) {
   cmd->add_option("--colmap", args->colmap, "The COLMAP executable")->capture_default_str();
   cmd->add_option("--mapper-attempts", args->mapper_attempts,
                   "Runs of COLMAP's matching and mapping while photos stay unregistered (its result varies from run "
-                  "to run); the run that registers the most is kept")
+                  "to run); the run that registers the most is kept. A run whose mapper found no pair of photos to "
+                  "start from maps its matches again with settings for small baselines (forward-facing captures)")
       ->check(CLI::Range(1, 10))
       ->capture_default_str();
   cmd->add_option("--camera-model", args->camera_model,

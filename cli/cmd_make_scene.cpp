@@ -98,6 +98,10 @@ void register_make_scene(CLI::App& app) {
                 "layout (poses_bounds.npy, images/, images_<factor>/); --size is then the image width (4:3), "
                 "default 256");
   cmd->add_option("--grid", *grid, "--forward-facing: cameras across x down (e.g. 5x4)")->capture_default_str();
+  cmd->add_option("--grid-width", forward->grid_width,
+                  "--forward-facing: the camera grid's width in scene units (height: half), 4 from the scene; "
+                  "narrower: less parallax")
+      ->capture_default_str();
   cmd->add_option("--factor", forward->factor, "--forward-facing: also write images_<factor>/ (1: none)")
       ->capture_default_str();
   cmd->add_flag("--jpeg", forward->jpeg, "--forward-facing: write the images as JPEG, as a phone capture holds them");
@@ -126,7 +130,7 @@ void register_make_scene(CLI::App& app) {
                 << ", poses_bounds.npy" << (forward->jpeg ? "; JPEG" : "") << ")\n";
       return;
     }
-    for (const char* forward_only : {"--grid", "--factor", "--jpeg"}) {
+    for (const char* forward_only : {"--grid", "--grid-width", "--factor", "--jpeg"}) {
       if (cmd->count(forward_only) > 0) throw Error(std::string(forward_only) + " applies to --forward-facing");
     }
     data::write_procedural_scene(*out, *options, print_log);

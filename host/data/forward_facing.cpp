@@ -95,6 +95,9 @@ void validate(const ForwardFacingOptions& o) {
     throw Error("make-scene --forward-facing: the camera grid must be at least 2 x 2 and at most 400 views");
   }
   if (o.samples_per_axis < 1 || o.samples_per_axis > 64) throw Error("make-scene: --samples must be 1 to 64");
+  if (!(o.grid_width >= 0.01 && o.grid_width <= 4.0)) {
+    throw Error("make-scene --forward-facing: --grid-width must be 0.01 to 4 (scene units; the scene is 4 away)");
+  }
 }
 
 std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) {
@@ -103,9 +106,11 @@ std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) 
   const uint32_t height = options.width_px * 3 / 4;
   for (uint32_t row = 0; row < options.views_y; ++row) {
     for (uint32_t col = 0; col < options.views_x; ++col) {
-      // A hand-held grid: 1.2 wide, 0.6 high, axes converging gently on the wall.
-      const double x = -0.6 + 1.2 * col / (options.views_x - 1);
-      const double z = 1.1 - 0.6 * row / (options.views_y - 1);
+      // A hand-held grid: 1.2 wide, 0.6 high by default (grid_width), centred at x 0 and z 0.8, axes converging
+      // gently on the wall. Written so that the default grid is the one the earlier constants gave, bit for bit.
+      const double grid_height = 0.5 * options.grid_width;
+      const double x = -0.5 * options.grid_width + options.grid_width * col / (options.views_x - 1);
+      const double z = 1.1 - 0.5 * (0.6 - grid_height) - grid_height * row / (options.views_y - 1);
       Camera camera;
       camera.camera_to_world = look_at_pose({x, kCameraY, z}, {0.5 * x, kWallY, 0.0}, {0, 0, 1});
       camera.width_px = options.width_px;

@@ -20,6 +20,8 @@ struct ForwardFacingOptions {
   uint32_t samples_per_axis = 4;  // jittered supersampling per pixel
   unsigned threads = 0;           // 0: every hardware thread
   double camera_angle_x = 0.87;   // horizontal field of view, radians (50°)
+  double grid_width = 1.2;        // the camera grid's width in scene units (its height: half), 4 from the scene's
+                                  // centre: neighbours ~4° apart; narrower, a capture of small parallax
   bool jpeg = false;              // write the images as JPEG (quality 95), as a phone capture holds them; else PNG
 };
 
