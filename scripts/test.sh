@@ -13,7 +13,8 @@
 #              `quality` tests and the tests of what does not depend on the OpenCL runtime: the CLI's (arguments,
 #              files, messages; the device work they start is the one the library's tests run here), the layering
 #              check, the reliability (SIGKILL, disk-full), bench-report and MPI tests (ranks, sharding, a killed
-#              rank: the process orchestration; each rank's kernels are the ones the other tests run here); the
+#              rank: the process orchestration; each rank's kernels are the ones the other tests run here) and the
+#              bundle test (label `bundle`: it runs PoCL through the bundle's own ICD file, whatever the stage); the
 #              other stages run them
 # The `quality` tests (tests/quality/: a scene trained for hundreds of steps to a PSNR) run on PoCL alone: the code
 # they run is the code the train, eval and graph tests run in every stage, and their minutes there bought nothing
@@ -163,7 +164,7 @@ fi
 if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
     eval "$environment"
-    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench|mpi)$' -E '^(cli|layers): '
+    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench|mpi|bundle)$' -E '^(cli|layers): '
     if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM" quick-cross; fi
   else
     record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"
