@@ -222,7 +222,7 @@ void run_render(const RenderArgs& args, const CLI::App& cmd) {
   // Once the device is ready (the job's first report, after the warm-up): how much, and about how long.
   const std::optional<RecordedRate> rate =
       parallel::world().distributed() ? std::nullopt : recorded_rate(run_folder, ctx->device_info().name);
-  RenderEstimate estimate(frames.cameras, args.supersample, rate);
+  RenderEstimate estimate(frames.cameras, args.supersample, rate, !args.path.empty());
   eval::RenderJob job;
   job.model = &model;
   job.checkpoint = checkpoint;

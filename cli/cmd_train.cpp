@@ -236,7 +236,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   run.on_val_start = [&](size_t images) { val_progress.emplace("render val", static_cast<int64_t>(images)); };
   run.val_progress = [&](size_t done, size_t) { val_progress->update(static_cast<int64_t>(done)); };
   const eval::TrainAndEvaluateResult result = eval::train_and_evaluate(*ctx, config, run);
-  if (result.val) val_progress->finish();
+  if (result.val && val_progress) val_progress->finish();  // none when the last step's score was the evaluation
   val_progress.reset();  // a failed evaluation's line ends before the warning
   if (!root) return;
   if (!result.val_error.empty()) std::cerr << "mipnerf-cl: warning: no val evaluation: " << result.val_error << "\n";

@@ -26,12 +26,13 @@ std::optional<RecordedRate> recorded_rate(const std::string& run_folder, const s
 }
 
 RenderEstimate::RenderEstimate(const std::vector<Camera>& cameras, uint32_t rays_per_pixel,
-                               std::optional<RecordedRate> rate)
+                               std::optional<RecordedRate> rate, bool path_frames)
     : frames_(cameras.size()),
       megapixels_(0.0),
       first_frame_rays_(cameras.empty() ? 0 : size_t{cameras[0].width_px} * cameras[0].height_px * rays_per_pixel),
       rays_per_pixel_(rays_per_pixel),
-      rate_(std::move(rate)) {
+      rate_(std::move(rate)),
+      path_frames_(path_frames) {
   uint64_t smallest = UINT64_MAX, largest = 0;
   std::string smallest_text, largest_text;
   for (const Camera& c : cameras) {
@@ -39,7 +40,10 @@ RenderEstimate::RenderEstimate(const std::vector<Camera>& cameras, uint32_t rays
     megapixels_ += static_cast<double>(pixels) * rays_per_pixel / 1e6;
     const std::string text = std::to_string(c.width_px) + "x" + std::to_string(c.height_px);
     if (pixels < smallest) smallest = pixels, smallest_text = text;
-    if (pixels > largest) largest = pixels, largest_text = text;
+    if (pixels > largest) {
+      largest = pixels, largest_text = text;
+      largest_width_ = c.width_px, largest_height_ = c.height_px;
+    }
   }
   size_text_ = smallest_text == largest_text ? smallest_text : smallest_text + " to " + largest_text;
 }
@@ -52,8 +56,20 @@ std::string RenderEstimate::opening_line() const {
   if (!rate_) return std::string(head) + ": the time it takes follows its first frame";
   char rate[64];
   std::snprintf(rate, sizeof(rate), "%.3g s/MP", rate_->seconds_per_megapixel);
-  return std::string(head) + ": about " + format_duration(rate_->seconds_per_megapixel * megapixels_) + " at " + rate +
-         " (" + rate_->source + ")";
+  const double seconds = rate_->seconds_per_megapixel * megapixels_;
+  return std::string(head) + ": about " + format_duration(seconds) + " at " + rate + " (" + rate_->source + ")" +
+         shorter_hint(seconds);
+}
+
+// Where a path's render will take more than five minutes: what half its width and height would take (a quarter of
+// the rays), e.g. a spiral of a phone capture on a CPU (120 full-size frames, 20 minutes and more).
+std::string RenderEstimate::shorter_hint(double seconds) const {
+  constexpr double kLongSeconds = 300.0;
+  if (!path_frames_ || seconds <= kLongSeconds || largest_width_ < 16 || largest_height_ < 16) return "";
+  const uint32_t width = largest_width_ / 2, height = largest_height_ / 2;
+  return "; --size " + std::to_string(width) + "x" + std::to_string(height) + " would take about " +
+         format_duration(seconds * (double(width) * height) / (double(largest_width_) * largest_height_)) +
+         ", fewer --frames less";
 }
 
 std::string RenderEstimate::report(size_t rays_done) {

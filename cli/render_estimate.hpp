@@ -26,7 +26,10 @@ std::optional<RecordedRate> recorded_rate(const std::string& run_folder, const s
 
 class RenderEstimate {
  public:
-  RenderEstimate(const std::vector<Camera>& cameras, uint32_t rays_per_pixel, std::optional<RecordedRate> rate);
+  // path_frames: the cameras are a path's (orbit, spiral, a path file), whose --size and --frames the user chooses;
+  // an estimate over five minutes then says what half the size would take.
+  RenderEstimate(const std::vector<Camera>& cameras, uint32_t rays_per_pixel, std::optional<RecordedRate> rate,
+                 bool path_frames = false);
 
   // Fed the job's progress (rays done), returns the line to print now, if any. The first call (the job's first
   // report, once the device is ready) starts the clock and returns "rendering 120 frames of 1008x756 (91.4 MP): about
@@ -42,10 +45,13 @@ class RenderEstimate {
   std::string size_text_;
   uint32_t rays_per_pixel_;
   std::optional<RecordedRate> rate_;
+  bool path_frames_;
+  uint32_t largest_width_ = 0, largest_height_ = 0;
   std::optional<std::chrono::steady_clock::time_point> start_;
   bool first_frame_told_ = false;
 
   std::string opening_line() const;
+  std::string shorter_hint(double seconds) const;
 };
 
 }  // namespace mipnerf::cli

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "core/error.hpp"
 #include "eval/image_output.hpp"
@@ -44,6 +45,15 @@ std::unique_ptr<ImageRenderer> val_renderer(ocl::Context& ctx, train::Trainer& t
                                          render_chunk_rays(trainer.spec(), chunk, ctx.device_info(), 0));
 }
 
+// Each val render written as the final evaluation writes it (val_image_folder; under mpirun, rank 0 writes).
+void write_val_images(const TrainAndEvaluateOptions& options, EvaluateOptions& evaluate) {
+  if (options.val_image_folder.empty() || !parallel::world().is_root()) return;
+  const std::string folder = options.val_image_folder;
+  evaluate.on_image = [folder](const ImageScore& score, const RenderedImage& image, const float* truth) {
+    write_val_png(folder, score, image, truth);
+  };
+}
+
 // The first config.val_views views of the val split (all: 0), rendered in chunks of config.render_chunk_rays.
 SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const TrainAndEvaluateOptions& options) {
   const auto& c = trainer.config();
@@ -53,23 +63,23 @@ SplitScores evaluate_val(ocl::Context& ctx, train::Trainer& trainer, const Train
   EvaluateOptions evaluate;
   evaluate.max_views = static_cast<size_t>(c.val_views);
   evaluate.progress = options.val_progress;
-  if (!options.val_image_folder.empty() && parallel::world().is_root()) {  // under mpirun, rank 0 writes
-    evaluate.on_image = [&](const ImageScore& score, const RenderedImage& image, const float* truth) {
-      write_val_png(options.val_image_folder, score, image, truth);
-    };
-  }
+  write_val_images(options, evaluate);
   if (options.on_val_start) options.on_val_start(select_views(val, evaluate.max_views).size());
   return evaluate_split(*renderer, val, evaluate);
 }
 
 // The val scores during training (config.val_every): the val split is loaded and the renderer built at the first
-// score and kept; the renderer reads the networks the trainer updates in place.
+// score and kept; the renderer reads the networks the trainer updates in place. The score of the last step renders
+// the same views of the same networks as the final evaluation would: it writes the val images and is kept
+// (last_step_scores), so a run scores its val views once at its end, not twice (a minute each on real photos and a
+// CPU).
 struct PeriodicVal {
   ocl::Context* ctx;
   std::string data_path;
-  const TrainAndEvaluateOptions* options;  // its periodic_val callbacks
+  const TrainAndEvaluateOptions* options;  // its periodic_val callbacks, the val image folder
   std::unique_ptr<data::Dataset> val_data;
   std::unique_ptr<ImageRenderer> renderer;
+  std::optional<SplitScores> last_step_scores;  // the score at config.steps, the final evaluation's
 
   train::ValScore operator()(train::Trainer& trainer) {
     const auto started = std::chrono::steady_clock::now();
@@ -77,17 +87,21 @@ struct PeriodicVal {
       val_data = std::make_unique<data::Dataset>(load_val(trainer.config(), data_path));
       renderer = val_renderer(*ctx, trainer, val_data->split("val"));
     }
+    const bool last_step = trainer.step() == trainer.config().steps;
     EvaluateOptions evaluate;
     evaluate.max_views = static_cast<size_t>(trainer.config().val_views);
     evaluate.ray_progress = options->periodic_val_progress;
+    if (last_step && options->evaluate_val) write_val_images(*options, evaluate);
     if (options->on_periodic_val_start) {
       options->on_periodic_val_start(trainer.step(), select_views(val_data->split("val"), evaluate.max_views).size());
     }
-    const SplitScores scores = evaluate_split(*renderer, val_data->split("val"), evaluate);
+    SplitScores scores = evaluate_split(*renderer, val_data->split("val"), evaluate);
     if (options->on_periodic_val_end) {
       options->on_periodic_val_end(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
     }
-    return {scores.mean_psnr, scores.mean_ssim, scores.images.size()};
+    const train::ValScore score{scores.mean_psnr, scores.mean_ssim, scores.images.size()};
+    if (last_step) last_step_scores = std::move(scores);
+    return score;
   }
 };
 
@@ -100,14 +114,18 @@ TrainAndEvaluateResult train_and_evaluate(ocl::Context& ctx, const train::TrainC
   TrainAndEvaluateResult result;
   result.record = train_record(trainer, ctx.device_info().name);
   train::TrainHooks hooks = options.hooks;
+  std::shared_ptr<PeriodicVal> periodic;  // one object the hook's copies share (std::function copies its target)
   if (config.val_every > 0 && !hooks.score_val) {
-    // One object the hook's copies share (std::function copies its target).
-    auto periodic = std::make_shared<PeriodicVal>(PeriodicVal{&ctx, options.data_path, &options, nullptr, nullptr});
+    periodic = std::make_shared<PeriodicVal>(PeriodicVal{&ctx, options.data_path, &options, nullptr, nullptr, {}});
     hooks.score_val = [periodic](train::Trainer& t) { return (*periodic)(t); };
   }
   result.train = trainer.run(hooks);
   if (options.on_trained) options.on_trained(trainer, result.train);
   if (!options.evaluate_val || result.train.interrupted) return result;
+  if (periodic && periodic->last_step_scores && trainer.step() == config.steps) {
+    result.val = std::move(periodic->last_step_scores);  // rendered and written at the last step
+    return result;
+  }
   try {
     result.val = evaluate_val(ctx, trainer, options);
   } catch (const Error& e) {

@@ -26,7 +26,10 @@ struct TrainAndEvaluateOptions {
   // After training, interrupted or not, before the val evaluation; the trainer still holds its networks.
   std::function<void(train::Trainer&, const train::TrainResult&)> on_trained;
 
-  bool evaluate_val = true;                         // score the val split after a run that was not interrupted
+  // Score the val split after a run that was not interrupted. With config.val_every, the score of the last step is
+  // that evaluation (same networks, same views; its images written then), and on_val_start and val_progress are
+  // not called.
+  bool evaluate_val = true;
   std::string val_image_folder;                     // where each val render goes as NNN_scaleK.png; empty: nowhere
   std::function<void(size_t images)> on_val_start;  // val loaded, renderer built, before image 1
   std::function<void(size_t done_images, size_t total)> val_progress;  // after every val image

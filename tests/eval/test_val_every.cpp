@@ -44,7 +44,7 @@ std::vector<ValRow> read_val_log(const std::string& run_dir) {
 }
 
 eval::TrainAndEvaluateResult train_run(const std::string& out, int64_t steps, bool resume,
-                                       train::TrainHooks hooks = {}) {
+                                       train::TrainHooks hooks = {}, eval::TrainAndEvaluateOptions options = {}) {
   const auto config = train::resolve_config("tiny", "mipnerf",
                                             {{"steps", std::to_string(steps)},
                                              {"val_every", "4"},
@@ -52,7 +52,6 @@ eval::TrainAndEvaluateResult train_run(const std::string& out, int64_t steps, bo
                                              {"batch_size", "64"},
                                              {"checkpoint_every", "4"},
                                              {"lr_warmup_steps", "2"}});
-  eval::TrainAndEvaluateOptions options;
   options.data_path = test::small_scene();
   options.out_dir = out;
   options.resume = resume;
@@ -83,6 +82,39 @@ TEST_CASE("val every: rows at every val_every steps and the last, the last equal
   CHECK(rows[2].psnr == doctest::Approx(result.val->mean_psnr).epsilon(1e-6));
   CHECK(rows[2].train_seconds == doctest::Approx(result.train.train_seconds).epsilon(0.02));
   fs::remove_all(out);
+}
+
+TEST_CASE("val every: the last step's score is the final evaluation: the val views are rendered once, images written") {
+  // Before, the last step was scored and then rendered again for the final evaluation (on real photos and a CPU,
+  // a minute each time).
+  const std::string out = test::fresh_run_dir("val-every-once");
+  eval::TrainAndEvaluateOptions options;
+  options.val_image_folder = (fs::path(out) / "val").string();
+  std::vector<int64_t> scored_steps;
+  int final_renders = 0;
+  options.on_periodic_val_start = [&](int64_t step, size_t) { scored_steps.push_back(step); };
+  options.on_val_start = [&](size_t) { ++final_renders; };
+  const auto result = train_run(out, 10, false, {}, options);
+  CHECK(scored_steps == std::vector<int64_t>{4, 8, 10});
+  CHECK(final_renders == 0);
+  REQUIRE(result.val.has_value());
+  REQUIRE(result.val->images.size() == 1);
+  CHECK(read_val_log(out).back().psnr == doctest::Approx(result.val->mean_psnr).epsilon(1e-6));
+  for (const char* name : {"000_scale0.png", "000_scale0_gt.png", "000_scale0_error.png"}) {
+    CHECK_MESSAGE(fs::exists(fs::path(out) / "val" / name), name);
+  }
+  // Without val_every the evaluation renders on its own, as before.
+  const std::string plain = test::fresh_run_dir("val-every-none");
+  const auto config = train::resolve_config("tiny", "mipnerf", {{"steps", "2"}, {"val_views", "1"}, {"batch_size", "64"}});
+  eval::TrainAndEvaluateOptions plain_options;
+  plain_options.data_path = test::small_scene();
+  plain_options.out_dir = plain;
+  plain_options.on_val_start = [&](size_t) { ++final_renders; };
+  const auto plain_result = eval::train_and_evaluate(test::test_context(), config, plain_options);
+  CHECK(final_renders == 1);
+  CHECK(plain_result.val.has_value());
+  fs::remove_all(out);
+  fs::remove_all(plain);
 }
 
 TEST_CASE("val every: the scoring's wall time is not training time") {
