@@ -61,12 +61,13 @@ std::string RenderEstimate::opening_line() const {
          shorter_hint(seconds);
 }
 
-// Where a path's render will take more than five minutes: what half its width and height would take (a quarter of
-// the rays), e.g. a spiral of a phone capture on a CPU (120 full-size frames, 20 minutes and more).
+// Where a path's render will take more than five minutes: what about half its width and height would take (a
+// quarter of the rays), e.g. a spiral of a phone capture on a CPU (120 full-size frames, 20 minutes and more).
 std::string RenderEstimate::shorter_hint(double seconds) const {
   constexpr double kLongSeconds = 300.0;
   if (!path_frames_ || seconds <= kLongSeconds || largest_width_ < 16 || largest_height_ < 16) return "";
-  const uint32_t width = largest_width_ / 2, height = largest_height_ / 2;
+  // Even, as --video's H.264 (4:2:0) needs: 504x378 becomes 252x188, not 252x189.
+  const uint32_t width = (largest_width_ / 2) & ~1u, height = (largest_height_ / 2) & ~1u;
   return "; --size " + std::to_string(width) + "x" + std::to_string(height) + " would take about " +
          format_duration(seconds * (double(width) * height) / (double(largest_width_) * largest_height_)) +
          ", fewer --frames less";
