@@ -15,6 +15,7 @@
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"
 #include "io/checkpoint_file.hpp"
+#include "io/json.hpp"
 #include "gemm/gemm_tuning.hpp"
 #include "train/checkpoint.hpp"
 #include "train/config_file.hpp"
@@ -168,17 +169,35 @@ WhatToTrain what_to_train(const TrainArgs& args, CLI::App& cmd) {
   return what;
 }
 
+// Whether OUT/summary.json holds the scores of a finished run at `step`: a run killed after its last checkpoint,
+// during its val evaluation, has none, and its --resume scores them.
+bool scores_written_at(const std::string& out, int64_t step) {
+  const std::string path = (fs::path(out) / "summary.json").string();
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;
+  try {
+    const io::Json summary = io::read_json(path);
+    return summary.value("steps", int64_t{-1}) == step && !summary.value("interrupted", true);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 void run_train(TrainArgs& args, CLI::App& cmd) {
   const WhatToTrain what = what_to_train(args, cmd);
   const train::TrainConfig& config = what.config;
   const std::string& data_path = what.data_path;
   if (what.previous && what.previous->record.step >= config.steps) {
+    const bool scored = scores_written_at(args.out, what.previous->record.step);
     if (parallel::world().is_root()) {
-      std::cerr << "mipnerf-cl: " << args.out << " is already at step " << what.previous->record.step << " of "
-                << config.steps << ": nothing to train (give --steps N to train further); its scores are in "
-                << (fs::path(args.out) / "summary.json").string() << "\n";
+      std::cerr << "mipnerf-cl: " << args.out << (scored ? " is already at step " : " is at step ")
+                << what.previous->record.step << " of " << config.steps
+                << (scored ? ": nothing to train (give --steps N to train further); its scores are in " +
+                                 (fs::path(args.out) / "summary.json").string()
+                           : " but its val scores were never written (stopped while scoring them): scoring them")
+                << "\n";
     }
-    return;
+    if (scored) return;
   }
   if (parallel::world().is_root()) make_output_folder(args.out, "--out");  // once the inputs are known good
   auto ctx = open_context(args.profile);

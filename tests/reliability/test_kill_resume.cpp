@@ -266,6 +266,19 @@ TEST_CASE("reliability: train --out RUN --resume alone continues a killed run bi
     const fs::path again_log = root / (std::string(c.name) + "-again.log");
     REQUIRE(run_to_end({cli, "train", "--out", killed.string(), "--resume"}, again_log) == 0);
     CHECK(test::read_text(again_log).find("is already at step 24 of 24: nothing to train") != std::string::npos);
+    // Killed after its last checkpoint, while scoring its val views: no summary.json. The resume scores them (the
+    // reference's scores), where it used to say "already at step 24" and point to a file that did not exist.
+    fs::remove(killed / "summary.json");
+    const fs::path scoring_log = root / (std::string(c.name) + "-scoring.log");
+    REQUIRE(run_to_end({cli, "train", "--out", killed.string(), "--resume"}, scoring_log) == 0);
+    const std::string scoring = test::read_text(scoring_log);
+    INFO(scoring);
+    CHECK(scoring.find("is at step 24 of 24 but its val scores were never written") != std::string::npos);
+    REQUIRE(fs::exists(killed / "summary.json"));
+    const auto val_psnr = [](const fs::path& run) {
+      return nlohmann::json::parse(test::read_text(run / "summary.json")).at("val").at("mean_psnr").get<double>();
+    };
+    CHECK(val_psnr(killed) == val_psnr(reference));
   }
   // Other data (by content, whatever its name): refused in one line, the run left as it was.
   const fs::path refused_log = root / "refused.log";
