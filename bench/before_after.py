@@ -22,7 +22,6 @@ elsewhere with --name or --out-dir.
 
 import argparse
 import datetime
-import hashlib
 import json
 import os
 import resource
@@ -36,6 +35,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import report_md  # noqa: E402
 from study_common import commit_of  # noqa: E402
+from lib.provenance import file_sha256  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SIDES = ("before", "after")
@@ -104,14 +104,6 @@ def bench_once(side, binary, args, out, cache):
             "figures": values, "units": units}
 
 
-def sha256(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def measure(args):
     os.makedirs(args.work, exist_ok=True)
     caches = {side: os.path.join(args.work, f"pocl-cache-{side}") for side in SIDES}
@@ -123,7 +115,7 @@ def measure(args):
               "script_commit": commit_of(REPO), "command": " ".join([os.path.relpath(__file__, REPO)] +
                                                                                  sys.argv[1:]),
               "sides": {s: {"label": getattr(args, f"{s}_label"), "binary": binaries[s],
-                            "binary_sha256": sha256(binaries[s])} for s in SIDES},
+                            "binary_sha256": file_sha256(binaries[s])} for s in SIDES},
               "bench_args": f"bench --quick --presets {args.presets} --sections {args.sections} --out DIR "
                             f"{args.bench_args}".rstrip(),
               "rounds": [], "notes": args.note}

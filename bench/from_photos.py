@@ -36,7 +36,6 @@ with the Python of ~/.cache/mipnerf-cl/vs-official-venv (--python). --report-onl
 import argparse
 import datetime
 import glob
-import hashlib
 import json
 import os
 import platform
@@ -50,6 +49,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import report_md  # noqa: E402
 from study_common import read_json, run, train_resumable  # noqa: E402
+from lib.provenance import cpu_model, file_sha256, tree_state  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_PYTHON = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv", "bin", "python")
@@ -58,17 +58,6 @@ TICK = os.sysconf("SC_CLK_TCK")
 
 
 # ---- the machine and the checkout ----
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
 
 def machine_busy_seconds():
     """Busy CPU seconds of the whole machine since boot (/proc/stat: user nice system irq softirq)."""
@@ -99,32 +88,6 @@ class Phase:
                 "own_cores": round(own / wall, 2) if wall > 0 else None,
                 "other_cores": round(max(machine - own, 0.0) / wall, 2) if wall > 0 else None,
                 "load_before": self.load0, "load_after": [round(x, 2) for x in os.getloadavg()]}
-
-
-def git(*args):
-    r = subprocess.run(["git", "--no-optional-locks", "-C", REPO, *args], capture_output=True, text=True)
-    return r.stdout if r.returncode == 0 else None
-
-
-def tree_state():
-    """HEAD and whether tracked files differ from it (read-only git: no index refresh)."""
-    commit = (git("rev-parse", "HEAD") or "unknown").strip()
-    status = git("status", "--porcelain", "--untracked-files=no")
-    dirty_paths = [line[3:] for line in (status or "").splitlines() if line.strip()]
-    state = {"commit": commit, "dirty": bool(dirty_paths), "dirty_paths": dirty_paths}
-    if dirty_paths:
-        diff = subprocess.run(["git", "--no-optional-locks", "-C", REPO, "diff", "HEAD", "--binary"],
-                              capture_output=True).stdout
-        state["diff_sha256"] = hashlib.sha256(diff).hexdigest()
-    return state
-
-
-def file_sha256(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def colmap_version():

@@ -53,6 +53,9 @@ import sys
 import time
 import zlib
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from lib.provenance import file_sha256  # noqa: E402
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
 
@@ -361,12 +364,6 @@ def compare_png(official, png):
             "fraction_over_1_level": float(np.mean(d > 1))}
 
 
-def sha256(path):
-    import hashlib
-    with open(path, "rb") as f:
-        return hashlib.sha256(f.read()).hexdigest()
-
-
 def fmt_db(x):
     return "inf" if x == float("inf") else f"{x:.2f}"
 
@@ -479,7 +476,7 @@ def main(argv):
     doc = {"format": 1, "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
            "commit": commit, "device": args.device, "command": " ".join([os.path.basename(sys.executable)] +
                                                                         [os.path.relpath(__file__, REPO)] + argv),
-           "binary": args.bin, "binary_sha256": sha256(args.bin),
+           "binary": args.bin, "binary_sha256": file_sha256(args.bin),
            "binary_mtime": datetime.datetime.fromtimestamp(os.path.getmtime(args.bin), datetime.timezone.utc)
            .isoformat(timespec="seconds"),
            "our_render_command": ours_cmd and " ".join(ours_cmd), "our_render_seconds": ours_seconds,

@@ -4,6 +4,8 @@ import json
 import os
 import subprocess
 
+from lib.provenance import commit_of  # noqa: F401  (the studies import it from here)
+
 
 def run(command, log_path):
     """Runs a command, its output appended to log_path; raises with the log's tail on failure."""
@@ -33,18 +35,6 @@ def procedural_scene(exe, work):
 
 def device_line(device):
     return f"{device.get('name')} ({device.get('platform')}, driver {device.get('driver_version')})"
-
-
-def commit_of(repo_dir="."):
-    """The checkout's commit (with -dirty when it has uncommitted changes), for a study's record."""
-    try:
-        commit = subprocess.run(["git", "-C", repo_dir, "rev-parse", "--short", "HEAD"], capture_output=True,
-                                text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", repo_dir, "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, check=True).stdout.strip()
-        return commit + ("-dirty" if dirty else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def train_resumable(exe, data, out, preset, variant, settings, log):

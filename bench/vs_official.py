@@ -57,7 +57,6 @@ first time (venv creation). The project's tests never import this file.
 
 import argparse
 import datetime
-import hashlib
 import json
 import os
 import platform
@@ -71,6 +70,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import report_md  # noqa: E402  (standard library only; the worker does not use it)
+from lib.provenance import cpu_model, file_sha256, tree_state  # noqa: E402,F401  (vs_official_llff reads them here)
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
@@ -211,74 +211,7 @@ def load_average():
     return [round(x, 2) for x in os.getloadavg()]
 
 
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-# ---- the checkout's state ----
-
-def git(*args, binary=False):
-    r = subprocess.run(["git", "--no-optional-locks", "-C", REPO, *args], capture_output=True, text=not binary)
-    if r.returncode != 0:
-        fail(f"git {' '.join(args)} failed: {r.stderr if not binary else r.stderr.decode(errors='replace')}")
-    return r.stdout
-
-
-def ignored_untracked(path):
-    """Untracked files the tree check ignores: build folders (build*/) and run folders (runs/)."""
-    top = path.split("/", 1)[0]
-    return ("/" in path or path.endswith("/")) and (top.startswith("build") or top == "runs")
-
-
-def tree_state():
-    """mipnerf-cl's commit and whether the checkout differs from it: `git status --porcelain` of the repository,
-    untracked files under build*/ and runs/ ignored. When it differs, the sha256 of the differences: the bytes of
-    `git diff HEAD --binary`, then for each untracked file (sorted) its path, a NUL, its bytes and a NUL."""
-    commit = git("rev-parse", "HEAD").strip()
-    dirty_paths = []
-    fields = git("status", "--porcelain", "-z", "--untracked-files=all").split("\0")
-    i = 0
-    while i < len(fields):
-        entry = fields[i]
-        i += 1
-        if len(entry) < 4:
-            continue
-        code, path = entry[:2], entry[3:]
-        if "R" in code or "C" in code:  # a rename or copy: the next field is the original path
-            path = f"{fields[i]} -> {path}"
-            i += 1
-        if code == "??" and ignored_untracked(path):
-            continue
-        dirty_paths.append(f"{code} {path}")
-    state = {"commit": commit, "dirty": bool(dirty_paths), "dirty_paths": dirty_paths}
-    if dirty_paths:
-        h = hashlib.sha256(git("diff", "HEAD", "--binary", binary=True))
-        for line in sorted(dirty_paths):
-            if line.startswith("?? "):
-                path = line[3:]
-                h.update(path.encode() + b"\0")
-                with open(os.path.join(REPO, path), "rb") as f:
-                    h.update(f.read())
-                h.update(b"\0")
-        state["diff_sha256"] = h.hexdigest()
-        state["diff_covers"] = ("git diff HEAD --binary, then each untracked file (not under build*/ or runs/): "
-                                "path, NUL, bytes, NUL, in sorted order")
-    return state
-
-
-def file_sha256(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+# ---- the checkout's state (tree_state and file_sha256: lib/provenance.py) ----
 
 
 def official_commit(official):
