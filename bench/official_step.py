@@ -8,7 +8,7 @@ jax_default_matmul_precision = 'float32' (full float32 products), each in its ow
   python3 bench/official_step.py --official DIR --data SCENE --precision default --steps 10 \\
       --our-bench BENCH_JSON --out official_default.json
 
-It reuses bench/vs_official.py's worker side (the official model built by construct_mipnerf, train.train_step
+It reuses the official-code module of the studies (bench/lib/official.py) (the official model built by construct_mipnerf, train.train_step
 pmapped over the local devices as train.py does, Adam behind a flax.optim stand-in, random rays over every training
 image of a Blender scene; the XLA compile and two warm-up steps are not timed; each timed step ends with
 block_until_ready). The settings are our paper preset's, read from the training record of a `mipnerf-cl bench`
@@ -84,7 +84,7 @@ def write_synthetic_scene(folder, views=40, size=64, seed=0):
 
 def install_compat_shims():
     """Stand-ins for what newer jax/flax releases removed and the official train.py still touches at import, beyond
-    vs_official.install_stubs' list; returns the names of those installed (recorded in the results)."""
+    lib/official.py's install_stubs; returns the names of those installed (recorded in the results)."""
     import jax
     shims = []
     if not hasattr(jax.config, "parse_flags_with_absl"):
@@ -144,7 +144,7 @@ def measure(args, result):
     result["jax"] = {"version": jax.__version__, "backend": jax.default_backend(), "devices": [str(d) for d in devices],
                      "device_kind": devices[0].device_kind, "python": platform.python_version()}
     result["shims"] = install_compat_shims()
-    import vs_official  # the worker side: Official, official_settings (standard library at import)
+    from lib import official as official_code  # Official, official_settings (standard library at import)
 
     data = args.data
     if not data or not os.path.isfile(os.path.join(data, "transforms_train.json")):
@@ -152,13 +152,13 @@ def measure(args, result):
         result["scene"] = "synthetic: 40 random 64x64 images"
     else:
         result["scene"] = data
-    official = vs_official.Official(args.official, data, 1)
+    official = official_code.Official(args.official, data, 1)
     result["versions"] = official.versions()
-    result["stubs"] = [name for name, _ in vs_official.STUBS]
+    result["stubs"] = [name for name, _ in official_code.STUBS]
 
     our_config, our_parameters = our_settings(args.our_bench)
     if our_config:
-        model, mlp, config = vs_official.official_settings(our_config)
+        model, mlp, config = official_code.official_settings(our_config)
         result["settings"] = "our paper preset's, from " + os.path.basename(args.our_bench)
     else:  # the official defaults are the paper's (MipNerfModel, MLP and Config)
         model, mlp, config = {}, {}, {"batching": "all_images"}

@@ -44,7 +44,8 @@ What it does (issue 13, deliverable 4), in one run on one machine:
 The official code runs in a worker process (this same file with --worker) inside a virtual
 environment the script creates (--venv) and fills from PyPI with jax[cpu], flax, optax, gin-config,
 numpy, pillow. The official checkout is only read (sys.path), never copied or patched on disk; the
-import-time stand-ins are installed in the worker's memory and listed in the results (STUBS below).
+import-time stand-ins are installed in the worker's memory and listed in the results (STUBS, bench/lib/official.py: the worker side
+this study, vs_official_llff.py and official_step.py share).
 
 A smoke test of the whole path (minutes; write it outside bench/results):
   python3 bench/vs_official.py --official /tmp/official --configs quick --rounds 2 --quick-steps 2 \\
@@ -52,7 +53,7 @@ A smoke test of the whole path (minutes; write it outside bench/results):
 
 Requirements: a built mipnerf-cl (--bin, default build/mipnerf-cl), a checkout of
 github:google/mipnerf (--official), the Blender lego scene (--data), network access to PyPI the
-first time (venv creation). The project's tests never import this file.
+first time (venv creation). The project's tests only import this file (tests/bench/test_scripts_import.py).
 """
 
 import argparse
@@ -60,7 +61,6 @@ import datetime
 import json
 import os
 import platform
-import resource
 import shlex
 import statistics
 import subprocess
@@ -70,32 +70,20 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import report_md  # noqa: E402  (standard library only; the worker does not use it)
-from lib.provenance import cpu_model, file_sha256, tree_state  # noqa: E402,F401  (vs_official_llff reads them here)
+from lib.machine import between, load_average, snapshot  # noqa: E402
+from lib.official import (STUBS, Official, OfficialError, Worker, check_official_checkout, ensure_venv,  # noqa: E402
+                          official_commit, official_settings, serve_requests)
+from lib.provenance import cpu_model, file_sha256, tree_state  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
 DEFAULT_DATA = os.path.normpath(os.path.join(REPO, "..", "shared", "data", "nerf_synthetic", "lego"))
-PIP_PACKAGES = ["jax[cpu]", "flax", "optax", "gin-config", "numpy", "pillow"]
 DEFAULT_ROUNDS = 5
 FORMAT = 2  # results format: 2 = per-round records; 1 (no "format" key) = pooled steps, before 2026-11-26
 
 # The two configurations: our preset and the batch size; everything else comes from the preset.
 CONFIGS = [("quick", "quick", 512), ("paper", "paper", 1024)]
 
-# Import-time stand-ins the official code needs with modern jax/flax (installed in the worker only).
-STUBS = [
-    ("flax.nn", "module with relu/sigmoid/softplus from flax.linen; utils.py registers them with gin "
-                "(old flax.nn was removed from flax)"),
-    ("flax.optim", "module whose Optimizer is a flax.struct dataclass (target, opt_state) with "
-                   "apply_gradient(grad, learning_rate) running optax.adam (b1 0.9, b2 0.999, eps 1e-8 = "
-                   "flax.optim.Adam's defaults) through optax.inject_hyperparams"),
-    ("jax.tree_map", "= jax.tree_util.tree_map (removed from jax; used by utils.shard)"),
-    ("flax.metrics.tensorboard", "empty SummaryWriter (needs tensorflow; train.py imports it, never used here)"),
-    ("cv2", "empty module (internal/datasets.py imports it; its loader is not used: Blender supports only "
-            "factor 0 or 2)"),
-    ("matplotlib, matplotlib.cm", "empty modules (internal/vis.py imports them; not used here)"),
-    ("absl flags", "train.py defines its flags at import; they are parsed with no arguments"),
-]
 
 
 # ----------------------------------------------------------------------------------------------
@@ -165,10 +153,7 @@ def parse_args(argv):
 
 
 def check_inputs_official(args):
-    if not args.official:
-        fail("pass --official DIR, a checkout of github:google/mipnerf (the folder holding train.py)")
-    if not os.path.isfile(os.path.join(args.official, "internal", "models.py")):
-        fail(f"--official {args.official}: no internal/models.py there; pass the google/mipnerf checkout")
+    check_official_checkout(args.official)  # OfficialError: main says it in one line
     if not os.access(args.bin, os.X_OK):
         fail(f"--bin {args.bin}: not an executable; build mipnerf-cl first (cmake --build build)")
 
@@ -194,102 +179,11 @@ def check_inputs(args):
         fail("--quick-steps and --paper-steps must be at least 1")
 
 
-def ensure_venv(args):
-    """Create the venv and install the official code's dependencies from PyPI (once)."""
-    py = os.path.join(args.venv, "bin", "python")
-    marker = os.path.join(args.venv, ".vs_official_ready")
-    if os.path.exists(marker):
-        return py
-    print(f"creating {args.venv} and installing {' '.join(PIP_PACKAGES)} from PyPI", flush=True)
-    subprocess.run([args.python, "-m", "venv", args.venv], check=True)
-    subprocess.run([py, "-m", "pip", "install", "-q"] + PIP_PACKAGES, check=True)
-    open(marker, "w").close()
-    return py
-
-
-def load_average():
-    return [round(x, 2) for x in os.getloadavg()]
-
-
 # ---- the checkout's state (tree_state and file_sha256: lib/provenance.py) ----
-
-
-def official_commit(official):
-    r = subprocess.run(["git", "--no-optional-locks", "-C", official, "rev-parse", "HEAD"], capture_output=True,
-                       text=True)
-    return r.stdout.strip() if r.returncode == 0 else "unknown (not a git work tree)"
 
 
 # ---- what else ran on the machine ----
 
-TICK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
-
-
-def machine_cpu_seconds():
-    """(busy, steal) CPU seconds of the whole machine since boot from /proc/stat, or None."""
-    try:
-        with open("/proc/stat") as f:
-            fields = [int(x) for x in f.readline().split()[1:]]
-    except (OSError, ValueError):
-        return None
-    user, nice, system, idle, iowait, irq, softirq = fields[:7]
-    steal = fields[7] if len(fields) > 7 else 0
-    return (user + nice + system + irq + softirq) / TICK, steal / TICK
-
-
-def own_cpu_seconds(worker_pid):
-    """CPU seconds of this process, its finished children (our mipnerf-cl runs) and the official worker."""
-    own = sum(resource.getrusage(who).ru_utime + resource.getrusage(who).ru_stime
-              for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
-    try:
-        with open(f"/proc/{worker_pid}/stat") as f:
-            fields = f.read().rsplit(")", 1)[1].split()
-        own += sum(int(x) for x in fields[11:15]) / TICK  # utime stime cutime cstime
-    except (OSError, ValueError, IndexError):
-        return None
-    return own
-
-
-def snapshot(worker):
-    return {"t": time.monotonic(), "load": load_average(), "machine": machine_cpu_seconds(),
-            "own": own_cpu_seconds(worker.proc.pid)}
-
-
-def between(before, after):
-    """What a round's snapshots say: wall seconds, load averages, the other processes' CPU (in cores)."""
-    wall = after["t"] - before["t"]
-    out = {"wall_s": wall, "load_before": before["load"], "load_after": after["load"],
-           "other_cpu_cores": None, "steal_cores": None}
-    if before["machine"] and after["machine"] and before["own"] is not None and after["own"] is not None and wall > 0:
-        busy = after["machine"][0] - before["machine"][0]
-        own = after["own"] - before["own"]
-        out["other_cpu_cores"] = max(0.0, busy - own) / wall
-        out["steal_cores"] = (after["machine"][1] - before["machine"][1]) / wall
-    return out
-
-
-class Worker:
-    """The official code in the venv's python, driven by one JSON line per request."""
-
-    def __init__(self, py, args):
-        cmd = [py, os.path.abspath(__file__), "--worker", "--official", args.official,
-               "--data", args.data, "--factor", str(args.factor)]
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-
-    def call(self, **request):
-        self.proc.stdin.write(json.dumps(request) + "\n")
-        self.proc.stdin.flush()
-        line = self.proc.stdout.readline()
-        if not line:
-            fail(f"the official worker died during {request.get('cmd')} (see its stderr above)")
-        reply = json.loads(line)
-        if "error" in reply:
-            fail(f"the official worker failed during {request.get('cmd')}: {reply['error']}")
-        return reply
-
-    def close(self):
-        self.proc.stdin.close()
-        self.proc.wait()
 
 
 def run_ours(args, preset, batch, steps, render_size, render_reps):
@@ -313,37 +207,6 @@ def our_run_entry(record):
     return {"command": record["command_line"], "first_step_s": t["first_step_seconds"],
             "warm_step_seconds": t["warm_step_seconds"], "gemm": record["devices"][0]["gemm"],
             "gemm_in_training": t.get("gemm_parameters", "")}
-
-
-def official_settings(our_config):
-    """The official model's and config's settings equal to our preset's (checked, not assumed)."""
-    c = our_config
-    depth, skip = c["mlp_depth"], c["mlp_skip"]
-    # Official MLP: concat after layer i when i % skip_layer == 0 and i > 0; ours after layer mlp_skip.
-    if [i for i in range(depth) if i > 0 and i % skip == 0] != [skip]:
-        fail(f"mlp_depth {depth} with mlp_skip {skip} has no official equivalent")
-    unsupported = {"single_mlp": True, "pos_identity": False, "multiscale": False, "resample_blur": True,
-                   "density_activation": "softplus", "jitter_pixels": False, "variant": "mipnerf"}
-    if "cov_max_deg" in c:  # the concatenated-PE variant's covariance encoding (0: not used, as in MipNerfModel)
-        unsupported["cov_max_deg"] = 0
-    for key, want in unsupported.items():
-        if c[key] != want:
-            fail(f"our setting {key} = {c[key]} is not what the official MipNerfModel computes")
-    model = dict(num_samples=c["num_samples"], num_levels=c["num_levels"],
-                 resample_padding=c["resample_padding"], stop_level_grad=True,
-                 use_viewdirs=c["view_dependence"], lindisp=c["lindisp"], ray_shape=c["ray_shape"],
-                 min_deg_point=c["pos_min_deg"], max_deg_point=c["pos_max_deg"], deg_view=c["view_max_deg"],
-                 density_noise=0.0, density_bias=c["density_bias"], rgb_padding=c["rgb_padding"],
-                 disable_integration=not c["integrated_encoding"])
-    mlp = dict(net_depth=depth, net_width=c["mlp_width"], net_depth_condition=1,
-               net_width_condition=c["view_branch_width"], skip_layer=skip)
-    config = dict(batch_size=c["batch_size"], coarse_loss_mult=c["coarse_loss_mult"],
-                  randomized=c["randomized"], white_bkgd=c["background"] == "white",
-                  near=c["near"] or 2.0, far=c["far"] or 6.0, lr_init=c["lr_init"], lr_final=c["lr_final"],
-                  lr_delay_steps=c["lr_warmup_steps"], lr_delay_mult=c["lr_warmup_mult"],
-                  grad_max_norm=c["grad_max_norm"], disable_multiscale_loss=not c["area_loss"],
-                  batching="all_images", max_steps=1000000)
-    return model, mlp, config
 
 
 def round_summary(rounds, batch):
@@ -717,9 +580,10 @@ def orchestrate(args):
     binary = {"path": os.path.relpath(os.path.abspath(args.bin), REPO), "sha256": file_sha256(args.bin),
               "mtime": datetime.datetime.fromtimestamp(os.path.getmtime(args.bin), datetime.timezone.utc)
               .strftime("%Y-%m-%dT%H:%M:%SZ")}
-    py = ensure_venv(args)
+    py = ensure_venv(args.venv, args.python)
     load_before = load_average()
-    worker = Worker(py, args)
+    worker = Worker([py, os.path.abspath(__file__), "--worker", "--official", args.official, "--data", args.data,
+                     "--factor", str(args.factor)])
     versions = worker.call(cmd="versions")
     results = [bench_config(args, worker, name, preset, batch)
                for name, preset, batch in CONFIGS if name in args.configs]
@@ -748,245 +612,6 @@ def orchestrate(args):
 # Worker side (runs in the venv; imports jax and the official code)
 # ----------------------------------------------------------------------------------------------
 
-def install_stubs():
-    import types
-    import jax
-    import optax
-    import flax
-    from flax import linen, struct
-
-    sys.modules["flax.nn"] = flax.nn = types.SimpleNamespace(
-        relu=linen.relu, sigmoid=linen.sigmoid, softplus=linen.softplus)
-
-    tx = optax.inject_hyperparams(optax.adam)(learning_rate=0.0, b1=0.9, b2=0.999, eps=1e-8)
-
-    @struct.dataclass
-    class Optimizer:
-        target: object
-        opt_state: object
-
-        @classmethod
-        def create(cls, target):
-            return cls(target=target, opt_state=tx.init(target))
-
-        def apply_gradient(self, grad, learning_rate):
-            state = self.opt_state
-            state.hyperparams["learning_rate"] = learning_rate
-            updates, state = tx.update(grad, state, self.target)
-            return self.replace(target=optax.apply_updates(self.target, updates), opt_state=state)
-
-    optim = types.ModuleType("flax.optim")
-    optim.Optimizer = Optimizer
-    sys.modules["flax.optim"] = flax.optim = optim
-    if not hasattr(jax, "tree_map"):
-        jax.tree_map = jax.tree_util.tree_map
-    tb = types.ModuleType("flax.metrics.tensorboard")
-    tb.SummaryWriter = object
-    sys.modules["flax.metrics.tensorboard"] = tb
-    for name in ["cv2", "matplotlib", "matplotlib.cm"]:
-        sys.modules[name] = types.ModuleType(name)
-    return Optimizer
-
-
-class Official:
-    """The official model, train_step and render in this process."""
-
-    def __init__(self, official, data, factor):
-        sys.path.insert(0, os.path.abspath(official))
-        self.Optimizer = install_stubs()
-        import numpy as np
-        from absl import flags
-        import train  # the official train.py: defines its flags, gives train_step
-        from internal import datasets, models, utils
-        flags.FLAGS(["train"])  # parse no arguments, so FLAGS defaults are readable
-        self.np, self.train, self.models, self.utils = np, train, models, utils
-        self.data, self.factor, self.datasets = data, factor, datasets
-        self.loaded = None
-
-    def versions(self):
-        import jax, jaxlib, flax, optax, numpy, gin
-        return {"python": platform.python_version(), "jax": jax.__version__, "jaxlib": jaxlib.__version__,
-                "flax": flax.__version__, "optax": optax.__version__, "numpy": numpy.__version__,
-                "gin": getattr(gin, "__version__", "installed"), "jax_devices": str(jax.devices())}
-
-    def setup(self, model, mlp, config):
-        import functools
-        import gin
-        import jax
-        from jax import random
-        gin.clear_config()
-        bindings = [f"MipNerfModel.{k} = {gin_value(v)}" for k, v in model.items()]
-        bindings += [f"MLP.{k} = {gin_value(v)}" for k, v in mlp.items()]
-        gin.parse_config(bindings)
-        cfg = self.utils.Config(dataset_loader="blender", **config)
-        self.config, self.rng = cfg, random.PRNGKey(20200823)
-        if self.loaded != (cfg.near, cfg.far):
-            self.views, images = load_blender(self.np, self.datasets, self.data, self.factor, cfg.near, cfg.far)
-            flat = self.utils.namedtuple_map(lambda r: r.reshape(-1, r.shape[-1]), self.views)
-            self.scene, self.loaded = (flat, images.reshape(-1, 3)), (cfg.near, cfg.far)
-        self.batches = [self.batch(cfg.batch_size, seed) for seed in range(8)]
-        key, self.rng = random.split(self.rng)
-        self.model, variables = self.models.construct_mipnerf(key, jax.device_put(self.batches[0]))
-        params = sum(int(x.size) for x in jax.tree_util.tree_leaves(variables))
-        state = self.utils.TrainState(optimizer=self.Optimizer.create(variables))
-        self.state = jax.tree_util.tree_map(lambda x: jax.numpy.asarray(x)[None], state)
-        self.pstep = jax.pmap(functools.partial(self.train.train_step, self.model, cfg), axis_name="batch",
-                              in_axes=(0, 0, 0, None), donate_argnums=(2,))
-        self.keys = random.split(self.rng, jax.local_device_count())
-        self.lr = functools.partial(self.train.math.learning_rate_decay, lr_init=cfg.lr_init,
-                                    lr_final=cfg.lr_final, max_steps=cfg.max_steps,
-                                    lr_delay_steps=cfg.lr_delay_steps, lr_delay_mult=cfg.lr_delay_mult)
-        self.step_index, self.render_pfn = 1, None
-        t0 = time.time()
-        self.steps(2)  # compile + one warm-up step
-        return {"parameters": params, "compile_s": time.time() - t0}
-
-    def batch(self, n, seed):
-        """Random rays over all training images, utils.shard'ed on the host (as datasets.py does)."""
-        np = self.np
-        rays, pixels = self.scene
-        idx = np.random.RandomState(seed).randint(0, pixels.shape[0], (n,))
-        b = {"pixels": pixels[idx], "rays": self.utils.namedtuple_map(lambda r: r[idx], rays)}
-        return self.utils.shard(b)
-
-    def steps(self, n):
-        import jax
-        out = []
-        for _ in range(n):
-            # a fresh device copy each step: train_step donates its batch (donate_argnums as train.py)
-            b = jax.block_until_ready(jax.device_put(self.batches[self.step_index % len(self.batches)]))
-            t0 = time.perf_counter()
-            self.state, stats, self.keys = self.pstep(self.keys, self.state, b, self.lr(self.step_index))
-            jax.block_until_ready((self.state, stats))
-            out.append(time.perf_counter() - t0)
-            self.step_index += 1
-        return out
-
-    def render(self, reps, chunk):
-        """Warm renders of the first training view through models.render_image (first call apart)."""
-        import jax
-        rays = self.view_rays(0)
-        t0 = time.perf_counter()
-        jax.block_until_ready(self.render_view(rays, chunk))
-        first = time.perf_counter() - t0
-        seconds = []
-        for _ in range(reps):
-            t0 = time.perf_counter()
-            jax.block_until_ready(self.render_view(rays, chunk))
-            seconds.append(time.perf_counter() - t0)
-        h, w = rays.origins.shape[:2]
-        return {"seconds": seconds, "first_call_s": first, "megapixels": h * w / 1e6}
-
-    def train_and_score(self, model, mlp, config, steps, val_views, chunk):
-        """Train from scratch for `steps` (fresh random batches each step, made in the loop), then the
-        mean PSNR of the first `val_views` val views (eval: randomized = False)."""
-        import jax
-        import numpy as np
-        setup = self.setup(model, mlp, dict(config, max_steps=steps))  # compiles (2 steps taken) ...
-        self.setup_state_fresh()  # ... then fresh parameters and Adam state: training starts at step 1
-        rng = np.random.RandomState(20201473)
-        t0 = time.time()
-        for step in range(1, steps + 1):
-            idx = rng.randint(0, self.scene[1].shape[0], (self.config.batch_size,))
-            b = jax.device_put(self.utils.shard({"pixels": self.scene[1][idx],
-                                                 "rays": self.utils.namedtuple_map(lambda r: r[idx], self.scene[0])}))
-            self.state, stats, self.keys = self.pstep(self.keys, self.state, b, self.lr(step))
-        jax.block_until_ready(self.state)
-        train_s = time.time() - t0
-        views, images = load_blender(np, self.datasets, self.data, self.factor, self.config.near,
-                                     self.config.far, split="val")
-        psnrs = []
-        for i in range(val_views):
-            rays = self.utils.namedtuple_map(lambda r: jax.numpy.asarray(r[i]), views)
-            rgb = np.asarray(self.render_view(rays, chunk))
-            psnrs.append(float(self.train.math.mse_to_psnr(((rgb - images[i]) ** 2).mean())))
-        return {"train_seconds": train_s, "compile_s": setup["compile_s"], "psnrs": psnrs,
-                "mean_psnr": sum(psnrs) / len(psnrs), "steps": steps}
-
-    def setup_state_fresh(self):
-        """Fresh parameters and Adam state for the already compiled step (same shapes: no recompile)."""
-        import jax
-        from jax import random
-        key, self.rng = random.split(random.PRNGKey(20200823))
-        _, variables = self.models.construct_mipnerf(key, jax.device_put(self.batches[0]))
-        state = self.utils.TrainState(optimizer=self.Optimizer.create(variables))
-        self.state = jax.tree_util.tree_map(lambda x: jax.numpy.asarray(x)[None], state)
-        self.keys = random.split(self.rng, jax.local_device_count())
-
-    def render_view(self, rays, chunk):
-        import functools
-        import jax
-        from jax import random
-        model, cfg = self.model, self.config
-
-        def render_eval_fn(variables, _, rays):  # as in train.py
-            return jax.lax.all_gather(model.apply(variables, random.PRNGKey(0), rays, randomized=False,
-                                                  white_bkgd=cfg.white_bkgd), axis_name="batch")
-
-        if getattr(self, "render_pfn", None) is None:
-            self.render_pfn = jax.pmap(render_eval_fn, in_axes=(None, None, 0), donate_argnums=(2,),
-                                       axis_name="batch")
-        variables = jax.tree_util.tree_map(lambda x: x[0], self.state).optimizer.target
-        rgb, _, _ = self.models.render_image(functools.partial(self.render_pfn, variables), rays, self.keys[0],
-                                             chunk=chunk)
-        return rgb
-
-    def view_rays(self, index):
-        import jax.numpy as jnp
-        return self.utils.namedtuple_map(lambda r: jnp.asarray(r[index]), self.views)
-
-
-def gin_value(v):
-    return repr(v) if isinstance(v, str) else ("True" if v is True else "False" if v is False else str(v))
-
-
-def load_blender(np, datasets, data, factor, near, far, split="train"):
-    """The scene's training rays by the official Blender._generate_rays (run on an object without its
-    loader thread), with the images box-downsampled by `factor` and composited on white here
-    (the official loader supports factor 0 or 2 only)."""
-    from PIL import Image
-    with open(os.path.join(data, f"transforms_{split}.json")) as f:
-        meta = json.load(f)
-    images, cams = [], []
-    for frame in meta["frames"]:
-        img = np.asarray(Image.open(os.path.join(data, frame["file_path"] + ".png")), dtype=np.float32) / 255.0
-        h, w = img.shape[0] // factor, img.shape[1] // factor
-        img = img[:h * factor, :w * factor].reshape(h, factor, w, factor, -1).mean(axis=(1, 3))
-        images.append(img[..., :3] * img[..., 3:] + (1.0 - img[..., 3:]))
-        cams.append(np.array(frame["transform_matrix"], dtype=np.float32))
-    scene = datasets.Blender.__new__(datasets.Blender)
-    scene.images, scene.camtoworlds = np.stack(images), np.stack(cams)
-    scene.h, scene.w = scene.images.shape[1:3]
-    scene.focal = 0.5 * scene.w / np.tan(0.5 * float(meta["camera_angle_x"]))
-    scene.near, scene.far = near, far
-    scene._generate_rays()
-    return scene.rays, scene.images
-
-
-def serve_requests(make_official, handlers):
-    """The worker's loop: one JSON request per stdin line, one JSON reply per stdout line; handlers maps a request's
-    cmd to handler(official, request). A failure (importing the official code, or a request) is a reply with
-    "error", its traceback on stderr."""
-    try:
-        off = make_official()
-    except Exception as e:  # report the first failure to the orchestrator in one line
-        import traceback
-        traceback.print_exc()
-        print(json.dumps({"error": f"importing the official code: {e!r}"}), flush=True)
-        return
-    for line in sys.stdin:
-        req = json.loads(line)
-        try:
-            cmd = req.pop("cmd")
-            handler = handlers.get(cmd)
-            reply = handler(off, req) if handler else {"error": f"unknown request {cmd}"}
-        except Exception as e:
-            import traceback
-            traceback.print_exc()
-            reply = {"error": repr(e)}
-        print(json.dumps(reply), flush=True)
-
-
 def worker_main(args):
     serve_requests(lambda: Official(args.official, args.data, args.factor), {
         "versions": lambda off, req: off.versions(),
@@ -998,11 +623,19 @@ def worker_main(args):
 
 def main(argv):
     args = parse_args(argv)
+    try:
+        dispatch(args)
+    except OfficialError as e:  # the official side's one-line reasons (lib/official.py)
+        fail(str(e))
+
+
+def dispatch(args):
     if args.llff:
-        import vs_official_llff  # the LLFF side-by-side: its own orchestrator and worker
+        import vs_official_llff  # the LLFF side-by-side: its own orchestrator and worker (it imports nothing of this)
         if args.worker:
             vs_official_llff.worker_main_llff(args)
         else:
+            check_inputs_official(args)
             vs_official_llff.orchestrate_llff(args)
     elif args.worker:
         worker_main(args)

@@ -19,12 +19,14 @@ import datetime
 import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
-import vs_official as vo
 import report_md
+from lib.machine import between, snapshot
+from lib.official import Official, Worker, ensure_venv, gin_value, install_stubs, official_commit, \
+    official_settings, serve_requests
+from lib.provenance import cpu_model, tree_state
 from study_common import read_json, run, train_resumable
 
 NAME = "vs_official_llff"
@@ -32,10 +34,14 @@ NAME = "vs_official_llff"
 
 # ---------------------------------------------------------------------------------------------- orchestrator side
 
+def fail(message):
+    sys.exit(f"vs_official.py --llff: {message}")
+
+
 def llff_factor(args):
     factor = args.factor if args.factor is not None else 8
     if not os.path.isdir(os.path.join(args.llff, f"images_{factor}")):
-        vo.fail(f"--llff {args.llff}: no images_{factor}/ (the official loader reads images_<factor>; give --factor)")
+        fail(f"--llff {args.llff}: no images_{factor}/ (the official loader reads images_<factor>; give --factor)")
     return factor
 
 
@@ -60,19 +66,18 @@ def official_llff_settings(config, steps):
     expect = {"ray_shape": "cylinder", "background": "black", "unit_viewdirs": False, "lindisp": False}
     for key, want in expect.items():
         if config.get(key) != want:
-            vo.fail(f"our LLFF run chose {key} = {config.get(key)}; configs/llff.gin has {want}")
-    model, mlp, cfg = vo.official_settings(config)
+            fail(f"our LLFF run chose {key} = {config.get(key)}; configs/llff.gin has {want}")
+    model, mlp, cfg = official_settings(config)
     model["density_noise"] = float(config["density_noise"])
     cfg.update(dataset_loader="llff", near=0.0, far=1.0, white_bkgd=False, llffhold=8, spherify=False,
                max_steps=steps)
     return model, mlp, cfg
 
 
-class LlffWorker(vo.Worker):
-    def __init__(self, py, args, factor):
-        cmd = [py, os.path.join(os.path.dirname(os.path.abspath(__file__)), "vs_official.py"), "--worker",
-               "--official", args.official, "--llff", args.llff, "--factor", str(factor)]
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+def llff_worker(py, args, factor):
+    """The official LLFF worker: vs_official.py --worker --llff in the venv's python (worker_main_llff below)."""
+    return Worker([py, os.path.join(os.path.dirname(os.path.abspath(__file__)), "vs_official.py"), "--worker",
+                   "--official", args.official, "--llff", args.llff, "--factor", str(factor)])
 
 
 def official_run(args, worker, config, factor, steps, seed):
@@ -102,21 +107,20 @@ def side_summary(runs):
 def orchestrate_llff(args):
     factor = llff_factor(args)
     steps_list = [int(s) for s in args.llff_steps.split(",")]
-    vo.check_inputs_official(args)
-    state = vo.tree_state()
+    state = tree_state()
     if state["dirty"] and not args.allow_dirty:
-        vo.fail("the checkout has uncommitted changes (figures must name a commit): commit, or --allow-dirty")
+        fail("the checkout has uncommitted changes (figures must name a commit): commit, or --allow-dirty")
     state["allow_dirty"] = args.allow_dirty
-    py = vo.ensure_venv(args)
+    py = ensure_venv(args.venv, args.python)
     os.makedirs(args.work, exist_ok=True)
     log = os.path.join(args.work, "ours.log")
-    worker = LlffWorker(py, args, factor)
+    worker = llff_worker(py, args, factor)
     versions = worker.call(cmd="versions")
     pairs = []
     for seed in range(args.seeds):
         for i, steps in enumerate(steps_list):
             order = ["ours", "official"] if (seed + i) % 2 == 0 else ["official", "ours"]
-            snap = vo.snapshot(worker)
+            snap = snapshot(worker)
             entry = {"seed": seed, "steps": steps, "order": order}
             for side in order:
                 if side == "ours":
@@ -124,9 +128,9 @@ def orchestrate_llff(args):
                 else:  # the official settings come from our run's config (or, before it, our preset's)
                     config = config if "ours" in entry else our_config(args, factor, steps, seed, log)
                     entry["official"] = official_run(args, worker, config, factor, steps, seed)
-            entry["conditions"] = vo.between(snap, vo.snapshot(worker))
+            entry["conditions"] = between(snap, snapshot(worker))
             if entry["ours"]["parameters"] != entry["official"]["parameters"]:
-                vo.fail(f"parameter counts differ: ours {entry['ours']['parameters']}, "
+                fail(f"parameter counts differ: ours {entry['ours']['parameters']}, "
                         f"official {entry['official']['parameters']}")
             pairs.append(entry)
             print(f"llff: seed {seed}, {steps} steps: ours {entry['ours']['mean_psnr']:.2f} dB in "
@@ -170,8 +174,8 @@ def write(args, factor, steps_list, versions, state, pairs):
     doc = {"what": "quick network trained on one forward-facing LLFF capture by both sides, test PSNR at equal steps",
            "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
            "capture": os.path.abspath(args.llff), "factor": factor, "views": args.llff_views or "all", "steps": steps_list, "seeds": args.seeds,
-           "checkout": state, "official_commit": args.official_commit or vo.official_commit(args.official),
-           "cpu": vo.cpu_model(), "versions": versions, "notes": args.note, "pairs": pairs, "summary": summary}
+           "checkout": state, "official_commit": args.official_commit or official_commit(args.official),
+           "cpu": cpu_model(), "versions": versions, "notes": args.note, "pairs": pairs, "summary": summary}
     os.makedirs(args.out_dir, exist_ok=True)
     base = os.path.join(args.out_dir, f"{NAME}_{args.device_name}")
     with open(base + ".json", "w") as f:
@@ -233,7 +237,7 @@ class OfficialLlff:
 
     def __init__(self, official, data, factor):
         sys.path.insert(0, os.path.abspath(official))
-        self.Optimizer = vo.install_stubs()
+        self.Optimizer = install_stubs()
         from absl import flags
         import train  # the official train.py: its flags and train_step
         from internal import datasets, models, utils
@@ -242,7 +246,7 @@ class OfficialLlff:
         self.data, self.factor, self.loaded = data, factor, None
 
     def versions(self):
-        return vo.Official.versions(self)
+        return Official.versions(self)
 
     def split(self, cfg, split):
         """The official loader's rays of a split (object made without Dataset.__init__: no batch thread); the
@@ -279,8 +283,8 @@ class OfficialLlff:
         import numpy as np
         from jax import random
         gin.clear_config()
-        gin.parse_config([f"MipNerfModel.{k} = {vo.gin_value(v)}" for k, v in model.items()] +
-                         [f"MLP.{k} = {vo.gin_value(v)}" for k, v in mlp.items()])
+        gin.parse_config([f"MipNerfModel.{k} = {gin_value(v)}" for k, v in model.items()] +
+                         [f"MLP.{k} = {gin_value(v)}" for k, v in mlp.items()])
         cfg = self.utils.Config(factor=self.factor, **config)
         self.config = cfg
         self.load(cfg)
@@ -324,13 +328,13 @@ class OfficialLlff:
         psnrs = []
         for i in range(views or self.test_images.shape[0]):
             rays = self.utils.namedtuple_map(lambda r: jax.numpy.asarray(r[i]), self.test_rays)
-            rgb = vo.Official.render_view(self, rays, flags.FLAGS.chunk)
+            rgb = Official.render_view(self, rays, flags.FLAGS.chunk)
             mse = float(((np.asarray(rgb) - self.test_images[i]) ** 2).mean())
             psnrs.append(float(self.train.math.mse_to_psnr(mse)))
         return psnrs
 
 
 def worker_main_llff(args):
-    vo.serve_requests(lambda: OfficialLlff(args.official, args.llff, args.factor), {
+    serve_requests(lambda: OfficialLlff(args.official, args.llff, args.factor), {
         "versions": lambda off, req: off.versions(),
         "train_llff": lambda off, req: off.train_llff(**req)})

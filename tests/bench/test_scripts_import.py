@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """Every script of bench/ and bench/lib/ compiles and imports with the standard library alone, as the studies and the
-device check (scripts/device-check.sh: bench/official_step.py, which imports vs_official) are run: a syntax error, a
-broken import between studies or a module-level failure fails this (CTest `bench: every bench script imports`).
-The heavy dependencies (JAX, numpy) are imported inside the functions that need them, never at module level.
+device check (scripts/device-check.sh runs bench/official_step.py) are run: a syntax error, a broken import between
+modules or a module-level failure fails this (CTest `bench: every bench script imports`). The heavy dependencies
+(JAX, numpy) are imported inside the functions that need them, never at module level. And the imports between
+bench's own modules (at any level, read with ast) form no circle: shared code lives in bench/lib/ (until 2026-11-27,
+vs_official.py and vs_official_llff.py imported each other).
 
 Usage: test_scripts_import.py BENCH_DIR"""
 
+import ast
 import glob
 import importlib
 import os
@@ -18,6 +21,42 @@ names = sorted(os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.pa
 names += sorted("lib." + os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.path.join(bench, "lib", "*.py"))
                 if not p.endswith("__init__.py"))
 failed = []
+
+
+def local_imports(name):
+    """The bench modules `name` imports anywhere in its source (lib.x as lib.x)."""
+    path = os.path.join(bench, *name.split(".")) + ".py"
+    found = set()
+    for node in ast.walk(ast.parse(open(path).read(), path)):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            found.add(node.module)
+            found.update(f"{node.module}.{a.name}" for a in node.names)
+    return sorted(found & set(names))
+
+
+graph = {name: local_imports(name) for name in names}
+
+
+def circle_from(start):
+    """A list of modules that import each other round to `start`, or None."""
+    stack = [(start, [start])]
+    while stack:
+        node, path = stack.pop()
+        for nxt in graph[node]:
+            if nxt == start:
+                return path + [start]
+            if nxt not in path:
+                stack.append((nxt, path + [nxt]))
+    return None
+
+
+for name in names:
+    circle = circle_from(name)
+    if circle:
+        failed.append(f"{name}: an import circle: {' -> '.join(circle)}")
+        break
 for name in names:
     try:
         importlib.import_module(name)
