@@ -680,19 +680,26 @@ set_tests_properties("cli: dataset from-photos says when no pair of photos can s
   PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_SCENARIO=no-initial-pair")
 set_tests_properties("cli: dataset from-photos says when no photos match"
   PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_SCENARIO=no-matches")
-# Photos of another size than most (tests/data/fixtures/photo_sizes, written by its make_fixture.py: 3 at 8x6, 2 at
-# 16x12) are read from their headers before COLMAP runs, left out with a warning naming each and its size, and never
-# given to COLMAP (the stand-in fails feature extraction unless its list is the 3); without a size held by more than
-# half of the photos, one line refuses.
+# Photos of another size than most (written into the build tree by tests/data/fixtures/photo_sizes/make_fixture.py: 3
+# at 8x6, 2 at 16x12) are read from their headers before COLMAP runs, left out with a warning naming each and its
+# size, and never given to COLMAP (the stand-in fails feature extraction unless its list is the 3); without a size
+# held by more than half of the photos, one line refuses.
+set(MIPNERF_PHOTO_SIZES "${CMAKE_CURRENT_BINARY_DIR}/cli-fixtures/photo_sizes")
+add_test(NAME "cli: dataset from-photos: write the photo-size fixtures"
+  COMMAND Python3::Interpreter -B "${CMAKE_CURRENT_SOURCE_DIR}/data/fixtures/photo_sizes/make_fixture.py" "${MIPNERF_PHOTO_SIZES}")
+set_tests_properties("cli: dataset from-photos: write the photo-size fixtures" PROPERTIES FIXTURES_SETUP cli_photo_sizes)
 mipnerf_add_checked_test("cli: dataset from-photos leaves out photos of another size than most, naming each"
   EXPECT "warning: 2 of 5 photos are not 8x6 like the others and are left out [^\n]*: wide_0.png \\(16x12\\), wide_1.png \\(16x12\\); resize them to 8x6 to include them\nmipnerf-cl: COLMAP on 3 photos \\(8x6\\).*imported 3 images"
-  COMMAND mipnerf-cl dataset from-photos "${MIPNERF_DATA_FIXTURES}/photo_sizes" "${MIPNERF_FAKE_COLMAP_OUT}-sizes"
+  COMMAND mipnerf-cl dataset from-photos "${MIPNERF_PHOTO_SIZES}" "${MIPNERF_FAKE_COLMAP_OUT}-sizes"
   --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh")
 set_tests_properties("cli: dataset from-photos leaves out photos of another size than most, naming each"
-  PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_EXPECT_PHOTOS=view_0.png view_1.png view_2.png")
+  PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_EXPECT_PHOTOS=view_0.png view_1.png view_2.png"
+  FIXTURES_REQUIRED cli_photo_sizes)
 mipnerf_add_cli_error_test("dataset from-photos: photos of two sizes, neither held by most" PATTERN "photo_sizes/no_majority: photos of 2 sizes and none held by more than half \\(2 at 8x6, 2 at 16x12\\); [^\n]*resize them to one"
-  ARGS dataset from-photos "${MIPNERF_DATA_FIXTURES}/photo_sizes/no_majority" "${CMAKE_CURRENT_BINARY_DIR}/cli-photos-bad"
+  ARGS dataset from-photos "${MIPNERF_PHOTO_SIZES}/no_majority" "${CMAKE_CURRENT_BINARY_DIR}/cli-photos-bad"
   --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh")
+set_tests_properties("cli: dataset from-photos: photos of two sizes, neither held by most"
+  PROPERTIES FIXTURES_REQUIRED cli_photo_sizes)
 mipnerf_add_cli_error_test("dataset from-photos: COLMAP missing" PATTERN "COLMAP was not found \\(`nosuch-colmap`\\): install the Debian package 'colmap'"
   ARGS dataset from-photos "${MIPNERF_DATA_FIXTURES}/textureless" "${CMAKE_CURRENT_BINARY_DIR}/cli-photos-bad" --colmap nosuch-colmap)
 mipnerf_add_cli_error_test("dataset from-photos: too few photos" PATTERN "fixtures/valid: 0 photos \\(PNG or JPEG\\); COLMAP needs at least 3"
