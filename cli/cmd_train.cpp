@@ -15,7 +15,6 @@
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"
 #include "io/checkpoint_file.hpp"
-#include "io/json.hpp"
 #include "gemm/gemm_tuning.hpp"
 #include "train/checkpoint.hpp"
 #include "train/config_file.hpp"
@@ -172,13 +171,10 @@ WhatToTrain what_to_train(const TrainArgs& args, CLI::App& cmd) {
 // Whether OUT/summary.json holds the scores of a finished run at `step`: a run killed after its last checkpoint,
 // during its val evaluation, has none, and its --resume scores them.
 bool scores_written_at(const std::string& out, int64_t step) {
-  const std::string path = (fs::path(out) / "summary.json").string();
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return false;
+  const std::optional<io::Json> summary = eval::read_summary(out);
   try {
-    const io::Json summary = io::read_json(path);
-    return summary.value("steps", int64_t{-1}) == step && !summary.value("interrupted", true);
-  } catch (const std::exception&) {
+    return summary && summary->value("steps", int64_t{-1}) == step && !summary->value("interrupted", true);
+  } catch (const std::exception&) {  // a field of another type
     return false;
   }
 }
@@ -193,7 +189,7 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
       std::cerr << "mipnerf-cl: " << args.out << (scored ? " is already at step " : " is at step ")
                 << what.previous->record.step << " of " << config.steps
                 << (scored ? ": nothing to train (give --steps N to train further); its scores are in " +
-                                 (fs::path(args.out) / "summary.json").string()
+                                 eval::summary_path(args.out)
                            : " but its val scores were never written (stopped while scoring them): scoring them")
                 << "\n";
     }

@@ -3,23 +3,21 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 
 #include "core/duration.hpp"
+#include "eval/report.hpp"
 #include "io/json.hpp"
 
 namespace mipnerf::cli {
 
 std::optional<RecordedRate> recorded_rate(const std::string& run_folder, const std::string& device) {
-  const std::string path = (std::filesystem::path(run_folder) / "summary.json").string();
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  const std::optional<io::Json> summary = eval::read_summary(run_folder);
+  if (!summary) return std::nullopt;
   try {
-    const io::Json summary = io::read_json(path);
-    const io::Json val = summary.value("val", io::Json::object());
+    const io::Json val = summary->value("val", io::Json::object());
     const double rate = val.value("render_seconds_per_megapixel", 0.0);
-    if (summary.value("device", std::string()) != device || !(rate > 0.0)) return std::nullopt;
-    return RecordedRate{rate, "the run's val renders on this device, " + path};
+    if (summary->value("device", std::string()) != device || !(rate > 0.0)) return std::nullopt;
+    return RecordedRate{rate, "the run's val renders on this device, " + eval::summary_path(run_folder)};
   } catch (const std::exception&) {
     return std::nullopt;
   }

@@ -194,9 +194,24 @@ Ordered summary_json(const TrainRecord& record, const train::TrainResult& result
   return j;
 }
 
+std::string summary_path(const std::string& out_dir) {
+  return (std::filesystem::path(out_dir) / "summary.json").string();
+}
+
+std::optional<io::Json> read_summary(const std::string& out_dir) {
+  const std::string path = summary_path(out_dir);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  try {
+    return io::read_json(path);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
 std::string write_summary(const std::string& out_dir, const TrainRecord& record, const train::TrainResult& result,
                           const SplitScores* val) {
-  const std::string path = (std::filesystem::path(out_dir) / "summary.json").string();
+  const std::string path = summary_path(out_dir);
   write_json_atomically(path, summary_json(record, result, val));
   return path;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,11 @@ nlohmann::ordered_json summary_json(const TrainRecord& record, const train::Trai
 // Writes out_dir/summary.json (atomically); returns its path.
 std::string write_summary(const std::string& out_dir, const TrainRecord& record, const train::TrainResult& result,
                           const SplitScores* val);
+// out_dir/summary.json.
+std::string summary_path(const std::string& out_dir);
+// out_dir/summary.json as written by write_summary; none when it is absent or does not read as JSON (its readers,
+// a resume's "already finished" and render's time estimate, then act as if the run had none).
+std::optional<io::Json> read_summary(const std::string& out_dir);
 
 // What render.json records of a render.
 struct RenderRecord {
