@@ -27,7 +27,6 @@ import statistics
 import sys
 import time
 import traceback
-import types
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -82,27 +81,6 @@ def write_synthetic_scene(folder, views=40, size=64, seed=0):
     return folder
 
 
-def install_compat_shims():
-    """Stand-ins for what newer jax/flax releases removed and the official train.py still touches at import, beyond
-    lib/official.py's install_stubs; returns the names of those installed (recorded in the results)."""
-    import jax
-    shims = []
-    if not hasattr(jax.config, "parse_flags_with_absl"):
-        try:
-            jax.config.parse_flags_with_absl = lambda *a, **k: None
-            shims.append("jax.config.parse_flags_with_absl (no-op)")
-        except Exception:
-            pass
-    try:
-        import flax.training.checkpoints  # noqa: F401  (train.py imports it; never used in a step)
-    except Exception:
-        import flax.training
-        module = types.ModuleType("flax.training.checkpoints")
-        sys.modules["flax.training.checkpoints"] = flax.training.checkpoints = module
-        shims.append("flax.training.checkpoints (empty module: it did not import)")
-    return shims
-
-
 def our_settings(path):
     """Our paper preset's training config and parameter count from a bench.json, or (None, None)."""
     if not path or not os.path.isfile(path):
@@ -143,7 +121,6 @@ def measure(args, result):
     devices = jax.devices()
     result["jax"] = {"version": jax.__version__, "backend": jax.default_backend(), "devices": [str(d) for d in devices],
                      "device_kind": devices[0].device_kind, "python": platform.python_version()}
-    result["shims"] = install_compat_shims()
     from lib import official as official_code  # Official, official_settings (standard library at import)
 
     data = args.data
@@ -153,6 +130,7 @@ def measure(args, result):
     else:
         result["scene"] = data
     official = official_code.Official(args.official, data, 1)
+    result["shims"] = list(official_code.INSTALLED_COMPAT_SHIMS)
     result["versions"] = official.versions()
     result["stubs"] = [name for name, _ in official_code.STUBS]
 

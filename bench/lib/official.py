@@ -128,6 +128,33 @@ class Worker:
 
 # ---- worker side (runs where JAX is; imports jax and the official code) ----
 
+INSTALLED_COMPAT_SHIMS = []  # install_compat_shims' names, in this process
+
+
+def install_compat_shims():
+    """Stand-ins for what newer jax/flax releases removed and the official train.py still touches at import, put in
+    only where missing (none with the studies' JAX 0.10); their names join INSTALLED_COMPAT_SHIMS (recorded in the
+    results) and are returned."""
+    import types
+    import jax
+    shims = []
+    if not hasattr(jax.config, "parse_flags_with_absl"):
+        try:
+            jax.config.parse_flags_with_absl = lambda *a, **k: None
+            shims.append("jax.config.parse_flags_with_absl (no-op)")
+        except Exception:
+            pass
+    try:
+        import flax.training.checkpoints  # noqa: F401  (train.py imports it; never used in a step)
+    except Exception:
+        import flax.training
+        module = types.ModuleType("flax.training.checkpoints")
+        sys.modules["flax.training.checkpoints"] = flax.training.checkpoints = module
+        shims.append("flax.training.checkpoints (empty module: it did not import)")
+    INSTALLED_COMPAT_SHIMS.extend(s for s in shims if s not in INSTALLED_COMPAT_SHIMS)
+    return shims
+
+
 def install_stubs():
     import types
     import jax
@@ -165,6 +192,7 @@ def install_stubs():
     sys.modules["flax.metrics.tensorboard"] = tb
     for name in ["cv2", "matplotlib", "matplotlib.cm"]:
         sys.modules[name] = types.ModuleType(name)
+    install_compat_shims()
     return Optimizer
 
 
