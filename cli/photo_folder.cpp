@@ -2,7 +2,6 @@
 #include "photo_folder.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <map>
 #include <utility>
@@ -13,12 +12,6 @@
 namespace mipnerf::cli {
 namespace fs = std::filesystem;
 namespace {
-
-bool is_photo(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".jpg" || ext == ".jpeg" || ext == ".png";
-}
 
 std::string size_text(uint32_t width_px, uint32_t height_px) {
   return std::to_string(width_px) + "x" + std::to_string(height_px);
@@ -31,7 +24,7 @@ std::vector<Photo> list_photos(const std::string& folder) {
   if (!fs::is_directory(folder, ec)) throw Error(folder + ": no such folder (expected the photos)");
   std::vector<Photo> photos;
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    if (entry.is_regular_file() && is_photo(entry.path())) photos.push_back({entry.path().filename().string()});
+    if (entry.is_regular_file() && data::has_image_extension(entry.path())) photos.push_back({entry.path().filename().string()});
   }
   std::sort(photos.begin(), photos.end(), [](const Photo& a, const Photo& b) { return a.name < b.name; });
   for (Photo& photo : photos) {

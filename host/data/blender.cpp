@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "data/frames.hpp"
+#include "data/image.hpp"
 #include "data/path_policy.hpp"
 
 namespace mipnerf::data::detail {
@@ -75,7 +76,7 @@ std::string resolve_image_path(const std::string& base_dir, const std::string& f
                   "); convert the images to PNG and update file_path");
     }
   }
-  const bool png_or_jpeg = extension == ".png" || extension == ".jpg" || extension == ".jpeg";
+  const bool png_or_jpeg = has_image_extension(given);
   if (is_file(given) && png_or_jpeg) return given.lexically_normal().string();
   if (is_file(with_png)) return with_png.lexically_normal().string();
   if (is_file(given)) return given.lexically_normal().string();  // a PNG without extension: decoding will tell

@@ -26,6 +26,12 @@ bool read_as_jpeg(const unsigned char* bytes, size_t size, const std::string& pa
 
 }  // namespace
 
+bool has_image_extension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".png" || extension == ".jpg" || extension == ".jpeg";
+}
+
 RgbaImage load_rgba_image(const std::string& path) {
   const std::vector<unsigned char> bytes = io::read_file_bytes(path);
   if (read_as_jpeg(bytes.data(), bytes.size(), path)) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,10 @@ struct RgbaImage {
 // Reads a PNG or a JPEG (told apart by their first bytes) as RGBA (RGB files and JPEGs get alpha 1). The one image
 // reader of the datasets: every place that reads a dataset's image goes through it. Errors name the file.
 RgbaImage load_rgba_image(const std::string& path);
+
+// Whether a file's name says PNG or JPEG (.png, .jpg, .jpeg, any case): the images the readers take. What it holds
+// is the reader's to find out (load_rgba_image tells them apart by their first bytes).
+bool has_image_extension(const std::filesystem::path& path);
 
 // Width and height from the file's header, PNG or JPEG told apart by their first bytes. Errors name the file.
 struct ImageSize {

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "data/frames.hpp"
+#include "data/image.hpp"
 #include "io/npy.hpp"
 
 namespace mipnerf::data {
@@ -39,18 +40,12 @@ void spherify(std::vector<Matrix34>& poses, std::vector<std::array<double, 2>>& 
   for (auto& b : bounds) b = {b[0] * s, b[1] * s};
 }
 
-bool is_image_file(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
-}
-
 // The official loader's list: the folder's images sorted by name.
 std::vector<std::string> list_images(const std::string& folder) {
   std::vector<std::string> files;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    if (entry.is_regular_file() && is_image_file(entry.path())) files.push_back(entry.path().string());
+    if (entry.is_regular_file() && has_image_extension(entry.path())) files.push_back(entry.path().string());
   }
   std::sort(files.begin(), files.end());
   return files;

@@ -2,11 +2,11 @@
 // COLMAP model (import-colmap makes a dataset of it), a folder of photos without poses (from-photos does), an empty
 // folder (make-scene can fill it), a folder whose subfolders hold datasets, or a folder of something else.
 #include <algorithm>
-#include <cctype>
 #include <optional>
 
 #include "core/error.hpp"
 #include "data/formats/formats.hpp"
+#include "data/image.hpp"
 #include "io/path_hint.hpp"
 
 namespace mipnerf::data {
@@ -18,18 +18,12 @@ constexpr const char* kDatasetFiles =
     "transforms_train.json (Blender), metadata.json (multiscale Blender), transforms.json or "
     "poses_bounds.npy with images/ (an LLFF capture)";
 
-bool is_photo(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
-}
-
 // The photos (PNG or JPEG files) directly in `folder`.
 size_t count_photos(const fs::path& folder) {
   size_t count = 0;
   std::error_code ec;
   for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-    if (it->is_regular_file(ec) && is_photo(it->path())) ++count;
+    if (it->is_regular_file(ec) && has_image_extension(it->path())) ++count;
   }
   return count;
 }

@@ -2,7 +2,6 @@
 #include "data/import/colmap_import.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -35,11 +34,6 @@ Matrix33 rotation_from_quaternion(const std::array<double, 4>& q) {
 std::string num(double v) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.4g", v);
-  return text;
-}
-
-std::string lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
   return text;
 }
 
@@ -107,8 +101,7 @@ Intrinsics camera_intrinsics(const ColmapModel& model, const ColmapCamera& camer
 enum class ImageFile { found, other_type, missing };
 ImageFile find_image(const fs::path& given, fs::path& image) {
   std::error_code ec;
-  const std::string extension = lower(given.extension().string());
-  if (extension == ".png" || extension == ".jpg" || extension == ".jpeg") {
+  if (has_image_extension(given)) {
     image = given;
     if (fs::is_regular_file(given, ec)) return ImageFile::found;
   }
