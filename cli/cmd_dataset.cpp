@@ -10,6 +10,7 @@
 
 #include "common.hpp"
 #include "core/error.hpp"
+#include "core/lens_models.hpp"
 #include "core/stage_options.hpp"
 #include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
@@ -244,11 +245,10 @@ void register_dataset(CLI::App& app) {
   auto import_args = std::make_shared<ImportColmapArgs>();
   auto* import = cmd->add_subcommand(
       "import-colmap",
-      "Convert a COLMAP sparse model (cameras, images, points3D; .bin or .txt) of SIMPLE_PINHOLE, PINHOLE, "
-      "SIMPLE_RADIAL, RADIAL, OPENCV or OPENCV_FISHEYE cameras (several may mix; lenses are kept) into a dataset "
-      "train, render and eval read: a forward-facing capture of one pinhole camera as an LLFF capture "
-      "(OUT/poses_bounds.npy, OUT/images/), anything else as OUT/transforms.json (poses to OpenGL axes, the world "
-      "recentred and scaled, near/far from the sparse points)");
+      "Convert a COLMAP sparse model (cameras, images, points3D; .bin or .txt) of " + lens_model_list("or") +
+          " cameras (several may mix; lenses are kept) into a dataset train, render and eval read: a forward-facing "
+          "capture of one pinhole camera as an LLFF capture (OUT/poses_bounds.npy, OUT/images/), anything else as "
+          "OUT/transforms.json (poses to OpenGL axes, the world recentred and scaled, near/far from the sparse points)");
   import->add_option("SPARSE_DIR", import_args->sparse_dir, "The model's folder (e.g. undistorted/sparse)")->required();
   import
       ->add_option("IMAGES_DIR", import_args->images_dir,

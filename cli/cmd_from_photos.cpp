@@ -19,6 +19,7 @@
 
 #include "common.hpp"
 #include "core/error.hpp"
+#include "core/lens_models.hpp"
 #include "data/import/colmap_model.hpp"
 #include "dataset_import.hpp"
 #include "io/file.hpp"
@@ -324,11 +325,8 @@ void run_from_photos(const FromPhotosArgs& args) {
     throw Error("--matcher '" + args.matcher + "': expected exhaustive (any photos) or sequential (a video or a walk)");
   }
   const data::ImportLayout layout = parse_import_layout(args.layout);
-  static const char* const kModels[] = {"SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV",
-                                        "OPENCV_FISHEYE"};
-  if (std::find(std::begin(kModels), std::end(kModels), args.camera_model) == std::end(kModels)) {
-    throw Error("--camera-model '" + args.camera_model + "': expected SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, "
-                "OPENCV or OPENCV_FISHEYE");
+  if (!find_lens_row(args.camera_model)) {
+    throw Error("--camera-model '" + args.camera_model + "': expected " + lens_model_list("or"));
   }
   const PhotoSelection selection = select_photos(args.photos);
   const size_t photos = selection.names.size();
@@ -411,7 +409,7 @@ void register_from_photos(CLI::App& dataset) {
       ->capture_default_str();
   cmd->add_option("--camera-model", args->camera_model,
                   "The camera COLMAP estimates and the import keeps: SIMPLE_PINHOLE (an LLFF capture when "
-                  "forward-facing), PINHOLE, or a lens trained as it is: SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE")
+                  "forward-facing), PINHOLE, or a lens trained as it is: one of " + lens_model_list("or"))
       ->capture_default_str();
   cmd->callback([args] { run_from_photos(*args); });
 }

@@ -8,6 +8,7 @@
 
 #include "common.hpp"
 #include "core/error.hpp"
+#include "core/lens_models.hpp"
 #include "data/forward_facing.hpp"
 #include "data/procedural.hpp"
 
@@ -15,7 +16,18 @@ namespace mipnerf::cli {
 
 namespace {
 
-// --lens MODEL:c1,c2,...: the model's coefficients in COLMAP's order (core/lens.hpp).
+// "SIMPLE_RADIAL:k1, RADIAL:k1,k2, …": what --lens takes, from the lens rows that have coefficients.
+std::string lens_shapes() {
+  std::string text;
+  for (const auto& row : lens_rows()) {
+    if (row.coefficients.empty()) continue;
+    text += (text.empty() ? "" : ", ") + std::string(row.colmap_name) + ":";
+    for (size_t i = 0; i < row.coefficients.size(); ++i) text += (i ? "," : "") + std::string(row.coefficients[i].name);
+  }
+  return text;
+}
+
+// --lens MODEL:c1,c2,...: the model's coefficients in COLMAP's order (core/lens_models.hpp).
 Lens parse_lens(const std::string& text) {
   const auto colon = text.find(':');
   const std::string model = text.substr(0, colon);
@@ -34,34 +46,15 @@ Lens parse_lens(const std::string& text) {
       start = comma + 1;
     }
   }
-  struct Shape {
-    const char* name;
-    LensModel model;
-    size_t count;
-  };
-  static const Shape kShapes[] = {{"SIMPLE_RADIAL", LensModel::simple_radial, 1}, {"RADIAL", LensModel::radial, 2},
-                                  {"OPENCV", LensModel::opencv, 4}, {"OPENCV_FISHEYE", LensModel::opencv_fisheye, 4}};
-  for (const auto& shape : kShapes) {
-    if (model != shape.name) continue;
-    if (values.size() != shape.count) {
-      throw Error("--lens '" + text + "': " + shape.name + " takes " + std::to_string(shape.count) + " coefficients");
-    }
-    Lens lens;
-    lens.model = shape.model;
-    lens.k1 = values[0];
-    if (shape.count > 1) lens.k2 = values[1];
-    if (shape.model == LensModel::opencv) {
-      lens.p1 = values[2];
-      lens.p2 = values[3];
-    }
-    if (shape.model == LensModel::opencv_fisheye) {
-      lens.k3 = values[2];
-      lens.k4 = values[3];
-    }
-    return lens;
+  const LensRow* row = find_lens_row(model);
+  if (!row || row->coefficients.empty()) {
+    throw Error("--lens '" + text + "': expected one of " + lens_shapes());
   }
-  throw Error("--lens '" + text + "': expected SIMPLE_RADIAL:k, RADIAL:k1,k2, OPENCV:k1,k2,p1,p2 or "
-              "OPENCV_FISHEYE:k1,k2,k3,k4");
+  if (values.size() != row->coefficients.size()) {
+    throw Error("--lens '" + text + "': " + row->colmap_name + " takes " + std::to_string(row->coefficients.size()) +
+                " coefficients");
+  }
+  return make_lens(*row, values, "--lens '" + text + "'");
 }
 
 }  // namespace
@@ -87,8 +80,7 @@ void register_make_scene(CLI::App& app) {
   auto lens = std::make_shared<std::string>();
   auto fov = std::make_shared<double>(0.0);
   cmd->add_option("--lens", *lens,
-                  "Render through a lens, MODEL:c1,c2,... in COLMAP's order: SIMPLE_RADIAL:k, RADIAL:k1,k2, "
-                  "OPENCV:k1,k2,p1,p2, OPENCV_FISHEYE:k1,k2,k3,k4 (needs --scales 1)");
+                  "Render through a lens, MODEL:c1,c2,... in COLMAP's order: " + lens_shapes() + " (needs --scales 1)");
   cmd->add_option("--fov", *fov, "Horizontal field of view of the focal length, degrees (default: the Blender scenes' 39.6)");
   auto forward = std::make_shared<data::ForwardFacingOptions>();
   auto forward_facing = std::make_shared<bool>(false);

@@ -7,17 +7,6 @@
 
 namespace mipnerf {
 
-const char* lens_model_name(LensModel model) {
-  switch (model) {
-    case LensModel::pinhole: return "PINHOLE";
-    case LensModel::simple_radial: return "SIMPLE_RADIAL";
-    case LensModel::radial: return "RADIAL";
-    case LensModel::opencv: return "OPENCV";
-    case LensModel::opencv_fisheye: return "OPENCV_FISHEYE";
-  }
-  return "?";
-}
-
 Uv distort(const Lens& lens, const Uv& uv) {
   const double u = uv[0], v = uv[1];
   const double r2 = u * u + v * v;
@@ -32,6 +21,12 @@ Uv distort(const Lens& lens, const Uv& uv) {
     }
     case LensModel::opencv: {
       const double radial = 1 + lens.k1 * r2 + lens.k2 * r2 * r2;
+      return {u * radial + 2 * lens.p1 * u * v + lens.p2 * (r2 + 2 * u * u),
+              v * radial + lens.p1 * (r2 + 2 * v * v) + 2 * lens.p2 * u * v};
+    }
+    case LensModel::full_opencv: {
+      const double r4 = r2 * r2, r6 = r4 * r2;
+      const double radial = (1 + lens.k1 * r2 + lens.k2 * r4 + lens.k3 * r6) / (1 + lens.k4 * r2 + lens.k5 * r4 + lens.k6 * r6);
       return {u * radial + 2 * lens.p1 * u * v + lens.p2 * (r2 + 2 * u * u),
               v * radial + lens.p1 * (r2 + 2 * v * v) + 2 * lens.p2 * u * v};
     }
@@ -93,7 +88,7 @@ bool undistort(const Lens& lens, const Uv& distorted_in, Uv& uv) {
 }
 
 void check_lens(const Lens& lens, const std::string& where) {
-  for (double k : {lens.k1, lens.k2, lens.k3, lens.k4, lens.p1, lens.p2}) {
+  for (double k : {lens.k1, lens.k2, lens.k3, lens.k4, lens.k5, lens.k6, lens.p1, lens.p2}) {
     if (!std::isfinite(k)) throw Error(where + ": a " + lens_model_name(lens.model) + " coefficient is not finite");
   }
 }

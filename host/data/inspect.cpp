@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 
+#include "core/lens_models.hpp"
 #include "data/lens_tables.hpp"
 
 namespace mipnerf::data {
@@ -29,11 +30,11 @@ std::vector<std::string> lens_descriptions(const Split& split) {
   for (size_t c = 0; c < split.cameras.size(); ++c) {
     const Camera& cam = split.cameras[c];
     if (cam.lens.is_pinhole() || split.scale_levels[c] != 0) continue;
-    const Lens& l = cam.lens;
-    std::string text = std::string(lens_model_name(l.model)) + " (k1 " + number(l.k1);
-    if (l.model != LensModel::simple_radial) text += ", k2 " + number(l.k2);
-    if (l.model == LensModel::opencv) text += ", p1 " + number(l.p1) + ", p2 " + number(l.p2);
-    if (l.model == LensModel::opencv_fisheye) text += ", k3 " + number(l.k3) + ", k4 " + number(l.k4);
+    const LensRow& row = lens_row(cam.lens.model);
+    std::string text = std::string(row.colmap_name) + " (";
+    for (size_t i = 0; i < row.coefficients.size(); ++i) {
+      text += (i ? ", " : "") + std::string(row.coefficients[i].name) + " " + number(cam.lens.*row.coefficients[i].value);
+    }
     text += ")";
     largest[text] = std::max(largest[text], largest_distortion_px(cam));
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/lens_models.hpp"
 
 namespace mipnerf::data {
 namespace {
@@ -25,61 +26,48 @@ double coefficient(const io::Json& object, const char* key, const std::string& w
   return io::optional_number(object, key, where).value_or(0.0);
 }
 
-// The lens a transforms file describes, as nerfstudio writes it ("camera_model": OPENCV, OPENCV_FISHEYE, …, with
-// k1..k4, p1, p2) or instant-ngp ("is_fisheye", or plain k1, k2, p1, p2 meaning OPENCV); nothing when the object
-// says nothing about a lens (the frame then keeps the file's). Throws naming `where` for a model not read here and
-// for coefficients the model does not have.
-std::optional<Lens> read_lens(const io::Json& object, const std::string& where) {
-  static const char* const kKeys[] = {"k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"};
-  bool any_key = object.contains("camera_model") || object.contains("is_fisheye");
-  for (const char* key : kKeys) any_key = any_key || object.contains(key);
-  if (!any_key) return std::nullopt;
-  Lens lens;
-  lens.k1 = coefficient(object, "k1", where);
-  lens.k2 = coefficient(object, "k2", where);
-  lens.k3 = coefficient(object, "k3", where);
-  lens.k4 = coefficient(object, "k4", where);
-  lens.p1 = coefficient(object, "p1", where);
-  lens.p2 = coefficient(object, "p2", where);
-  for (const char* key : {"k5", "k6"}) {
-    if (coefficient(object, key, where) != 0.0) {
-      throw Error(where + ": lens distortion " + key + " is not read (FULL_OPENCV): mipnerf-cl reads PINHOLE, "
-                  "SIMPLE_RADIAL, RADIAL, OPENCV and OPENCV_FISHEYE cameras; undistort the images first");
-    }
-  }
-  std::string model;
+// The model name a transforms object gives: "camera_model", or instant-ngp's "is_fisheye" (OPENCV_FISHEYE), or
+// plain coefficients (OPENCV, instant-ngp's k1, k2, p1, p2), or none of them (PINHOLE).
+std::string lens_model_named(const io::Json& object, const std::string& where) {
   if (object.contains("camera_model")) {
     if (!object.at("camera_model").is_string()) throw Error(where + ": 'camera_model' must be a string");
-    model = object.at("camera_model").get<std::string>();
-  } else if (object.contains("is_fisheye") && object.at("is_fisheye").is_boolean() && object.at("is_fisheye").get<bool>()) {
-    model = "OPENCV_FISHEYE";
-  } else {
-    model = (lens.k1 || lens.k2 || lens.p1 || lens.p2 || lens.k3 || lens.k4) ? "OPENCV" : "PINHOLE";
+    return object.at("camera_model").get<std::string>();
   }
-  const bool radial_only = lens.p1 == 0 && lens.p2 == 0 && lens.k3 == 0 && lens.k4 == 0;
-  if (model == "PINHOLE" || model == "SIMPLE_PINHOLE") {
-    if (lens.k1 || lens.k2 || lens.k3 || lens.k4 || lens.p1 || lens.p2) {
+  if (object.contains("is_fisheye") && object.at("is_fisheye").is_boolean() && object.at("is_fisheye").get<bool>()) {
+    return "OPENCV_FISHEYE";
+  }
+  for (const auto& name : lens_coefficient_names()) {
+    if (object.contains(name) && coefficient(object, name.c_str(), where) != 0.0) return "OPENCV";
+  }
+  return "PINHOLE";
+}
+
+// The lens a transforms file describes, as nerfstudio writes it ("camera_model" with the coefficients its row takes,
+// core/lens_models.hpp) or instant-ngp ("is_fisheye", or plain k1, k2, p1, p2 meaning OPENCV); nothing when the
+// object says nothing about a lens (the frame then keeps the file's). Throws naming `where` for a model not read here
+// and for coefficients the model does not take.
+std::optional<Lens> read_lens(const io::Json& object, const std::string& where) {
+  bool any_key = object.contains("camera_model") || object.contains("is_fisheye");
+  for (const auto& key : lens_coefficient_names()) any_key = any_key || object.contains(key);
+  if (!any_key) return std::nullopt;
+  const std::string model = lens_model_named(object, where);
+  const LensRow* row = find_lens_row(model);
+  if (!row) {
+    throw Error(where + ": camera_model '" + model + "' is not read: mipnerf-cl reads " + lens_model_list() +
+                " cameras; undistort the images to a pinhole camera first (e.g. COLMAP's image_undistorter)");
+  }
+  std::vector<double> values;
+  for (const auto& c : row->coefficients) values.push_back(coefficient(object, c.name, where));
+  for (const auto& key : lens_coefficient_names()) {
+    if (row->takes(key) || coefficient(object, key.c_str(), where) == 0.0) continue;
+    if (row->coefficients.empty()) {
       throw Error(where + ": camera_model " + model + " with distortion coefficients: give the model they belong to "
                   "(e.g. OPENCV)");
     }
-    lens.model = LensModel::pinhole;
-  } else if (model == "SIMPLE_RADIAL" && radial_only && lens.k2 == 0) {
-    lens.model = LensModel::simple_radial;
-  } else if (model == "RADIAL" && radial_only) {
-    lens.model = LensModel::radial;
-  } else if (model == "OPENCV" && lens.k3 == 0 && lens.k4 == 0) {
-    lens.model = LensModel::opencv;
-  } else if (model == "OPENCV_FISHEYE" && lens.p1 == 0 && lens.p2 == 0) {
-    lens.model = LensModel::opencv_fisheye;
-  } else if (model == "SIMPLE_RADIAL" || model == "RADIAL" || model == "OPENCV" || model == "OPENCV_FISHEYE") {
-    throw Error(where + ": camera_model " + model + " has coefficients it does not take (SIMPLE_RADIAL: k1; RADIAL: "
-                "k1, k2; OPENCV: k1, k2, p1, p2; OPENCV_FISHEYE: k1..k4)");
-  } else {
-    throw Error(where + ": camera_model '" + model + "' is not read: mipnerf-cl reads PINHOLE, SIMPLE_RADIAL, RADIAL, "
-                "OPENCV and OPENCV_FISHEYE cameras; undistort the images to a pinhole camera first (e.g. COLMAP's "
-                "image_undistorter)");
+    throw Error(where + ": camera_model " + model + " has coefficients it does not take (" + lens_coefficient_list() +
+                ")");
   }
-  return lens;
+  return make_lens(*row, values, where);
 }
 
 }  // namespace
@@ -139,13 +127,9 @@ void resolve_intrinsics(const IntrinsicsSpec& spec, uint32_t width, uint32_t hei
 io::Json lens_json(const Lens& lens) {
   io::Json json = io::Json::object();
   if (lens.is_pinhole()) return json;
-  json["camera_model"] = lens_model_name(lens.model);
-  json["k1"] = lens.k1;
-  json["k2"] = lens.k2;
-  json["k3"] = lens.k3;
-  json["k4"] = lens.k4;
-  json["p1"] = lens.p1;
-  json["p2"] = lens.p2;
+  const LensRow& row = lens_row(lens.model);
+  json["camera_model"] = row.colmap_name;
+  for (const auto& c : row.coefficients) json[c.name] = lens.*c.value;
   return json;
 }
 

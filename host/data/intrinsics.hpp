@@ -1,6 +1,6 @@
 // Intrinsics as transforms files give them: fl_x, fl_y, cx, cy, w, h (global or per frame), or camera_angle_x (and
-// camera_angle_y) as the Blender files do; and a lens: "camera_model" (PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV,
-// OPENCV_FISHEYE, as nerfstudio writes them) with k1..k4, p1, p2, or instant-ngp's "is_fisheye" and k1, k2, p1, p2.
+// camera_angle_y) as the Blender files do; and a lens: "camera_model" (a row of core/lens_models.hpp, as nerfstudio
+// writes them) with the coefficients that row takes, or instant-ngp's "is_fisheye" and k1, k2, p1, p2.
 #pragma once
 
 #include <optional>
@@ -22,7 +22,7 @@ struct IntrinsicsSpec {
 
 // Reads the keys above from `object` on top of `base` (a frame's values override the file's global ones).
 // Throws mipnerf::Error naming `where` for a non-number or non-positive value, a camera_model not read here
-// (FULL_OPENCV's k5, k6, EQUIRECTANGULAR, …), or coefficients the model does not take.
+// (FOV, EQUIRECTANGULAR, …), or coefficients the model does not take.
 IntrinsicsSpec read_intrinsics(const io::Json& object, const IntrinsicsSpec& base, const std::string& where);
 
 // Sets camera's focal lengths, principal point and size for an image of width × height pixels:
@@ -32,8 +32,8 @@ IntrinsicsSpec read_intrinsics(const io::Json& object, const IntrinsicsSpec& bas
 void resolve_intrinsics(const IntrinsicsSpec& spec, uint32_t width, uint32_t height, Camera& camera,
                         const std::string& where);
 
-// The transforms-file keys of a lens (nerfstudio's: camera_model, k1.., p1, p2), empty for a pinhole: what
-// read_intrinsics reads back (make-scene's transforms files, render's camera paths).
+// The transforms-file keys of a lens (nerfstudio's: camera_model and the coefficients its row takes), empty for a
+// pinhole: what read_intrinsics reads back (make-scene's and import-colmap's transforms files, render's camera paths).
 io::Json lens_json(const Lens& lens);
 
 }  // namespace mipnerf::data

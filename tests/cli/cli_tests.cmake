@@ -173,7 +173,7 @@ mipnerf_add_checked_test("cli: train on an imported COLMAP model" EXPECT "traine
 set_tests_properties("cli: train on an imported COLMAP model" PROPERTIES FIXTURES_REQUIRED cli_colmap)
 mipnerf_add_checked_test("cli: dataset import-colmap: a SIMPLE_RADIAL camera imports with its lens" EXPECT "imported 3 images \\(1 camera: SIMPLE_RADIAL\\)"
   COMMAND mipnerf-cl dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/distorted" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-lens")
-mipnerf_add_cli_error_test("dataset import-colmap: a lens model not read" PATTERN "unknown_lens/cameras.txt:4: camera 1 is FULL_OPENCV, a model mipnerf-cl does not read .*run COLMAP's image_undistorter first"
+mipnerf_add_cli_error_test("dataset import-colmap: a lens model not read" PATTERN "unknown_lens/cameras.txt:4: camera 1 is THIN_PRISM_FISHEYE, a model mipnerf-cl does not read .*run COLMAP's image_undistorter first"
   ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/unknown_lens" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
 mipnerf_add_cli_error_test("dataset import-colmap: a missing image" PATTERN "colmap/images: 1 of the 4 images of .*missing/images.txt are missing: view_3.png$"
   ARGS dataset import-colmap "${MIPNERF_COLMAP_FIXTURES}/missing" "${MIPNERF_COLMAP_FIXTURES}/images" "${CMAKE_CURRENT_BINARY_DIR}/cli-colmap-bad")
@@ -216,7 +216,7 @@ mipnerf_add_cli_error_test("dataset inspect: a factor that is no power of two, a
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --factor 3)
 mipnerf_add_cli_error_test("dataset inspect: a factor that is no number, as train says it" PATTERN "setting 'factor' = 'two': expected an integer$"
   ARGS dataset inspect "${MIPNERF_DATA_FIXTURES}/valid" --factor two)
-mipnerf_add_checked_test("cli: dataset import-colmap --help names the six camera models it reads" EXPECT "of SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV or OPENCV_FISHEYE cameras"
+mipnerf_add_checked_test("cli: dataset import-colmap --help names the seven camera models it reads" EXPECT "of SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE or FULL_OPENCV cameras"
   COMMAND mipnerf-cl dataset import-colmap --help)
 mipnerf_add_cli_error_test("train: invalid combination" PATTERN "invalid configuration: lr_warmup_mult must be in"
   ARGS train --lr_warmup_mult 2 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")

@@ -12,6 +12,7 @@
 #include <limits>
 #include <random>
 
+#include "core/lens_models.hpp"
 #include "data/import/colmap_model.hpp"
 #include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
@@ -332,12 +333,29 @@ TEST_CASE("colmap: lens cameras import with their model, and unknown, non-finite
   CHECK(opencv.cameras[1].lens.model == LensModel::opencv);
   CHECK(opencv.cameras[1].lens.p2 == 0.002);
 
+  // FULL_OPENCV: its eight coefficients in COLMAP's order k1, k2, p1, p2, k3, k4, k5, k6 (core/lens_models.cpp).
+  capture.model.cameras[0] = {1, "FULL_OPENCV", 6, 8, 6,
+                              {7.0, 7.0, 4.0, 3.0, 0.1, 0.01, 0.001, 0.002, 0.003, 0.02, 0.004, 0.0005}};
+  test::write_colmap_model(dir / "full", capture.model, true);
+  data::import_colmap(dir / "full", dir / "images", dir / "out_full", {});
+  const auto full = data::load_dataset(dir / "out_full/transforms.json", all_frames()).split("train");
+  const Lens& full_lens = full.cameras[0].lens;
+  CHECK(full_lens.model == LensModel::full_opencv);
+  CHECK(full_lens.k1 == 0.1);
+  CHECK(full_lens.k2 == 0.01);
+  CHECK(full_lens.p1 == 0.001);
+  CHECK(full_lens.p2 == 0.002);
+  CHECK(full_lens.k3 == 0.003);
+  CHECK(full_lens.k4 == 0.02);
+  CHECK(full_lens.k5 == 0.004);
+  CHECK(full_lens.k6 == 0.0005);
+
   capture.model.cameras[0] = {1, "FOV", 7, 8, 6, {7.0, 7.0, 4.0, 3.0, 0.9}};
   test::write_colmap_model(dir / "fov", capture.model, false);
   CHECK(import_error(dir / "fov", dir / "images", dir / "out") ==
         dir / "fov/cameras.txt" +
             ":4: camera 1 is FOV, a model mipnerf-cl does not read (it reads SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, "
-            "RADIAL, OPENCV and OPENCV_FISHEYE): run COLMAP's image_undistorter first and import the sparse model and "
+            "RADIAL, OPENCV, OPENCV_FISHEYE and FULL_OPENCV): run COLMAP's image_undistorter first and import the sparse model and "
             "images it writes (PINHOLE cameras)");
   capture.model.cameras[0] = {1, "RADIAL", 3, 8, 6, {7.0, 4.0, 3.0, -0.02, std::numeric_limits<double>::infinity()}};
   test::write_colmap_model(dir / "infinite", capture.model, true);
@@ -694,4 +712,16 @@ TEST_CASE("colmap: the imported transforms.json names links inside its folder, a
   const std::string message = import_error(dir / "escape", dir / "images", dir / "out2");
   CHECK(contains(message, "escape/images.txt: image 100's name '../images/img_0.png' lies outside " + dir / "images"));
   CHECK(message.find('\n') == std::string::npos);
+}
+
+TEST_CASE("colmap: every lens row (core/lens_models.cpp) is COLMAP's model of that name: id and parameter count") {
+  for (const auto& row : lens_rows()) {
+    INFO(row.colmap_name);
+    const data::ColmapCameraModel* by_name = data::find_colmap_camera_model(row.colmap_name);
+    REQUIRE(by_name);
+    CHECK(by_name->id == row.colmap_id);
+    CHECK(static_cast<size_t>(by_name->num_params) == row.parameter_count());
+    CHECK(find_lens_row(row.colmap_name) == &row);
+  }
+  CHECK(find_lens_row("FOV") == nullptr);
 }

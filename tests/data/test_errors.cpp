@@ -165,18 +165,20 @@ TEST_CASE("errors: transforms.json lens models, inconsistent w/h, near/far") {
   // A lens mipnerf-cl reads loads (its rays go through the lens); the rest are one-line errors naming the camera.
   CHECK(load({{"fl_x", 5.0}, {"k1", -0.05}, {"frames", frames}}).empty());
   CHECK(load({{"fl_x", 5.0}, {"camera_model", "OPENCV_FISHEYE"}, {"k1", 0.01}, {"frames", frames}}).empty());
+  CHECK(load({{"fl_x", 5.0}, {"camera_model", "FULL_OPENCV"}, {"k1", -0.05}, {"k5", 0.01}, {"frames", frames}}).empty());
+  // Coefficients without a model are OPENCV's (instant-ngp), which has no k5.
   CHECK(load({{"fl_x", 5.0}, {"k1", -0.05}, {"k5", 0.01}, {"frames", frames}}) ==
-        file + ": lens distortion k5 is not read (FULL_OPENCV): mipnerf-cl reads PINHOLE, SIMPLE_RADIAL, RADIAL, "
-               "OPENCV and OPENCV_FISHEYE cameras; undistort the images first");
+        file + ": camera_model OPENCV has coefficients it does not take (SIMPLE_RADIAL: k1; RADIAL: k1, k2; OPENCV: "
+               "k1, k2, p1, p2; OPENCV_FISHEYE: k1, k2, k3, k4; FULL_OPENCV: k1, k2, p1, p2, k3, k4, k5, k6)");
   auto with_frame_model = io::Json{{"fl_x", 5.0}, {"frames", frames}};
   with_frame_model["frames"][1]["camera_model"] = "FOV";
   CHECK(load(with_frame_model) ==
-        file + ": frames[1]: camera_model 'FOV' is not read: mipnerf-cl reads PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV "
-               "and OPENCV_FISHEYE cameras; undistort the images to a pinhole camera first (e.g. COLMAP's "
+        file + ": frames[1]: camera_model 'FOV' is not read: mipnerf-cl reads SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, "
+               "RADIAL, OPENCV, OPENCV_FISHEYE and FULL_OPENCV cameras; undistort the images to a pinhole camera first (e.g. COLMAP's "
                "image_undistorter)");
   CHECK(load({{"fl_x", 5.0}, {"camera_model", "SIMPLE_RADIAL"}, {"k1", 0.1}, {"p1", 0.01}, {"frames", frames}}) ==
         file + ": camera_model SIMPLE_RADIAL has coefficients it does not take (SIMPLE_RADIAL: k1; RADIAL: k1, k2; "
-               "OPENCV: k1, k2, p1, p2; OPENCV_FISHEYE: k1..k4)");
+               "OPENCV: k1, k2, p1, p2; OPENCV_FISHEYE: k1, k2, k3, k4; FULL_OPENCV: k1, k2, p1, p2, k3, k4, k5, k6)");
   CHECK(contains(load({{"fl_x", 5.0}, {"k1", "strong"}, {"frames", frames}}), file + ": 'k1'"));
   // k1 = −2 folds the image at r = 1/√6 = 0.41 (normalised): the 4×4 image at focal 2 px reaches r = 1.06.
   CHECK(load({{"fl_x", 2.0}, {"camera_model", "SIMPLE_RADIAL"}, {"k1", -2.0}, {"frames", frames}}) ==

@@ -2,10 +2,10 @@
 """COLMAP's own lens models as test vectors (tests/official/fixtures/colmap_lenses.json).
 
 Run by hand, never by the test suite: it needs pycolmap (PyPI), COLMAP's Python bindings, whose camera models are
-COLMAP's C++ code. For each model mipnerf-cl reads (SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE) on a 640x480
-camera with realistic coefficients, it records for random image positions (and every pixel centre of a coarse grid)
-COLMAP's cam_from_img (the undistorted normalised coordinates the ray goes through) and, for random normalised
-points, img_from_cam (the forward model). tests/official/test_lenses.cpp compares core/lens.hpp and the ray kernel
+COLMAP's C++ code. For each lens model mipnerf-cl reads (the rows of core/lens_models.cpp that take coefficients:
+SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, FULL_OPENCV) on a 640x480 camera with realistic coefficients, it
+records for random image positions (and every pixel centre of a coarse grid) COLMAP's cam_from_img (the undistorted
+normalised coordinates the ray goes through) and, for random normalised points, img_from_cam (the forward model). tests/official/test_lenses.cpp compares core/lens.hpp and the ray kernel
 with them.
 
     python3 -m venv /tmp/pycolmap-venv && /tmp/pycolmap-venv/bin/pip install pycolmap numpy
@@ -22,6 +22,8 @@ CAMERAS = [
     ("RADIAL", [500.0, 320.0, 240.0, -0.12, 0.03]),
     ("OPENCV", [510.0, 495.0, 318.5, 243.25, -0.15, 0.04, 0.0012, -0.0008]),
     ("OPENCV_FISHEYE", [230.0, 228.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0004]),
+    # k1, k2, p1, p2, k3, k4, k5, k6: a wide lens's rational radial profile (OpenCV's CALIB_RATIONAL_MODEL).
+    ("FULL_OPENCV", [505.0, 498.0, 321.0, 238.5, -0.28, 0.09, 0.0009, -0.0006, -0.012, 0.05, -0.01, 0.002]),
 ]
 WIDTH, HEIGHT = 640, 480
 

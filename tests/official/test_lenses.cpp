@@ -1,7 +1,8 @@
 // Our lens models (core/lens.hpp) and the rays behind them against COLMAP's own camera models
 // (tests/official/fixtures/colmap_lenses.json, written by make_lens_vectors.py through pycolmap, COLMAP's C++ models):
 // img_from_cam (the forward model) and cam_from_img (its inverse, the normalised point a pixel's ray goes through)
-// for SIMPLE_RADIAL, RADIAL, OPENCV and OPENCV_FISHEYE on a 640×480 camera.
+// for every lens row with coefficients (SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, FULL_OPENCV) on a 640×480
+// camera.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -10,6 +11,7 @@
 
 #include "core/camera.hpp"
 #include "core/lens.hpp"
+#include "core/lens_models.hpp"
 #include "official_fixtures.hpp"
 
 using namespace mipnerf;
@@ -30,22 +32,21 @@ struct FixtureCamera {
   uint32_t width = 0, height = 0;
 };
 
-// The fixture's COLMAP parameter list as intrinsics and a lens (COLMAP's order of parameters per model).
+// The fixture's COLMAP parameter list as intrinsics and a lens, read through the model's row (core/lens_models.hpp):
+// the row's parameter order is what this pins against COLMAP's.
 FixtureCamera camera_of(const io::Json& json) {
   FixtureCamera c;
   c.model = json.at("model").get<std::string>();
-  const auto p = json.at("params").get<std::vector<double>>();
   c.width = json.at("width").get<uint32_t>();
   c.height = json.at("height").get<uint32_t>();
-  const bool single_focal = c.model == "SIMPLE_RADIAL" || c.model == "RADIAL";
-  c.fx = p[0];
-  c.fy = single_focal ? p[0] : p[1];
-  c.cx = single_focal ? p[1] : p[2];
-  c.cy = single_focal ? p[2] : p[3];
-  if (c.model == "SIMPLE_RADIAL") c.lens = {LensModel::simple_radial, p[3]};
-  if (c.model == "RADIAL") c.lens = {LensModel::radial, p[3], p[4]};
-  if (c.model == "OPENCV") c.lens = {LensModel::opencv, p[4], p[5], 0, 0, p[6], p[7]};
-  if (c.model == "OPENCV_FISHEYE") c.lens = {LensModel::opencv_fisheye, p[4], p[5], p[6], p[7]};
+  const LensRow* row = find_lens_row(c.model);
+  REQUIRE_MESSAGE(row, c.model << " has no lens row");
+  const ColmapIntrinsics in = read_colmap_params(*row, json.at("params").get<std::vector<double>>(), c.model);
+  c.fx = in.fx;
+  c.fy = in.fy;
+  c.cx = in.cx;
+  c.cy = in.cy;
+  c.lens = in.lens;
   REQUIRE(!c.lens.is_pinhole());
   return c;
 }
@@ -53,9 +54,12 @@ FixtureCamera camera_of(const io::Json& json) {
 }  // namespace
 
 // COLMAP's forward model and ours are the same polynomials in double precision: agreement to 1e-9 px is roundoff.
-TEST_CASE("lens distortion matches COLMAP's img_from_cam for the four models") {
+TEST_CASE("lens distortion matches COLMAP's img_from_cam for every lens model with coefficients") {
   const io::Json fixture = lens_fixture();
-  REQUIRE(fixture.at("cameras").size() == 4);
+  // Every row that takes coefficients has its camera in the fixture (make_lens_vectors.py's CAMERAS).
+  size_t lens_rows_with_coefficients = 0;
+  for (const auto& row : lens_rows()) lens_rows_with_coefficients += row.coefficients.empty() ? 0 : 1;
+  REQUIRE(fixture.at("cameras").size() == lens_rows_with_coefficients);
   for (const auto& json : fixture.at("cameras")) {
     const FixtureCamera c = camera_of(json);
     const auto points = official::flat(json.at("points"));

@@ -9,8 +9,10 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "core/lens_models.hpp"
 #include "data/lens_tables.hpp"
 #include "data/image.hpp"
+#include "data/intrinsics.hpp"
 #include "data/path_policy.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
@@ -57,32 +59,19 @@ struct Intrinsics {
   Lens lens;
 };
 
-// The intrinsics and lens of a camera the images use: SIMPLE_PINHOLE (f, cx, cy), PINHOLE (fx, fy, cx, cy),
-// SIMPLE_RADIAL (f, cx, cy, k), RADIAL (f, cx, cy, k1, k2), OPENCV (fx, fy, cx, cy, k1, k2, p1, p2) and OPENCV_FISHEYE
-// (fx, fy, cx, cy, k1, k2, k3, k4), COLMAP's parameter orders; any other model is refused with what to run.
+// The intrinsics and lens of a camera the images use, read through its model's row (core/lens_models.hpp: COLMAP's
+// parameter orders); a model without a row is refused with what to run.
 Intrinsics camera_intrinsics(const ColmapModel& model, const ColmapCamera& camera) {
   const std::string at = model.where("cameras", camera.line, "camera", camera.id);
   const std::string name = camera.model->name;
-  const auto& p = camera.params;
-  Intrinsics in{0, 0, 0, 0, camera.width, camera.height, {}};
-  if (name == "SIMPLE_PINHOLE" || name == "SIMPLE_RADIAL" || name == "RADIAL") {
-    in.fx = in.fy = p[0];
-    in.cx = p[1];
-    in.cy = p[2];
-    if (name == "SIMPLE_RADIAL") in.lens = {LensModel::simple_radial, p[3]};
-    if (name == "RADIAL") in.lens = {LensModel::radial, p[3], p[4]};
-  } else if (name == "PINHOLE" || name == "OPENCV" || name == "OPENCV_FISHEYE") {
-    in.fx = p[0];
-    in.fy = p[1];
-    in.cx = p[2];
-    in.cy = p[3];
-    if (name == "OPENCV") in.lens = {LensModel::opencv, p[4], p[5], 0, 0, p[6], p[7]};
-    if (name == "OPENCV_FISHEYE") in.lens = {LensModel::opencv_fisheye, p[4], p[5], p[6], p[7]};
-  } else {
-    throw Error(at + " is " + name + ", a model mipnerf-cl does not read (it reads SIMPLE_PINHOLE, PINHOLE, "
-                "SIMPLE_RADIAL, RADIAL, OPENCV and OPENCV_FISHEYE): run COLMAP's image_undistorter first and import the "
-                "sparse model and images it writes (PINHOLE cameras)");
+  const LensRow* row = find_lens_row(name);
+  if (!row) {
+    throw Error(at + " is " + name + ", a model mipnerf-cl does not read (it reads " + lens_model_list() +
+                "): run COLMAP's image_undistorter first and import the sparse model and images it writes (PINHOLE "
+                "cameras)");
   }
+  const ColmapIntrinsics read = read_colmap_params(*row, camera.params, at);
+  Intrinsics in{read.fx, read.fy, read.cx, read.cy, camera.width, camera.height, read.lens};
   if (!(in.fx > 0.0) || !(in.fy > 0.0)) throw Error(at + ": the focal length must be positive");
   Camera as_camera;  // the lens must invert over the whole image, or no ray leaves some pixels
   as_camera.focal_x_px = in.fx;
@@ -128,21 +117,10 @@ std::string relative_path(const fs::path& path, const fs::path& from_dir) {
   return relative.generic_string();
 }
 
-// The camera as a transforms file holds it (nerfstudio's keys for the lens).
+// The camera as a transforms file holds it (nerfstudio's keys for the lens, data/intrinsics.hpp).
 io::Json intrinsics_json(const Intrinsics& in) {
   io::Json json = {{"fl_x", in.fx}, {"fl_y", in.fy}, {"cx", in.cx}, {"cy", in.cy}, {"w", in.width}, {"h", in.height}};
-  if (in.lens.is_pinhole()) return json;
-  json["camera_model"] = lens_model_name(in.lens.model);
-  json["k1"] = in.lens.k1;
-  json["k2"] = in.lens.k2;
-  if (in.lens.model == LensModel::opencv) {
-    json["p1"] = in.lens.p1;
-    json["p2"] = in.lens.p2;
-  }
-  if (in.lens.model == LensModel::opencv_fisheye) {
-    json["k3"] = in.lens.k3;
-    json["k4"] = in.lens.k4;
-  }
+  json.update(lens_json(in.lens));
   return json;
 }
 

@@ -19,27 +19,27 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The models COLMAP defines (src/colmap/sensor/models.h): id, name, parameter count. Only the first two are a
-// pinhole camera without distortion; the rest distort (radial, tangential, fisheye, …) or are not perspective.
+// The models COLMAP defines (src/colmap/sensor/models.h): id, name, parameter count, to read a model file whatever
+// its cameras; which of them a camera is read of, and how, is core/lens_models.hpp's.
 constexpr ColmapCameraModel kModels[] = {
-    {0, "SIMPLE_PINHOLE", 3, true},
-    {1, "PINHOLE", 4, true},
-    {2, "SIMPLE_RADIAL", 4, false},
-    {3, "RADIAL", 5, false},
-    {4, "OPENCV", 8, false},
-    {5, "OPENCV_FISHEYE", 8, false},
-    {6, "FULL_OPENCV", 12, false},
-    {7, "FOV", 5, false},
-    {8, "SIMPLE_RADIAL_FISHEYE", 4, false},
-    {9, "RADIAL_FISHEYE", 5, false},
-    {10, "THIN_PRISM_FISHEYE", 12, false},
-    {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16, false},
-    {12, "SIMPLE_DIVISION", 4, false},
-    {13, "DIVISION", 5, false},
-    {14, "SIMPLE_FISHEYE", 3, false},
-    {15, "FISHEYE", 4, false},
-    {16, "EUCM", 6, false},
-    {17, "EQUIRECTANGULAR", 2, false},
+    {0, "SIMPLE_PINHOLE", 3},
+    {1, "PINHOLE", 4},
+    {2, "SIMPLE_RADIAL", 4},
+    {3, "RADIAL", 5},
+    {4, "OPENCV", 8},
+    {5, "OPENCV_FISHEYE", 8},
+    {6, "FULL_OPENCV", 12},
+    {7, "FOV", 5},
+    {8, "SIMPLE_RADIAL_FISHEYE", 4},
+    {9, "RADIAL_FISHEYE", 5},
+    {10, "THIN_PRISM_FISHEYE", 12},
+    {11, "RAD_TAN_THIN_PRISM_FISHEYE", 16},
+    {12, "SIMPLE_DIVISION", 4},
+    {13, "DIVISION", 5},
+    {14, "SIMPLE_FISHEYE", 3},
+    {15, "FISHEYE", 4},
+    {16, "EUCM", 6},
+    {17, "EQUIRECTANGULAR", 2},
 };
 constexpr int kFewestParams = 2;
 

@@ -19,9 +19,9 @@ struct ColmapCameraModel {
   int id;
   const char* name;
   int num_params;
-  bool pinhole;  // SIMPLE_PINHOLE (f, cx, cy) or PINHOLE (fx, fy, cx, cy): no distortion, a perspective projection
 };
-// Every model COLMAP defines (ids 0 … 17); nullptr for an unknown id or name.
+// Every model COLMAP defines (ids 0 … 17), to read any model file; the ones mipnerf-cl reads a camera of are the
+// rows of core/lens_models.hpp. nullptr for an unknown id or name.
 const ColmapCameraModel* find_colmap_camera_model(int id);
 const ColmapCameraModel* find_colmap_camera_model(std::string_view name);
 
