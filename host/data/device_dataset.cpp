@@ -4,28 +4,25 @@
 #include <algorithm>
 
 #include "core/error.hpp"
-#include "data/lens_tables.hpp"
 
 namespace mipnerf::data {
 
-DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
-    : host_cameras_(split.cameras), num_pixels_(split.num_pixels()) {
+namespace {
+// The split, once it is known to fit the device's 32-bit pixel indices and to hold an image.
+const Split& uploadable(const Split& split) {
   if (split.cameras.empty()) throw Error("split '" + split.name + "' has no images to upload");
-  if (num_pixels_ >= (uint64_t{1} << 32)) {
-    throw Error("split '" + split.name + "' has " + std::to_string(num_pixels_) +
+  if (split.num_pixels() >= (uint64_t{1} << 32)) {
+    throw Error("split '" + split.name + "' has " + std::to_string(split.num_pixels()) +
                 " pixels; the device indexes pixels with 32 bits: use fewer images or a lower resolution");
   }
-  auto packed = pack_cameras(split.cameras);
-  // Cameras behind a lens: their rays and radii come from tables made once here (data/lens_tables.hpp).
-  const LensTables tables = build_lens_tables(split.cameras, split.files);
-  set_lens_table_slots(packed, tables);
-  cameras_ = ocl::DeviceArray<float>(ctx, packed.size(), "cameras [C][24] of " + split.name);
-  cameras_.upload(ctx, packed);
-  if (!tables.empty()) {
-    lens_tables_ = ocl::DeviceArray<float>(ctx, tables.values.size(), "lens tables [pixels][4] of " + split.name);
-    lens_tables_.upload(ctx, tables.values);
-    has_lens_tables_ = true;
-  }
+  return split;
+}
+}  // namespace
+
+DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
+    : host_cameras_(uploadable(split).cameras),
+      num_pixels_(split.num_pixels()),
+      cameras_(ctx, split.cameras, split.files, split.name) {
   pixels_rgb_ = ocl::DeviceArray<float>(ctx, split.rgb.size(), "pixels_rgb [pixels][3] of " + split.name);
   pixels_rgb_.upload(ctx, split.rgb);
   std::vector<uint32_t> offsets(split.pixel_offsets.begin(), split.pixel_offsets.end());
@@ -34,12 +31,12 @@ DeviceDataset::DeviceDataset(ocl::Context& ctx, const Split& split)
 }
 
 size_t DeviceDataset::bytes_for(const Split& split) {
-  return split.cameras.size() * camera_layout::stride * sizeof(float) + split.rgb.size() * sizeof(float) +
+  return DeviceCameras::packed_bytes(split.cameras.size()) + split.rgb.size() * sizeof(float) +
          split.pixel_offsets.size() * sizeof(uint32_t);
 }
 
 size_t DeviceDataset::largest_buffer_for(const Split& split) {
-  return std::max({split.cameras.size() * camera_layout::stride * sizeof(float), split.rgb.size() * sizeof(float),
+  return std::max({DeviceCameras::packed_bytes(split.cameras.size()), split.rgb.size() * sizeof(float),
                    split.pixel_offsets.size() * sizeof(uint32_t)});
 }
 

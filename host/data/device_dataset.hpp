@@ -8,12 +8,13 @@
 
 #include "cl/buffer.hpp"
 #include "data/dataset.hpp"
+#include "data/device_cameras.hpp"
 
 namespace mipnerf::data {
 
 class DeviceDataset {
  public:
-  // Uploads `split`. Throws mipnerf::Error when it has no image, or 2^32 pixels or more (pixel indices are
+  // Uploads `split` (its cameras with their lens tables, data/device_cameras.hpp). Throws mipnerf::Error when it has no image, or 2^32 pixels or more (pixel indices are
   // 32-bit on the device), or a buffer exceeds the device's allocation limit.
   DeviceDataset(ocl::Context& ctx, const Split& split);
 
@@ -26,20 +27,16 @@ class DeviceDataset {
   uint64_t num_pixels() const { return num_pixels_; }
   const std::vector<Camera>& host_cameras() const { return host_cameras_; }
 
-  const ocl::DeviceArray<float>& cameras() const { return cameras_; }            // [C][24] (pack_cameras)
+  const DeviceCameras& cameras() const { return cameras_; }  // packed [C][24], and lens tables when any lens
   const ocl::DeviceArray<float>& pixels_rgb() const { return pixels_rgb_; }      // [pixels][3]
   const ocl::DeviceArray<uint32_t>& pixel_offsets() const { return pixel_offsets_; }  // [C + 1]
-  // The lens tables of the cameras behind a lens (data/lens_tables.hpp), or nullptr when every camera is a pinhole.
-  const ocl::DeviceArray<float>* lens_tables() const { return has_lens_tables_ ? &lens_tables_ : nullptr; }
 
  private:
   std::vector<Camera> host_cameras_;
   uint64_t num_pixels_ = 0;
-  ocl::DeviceArray<float> cameras_;
+  DeviceCameras cameras_;
   ocl::DeviceArray<float> pixels_rgb_;
   ocl::DeviceArray<uint32_t> pixel_offsets_;
-  ocl::DeviceArray<float> lens_tables_;
-  bool has_lens_tables_ = false;
 };
 
 }  // namespace mipnerf::data

@@ -5,7 +5,6 @@
 #include <numeric>
 
 #include "core/error.hpp"
-#include "data/lens_tables.hpp"
 #include "parallel/world.hpp"
 
 namespace mipnerf::eval {
@@ -13,6 +12,18 @@ namespace {
 
 graph::GraphMode mode_for(const RenderSettings& settings) {
   return settings.supersample > 1 ? graph::GraphMode::inference_jittered : graph::GraphMode::inference;
+}
+
+// The cameras, once each is known to fit the device's 32-bit pixel indices.
+const std::vector<Camera>& renderable(const std::vector<Camera>& cameras) {
+  if (cameras.empty()) throw Error("render: no camera to render");
+  for (const auto& camera : cameras) {
+    if (static_cast<uint64_t>(camera.width_px) * camera.height_px > 0xFFFFFFFFull) {
+      throw Error("render: an image of " + std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) +
+                  " has more than 2^32 - 1 pixels");
+    }
+  }
+  return cameras;
 }
 
 const RenderSettings& checked(const RenderSettings& settings) {
@@ -38,29 +49,12 @@ ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, st
 ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                              const std::vector<Camera>& cameras, const RenderSettings& settings)
     : ctx_(&ctx),
-      cameras_(cameras),
+      cameras_(renderable(cameras)),
       settings_(checked(settings)),
       graph_(ctx, spec, std::move(networks), mode_for(settings), settings.chunk_rays),
-      packed_cameras_(ctx, std::max<size_t>(1, cameras.size()) * camera_layout::stride, "render cameras [C][24]"),
+      device_cameras_(ctx, cameras_, {}, "render"),
       camera_ids_(ctx, settings.chunk_rays, "render camera_ids [chunk]"),
-      pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {
-  if (cameras_.empty()) throw Error("render: no camera to render");
-  for (const auto& camera : cameras_) {
-    if (static_cast<uint64_t>(camera.width_px) * camera.height_px > 0xFFFFFFFFull) {
-      throw Error("render: an image of " + std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) +
-                  " has more than 2^32 - 1 pixels");
-    }
-  }
-  auto packed = pack_cameras(cameras_);
-  const data::LensTables tables = data::build_lens_tables(cameras_);
-  data::set_lens_table_slots(packed, tables);
-  packed_cameras_.upload(ctx, packed);
-  if (!tables.empty()) {
-    lens_tables_ = ocl::DeviceArray<float>(ctx, tables.values.size(), "render lens tables [pixels][4]");
-    lens_tables_.upload(ctx, tables.values);
-    has_lens_tables_ = true;
-  }
-}
+      pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {}
 
 RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_t, size_t)>& progress) {
   if (index >= cameras_.size()) {
@@ -86,7 +80,7 @@ RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_
     depth.resize(chunk_rays);
     acc.resize(chunk_rays);
   }
-  const graph::RaySource source{packed_cameras_, camera_ids_, pixel_ids_, has_lens_tables_ ? &lens_tables_ : nullptr};
+  const graph::RaySource source{device_cameras_, camera_ids_, pixel_ids_};
   const auto& out = graph_.level_outputs(graph_.spec().levels.size() - 1);
   const uint64_t seed = camera_seed(settings_.seed, index);
   // Under mpirun each rank renders a contiguous share of the image's chunks (whole chunks, so every pixel is
@@ -152,7 +146,7 @@ double ImageRenderer::warm_up() {
   std::iota(ids.begin(), ids.end(), 0u);
   camera_ids_.fill(*ctx_, 0u);
   pixel_ids_.upload(*ctx_, ids.data(), count);
-  graph_.render_chunk({packed_cameras_, camera_ids_, pixel_ids_, has_lens_tables_ ? &lens_tables_ : nullptr},
+  graph_.render_chunk({device_cameras_, camera_ids_, pixel_ids_},
                       {0, count}, {settings_.seed, 0}, 0);
   std::vector<float> acc(count);
   graph_.level_outputs(graph_.spec().levels.size() - 1).acc.download(*ctx_, acc.data(), count);  // waits

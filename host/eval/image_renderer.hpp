@@ -11,6 +11,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "core/camera.hpp"
+#include "data/device_cameras.hpp"
 #include "graph/graph.hpp"
 
 namespace mipnerf::eval {
@@ -63,11 +64,9 @@ class ImageRenderer {
   std::vector<Camera> cameras_;
   RenderSettings settings_;
   graph::Graph graph_;
-  ocl::DeviceArray<float> packed_cameras_;  // [C][24]
-  ocl::DeviceArray<uint32_t> camera_ids_;   // [chunk]
-  ocl::DeviceArray<uint32_t> pixel_ids_;    // [chunk]
-  ocl::DeviceArray<float> lens_tables_;     // the cameras behind a lens (data/lens_tables.hpp)
-  bool has_lens_tables_ = false;
+  data::DeviceCameras device_cameras_;     // packed, with their lens tables
+  ocl::DeviceArray<uint32_t> camera_ids_;  // [chunk]
+  ocl::DeviceArray<uint32_t> pixel_ids_;   // [chunk]
 };
 
 }  // namespace mipnerf::eval

@@ -171,15 +171,16 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
   ocl::copy(*ctx_, source.camera_ids, chunk.first, camera_ids_, 0, chunk.count);
   ocl::copy(*ctx_, source.pixel_ids, chunk.first, pixel_ids_, 0, chunk.count);
   const RngKey rng{key.seed, key.step, first_ray};
-  if (source.lens_tables) {
+  if (source.cameras.has_lens_tables()) {
     if (!lens_rays_) {
       RaysOptions lens_options = rays_->options();
       lens_options.lens_tables = true;
       lens_rays_ = std::make_unique<ops::Rays>(*ctx_, lens_options);  // refuses cylinder rays with what to do
     }
-    lens_rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count, source.lens_tables}, chunk_rays_, rng);
+    lens_rays_->fwd({source.cameras.packed(), camera_ids_, pixel_ids_, chunk.count, &source.cameras.lens_tables()},
+                    chunk_rays_, rng);
   } else {
-    rays_->fwd({source.cameras, camera_ids_, pixel_ids_, chunk.count}, chunk_rays_, rng);
+    rays_->fwd({source.cameras.packed(), camera_ids_, pixel_ids_, chunk.count}, chunk_rays_, rng);
   }
   if (spec_.rays.view_dependence) {
     ocl::StageScope view_stage(*ctx_, "view encoding");

@@ -15,6 +15,7 @@
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
+#include "data/device_cameras.hpp"
 #include "graph/graph_spec.hpp"
 #include "mlp/network.hpp"
 #include "ops/encode.hpp"
@@ -30,12 +31,9 @@ namespace mipnerf::graph {
 
 // Where a chunk's rays come from: cameras and, per ray of the batch (or image), its camera and pixel.
 struct RaySource {
-  const ocl::DeviceArray<float>& cameras;        // [C][24] packed
+  const data::DeviceCameras& cameras;            // packed, with the lens tables when any camera has a lens
   const ocl::DeviceArray<uint32_t>& camera_ids;  // [B]
   const ocl::DeviceArray<uint32_t>& pixel_ids;   // [B] y·width + x
-  // Per-pixel undistorted directions of lens cameras ([pixels][4], data/lens_tables.hpp); null when every
-  // camera is a pinhole.
-  const ocl::DeviceArray<float>* lens_tables = nullptr;
 };
 
 // Rays first .. first + count − 1 of the source.

@@ -27,7 +27,7 @@ void batch_sample(ocl::Context& ctx, const data::DeviceDataset& dataset, const B
   build.define("BATCH_SINGLE_IMAGE", options.batching == Batching::single_image ? 1 : 0);
   auto& kernel = ctx.program({"common.cl", "batch.cl"}, build).kernel(name);
   ocl::set_args(kernel, name, cl_ulong{options.seed}, cl_uint{step}, dataset.pixel_offsets(),
-                cl_uint{dataset.num_cameras()}, dataset.pixels_rgb(), dataset.cameras(), batch.camera_ids,
+                cl_uint{dataset.num_cameras()}, dataset.pixels_rgb(), dataset.cameras().packed(), batch.camera_ids,
                 batch.pixel_ids, batch.target_rgb, batch.lossmult, static_cast<cl_uint>(batch.rays));
   ocl::launch_1d(ctx, kernel, batch.rays, name);
 }

@@ -37,7 +37,7 @@ double draw_batch(StepParts& p, int64_t step) {
 // single-process chunk bit for bit.
 std::vector<ops::LevelLoss> forward_backward(StepParts& p, int64_t step, double lossmult_sum) {
   const size_t batch_rays = static_cast<size_t>(p.config.batch_size);
-  const graph::RaySource source{p.data.cameras(), p.batch.camera_ids, p.batch.pixel_ids, p.data.lens_tables()};
+  const graph::RaySource source{p.data.cameras(), p.batch.camera_ids, p.batch.pixel_ids};
   const graph::TrainTargets targets{p.batch.target_rgb, p.spec.loss.multiscale ? &p.batch.lossmult : nullptr};
   const RayShare share = this_rank_rays(batch_rays);
   p.graph.begin_step(batch_rays, lossmult_sum);

@@ -90,7 +90,7 @@ TEST_CASE("device dataset: a split's cameras, pixels and offsets are uploaded as
   const data::DeviceDataset device(ctx, split);
   CHECK(device.num_cameras() == 12);
   CHECK(device.num_pixels() == 3 * (256 + 64 + 16 + 4));
-  CHECK(device.cameras().download(ctx) == pack_cameras(split.cameras));
+  CHECK(device.cameras().packed().download(ctx) == pack_cameras(split.cameras));
   CHECK(device.pixels_rgb().download(ctx) == split.rgb);
   const auto offsets = device.pixel_offsets().download(ctx);
   REQUIRE(offsets.size() == 13);
@@ -188,7 +188,7 @@ TEST_CASE("batch sampler + ray kernel: device rays of a dataset batch match came
   ops::batch_sample(ctx, device, {77, ops::Batching::all_images}, 5, batch);
   ops::RayBundle bundle(ctx, rays);
   ops::Rays stage(ctx, RaysOptions{});
-  stage.fwd({device.cameras(), batch.camera_ids, batch.pixel_ids, rays}, bundle);
+  stage.fwd({device.cameras().packed(), batch.camera_ids, batch.pixel_ids, rays}, bundle);
   const auto camera_ids = batch.camera_ids.download(ctx), pixel_ids = batch.pixel_ids.download(ctx);
   const auto o = bundle.origins.download(ctx), d = bundle.directions.download(ctx), r = bundle.radii.download(ctx),
              n = bundle.near.download(ctx), f = bundle.far.download(ctx), l = bundle.lossmult.download(ctx),

@@ -253,7 +253,7 @@ void check_step_against_reference_on(gemm::GemmBackend backend, const std::strin
   std::vector<std::vector<double>> params;
   for (auto& n : networks) params.push_back(to_double(n->download_params()));
   const auto ref_lossmult = spec.loss.multiscale ? to_double(lossmult) : std::vector<double>(batch_rays, 1.0);
-  const auto cameras = to_double(device_data.cameras().download(ctx));
+  const auto cameras = to_double(device_data.cameras().packed().download(ctx));
   const auto camera_ids = batch.camera_ids.download(ctx), pixel_ids = batch.pixel_ids.download(ctx);
   const auto target = to_double(batch.target_rgb.download(ctx));
   const RngKey key{config.seed, step, 0};

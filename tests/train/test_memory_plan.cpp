@@ -20,9 +20,9 @@ TEST_CASE("memory plan: each owner's bytes_for is what it allocates, and the fix
   const auto dataset = data::load_dataset(test::small_scene(), {});
   const data::Split& split = dataset.split("train");
   const data::DeviceDataset device_data(ctx, split);
-  CHECK(device_data.cameras().size() == split.num_images() * camera_layout::stride);  // 24 floats a camera, not 32
+  CHECK(device_data.cameras().packed().size() == split.num_images() * camera_layout::stride);  // 24 floats a camera, not 32
   CHECK(data::DeviceDataset::bytes_for(split) ==
-        device_data.cameras().bytes() + device_data.pixels_rgb().bytes() + device_data.pixel_offsets().bytes());
+        device_data.cameras().packed().bytes() + device_data.pixels_rgb().bytes() + device_data.pixel_offsets().bytes());
 
   const size_t batch_rays = 96;
   const ops::BatchArrays batch(ctx, batch_rays);
