@@ -44,21 +44,29 @@ ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, st
       packed_cameras_(ctx, std::max<size_t>(1, cameras.size()) * camera_layout::stride, "render cameras [C][24]"),
       camera_ids_(ctx, settings.chunk_rays, "render camera_ids [chunk]"),
       pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {
-  if (cameras_.empty()) throw Error("render: no camera to render");
-  for (const auto& camera : cameras_) {
+  set_cameras(cameras);
+}
+
+void ImageRenderer::set_cameras(const std::vector<Camera>& cameras) {
+  if (cameras.empty()) throw Error("render: no camera to render");
+  for (const auto& camera : cameras) {
     if (static_cast<uint64_t>(camera.width_px) * camera.height_px > 0xFFFFFFFFull) {
       throw Error("render: an image of " + std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) +
                   " has more than 2^32 - 1 pixels");
     }
   }
+  cameras_ = cameras;
   auto packed = pack_cameras(cameras_);
   const data::LensTables tables = data::build_lens_tables(cameras_);
   data::set_lens_table_slots(packed, tables);
-  packed_cameras_.upload(ctx, packed);
-  if (!tables.empty()) {
-    lens_tables_ = ocl::DeviceArray<float>(ctx, tables.values.size(), "render lens tables [pixels][4]");
-    lens_tables_.upload(ctx, tables.values);
-    has_lens_tables_ = true;
+  if (packed_cameras_.size() != packed.size()) {
+    packed_cameras_ = ocl::DeviceArray<float>(*ctx_, packed.size(), "render cameras [C][24]");
+  }
+  packed_cameras_.upload(*ctx_, packed);
+  has_lens_tables_ = !tables.empty();
+  if (has_lens_tables_) {
+    lens_tables_ = ocl::DeviceArray<float>(*ctx_, tables.values.size(), "render lens tables [pixels][4]");
+    lens_tables_.upload(*ctx_, tables.values);
   }
 }
 
