@@ -56,6 +56,11 @@ ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, st
       camera_ids_(ctx, settings.chunk_rays, "render camera_ids [chunk]"),
       pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {}
 
+void ImageRenderer::set_cameras(const std::vector<Camera>& cameras) {
+  cameras_ = renderable(cameras);
+  device_cameras_ = data::DeviceCameras(*ctx_, cameras_, {}, "render");
+}
+
 RenderedImage ImageRenderer::render(size_t index, const std::function<void(size_t, size_t)>& progress) {
   if (index >= cameras_.size()) {
     throw Error("render: camera " + std::to_string(index) + " of " + std::to_string(cameras_.size()));

@@ -43,6 +43,10 @@ class ImageRenderer {
   ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                 const std::vector<Camera>& cameras, const RenderSettings& settings);
 
+  // Replaces the cameras (uploaded once more; the graph and its buffers stay): the viewer renders each request's
+  // camera through one renderer instead of building a graph per request.
+  void set_cameras(const std::vector<Camera>& cameras);
+
   // Renders camera `index`; `progress(done_rays, total_rays)` is called after every chunk (total_rays counts
   // every supersampling pass).
   RenderedImage render(size_t index, const std::function<void(size_t, size_t)>& progress = {});

@@ -183,15 +183,13 @@ ViewFrames path_views(const train::TrainedModel& model, const std::string& path_
   return frames;
 }
 
-ViewFrames path_views(const train::TrainedModel& model, const nlohmann::json& path, const std::string& source,
+ViewFrames path_views(const std::vector<Camera>& keyframes, const std::string& source,
                       const data::ResolutionRequest& resolution, uint32_t interpolated_frames) {
-  const data::CameraPathDefaults defaults = camera_path_defaults(model, resolution);
-  const std::vector<Camera> file_cameras = data::camera_path_from_json(path, source, defaults);
-  ViewFrames frames = frames_along(file_cameras, resolution, interpolated_frames);
+  ViewFrames frames = frames_along(keyframes, resolution, interpolated_frames);
   frames.source = source;
   frames.default_folder = "render_path";
   frames.details = {{"kind", "path"}, {"source", source}};
-  if (interpolated_frames > 0) frames.details["keyframes"] = file_cameras.size();
+  if (interpolated_frames > 0) frames.details["keyframes"] = keyframes.size();
   return frames;
 }
 

@@ -68,8 +68,9 @@ data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
 // (data::interpolate_keyframes): a few recorded views become a smooth video.
 ViewFrames path_views(const train::TrainedModel& model, const std::string& path_file,
                       const data::ResolutionRequest& resolution, uint32_t interpolated_frames = 0);
-// The same from a camera path's JSON (the viewer's recorded keyframes); `source` names it in errors and records.
-ViewFrames path_views(const train::TrainedModel& model, const nlohmann::json& path, const std::string& source,
+// The same from keyframes already read (the viewer's recorded path, which its request handler reads with
+// camera_path_defaults); `source` names them in errors and records.
+ViewFrames path_views(const std::vector<Camera>& keyframes, const std::string& source,
                       const data::ResolutionRequest& resolution, uint32_t interpolated_frames);
 
 // The full-resolution training cameras of `data`, else of the checkpoint's data when it still exists; empty when

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "core/error.hpp"
+#include "view/api_json.hpp"
 #include "view/page.hpp"
 #include "view/run_state.hpp"
 
@@ -31,18 +33,16 @@ Response no_checkpoint_yet() {
   return text(503, "no checkpoint has loaded yet: the viewer renders once the run writes one");
 }
 
-// The object at `key` of a request, as JSON text (a camera path: the renderer reads it); false when it is not one.
-bool object_text(const nlohmann::json& j, const char* key, std::string& out) {
+// The object at `key` of a request (a camera path), or null when it is not one.
+const nlohmann::json* object_at(const nlohmann::json& j, const char* key) {
   const auto it = j.find(key);
-  if (it == j.end() || !it->is_object()) return false;
-  out = it->dump();
-  return true;
+  return it == j.end() || !it->is_object() ? nullptr : &*it;
 }
 
-Response json_response(const std::string& body) {
+Response json_response(const nlohmann::json& body) {
   Response r;
   r.content_type = "application/json";
-  r.body = body;
+  r.body = body.dump();
   r.headers.emplace_back("Cache-Control", "no-store");
   return r;
 }
@@ -214,26 +214,26 @@ Response Handler::route(const std::string& method, const std::string& path, cons
     std::error_code ec;
     const std::string root = run_root_.empty() ? fs::weakly_canonical(options_.run_folder, ec).string() : run_root_;
     nlohmann::json state = run_state(root);
-    if (backend) state["viewer"] = nlohmann::json::parse(backend->status_json(), nullptr, false);
-    return json_response(state.dump());
+    if (backend) state["viewer"] = to_json(backend->status());
+    return json_response(state);
   }
   if (method == "GET" && path == "/api/cameras") {
     if (!backend) return no_checkpoint_yet();
-    return json_response(backend->cameras_json());
+    return json_response(to_json(backend->start_cameras()));
   }
   if (method == "GET" && path.rfind("/run/", 0) == 0) return serve_run_file(path.substr(5));
   if (method == "POST" && path == "/api/render") return render(request.body);
   if (method == "GET" && path == "/api/render/progress") {
     if (!backend) return no_checkpoint_yet();
-    return json_response(backend->render_progress_json());
+    return json_response(to_json(backend->render_progress()));
   }
   if (path == "/api/path" || path == "/api/path/cancel") {
     if (!backend) return no_checkpoint_yet();
-    if (method == "GET" && path == "/api/path") return json_response(backend->path_status_json());
+    if (method == "GET" && path == "/api/path") return json_response(to_json(backend->path_status()));
     if (method == "POST" && path == "/api/path") return start_path(request.body);
     if (method == "POST") {
       backend->cancel_path();
-      return json_response(backend->path_status_json());
+      return json_response(to_json(backend->path_status()));
     }
     return text(405, "method not allowed");
   }
@@ -272,15 +272,19 @@ Response Handler::render(const std::string& body) const {
   req.divisor = static_cast<int>(divisor);
   req.generation = static_cast<uint64_t>(generation);
   if (j.contains("output")) {
-    if (!j["output"].is_string()) return text(400, "'output' must be rgb, depth or acc");
-    req.output = j["output"].get<std::string>();
-    if (req.output != "rgb" && req.output != "depth" && req.output != "acc") {
+    if (!j["output"].is_string() || !parse_render_output(j["output"].get<std::string>(), req.output)) {
       return text(400, "'output' must be rgb, depth or acc");
     }
   }
-  if (!object_text(j, "camera", req.camera_json)) return text(400, "'camera' must be a camera path object");
+  const nlohmann::json* camera = object_at(j, "camera");
+  if (!camera) return text(400, "'camera' must be a camera path object");
   RenderBackend* backend = backend_.load();
   if (!backend) return no_checkpoint_yet();
+  try {
+    req.camera = page_camera(*camera, backend->camera_defaults());
+  } catch (const Error& e) {
+    return text(400, e.what());
+  }
   const RenderReply reply = backend->render(req);
   switch (reply.status) {
     case RenderReply::Status::ok: {
@@ -317,13 +321,19 @@ Response Handler::start_path(const std::string& body) const {
     }
     req.fps = fps.get<double>();
   }
-  if (!object_text(j, "keyframes", req.keyframes_json)) return text(400, "'keyframes' must be a camera path object");
+  const nlohmann::json* keyframes = object_at(j, "keyframes");
+  if (!keyframes) return text(400, "'keyframes' must be a camera path object");
   RenderBackend* backend = backend_.load();
   if (!backend) return no_checkpoint_yet();
+  try {
+    req.keyframes = recorded_keyframes(*keyframes, backend->camera_defaults());
+  } catch (const Error& e) {
+    return text(400, e.what());
+  }
   const PathReply reply = backend->start_path(req);
   switch (reply.status) {
     case PathReply::Status::started: {
-      Response r = json_response(backend->path_status_json());
+      Response r = json_response(to_json(backend->path_status()));
       r.status = 202;
       return r;
     }

@@ -1,6 +1,7 @@
 // `mipnerf-cl view`'s requests and responses, without sockets: the route table, the token check, the run folder's
 // files, and the renders, so doctest tests and the fuzz target drive exactly what the HTTP server (view/http_server)
-// serves. Every request gets a response; nothing a client sends makes it throw.
+// serves. Every request gets a response; nothing a client sends makes it throw. The JSON of the API is read and
+// written here (with view/api_json); the renderer behind it (view/render_backend.hpp) takes and returns types.
 #pragma once
 
 #include <atomic>
@@ -11,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "view/render_backend.hpp"
 #include "view/request_guard.hpp"
 
 namespace mipnerf::view {
@@ -33,63 +35,6 @@ struct Response {
   std::string content_type = "text/plain; charset=utf-8";
   std::string body;
   std::vector<std::pair<std::string, std::string>> headers;  // beside Content-Type and Content-Length
-};
-
-// One image the page asked for, already checked: the camera as a transforms-style camera path text (one frame), the
-// divisor of its size (8, 4, 2 or 1), what to draw, and the page's request counter (newest wins).
-struct RenderRequest {
-  std::string camera_json;  // {"frames": [{transform_matrix, fl_x, fl_y, cx, cy, w, h}]}
-  int divisor = 1;
-  std::string output = "rgb";  // rgb | depth | acc
-  uint64_t generation = 0;
-};
-
-struct RenderReply {
-  enum class Status { ok, superseded, busy, bad_request, failed };
-  Status status = Status::ok;
-  std::string png;  // the image, 8-bit PNG
-  uint32_t width = 0, height = 0;
-  double seconds = 0.0;  // render wall time
-  int64_t step = 0;      // the checkpoint's step
-  std::string message;   // why, when not ok
-};
-
-// A path recorded in the page, to render into the run folder as frames and a video (as `render --path FILE
-// --frames N --video` would): its keyframes, the frames along them, the divisor of the keyframes' size, the video's
-// frame rate.
-struct PathRequest {
-  std::string keyframes_json;  // {"frames": [{transform_matrix, fl_x, fl_y, cx, cy, w, h}, ...]}
-  uint32_t frames = 60;
-  int divisor = 1;
-  double fps = 30.0;
-};
-
-struct PathReply {
-  enum class Status { started, busy, bad_request };
-  Status status = Status::started;
-  std::string message;  // why, when not started
-};
-
-// What renders the page's cameras: a trained model on a device (view/view_renderer), or a test double.
-class RenderBackend {
- public:
-  virtual ~RenderBackend() = default;
-  virtual RenderReply render(const RenderRequest& request) = 0;
-  // Starts rendering a recorded path in the background (one at a time) and returns at once.
-  virtual PathReply start_path(const PathRequest& request) = 0;
-  // The path render's progress, as JSON text: {"state": "idle" | "rendering" | "done" | "failed" | "cancelled",
-  // "frames_done", "frames", "seconds", "eta_seconds", "folder" (run-relative), "video" (run-relative, "" without
-  // one), "first_frame" (run-relative), "message"}.
-  virtual std::string path_status_json() = 0;
-  // Asks a running path render to stop after its current chunk of rays (its partial video is not kept).
-  virtual void cancel_path() = 0;
-  // The cameras to start from, as JSON text: {"train": [frames], "orbit": {...}} (see view_renderer.hpp).
-  virtual std::string cameras_json() = 0;
-  // The device and the checkpoint it renders, as JSON text.
-  virtual std::string status_json() = 0;
-  // The render under way (a full-size frame on a CPU takes tens of seconds), as JSON text: {"rendering": bool,
-  // "generation", "divisor", "done_rays", "total_rays", "seconds"}; the last one's when none is.
-  virtual std::string render_progress_json() = 0;
 };
 
 struct HandlerOptions {

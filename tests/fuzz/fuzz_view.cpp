@@ -6,7 +6,8 @@
 // run folder holds a log, a config and an image, and a symlink to a file outside it. Every request must get a status
 // in 200..599; no response may contain the outside file's text; only a request whose Host names the viewer may get a
 // 2xx, and a state-changing one only from its own origin with a JSON body; a render request's camera is read by the
-// camera path reader the real renderer uses (data::parse_camera_path), whose errors must be mipnerf::Error.
+// handler with the camera path reader (data::camera_path_from_json), whose errors must be mipnerf::Error (a 400), and
+// a camera it passes on must have pixels.
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
@@ -28,34 +29,29 @@ using namespace mipnerf;
 constexpr const char* kSecret = "FUZZ-SECRET-OUTSIDE-THE-RUN";
 
 struct CameraReadingBackend : view::RenderBackend {
+  data::CameraPathDefaults camera_defaults() override { return {}; }
   view::RenderReply render(const view::RenderRequest& request) override {
     view::RenderReply reply;
-    try {
-      const auto cameras = data::parse_camera_path(request.camera_json, "the page's camera", {});
-      fuzz::check(!cameras.empty(), "a camera path without cameras was accepted");
-      reply.png = "image";
-    } catch (const Error&) {
-      reply.status = view::RenderReply::Status::bad_request;
-    }
+    fuzz::check(request.camera.width_px > 0 && request.camera.height_px > 0, "a camera without pixels was accepted");
+    reply.png = "image";
     return reply;
   }
-  std::string cameras_json() override { return "{}"; }
-  std::string status_json() override { return "{}"; }
-  std::string render_progress_json() override { return R"({"rendering": false})"; }
-  // A path's keyframes go through the reader and the interpolation the real renderer uses (frames capped: the
-  // handler allows 3600, the fuzzer need not build them all).
+  view::StartCameras start_cameras() override { return {}; }
+  view::ViewerStatus status() override { return {}; }
+  view::RenderProgress render_progress() override { return {}; }
+  // A path's keyframes go through the interpolation the real renderer uses (frames capped: the handler allows 3600,
+  // the fuzzer need not build them all).
   view::PathReply start_path(const view::PathRequest& request) override {
     view::PathReply reply;
     try {
-      const auto keyframes = data::parse_camera_path(request.keyframes_json, "the viewer's recorded path", {});
-      const auto frames = data::interpolate_keyframes(keyframes, std::min<uint32_t>(request.frames, 64));
+      const auto frames = data::interpolate_keyframes(request.keyframes, std::min<uint32_t>(request.frames, 64));
       fuzz::check(!frames.empty(), "a path without frames was accepted");
     } catch (const Error&) {
       reply.status = view::PathReply::Status::bad_request;
     }
     return reply;
   }
-  std::string path_status_json() override { return R"({"state": "idle"})"; }
+  view::PathStatus path_status() override { return {}; }
   void cancel_path() override {}
 };
 

@@ -51,9 +51,24 @@ struct FakeBackend : RenderBackend {
     reply.height = 6;
     return reply;
   }
-  std::string cameras_json() override { return R"({"train": []})"; }
-  std::string status_json() override { return R"({"device": "fake", "step": 4})"; }
-  std::string render_progress_json() override { return R"({"rendering": true, "done_rays": 12, "total_rays": 48})"; }
+  data::CameraPathDefaults camera_defaults() override { return {}; }
+  StartCameras start_cameras() override { return {}; }
+  ViewerStatus status() override {
+    ViewerStatus s;
+    s.device = "fake";
+    s.step = 4;
+    return s;
+  }
+  RenderProgress render_progress() override {
+    RenderProgress p;
+    p.rendering = true;
+    p.generation = 3;
+    p.divisor = 2;
+    p.done_rays = 12;
+    p.total_rays = 48;
+    p.seconds = 0.5;
+    return p;
+  }
   // Paths: records the request; a second start while "rendering" is busy, as the real renderer's.
   PathRequest last_path;
   bool path_rendering = false;
@@ -69,8 +84,13 @@ struct FakeBackend : RenderBackend {
     path_rendering = true;
     return reply;
   }
-  std::string path_status_json() override {
-    return path_rendering ? R"({"state": "rendering", "frames": 12})" : R"({"state": "idle"})";
+  PathStatus path_status() override {
+    PathStatus status;
+    if (path_rendering) {
+      status.state = PathStatus::State::rendering;
+      status.frames = 12;
+    }
+    return status;
   }
   void cancel_path() override { path_cancelled = true; }
 };
@@ -373,11 +393,75 @@ TEST_CASE("handler: a well-formed render request reaches the renderer with its c
   CHECK(r.body == "P");
   CHECK(backend.last.divisor == 4);
   CHECK(backend.last.generation == 7);
-  CHECK(backend.last.output == "rgb");
-  CHECK(nlohmann::json::parse(backend.last.camera_json) == nlohmann::json::parse(kCamera));
+  CHECK(backend.last.output == RenderOutput::rgb);
+  // The camera as the page sent it (the divisor is the renderer's to apply).
+  const Camera& camera = backend.last.camera;
+  CHECK(camera.width_px == 8);
+  CHECK(camera.height_px == 6);
+  CHECK(camera.focal_x_px == 10.0);
+  CHECK(camera.center_y_px == 3.0);
+  CHECK(camera.camera_to_world[11] == 4.0);
+  CHECK(camera.near == 2.0);  // the renderer's defaults (Blender's 2..6 here) where the page gives none
+  CHECK(camera.far == 6.0);
   bool size_header = false;
   for (const auto& [name, value] : r.headers) size_header |= name == "X-Render-Size" && value == "8x6";
   CHECK(size_header);
+}
+
+TEST_CASE("handler: a camera the camera path reader refuses is answered 400 with its reason, never passed on") {
+  RunFixture f;
+  FakeBackend backend;
+  const Handler h(options_for(f), &backend);
+  const std::string frame = R"({"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": 10, "w": 8, "h": 6})";
+  const std::string negative_focal = R"({"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": -10, "w": 8, "h": 6})";
+  const Response none = post(h, "/api/render", render_body("{}", 1, 1));
+  CHECK(none.status == 400);
+  const Response two = post(h, "/api/render", render_body(R"({"frames": [)" + frame + "," + frame + "]}", 1, 1));
+  CHECK(two.status == 400);
+  CHECK(two.body.find("exactly one frame") != std::string::npos);
+  const Response bad = post(h, "/api/render", render_body(R"({"frames": [)" + negative_focal + "]}", 1, 1));
+  CHECK(bad.status == 400);
+  CHECK(bad.body.find("the page's camera") != std::string::npos);
+  CHECK(post(h, "/api/render", render_body(R"({"frames": [)" + frame + "]}", 1, 1)).status == 200);
+  CHECK(backend.calls == 1);
+  const Response path = post(h, "/api/path", R"({"keyframes": {"frames": [)" + negative_focal + R"(]}, "frames": 4, "divisor": 1})");
+  CHECK(path.status == 400);
+  CHECK(path.body.find("the viewer's recorded path") != std::string::npos);
+  CHECK_FALSE(backend.path_rendering);
+}
+
+TEST_CASE("handler: the renderer's state goes out as the API's JSON") {
+  RunFixture f;
+  struct Described : FakeBackend {
+    StartCameras start_cameras() override {
+      StartCameras c;
+      Camera camera;
+      camera.width_px = 8;
+      camera.height_px = 6;
+      c.train = {camera, camera};
+      c.orbit.radius = 3.5;
+      c.orbit.frame = camera;
+      c.start = StartCameras::View::train;
+      c.why = "forward";
+      return c;
+    }
+  } backend;
+  const Handler h(options_for(f), &backend);
+  const auto cameras = nlohmann::json::parse(get(h, "/api/cameras").body);
+  CHECK(cameras["train"].size() == 2);
+  CHECK(cameras["train"][1]["w"] == 8);
+  CHECK(cameras["spiral"] == nlohmann::json::array());
+  CHECK(cameras["start"] == nlohmann::json{{"view", "train"}, {"index", 0}, {"why", "forward"}});
+  CHECK(cameras["orbit"]["radius"] == 3.5);
+  CHECK(cameras["orbit"]["up"] == nlohmann::json{0.0, 0.0, 1.0});
+  CHECK(cameras["orbit"]["frame"]["h"] == 6);
+  const auto run = nlohmann::json::parse(get(h, "/api/run").body);
+  CHECK(run["viewer"] == nlohmann::json{{"device", "fake"}, {"step", 4}, {"checkpoint", ""}, {"chunk_rays", 0},
+                                        {"warm_up_seconds", 0.0}});
+  const auto idle = nlohmann::json::parse(get(h, "/api/path").body);
+  CHECK(idle == nlohmann::json{{"state", "idle"}, {"frames_done", 0}, {"frames", 0}, {"seconds", 0.0},
+                               {"eta_seconds", 0.0}, {"folder", ""}, {"video", ""}, {"first_frame", ""},
+                               {"message", ""}});
 }
 
 TEST_CASE("handler: the renderer's refusals become HTTP statuses") {
@@ -489,7 +573,8 @@ TEST_CASE("handler: a recorded path starts once, reports its progress, and can b
   CHECK(backend.last_path.frames == 12);
   CHECK(backend.last_path.divisor == 2);
   CHECK(backend.last_path.fps == 24.0);
-  CHECK(backend.last_path.keyframes_json.find("transform_matrix") != std::string::npos);
+  REQUIRE(backend.last_path.keyframes.size() == 1);
+  CHECK(backend.last_path.keyframes.front().width_px == 8);
   CHECK(post(h, "/api/path", body).status == 409);  // one path at a time
   CHECK(get(h, "/api/path").body.find("rendering") != std::string::npos);
   CHECK(post(h, "/api/path/cancel", "").status == 200);
@@ -547,7 +632,8 @@ TEST_CASE("handler: the render under way reports its progress, read-only") {
   const Response r = get(h, "/api/render/progress");
   CHECK(r.status == 200);
   CHECK(r.content_type == "application/json");
-  CHECK(r.body.find("\"done_rays\": 12") != std::string::npos);
+  CHECK(nlohmann::json::parse(r.body) == nlohmann::json{{"rendering", true}, {"generation", 3}, {"divisor", 2},
+                                                        {"done_rays", 12}, {"total_rays", 48}, {"seconds", 0.5}});
   CHECK(post(h, "/api/render/progress", "{}").status == 405);
   const Handler without_model(options_for(f), nullptr);
   CHECK(get(without_model, "/api/render/progress").status == 503);

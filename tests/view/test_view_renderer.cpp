@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "data/camera_path.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "train/config.hpp"
@@ -42,17 +43,26 @@ const char* kKeyframes = R"({"frames": [
   {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": 20, "fl_y": 20, "cx": 8, "cy": 8, "w": 16, "h": 16},
   {"transform_matrix": [[1,0,0,0.5],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "fl_x": 20, "fl_y": 20, "cx": 8, "cy": 8, "w": 16, "h": 16}]})";
 
+Camera page_camera() { return data::parse_camera_path(kCamera, "test camera", {}).front(); }
+
 // A path of `frames` frames at 16x16 (H.264 wants even sizes).
 view::PathRequest small_path(uint32_t frames = 3) {
   view::PathRequest request;
-  request.keyframes_json = kKeyframes;
+  request.keyframes = data::parse_camera_path(kKeyframes, "test keyframes", {});
   request.frames = frames;
   request.divisor = 1;
   return request;
 }
 
 std::string path_state(view::ViewRenderer& renderer) {
-  return nlohmann::json::parse(renderer.path_status_json()).at("state").get<std::string>();
+  switch (renderer.path_status().state) {
+    case view::PathStatus::State::idle: return "idle";
+    case view::PathStatus::State::rendering: return "rendering";
+    case view::PathStatus::State::done: return "done";
+    case view::PathStatus::State::failed: return "failed";
+    case view::PathStatus::State::cancelled: return "cancelled";
+  }
+  return "unknown";
 }
 
 // Polls until no path renders (the path thread ended), at most `seconds`.
@@ -111,7 +121,7 @@ TEST_CASE("view renderer: renders, path starts, cancels and status polls from se
   auto renders = [&] {
     while (!stop) {
       view::RenderRequest request;
-      request.camera_json = kCamera;
+      request.camera = page_camera();
       request.divisor = 2;
       request.generation = ++generation;
       const view::RenderReply reply = renderer.render(request);
@@ -136,11 +146,9 @@ TEST_CASE("view renderer: renders, path starts, cancels and status polls from se
   auto cancels_and_polls = [&] {
     for (int i = 0; !stop; ++i) {
       if (i % 7 == 0) renderer.cancel_path();
-      const auto status = nlohmann::json::parse(renderer.path_status_json());
-      const std::string state = status.at("state").get<std::string>();
+      const std::string state = path_state(renderer);
       if (state != "idle" && state != "rendering" && state != "done" && state != "cancelled") ++bad;
-      const auto info = nlohmann::json::parse(renderer.status_json());
-      if (info.at("step").get<int64_t>() != 4) ++bad;
+      if (renderer.status().step != 4) ++bad;
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   };
@@ -165,7 +173,7 @@ TEST_CASE("view renderer: renders, path starts, cancels and status polls from se
   REQUIRE(wait_for_path(renderer, 120.0));
   // The viewer still works as before: a free-camera render, then a whole path.
   view::RenderRequest request;
-  request.camera_json = kCamera;
+  request.camera = page_camera();
   request.generation = generation + 1;
   CHECK(renderer.render(request).status == view::RenderReply::Status::ok);
   REQUIRE(renderer.start_path(small_path()).status == view::PathReply::Status::started);
@@ -179,22 +187,22 @@ TEST_CASE("view renderer: a render reports its rays as it goes, and the last one
   options.chunk_rays = 64;  // 4 chunks for the 16x16 frame
   view::ViewRenderer renderer(test::test_context(), options);
   view::RenderRequest request;
-  request.camera_json = kCamera;
+  request.camera = page_camera();
   request.generation = 7;
   REQUIRE(renderer.render(request).status == view::RenderReply::Status::ok);
-  const auto progress = nlohmann::json::parse(renderer.render_progress_json());
-  CHECK(progress.at("rendering") == false);
-  CHECK(progress.at("generation") == 7);
-  CHECK(progress.at("divisor") == 1);
-  CHECK(progress.at("done_rays") == 256);
-  CHECK(progress.at("total_rays") == 256);
-  CHECK(progress.at("seconds").get<double>() > 0.0);
+  const view::RenderProgress progress = renderer.render_progress();
+  CHECK(progress.rendering == false);
+  CHECK(progress.generation == 7);
+  CHECK(progress.divisor == 1);
+  CHECK(progress.done_rays == 256);
+  CHECK(progress.total_rays == 256);
+  CHECK(progress.seconds > 0.0);
   // Polled from another thread while renders run: always a whole object, done never above total.
   std::atomic<bool> stop{false};
   std::thread poller([&] {
     while (!stop) {
-      const auto p = nlohmann::json::parse(renderer.render_progress_json());
-      CHECK(p.at("done_rays").get<size_t>() <= std::max<size_t>(p.at("total_rays").get<size_t>(), 256));
+      const view::RenderProgress p = renderer.render_progress();
+      CHECK(p.done_rays <= std::max<size_t>(p.total_rays, 256));
     }
   });
   for (int i = 0; i < 5; ++i) {
@@ -203,4 +211,78 @@ TEST_CASE("view renderer: a render reports its rays as it goes, and the last one
   }
   stop = true;
   poller.join();
+}
+
+namespace {
+
+view::RenderReply render_view(view::ViewRenderer& renderer, uint64_t generation, int divisor = 1,
+                              view::RenderOutput output = view::RenderOutput::rgb) {
+  view::RenderRequest request;
+  request.camera = page_camera();
+  request.generation = generation;
+  request.divisor = divisor;
+  request.output = output;
+  return renderer.render(request);
+}
+
+// A run trained `steps` steps on the tiny run's scene size, in a folder of its own.
+std::string trained_run(const std::string& name, int steps) {
+  const std::string scene = test::write_temp_scene(name + "-scene", {16, 4, 1, 1, 2});
+  const fs::path out = test::fresh_temp_dir(name);
+  const auto config =
+      train::resolve_config("tiny", "mipnerf", {{"steps", std::to_string(steps)}, {"batch_size", "64"}});
+  train::Trainer trainer(test::test_context(), config, scene, out.string(), false);
+  trainer.run();
+  return out.string();
+}
+
+}  // namespace
+
+TEST_CASE("view renderer: one image renderer serves every request of a checkpoint, with the images of a fresh one") {
+  view::ViewRendererOptions options;
+  options.run_folder = tiny_run();
+  view::ViewRenderer renderer(test::test_context(), options);
+  CHECK(renderer.renderers_built() == 1);  // the warm-up's
+  const view::RenderReply first = render_view(renderer, 1);
+  const view::RenderReply smaller = render_view(renderer, 2, 2);
+  const view::RenderReply depth = render_view(renderer, 3, 1, view::RenderOutput::depth);
+  const view::RenderReply again = render_view(renderer, 4);
+  REQUIRE(first.status == view::RenderReply::Status::ok);
+  REQUIRE(again.status == view::RenderReply::Status::ok);
+  CHECK(smaller.width == 8);
+  CHECK(depth.png != first.png);
+  CHECK(again.png == first.png);  // nothing of the 8x8 and depth renders between leaks into it
+  CHECK(renderer.renderers_built() == 1);
+  // After a path (which frees the renderer for its own) the next request builds one again, rendering alike.
+  REQUIRE(renderer.start_path(small_path(2)).status == view::PathReply::Status::started);
+  REQUIRE(wait_for_path(renderer, 120.0));
+  CHECK(render_view(renderer, 5).png == first.png);
+  CHECK(renderer.renderers_built() == 2);
+}
+
+TEST_CASE("view renderer: a newer checkpoint written while it serves gets a renderer of its own networks") {
+  const std::string later = trained_run("view-run-later", 8);
+  const fs::path run = test::fresh_temp_dir("view-run-followed");
+  fs::copy(tiny_run(), run, fs::copy_options::recursive);
+  view::ViewRendererOptions options;
+  options.run_folder = run.string();
+  view::ViewRenderer renderer(test::test_context(), options);
+  const view::RenderReply before = render_view(renderer, 1);
+  REQUIRE(before.status == view::RenderReply::Status::ok);
+  CHECK(before.step == 4);
+  // `train` writing a newer checkpoint into the run the viewer follows.
+  for (const auto& entry : fs::directory_iterator(fs::path(later) / "checkpoints")) {
+    fs::copy_file(entry.path(), run / "checkpoints" / entry.path().filename(), fs::copy_options::skip_existing);
+  }
+  const view::RenderReply after = render_view(renderer, 2);
+  REQUIRE(after.status == view::RenderReply::Status::ok);
+  CHECK(after.step == 8);
+  CHECK(renderer.renderers_built() == 2);
+  CHECK(renderer.status().step == 8);
+  // The image of the newer networks: what a viewer started on that checkpoint renders.
+  view::ViewRendererOptions fresh_options;
+  fresh_options.run_folder = later;
+  view::ViewRenderer fresh(test::test_context(), fresh_options);
+  CHECK(render_view(fresh, 1).png == after.png);
+  CHECK(after.png != before.png);
 }
