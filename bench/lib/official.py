@@ -7,7 +7,7 @@ request per stdin line, one JSON reply per stdout line). The orchestrator side: 
 official_settings() maps our preset's config to the official MipNerfModel/MLP/Config settings (checked, not
 assumed), ensure_venv() makes the venv once, official_commit() names the checkout.
 
-Used by bench/vs_official.py, bench/vs_official_llff.py and bench/official_step.py (scripts/device-check.sh). Standard
+Used by bench/studies/vs_official.py, bench/studies/vs_official_llff.py and bench/studies/official_step.py (scripts/device-check.sh). Standard
 library at import; JAX, numpy and the official code are imported inside the functions that run them.
 """
 
@@ -40,6 +40,28 @@ STUBS = [
     ("matplotlib, matplotlib.cm", "empty modules (internal/vis.py imports them; not used here)"),
     ("absl flags", "train.py defines its flags at import; they are parsed with no arguments"),
 ]
+
+
+DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
+
+
+def add_official_arguments(parser, repo, out_dir):
+    """The arguments every study that runs the official code beside ours takes (vs_official.py,
+    vs_official_llff.py): the checkout, our executable, the venv, the tree rule, where the results go."""
+    p = parser
+    p.add_argument("--official", help="checkout of github:google/mipnerf (contains train.py and internal/)")
+    p.add_argument("--official-commit", help="commit of --official when it is not a git work tree (e.g. a git archive)")
+    p.add_argument("--bin", default=os.path.join(repo, "build", "mipnerf-cl"), help="mipnerf-cl executable")
+    p.add_argument("--venv", default=DEFAULT_VENV, help="virtual environment for the official code")
+    p.add_argument("--python", default=sys.executable, help="python used to create the venv")
+    p.add_argument("--allow-dirty", action="store_true",
+                   help="run although the mipnerf-cl checkout has uncommitted changes (their sha256 is recorded)")
+    p.add_argument("--device-name", default="pocl_cpu", help="suffix of the results files")
+    p.add_argument("--out-dir", default=out_dir)
+    p.add_argument("--note", action="append", default=[], help="a line for the results' Notes (repeatable)")
+    p.add_argument("--report-only", metavar="JSON",
+                   help="regenerate the .md beside a results .json from it (keeping its hand-written notes); "
+                        "measure nothing")
 
 
 def check_official_checkout(official):
