@@ -1,23 +1,11 @@
-"""Helpers shared by the study scripts in bench/: running the CLI with a log, and reading its outputs."""
+"""What the studies share about mipnerf-cl's runs: the procedural scene, a resumable training, reading a run's outputs
+(run() itself is lib/run.py)."""
 
 import json
 import os
-import subprocess
 
 from lib.provenance import commit_of  # noqa: F401  (the studies import it from here)
-
-
-def run(command, log_path):
-    """Runs a command, its output appended to log_path; raises with the log's tail on failure."""
-    os.makedirs(os.path.dirname(os.path.abspath(log_path)), exist_ok=True)
-    with open(log_path, "a") as log:
-        log.write("$ " + " ".join(command) + "\n")
-        log.flush()
-        result = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT)
-    if result.returncode != 0:
-        with open(log_path) as log:
-            tail = log.read()[-2000:]
-        raise RuntimeError(f"{' '.join(command)} failed ({result.returncode}):\n{tail}")
+from lib.run import run  # noqa: F401  (the studies import it from here)
 
 
 def read_json(path):

@@ -25,6 +25,20 @@ HAND_HINT = ("<!-- Hand-written notes: this section, to the end of the file, is 
              "from its .json ({regen}); everything above it is generated and rewritten. -->")
 
 
+ALIGN = {"l": "---", "r": "---:", "c": ":---:"}
+
+
+def table(header, align, rows):
+    """A Markdown table's lines: `header` cells, `align` one letter per column ("l" left, "r" right, "c" centred:
+    `|---|---:|:---:|`), then one line per row of cell strings. An empty cell is written `| |` (one space)."""
+    if len(align) != len(header):
+        raise ValueError(f"table: {len(header)} header cells but alignment {align!r} for {len(align)} columns")
+
+    def line(cells):
+        return "|" + "".join(f" {c} |" if c != "" else " |" for c in cells)
+    return [line(header), "|" + "".join(ALIGN[a] + "|" for a in align)] + [line(r) for r in rows]
+
+
 def results_folder(study):
     """bench/results/STUDY/: where a study writes its records and reports (one folder per study)."""
     return os.path.join(RESULTS, study)

@@ -67,17 +67,17 @@ def write_markdown(record):
         f"`{record['preset']}`, {record['steps']} steps per run, equal for every run. Positional degrees 0..L-1 "
         "(pos_max_deg = L); NeRF appends the identity. Commands: l_sweep.json.",
         "",
-        "| L | NeRF PSNR | NeRF SSIM | NeRF train s | mip-NeRF PSNR | mip-NeRF SSIM | mip-NeRF train s | "
-        "render s/MP (NeRF / mip-NeRF) |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
+    rows = []
     for degree in record["degrees"]:
         n, m = by.get(("nerf", degree)), by.get(("mipnerf", degree))
         if not n or not m:
             continue
-        lines.append(f"| {degree} | {n['psnr']:.2f} | {n['ssim']:.4f} | {n['train_seconds']:.0f} | {m['psnr']:.2f} | "
-                     f"{m['ssim']:.4f} | {m['train_seconds']:.0f} | {n['render_s_per_mp']:.0f} / "
-                     f"{m['render_s_per_mp']:.0f} |")
+        rows.append([str(degree), f"{n['psnr']:.2f}", f"{n['ssim']:.4f}", f"{n['train_seconds']:.0f}", f"{m['psnr']:.2f}",
+                     f"{m['ssim']:.4f}", f"{m['train_seconds']:.0f}",
+                     f"{n['render_s_per_mp']:.0f} / {m['render_s_per_mp']:.0f}"])
+    lines += report_md.table(["L", "NeRF PSNR", "NeRF SSIM", "NeRF train s", "mip-NeRF PSNR", "mip-NeRF SSIM",
+                              "mip-NeRF train s", "render s/MP (NeRF / mip-NeRF)"], "rrrrrrrr", rows)
     for note in record.get("notes", []):  # notes recorded in the JSON (new ones go in the .md's hand section)
         lines += ["", note]
     lines += ["", "![val PSNR against L](l_sweep.svg)", ""]

@@ -30,16 +30,15 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.provenance import REPO  # noqa: E402
+from lib.provenance import REPO, commit_of  # noqa: E402
+from lib.run import RunError, run  # noqa: E402
 
 
 
-def run(command, log):
+def run_timed(command, log):
+    """lib/run.py's run, its output appended to `log`; returns the wall seconds it took."""
     started = time.time()
-    with open(log, "w") as out:
-        status = subprocess.call(command, stdout=out, stderr=subprocess.STDOUT)
-    if status != 0:
-        sys.exit(f"lenses: {' '.join(command)} failed (exit {status}); see {log}")
+    run(command, log)
     return time.time() - started
 
 
@@ -60,7 +59,7 @@ def import_captures(args, work):
     opencv = os.path.join(work, "opencv")
     record = {}
     if not os.path.exists(os.path.join(opencv, "transforms.json")):
-        seconds = run([args.bin, "dataset", "from-photos", args.photos, opencv, "--camera-model", "OPENCV"],
+        seconds = run_timed([args.bin, "dataset", "from-photos", args.photos, opencv, "--camera-model", "OPENCV"],
                       os.path.join(work, "from-photos.log"))
         record["from_photos_seconds"] = round(seconds, 1)
     undistorted = os.path.join(work, "undistorted")
@@ -68,7 +67,7 @@ def import_captures(args, work):
     if not os.path.exists(os.path.join(pinhole, "transforms.json")):
         shutil.rmtree(undistorted, ignore_errors=True)
         sparse = os.path.join(opencv, "colmap", "sparse", "0")
-        seconds = run([args.colmap, "image_undistorter", "--image_path", args.photos, "--input_path", sparse,
+        seconds = run_timed([args.colmap, "image_undistorter", "--image_path", args.photos, "--input_path", sparse,
                        "--output_path", undistorted, "--output_type", "COLMAP"], os.path.join(work, "undistort.log"))
         record["undistort_seconds"] = round(seconds, 1)
         run([args.bin, "dataset", "import-colmap", os.path.join(undistorted, "sparse"),
@@ -160,8 +159,7 @@ def main():
         "photos": os.path.abspath(args.photos),
         "photo_count": len([f for f in os.listdir(args.photos) if f.lower().endswith((".jpg", ".jpeg", ".png"))]),
         "device": device_name(args),
-        "commit": subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
-                                 text=True).stdout.strip(),
+        "commit": commit_of(REPO),
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "preset": args.preset,
         "load_average": os.getloadavg(),
@@ -176,4 +174,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except RunError as e:
+        sys.exit(f"lenses: {e}")

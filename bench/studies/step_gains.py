@@ -73,9 +73,8 @@ def write_markdown(record):
              "# What the CPU GEMM library choice and the angle doubling buy per step", "",
              f"Date: {record['date']} (UTC), commit {record['commit']}, device {device}. Command: "
              f"`{record['command']}`; {record['rounds']} rounds, settings alternating. Load average (1 min) after "
-             f"each run: {min(loads):.2f}-{max(loads):.2f}.", "",
-             "| preset | setting | warm s/step (median over rounds) | rays/s | render s/MP | vs before |",
-             "|---|---|---:|---:|---:|---:|"]
+             f"each run: {min(loads):.2f}-{max(loads):.2f}.", ""]
+    rows_out = []
     presets = []
     for r in record["runs"]:
         if r["preset"] not in presets:
@@ -90,7 +89,9 @@ def write_markdown(record):
             rays = statistics.median(r["train"]["rays_per_second"] for r in rows)
             render = statistics.median(r["render"]["seconds_per_megapixel"] for r in rows)
             base = base or steps
-            lines.append(f"| {preset} | {name} | {steps:.3f} | {rays:.0f} | {render:.1f} | {base / steps:.2f}x |")
+            rows_out.append([preset, name, f"{steps:.3f}", f"{rays:.0f}", f"{render:.1f}", f"{base / steps:.2f}x"])
+    lines += report_md.table(["preset", "setting", "warm s/step (median over rounds)", "rays/s", "render s/MP",
+                              "vs before"], "llrrrr", rows_out)
     return "\n".join(lines) + "\n"
 
 

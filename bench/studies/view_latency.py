@@ -28,16 +28,10 @@ import urllib.request
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.provenance import REPO  # noqa: E402
+from lib.provenance import REPO, commit_of  # noqa: E402
+from lib.run import RunError, run  # noqa: E402
 
 DIVISORS = [8, 4, 2, 1]
-
-
-def run(command):
-    result = subprocess.run(command, capture_output=True, text=True)
-    if result.returncode != 0:
-        sys.exit(f"view_latency: {' '.join(command)} failed (exit {result.returncode}): {result.stderr[-400:]}")
-    return result.stdout
 
 
 def post(url, body):
@@ -115,13 +109,12 @@ def markdown(result):
     lines += [f"Per preset: {result['rounds']} new viewpoints, each rendered 1/8 → 1/4 → 1/2 → full size "
               f"({result['size']}x{result['size']}) one after another as the page asks; seconds from the request "
               "of the viewpoint's first frame, measured by the client (HTTP and PNG included); median (min–max). "
-              f"The quick preset's target for the first frame: ≤ 0.3 s.", "",
-              "| preset | sizes | first frame (s) | full size (s) | view start-up incl. warm-up (s) |",
-              "|---|---|---:|---:|---:|"]
+              f"The quick preset's target for the first frame: ≤ 0.3 s.", ""]
     fmt = lambda s: f"{s['median']:.3f} ({s['min']:.3f}–{s['max']:.3f})"
-    for p in result["presets"]:
-        lines.append(f"| {p['preset']} | {' → '.join(p['sizes'])} | {fmt(p['first_frame_seconds'])} | "
-                     f"{fmt(p['full_size_seconds'])} | {p['start_seconds']:.1f} |")
+    lines += report_md.table(["preset", "sizes", "first frame (s)", "full size (s)", "view start-up incl. warm-up (s)"],
+                             "llrrr", [[p["preset"], " → ".join(p["sizes"]), fmt(p["first_frame_seconds"]),
+                                        fmt(p["full_size_seconds"]), f"{p['start_seconds']:.1f}"]
+                                       for p in result["presets"]])
     return "\n".join(lines) + "\n"
 
 
@@ -140,8 +133,7 @@ def main():
     if not args.report_only:
         os.makedirs(args.work, exist_ok=True)
         presets = [measure_preset(args, p, args.work) for p in args.presets.split(",")]
-        commit = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
-                                text=True).stdout.strip()
+        commit = commit_of(REPO)
         result = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
                   "device": presets[0]["device"], "commit": commit, "size": args.size, "rounds": args.rounds,
                   "command": "python3 bench/studies/view_latency.py " + " ".join(sys.argv[1:]), "note": args.note,
@@ -157,4 +149,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except RunError as e:
+        sys.exit(f"view_latency: {e}")

@@ -588,9 +588,8 @@ def worker_main(args):
 
 
 def main(argv):
-    args = parse_args(argv)
     try:
-        dispatch(args)
+        dispatch(parse_args(argv))
     except OfficialError as e:  # the official side's one-line reasons (lib/official.py)
         fail(str(e))
 
