@@ -28,15 +28,21 @@ HAND_HINT = ("<!-- Hand-written notes: this section, to the end of the file, is 
 ALIGN = {"l": "---", "r": "---:", "c": ":---:"}
 
 
-def table(header, align, rows):
+def table(header, align, rows, blank=" "):
     """A Markdown table's lines: `header` cells, `align` one letter per column ("l" left, "r" right, "c" centred:
-    `|---|---:|:---:|`), then one line per row of cell strings. An empty cell is written `| |` (one space)."""
+    `|---|---:|:---:|`), then one line per row of cell strings. An empty header cell is written `| |`; an empty row
+    cell is `blank` between its bars: one space by default (`| |`), two for before_after's reports (`|  |`, as
+    they were first written; the regeneration CTest holds the committed bytes)."""
     if len(align) != len(header):
         raise ValueError(f"table: {len(header)} header cells but alignment {align!r} for {len(align)} columns")
+    for row in rows:
+        if len(row) != len(header):
+            raise ValueError(f"table: {len(header)} header cells but a row of {len(row)}: {row!r}")
 
-    def line(cells):
-        return "|" + "".join(f" {c} |" if c != "" else " |" for c in cells)
-    return [line(header), "|" + "".join(ALIGN[a] + "|" for a in align)] + [line(r) for r in rows]
+    def line(cells, empty):
+        return "|" + "".join(f" {c} |" if c != "" else empty + "|" for c in cells)
+    return ([line(header, " "), "|" + "".join(ALIGN[a] + "|" for a in align)]
+            + [line(r, blank) for r in rows])
 
 
 def results_folder(study):

@@ -94,16 +94,13 @@ def train_and_eval(args, scene, config):
 
 def markdown(scene_name, rows, meta):
     scales = sorted({int(k) for r in rows for k in r["psnr_by_scale"]})
-    head = "| setting | " + " | ".join(f"PSNR {SCALE_NAMES.get(s, '1/' + str(s))}" for s in scales)
-    head += " | mean PSNR | mean SSIM | train s | render s/MP | parameters |\n"
-    head += "|---|" + "---:|" * (len(scales) + 5) + "\n"
-    body = ""
-    for r in rows:
-        cells = [f"{r['psnr_by_scale'].get(str(s), float('nan')):.2f}" for s in scales]
-        body += (f"| {r['label']} | " + " | ".join(cells) +
-                 f" | {r['mean_psnr']:.2f} | {r['mean_ssim']:.4f} | {r['train_seconds']:.0f} | "
-                 f"{r['render_seconds_per_megapixel']:.1f} | {r['parameters']} |\n")
-    return (f"### {scene_name}\n\n{meta}\n\n" + head + body + "\n")
+    header = (["setting"] + [f"PSNR {SCALE_NAMES.get(s, '1/' + str(s))}" for s in scales]
+              + ["mean PSNR", "mean SSIM", "train s", "render s/MP", "parameters"])
+    body = [[r["label"]] + [f"{r['psnr_by_scale'].get(str(s), float('nan')):.2f}" for s in scales]
+            + [f"{r['mean_psnr']:.2f}", f"{r['mean_ssim']:.4f}", f"{r['train_seconds']:.0f}",
+               f"{r['render_seconds_per_megapixel']:.1f}", str(r["parameters"])] for r in rows]
+    table = report_md.table(header, "l" + "r" * (len(header) - 1), body)
+    return f"### {scene_name}\n\n{meta}\n\n" + "\n".join(table) + "\n\n"
 
 
 def import_pyplot():

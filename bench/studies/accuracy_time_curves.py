@@ -102,13 +102,13 @@ def write_markdown(record):
         "",
         "![lego x4: val PSNR against training seconds](accuracy_time_curves.svg)",
         "",
-        "| scene | run | preset | variant | steps | train s | final val PSNR | SSIM | render s/MP | parameters |",
-        "|---|---|---|---|---:|---:|---:|---:|---:|---:|",
     ]
-    for r in record["runs"]:
-        lines.append(f"| {r['scene']} | {r['name']} | {r['preset']} | {r['variant']} | {r['steps']} | "
-                     f"{r['train_seconds']:.0f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['render_s_per_mp']:.0f} | "
-                     f"{r['parameters']} |")
+    lines += report_md.table(
+        ["scene", "run", "preset", "variant", "steps", "train s", "final val PSNR", "SSIM", "render s/MP", "parameters"],
+        "llllrrrrrr",
+        [[r["scene"], r["name"], r["preset"], r["variant"], str(r["steps"]), f"{r['train_seconds']:.0f}",
+          f"{r['psnr']:.2f}", f"{r['ssim']:.4f}", f"{r['render_s_per_mp']:.0f}", str(r["parameters"])]
+         for r in record["runs"]])
     lines += ["", "Val PSNR at each scored point (training seconds: dB):", ""]
     for r in record["runs"]:
         points = ", ".join(f"{p['train_seconds']:.0f}: {p['val_psnr']:.2f}" for p in r["curve"])
@@ -139,15 +139,14 @@ def table3_markdown(record):
         "square roots of its full covariance's upper triangle (the off-diagonal lifted as the official lift_gaussian "
         "with diag=False does: all six entries are non-zero for a ray off the axes), 72 + 24 = 96 features like IPE.",
         "",
-        "| row | " + " | ".join(f"PSNR {names.get(l, l)}" for l in levels) + " | mean PSNR | SSIM | train s | "
-        "render s/MP |",
-        "|---|" + "---:|" * (len(levels) + 4),
     ]
+    header = ["row"] + [f"PSNR {names.get(l, l)}" for l in levels] + ["mean PSNR", "SSIM", "train s", "render s/MP"]
+    rows = []
     for r in runs:
         by_level = {s["scale_level"]: s["mean_psnr"] for s in r["scales"]}
-        cells = " | ".join(f"{by_level[l]:.2f}" if l in by_level else "-" for l in levels)
-        lines.append(f"| {r['variant']} | {cells} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['train_seconds']:.0f} | "
-                     f"{r['render_s_per_mp']:.0f} |")
+        rows.append([r["variant"]] + [f"{by_level[l]:.2f}" if l in by_level else "-" for l in levels]
+                    + [f"{r['psnr']:.2f}", f"{r['ssim']:.4f}", f"{r['train_seconds']:.0f}", f"{r['render_s_per_mp']:.0f}"])
+    lines += report_md.table(header, "l" + "r" * (len(header) - 1), rows)
     for note in record.get("table3_notes", []):
         lines += ["", note]
     lines.append("")

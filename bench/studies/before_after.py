@@ -193,28 +193,26 @@ def write_markdown(record):
         lines += ["Training GEMMs ran on: " + "; ".join(f"{s}: {', '.join(training[s])}" for s in SIDES) + ".", ""]
     for note in record.get("notes", []):
         lines += [note, ""]
-    lines += [f"| figure | unit | before ({lb}) median [min–max] | after ({la}) median [min–max] | after/before | |",
-              "|---|---|---:|---:|---:|---|"]
-    one_sided = []
+    one_sided, rows = [], []
     for name, unit, stats, ratio in summary(record):
         if ratio is None:
             one_sided.append(name)
             continue
         cell = {s: f"{fmt(stats[s][0])} [{fmt(stats[s][1])}–{fmt(stats[s][2])}]" for s in SIDES}
-        lines.append(f"| {name} | {unit} | {cell['before']} | {cell['after']} | {ratio:.2f} | "
-                     f"{'ranges apart' if separated(stats) else ''} |")
+        rows.append([name, unit, cell["before"], cell["after"], f"{ratio:.2f}",
+                     "ranges apart" if separated(stats) else ""])
+    lines += report_md.table(["figure", "unit", f"before ({lb}) median [min–max]", f"after ({la}) median [min–max]",
+                              "after/before", ""], "llrrrl", rows, blank="  ")
     if one_sided:
         lines += ["", "Figures measured on one side only: " + ", ".join(one_sided) + "."]
     lines += ["", "## Load per run", "",
               "Load average (1 min) at the run's start and end; other processes: the machine's busy CPU time during "
-              "the run (/proc/stat) minus the bench's own, in cores (of 2).", "",
-              "| round | run | side | wall s | load 1-min start → end | other processes, cores |",
-              "|---:|---:|---|---:|---|---:|"]
-    for rnd in record["rounds"]:
-        for i, run in enumerate(rnd["runs"]):
-            lines.append(f"| {rnd['round']}{' (cold)' if rnd['round'] == 1 and n > 1 else ''} | {i + 1} | "
-                         f"{run['side']} | {run['wall_s']:.0f} | {run['load_start'][0]:.2f} → {run['load_end'][0]:.2f}"
-                         f" | {run['other_cpu_cores']:.2f} |")
+              "the run (/proc/stat) minus the bench's own, in cores (of 2).", ""]
+    lines += report_md.table(
+        ["round", "run", "side", "wall s", "load 1-min start → end", "other processes, cores"], "rrlrlr",
+        [[f"{rnd['round']}{' (cold)' if rnd['round'] == 1 and n > 1 else ''}", str(i + 1), run["side"],
+          f"{run['wall_s']:.0f}", f"{run['load_start'][0]:.2f} → {run['load_end'][0]:.2f}",
+          f"{run['other_cpu_cores']:.2f}"] for rnd in record["rounds"] for i, run in enumerate(rnd["runs"])])
     errors = [(r["round"], run["side"], e) for r in record["rounds"] for run in r["runs"] for e in run["errors"]]
     if errors:
         lines += ["", "Sections that failed: " + "; ".join(f"round {r} {s}: {e['section']}: {e['message']}"

@@ -91,25 +91,26 @@ def write_markdown(record):
              f"`{device}` ({record['cpu']}). Preset `{record['preset']}` on "
              f"{record['scene']}, trained from scratch each run; {record['rounds']} alternating rounds (round 1 flush "
              "first). `keep` = MIPNERF_KEEP_DENORMALS=1.", "",
-             "## Training time and val PSNR", "",
-             "| mode | runs | training s, median (each) | val PSNR dB (each) |", "|---|---:|---:|---|"]
+             "## Training time and val PSNR", ""]
+    rows = []
     for mode in MODES:
         of_mode = [r for r in runs if r["mode"] == mode]
         seconds = [r["train_seconds"] for r in of_mode]
-        lines.append(f"| {mode} | {len(of_mode)} | {statistics.median(seconds):.1f} "
-                     f"({', '.join(f'{s:.1f}' for s in seconds)}) | "
-                     f"{', '.join(psnr_text(r) for r in of_mode)} |")
+        rows.append([mode, str(len(of_mode)),
+                     f"{statistics.median(seconds):.1f} ({', '.join(f'{s:.1f}' for s in seconds)})",
+                     ", ".join(psnr_text(r) for r in of_mode)])
+    lines += report_md.table(["mode", "runs", "training s, median (each)", "val PSNR dB (each)"], "lrrl", rows)
     lines += ["", f"## Seconds per step, {WINDOW}-step windows", "",
               "Each cell: the window's wall seconds per step (train_log.csv rows, every 50 steps). A step that slows as "
               "training goes on shows as a growing row.", ""]
     windows = runs[0]["windows"]
-    header = "| run | mode | " + " | ".join(f"{a}-{b}" for a, b, _ in windows) + " | last / first |"
-    lines += [header, "|---|---|" + "---:|" * (len(windows) + 1)]
+    header = ["run", "mode"] + [f"{a}-{b}" for a, b, _ in windows] + ["last / first"]
+    rows = []
     for i, r in enumerate(runs):
         per_step = [w[2] for w in r["windows"]]
         ratio = per_step[-1] / per_step[0] if per_step and per_step[0] > 0 else float("nan")
-        lines.append(f"| {i + 1} | {r['mode']} | " + " | ".join(f"{1e3 * s:.1f} ms" for s in per_step) +
-                     f" | {ratio:.2f} |")
+        rows.append([str(i + 1), r["mode"]] + [f"{1e3 * s:.1f} ms" for s in per_step] + [f"{ratio:.2f}"])
+    lines += report_md.table(header, "ll" + "r" * (len(windows) + 1), rows)
     return "\n".join(lines) + "\n"
 
 

@@ -91,8 +91,8 @@ def write_markdown(record):
     names = {"mipnerf": "mip-NeRF", "nerf": "NeRF"}
 
     def row(r, label):
-        return (f"| {label} | {r['steps']:,} | {r['train_seconds']:,.0f} | {r['psnr']:.2f} | {r['ssim']:.4f} | "
-                f"{r['render_s_per_mp']:.1f} |")
+        return [label, f"{r['steps']:,}", f"{r['train_seconds']:,.0f}", f"{r['psnr']:.2f}", f"{r['ssim']:.4f}",
+                f"{r['render_s_per_mp']:.1f}"]
 
     lines = [
         "# Forward-facing: mip-NeRF (cylinders, NDC) beside NeRF (NDC), supplement §4 at CPU budget",
@@ -107,19 +107,18 @@ def write_markdown(record):
         "",
         f"Command: `python3 bench/studies/forward_facing.py --steps {record['steps']} --preset {record['preset']}`",
         "",
-        "| run | steps | train s | test PSNR (dB) | test SSIM | render s/MP |",
-        "|---|---:|---:|---:|---:|---:|",
-        row(equal_steps["mipnerf"], f"mip-NeRF, {equal_steps['mipnerf']['steps']:,} steps "
-                                    f"({equal_steps['mipnerf']['train_seconds']:,.0f} s)"),
-        row(equal_steps["nerf"], f"NeRF, {equal_steps['nerf']['steps']:,} steps "
-                                 f"({equal_steps['nerf']['train_seconds']:,.0f} s)"),
     ]
+    rows = [row(equal_steps["mipnerf"], f"mip-NeRF, {equal_steps['mipnerf']['steps']:,} steps "
+                                        f"({equal_steps['mipnerf']['train_seconds']:,.0f} s)"),
+            row(equal_steps["nerf"], f"NeRF, {equal_steps['nerf']['steps']:,} steps "
+                                     f"({equal_steps['nerf']['train_seconds']:,.0f} s)")]
     resumed = extended is not slower and extended["steps"] != record["steps"]
     if resumed:
-        lines.append(row(extended, f"{names.get(extended['variant'], extended['variant'])}, resumed to "
-                                   f"{extended['steps']:,} steps ({extended['train_seconds']:,.0f} s; aimed at "
-                                   f"{names.get(slower['variant'], slower['variant'])}'s "
-                                   f"{slower['train_seconds']:,.0f} s)"))
+        rows.append(row(extended, f"{names.get(extended['variant'], extended['variant'])}, resumed to "
+                                  f"{extended['steps']:,} steps ({extended['train_seconds']:,.0f} s; aimed at "
+                                  f"{names.get(slower['variant'], slower['variant'])}'s "
+                                  f"{slower['train_seconds']:,.0f} s)"))
+    lines += report_md.table(["run", "steps", "train s", "test PSNR (dB)", "test SSIM", "render s/MP"], "lrrrrr", rows)
     lines.append("")
     if resumed:
         first = equal_steps[extended["variant"]]

@@ -76,9 +76,8 @@ def write_markdown(record):
     for preset in record["presets"]:
         lines += [f"## {preset['preset']} ({preset['block_rows']}-row blocks)", "",
                   "GFLOP/s, median of the rounds (best). *ours*: 2 threads, each its own block; *library*: the "
-                  "library's 2 threads on one product of both blocks. – : the library cannot run the shape.", "",
-                  "| product | count | " + " | ".join(f"{lib} ours | {lib} library" for lib in libs) + " |",
-                  "|---|---:|" + "---:|" * (2 * len(libs))]
+                  "library's 2 threads on one product of both blocks. – : the library cannot run the shape.", ""]
+        rows = []
         for p in preset["products"]:
             cells = []
             for lib in libs:
@@ -86,7 +85,9 @@ def write_markdown(record):
                 for arrangement in ("ours", "library"):
                     r = rate(cell, arrangement)
                     cells.append("–" if r is None else f"{r['median']:.1f} ({r['best']:.1f})")
-            lines.append(f"| {p['label']} | {p['count']} | " + " | ".join(cells) + " |")
+            rows.append([p["label"], str(p["count"])] + cells)
+        header = ["product", "count"] + [f"{lib} {arrangement}" for lib in libs for arrangement in ("ours", "library")]
+        lines += report_md.table(header, "l" + "r" * (len(header) - 1), rows)
 
         def best_of(p):
             rates = [rate(p["libraries"][lib], "ours") for lib in libs if lib in p["libraries"]]

@@ -144,36 +144,37 @@ def write_markdown(record):
              f"median over rounds shown. Load average (1 min) at each run: {min(loads):.2f}-{max(loads):.2f}.", "",
              "Devices: " + devices_text(record) + ".", "",
              "Batch: 4,096 rays x 128 samples (bench_kernels' defaults). Target (issue 28): PoCL within "
-             f"{TARGET_RATIO}x of Intel's runtime.", "",
-             "| kernel | PoCL ms | Intel ms | PoCL / Intel | within 1.5x |", "|---|---:|---:|---:|:---:|"]
+             f"{TARGET_RATIO}x of Intel's runtime.", ""]
+    rows = []
     for stage, by in s.items():
         if "pocl" not in by or "intel" not in by:
             continue
         ratio = by["pocl"] / by["intel"]
-        lines.append(f"| {stage} | {by['pocl']:.3f} | {by['intel']:.3f} | {ratio:.2f} | "
-                     f"{'yes' if ratio <= TARGET_RATIO else 'no'} |")
+        rows.append([stage, f"{by['pocl']:.3f}", f"{by['intel']:.3f}", f"{ratio:.2f}",
+                     "yes" if ratio <= TARGET_RATIO else "no"])
+    lines += report_md.table(["kernel", "PoCL ms", "Intel ms", "PoCL / Intel", "within 1.5x"], "lrrrc", rows)
     fused = [(stage, by) for stage, by in s.items() if "pocl K=1" in by and stage.startswith("gaussian_ipe_fwd")]
     if fused:
         lines += ["", "The fused Gaussian + IPE kernel with a sincos per degree (K = 1, before angle doubling) and "
-                  "with each runtime's default (a sincos every 4 degrees on CPUs):", "",
-                  "| kernel | PoCL K=1 ms | PoCL default ms | Intel K=1 ms | Intel default ms |",
-                  "|---|---:|---:|---:|---:|"]
-        for stage, by in fused:
-            lines.append(f"| {stage} | {by['pocl K=1']:.3f} | {by['pocl']:.3f} | {by.get('intel K=1', float('nan')):.3f}"
-                         f" | {by['intel']:.3f} |")
+                  "with each runtime's default (a sincos every 4 degrees on CPUs):", ""]
+        lines += report_md.table(
+            ["kernel", "PoCL K=1 ms", "PoCL default ms", "Intel K=1 ms", "Intel default ms"], "lrrrr",
+            [[stage, f"{by['pocl K=1']:.3f}", f"{by['pocl']:.3f}", f"{by.get('intel K=1', float('nan')):.3f}",
+              f"{by['intel']:.3f}"] for stage, by in fused])
     diagnosed = [(stage, by) for stage, by in s.items() if "pocl one worker" in by and "pocl workers unpinned" in by]
     if diagnosed:
         lines += ["", "PoCL's workers (diagnostics, same rounds): on one worker thread (`POCL_MAX_PTHREAD_COUNT=1`), "
                   "and left where Linux places them (`POCL_AFFINITY=0`; mipnerf-cl pins them by default, "
-                  "host/cl/device.cpp):", "",
-                  "| kernel | PoCL ms (pinned) | PoCL one worker ms | PoCL unpinned ms | Intel ms | unpinned / Intel |",
-                  "|---|---:|---:|---:|---:|---:|"]
+                  "host/cl/device.cpp):", ""]
+        rows = []
         for stage, by in diagnosed:
             if "intel" not in by:
                 continue
             unpinned = by["pocl workers unpinned"]
-            lines.append(f"| {stage} | {by['pocl']:.3f} | {by['pocl one worker']:.3f} | {unpinned:.3f} | "
-                         f"{by['intel']:.3f} | {unpinned / by['intel']:.2f} |")
+            rows.append([stage, f"{by['pocl']:.3f}", f"{by['pocl one worker']:.3f}", f"{unpinned:.3f}",
+                         f"{by['intel']:.3f}", f"{unpinned / by['intel']:.2f}"])
+        lines += report_md.table(["kernel", "PoCL ms (pinned)", "PoCL one worker ms", "PoCL unpinned ms", "Intel ms",
+                                  "unpinned / Intel"], "lrrrrr", rows)
     return "\n".join(lines) + "\n"
 
 

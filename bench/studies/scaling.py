@@ -161,14 +161,13 @@ def write_markdown(record):
     lines += ["", "## Measured", "",
               "Bytes per step: the flat float32 gradient buffer every rank all-reduces (4 bytes per parameter; the "
               "loss sums add 16 bytes per level). All-reduce: rank 0's stage, the gradients' copies to and from the "
-              "host included.", "",
-              "| preset | batch rays | parameters | all-reduce bytes/step | 1 process ms/step | 2 ranks ms/step | "
-              "all-reduce ms/step (2 ranks) | all-reduce share | 2-rank speed-up |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    for r in rows:
-        lines.append(f"| {r['preset']} | {r['batch']} | {r['parameters']} | {r['bytes']:,} | {r['one_ms']:.1f} | "
-                     f"{r['two_ms']:.1f} | {r['allreduce_ms']:.2f} | {100 * r['allreduce_ms'] / r['two_ms']:.1f} % | "
-                     f"{r['one_ms'] / r['two_ms']:.2f}x |")
+              "host included.", ""]
+    lines += report_md.table(
+        ["preset", "batch rays", "parameters", "all-reduce bytes/step", "1 process ms/step", "2 ranks ms/step",
+         "all-reduce ms/step (2 ranks)", "all-reduce share", "2-rank speed-up"], "lrrrrrrrr",
+        [[r["preset"], str(r["batch"]), str(r["parameters"]), f"{r['bytes']:,}", f"{r['one_ms']:.1f}",
+          f"{r['two_ms']:.1f}", f"{r['allreduce_ms']:.2f}", f"{100 * r['allreduce_ms'] / r['two_ms']:.1f} %",
+          f"{r['one_ms'] / r['two_ms']:.2f}x"] for r in rows])
     paper = [r for r in rows if r["preset"] == "paper"]
     t_paper = PAPER_STEP_S * PAPER_CORES
     lines += ["", "On one 2-core machine two ranks split the same two cores a single process already uses, so the "
@@ -192,10 +191,11 @@ def write_markdown(record):
               "(the T_compute below which 64 accelerators drop under 50 %, T_compute = 64 T_allreduce(64)) needs none.",
               ""]
     for name, alpha, beta in LINKS:
-        lines += [f"### {name}: alpha = {alpha * 1e6:.0f} us, beta = {beta / 1e9:.2f} GB/s", "",
-                  "| preset | T_compute (1 accelerator) | " +
-                  " | ".join(f"N={n} step ms | N={n} efficiency" for n in GPU_COUNTS) + " | T_compute for 50 % at N=64 |",
-                  "|---|---:|" + "---:|---:|" * len(GPU_COUNTS) + "---:|"]
+        lines += [f"### {name}: alpha = {alpha * 1e6:.0f} us, beta = {beta / 1e9:.2f} GB/s", ""]
+        header = (["preset", "T_compute (1 accelerator)"]
+                  + [f"N={n} {figure}" for n in GPU_COUNTS for figure in ("step ms", "efficiency")]
+                  + ["T_compute for 50 % at N=64"])
+        model_rows = []
         for r in rows:
             _, allreduce64, _ = model_row(0.0, r["bytes"], 64, alpha, beta)
             if r["preset"] == "paper":
@@ -205,7 +205,8 @@ def write_markdown(record):
                     cells += [f"{step * 1e3:.2f}", f"{100 * eff:.0f} %"]
             else:
                 cells = ["not sourced"] + ["–", "–"] * len(GPU_COUNTS)
-            lines.append(f"| {r['preset']} | " + " | ".join(cells) + f" | {64 * allreduce64 * 1e3:.1f} ms |")
+            model_rows.append([r["preset"]] + cells + [f"{64 * allreduce64 * 1e3:.1f} ms"])
+        lines += report_md.table(header, "l" + "r" * (len(header) - 1), model_rows)
         lines.append("")
     if not paper:
         lines += ["(The paper preset was not measured, so no row has a step time.)", ""]
