@@ -627,13 +627,15 @@ def write_markdown(record):
         "",
         "## Registration (`mipnerf-cl dataset from-photos PHOTOS OUT`, defaults)",
         "",
-        "| photos | registered | layout | sparse points | cameras | COLMAP wall s | mean reprojection error (px) | "
-        "mean track length |",
-        "|---:|---:|---|---:|---|---:|---:|---:|",
-        f"| {photos['count']} | {registered} | {colmap.get('layout')} | {colmap.get('points', 0):,} | "
-        f"{colmap.get('cameras')} ({colmap.get('camera_models')}) | {colmap['wall_seconds']:,.0f} | "
-        f"{colmap.get('model_analyzer', {}).get('mean_reprojection_error', float('nan')):.3f} | "
-        f"{colmap.get('model_analyzer', {}).get('mean_track_length', float('nan')):.2f} |",
+    ]
+    lines += report_md.table(
+        ["photos", "registered", "layout", "sparse points", "cameras", "COLMAP wall s", "mean reprojection error (px)",
+         "mean track length"], "rrlrlrrr",
+        [[str(photos["count"]), str(registered), str(colmap.get("layout")), f"{colmap.get('points', 0):,}",
+          f"{colmap.get('cameras')} ({colmap.get('camera_models')})", f"{colmap['wall_seconds']:,.0f}",
+          f"{colmap.get('model_analyzer', {}).get('mean_reprojection_error', float('nan')):.3f}",
+          f"{colmap.get('model_analyzer', {}).get('mean_track_length', float('nan')):.2f}"]])
+    lines += [
         "",
         "COLMAP's steps (their own elapsed times): "
         + ", ".join(f"{s['step']} {s['seconds']:,.0f} s" for s in colmap.get("colmap_steps", []))
@@ -654,25 +656,27 @@ def write_markdown(record):
         f"fraction of the capture's extent (the largest distance between two given centres, {poses['extent']:.3g} "
         "given units).",
         "",
-        "| | median | max |",
-        "|---|---:|---:|",
-        f"| rotation error (°) | {poses['rotation_error_deg']['median']:.3f} | {poses['rotation_error_deg']['max']:.3f} |",
-        f"| position error (% of extent) | {poses['position_error_of_extent']['median'] * 100:.2f} | "
-        f"{poses['position_error_of_extent']['max'] * 100:.2f} |",
-        f"| rotation error with the rotation fitted to the orientations instead (°) | "
-        f"{poses['rotation_error_deg_orientation_fit']['median']:.3f} | "
-        f"{poses['rotation_error_deg_orientation_fit']['max']:.3f} |",
+    ]
+    errors = [("rotation error (°)", poses["rotation_error_deg"], 1, ".3f"),
+              ("position error (% of extent)", poses["position_error_of_extent"], 100, ".2f"),
+              ("rotation error with the rotation fitted to the orientations instead (°)",
+               poses["rotation_error_deg_orientation_fit"], 1, ".3f")]
+    lines += report_md.table(["", "median", "max"], "lrr",
+                             [[name, f"{e['median'] * scale:{form}}", f"{e['max'] * scale:{form}}"]
+                              for name, e, scale, form in errors])
+    lines += [
         "",
         f"(The last row's rotation differs from the centre fit's by "
         f"{poses['rotation_error_deg_orientation_fit']['fit_vs_centre_fit_deg']:.3f}°.)",
         "",
-        "| focal length | px |",
-        "|---|---:|",
-        f"| COLMAP (SIMPLE_PINHOLE, at {focal['colmap_hw'][1]:.0f}×{focal['colmap_hw'][0]:.0f}) | "
-        f"{focal['colmap_px']:.2f} |",
-        f"| given ({focal['given_px_full']:.2f} at {focal['given_hw_full'][1]:.0f}×{focal['given_hw_full'][0]:.0f}, "
-        f"scaled to {focal['photo_width']} wide) | {focal['given_px_at_photo_width']:.2f} |",
-        f"| difference | {focal['relative_difference'] * 100:+.2f} % |",
+    ]
+    lines += report_md.table(["focal length", "px"], "lr", [
+        [f"COLMAP (SIMPLE_PINHOLE, at {focal['colmap_hw'][1]:.0f}×{focal['colmap_hw'][0]:.0f})",
+         f"{focal['colmap_px']:.2f}"],
+        [f"given ({focal['given_px_full']:.2f} at {focal['given_hw_full'][1]:.0f}×{focal['given_hw_full'][0]:.0f}, "
+         f"scaled to {focal['photo_width']} wide)", f"{focal['given_px_at_photo_width']:.2f}"],
+        ["difference", f"{focal['relative_difference'] * 100:+.2f} %"]])
+    lines += [
         "",
         f"Depth bounds (COLMAP's × the fit's scale, against the given): nearest "
         f"{poses['bounds']['colmap_fitted_min_near']:.2f} vs {poses['bounds']['given_min_near']:.2f}, farthest "
@@ -687,12 +691,11 @@ def write_markdown(record):
         "",
         "Worst views by rotation error:",
         "",
-        "| view | rotation error (°) | position error (% of extent) |",
-        "|---|---:|---:|",
     ]
     worst = sorted(poses["views"], key=lambda v: -v["rotation_error_deg"])[:5]
-    for v in worst:
-        lines.append(f"| {v['name']} | {v['rotation_error_deg']:.3f} | {v['position_error_of_extent'] * 100:.2f} |")
+    lines += report_md.table(["view", "rotation error (°)", "position error (% of extent)"], "lrr",
+                             [[v["name"], f"{v['rotation_error_deg']:.3f}", f"{v['position_error_of_extent'] * 100:.2f}"]
+                              for v in worst])
 
     radial = record.get("radial_check")
     if radial:
@@ -705,20 +708,21 @@ def write_markdown(record):
             f"{radial['what']}. Registered {radial['registered']} of {photos['count']}; mapper "
             f"{radial['mapper_phase']['wall_seconds']:,.0f} s wall.",
             "",
-            "| camera | focal (px at 504 wide) | vs given | k (radial) | rotation error median / max (°) | "
-            "same, rotation fitted to orientations (°) | position error median / max (% of extent) |",
-            "|---|---:|---:|---:|---:|---:|---:|",
-            f"| SIMPLE_PINHOLE (from-photos) | {focal['colmap_px']:.2f} | {focal['relative_difference'] * 100:+.2f} % | — | "
-            f"{poses['rotation_error_deg']['median']:.3f} / {poses['rotation_error_deg']['max']:.3f} | "
-            f"{poses['rotation_error_deg_orientation_fit']['median']:.3f} / "
-            f"{poses['rotation_error_deg_orientation_fit']['max']:.3f} | "
-            f"{poses['position_error_of_extent']['median'] * 100:.2f} / {poses['position_error_of_extent']['max'] * 100:.2f} |",
-            f"| {cam['model']} | {rc['focal']['colmap_px']:.2f} | {rc['focal']['relative_difference'] * 100:+.2f} % | "
-            f"{cam['params'][3]:+.4f} | {rc['rotation_error_deg']['median']:.3f} / {rc['rotation_error_deg']['max']:.3f} | "
-            f"{rc['rotation_error_deg_orientation_fit']['median']:.3f} / "
-            f"{rc['rotation_error_deg_orientation_fit']['max']:.3f} | "
-            f"{rc['position_error_of_extent']['median'] * 100:.2f} / {rc['position_error_of_extent']['max'] * 100:.2f} |",
         ]
+
+        def camera_row(name, fit, k):
+            # `fit`: a comparison shaped like radial["comparison"] (focal, rotation and position errors).
+            return [name, f"{fit['focal']['colmap_px']:.2f}", f"{fit['focal']['relative_difference'] * 100:+.2f} %", k,
+                    f"{fit['rotation_error_deg']['median']:.3f} / {fit['rotation_error_deg']['max']:.3f}",
+                    f"{fit['rotation_error_deg_orientation_fit']['median']:.3f} / "
+                    f"{fit['rotation_error_deg_orientation_fit']['max']:.3f}",
+                    f"{fit['position_error_of_extent']['median'] * 100:.2f} / "
+                    f"{fit['position_error_of_extent']['max'] * 100:.2f}"]
+        lines += report_md.table(
+            ["camera", "focal (px at 504 wide)", "vs given", "k (radial)", "rotation error median / max (°)",
+             "same, rotation fitted to orientations (°)", "position error median / max (% of extent)"], "lrrrrrr",
+            [camera_row("SIMPLE_PINHOLE (from-photos)", dict(poses, focal=focal), "—"),  # the main run's, same shape
+             camera_row(cam["model"], rc, f"{cam['params'][3]:+.4f}")])
 
     colmap_runs, given_runs = runs["colmap"], runs["given"]
     held = ", ".join(photo_name(f) for f in colmap_runs[0]["test_files"])
@@ -739,23 +743,23 @@ def write_markdown(record):
         + ("**the same views**." if record["same_held_out_views"] else "**not the same views** (registration "
                                                                       "changed the order or dropped photos)."),
         "",
-        "| poses | seed | steps | train s | test PSNR (dB) | test SSIM | render s/MP | val PSNR by step |",
-        "|---|---:|---:|---:|---:|---:|---:|---|",
     ]
 
     def curve(r):
         return ", ".join(f"{int(float(row['step']))}: {float(row['val_psnr']):.2f}"
                          for row in r["val_log"] if "val_psnr" in row and "step" in row) or "—"
 
-    for label, rs in (("COLMAP (from-photos)", colmap_runs), ("given (poses_bounds.npy)", given_runs)):
-        for r in rs:
-            lines.append(f"| {label} | {r['seed']} | {r['steps']:,} | {r['train_seconds']:,.0f} | {r['test_psnr']:.2f} | "
-                         f"{r['test_ssim']:.4f} | {r['render_s_per_mp']:,.0f} | {curve(r)} |")
+    rows = [[label, str(r["seed"]), f"{r['steps']:,}", f"{r['train_seconds']:,.0f}", f"{r['test_psnr']:.2f}",
+             f"{r['test_ssim']:.4f}", f"{r['render_s_per_mp']:,.0f}", curve(r)]
+            for label, rs in (("COLMAP (from-photos)", colmap_runs), ("given (poses_bounds.npy)", given_runs))
+            for r in rs]
     if record["seeds"] > 1:
-        for label, rs in (("COLMAP, mean", colmap_runs), ("given, mean", given_runs)):
-            lines.append(f"| {label} | | {rs[0]['steps']:,} | {mean(r['train_seconds'] for r in rs):,.0f} | "
-                         f"{mean(r['test_psnr'] for r in rs):.2f} | {mean(r['test_ssim'] for r in rs):.4f} | "
-                         f"{mean(r['render_s_per_mp'] for r in rs):,.0f} | |")
+        rows += [[label, "", f"{rs[0]['steps']:,}", f"{mean(r['train_seconds'] for r in rs):,.0f}",
+                  f"{mean(r['test_psnr'] for r in rs):.2f}", f"{mean(r['test_ssim'] for r in rs):.4f}",
+                  f"{mean(r['render_s_per_mp'] for r in rs):,.0f}", ""]
+                 for label, rs in (("COLMAP, mean", colmap_runs), ("given, mean", given_runs))]
+    lines += report_md.table(["poses", "seed", "steps", "train s", "test PSNR (dB)", "test SSIM", "render s/MP",
+                              "val PSNR by step"], "lrrrrrrl", rows)
     gap = mean(r["test_psnr"] for r in colmap_runs) - mean(r["test_psnr"] for r in given_runs)
     lines += [
         "",
@@ -763,14 +767,15 @@ def write_markdown(record):
         "",
         "Per held-out view (test PSNR dB, seed 0):",
         "",
-        "| view | COLMAP's poses | given poses |",
-        "|---|---:|---:|",
     ]
     given_by_name = {photo_name(v["file"]): v for v in given_runs[0]["test_per_view"]}
-    for v in colmap_runs[0]["test_per_view"]:
+
+    def given_psnr(v):
         g = given_by_name.get(photo_name(v["file"]))
-        lines.append(f"| {photo_name(v['file'])} | {v['psnr']:.2f} | {g['psnr']:.2f} |" if g else
-                     f"| {photo_name(v['file'])} | {v['psnr']:.2f} | — |")
+        return f"{g['psnr']:.2f}" if g else "—"
+    lines += report_md.table(["view", "COLMAP's poses", "given poses"], "lrr",
+                             [[photo_name(v["file"]), f"{v['psnr']:.2f}", given_psnr(v)]
+                              for v in colmap_runs[0]["test_per_view"]])
     lines += ["", "Conditions per phase:", ""]
     lines.append(f"- from-photos: {fmt_phase(colmap)}")
     for label, rs in (("COLMAP", colmap_runs), ("given", given_runs)):

@@ -120,12 +120,16 @@ def write_markdown(record, path):
         f"Capture: {record['photos']} ({record['photo_count']} JPEG photos). Device: {record['device']}. "
         f"Commit {record['commit']}, {record['date']}. Preset {record['preset']}, {o['steps']} steps each, seed 0.",
         "",
-        "| | camera | test views | test PSNR (dB) | SSIM | train s | rays stage per step (profile) |",
-        "|---|---|---:|---:|---:|---:|---|",
-        f"| COLMAP OPENCV, trained as is | lens tables | {o['test_images']} | {o['test_psnr']:.2f} | "
-        f"{o['test_ssim']:.4f} | {o['train_seconds']} | `{o['profile_rays_row']}` |",
-        f"| COLMAP image_undistorter, PINHOLE | pinhole | {p['test_images']} | {p['test_psnr']:.2f} | "
-        f"{p['test_ssim']:.4f} | {p['train_seconds']} | `{p['profile_rays_row']}` |",
+    ]
+
+    def row(label, camera, r):
+        return [label, camera, str(r["test_images"]), f"{r['test_psnr']:.2f}", f"{r['test_ssim']:.4f}",
+                str(r["train_seconds"]), f"`{r['profile_rays_row']}`"]
+    lines += report_md.table(["", "camera", "test views", "test PSNR (dB)", "SSIM", "train s",
+                              "rays stage per step (profile)"], "llrrrrl",
+                             [row("COLMAP OPENCV, trained as is", "lens tables", o),
+                              row("COLMAP image_undistorter, PINHOLE", "pinhole", p)])
+    lines += [
         "",
         "What `dataset inspect` says of each:",
         "",

@@ -380,16 +380,17 @@ def write_md(path, doc):
              f"pixels compared: {doc['pixels_note']}.", "",
              "Official side: google/mipnerf MipNerfModel (fine level), randomized=False (no jitter, no density "
              "noise), white_bkgd=False, rays from the official LLFF loader (NDC, NDC radii, viewdirs = "
-             "un-normalised world directions), our weights mapped layer by layer (shapes checked).", "",
-             "| view | image | size | PSNR (dB) | max abs diff (float) | max abs diff (8-bit levels) | "
-             "pixel channels > 1 level off | any level off | PSNR vs our PNG (dB) | max vs PNG |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "un-normalised world directions), our weights mapped layer by layer (shapes checked).", ""]
+    rows = []
     for v in doc["per_view"]:
         m, p = v["vs_exr"], v.get("vs_png") or {}
-        lines.append(f"| {v['test_index']} | {v['image']} | {v['size']} | {fmt_db(m['psnr_db'])} | "
-                     f"{m['max_abs_float']:.2e} | {m['max_abs_8bit_levels']} | {100 * m['fraction_over_1_level']:.4f} % | "
-                     f"{100 * m['fraction_any_level']:.4f} % | {fmt_db(p.get('psnr_db', float('nan')))} | "
-                     f"{p.get('max_abs_8bit_levels', '-')} |")
+        rows.append([str(v["test_index"]), str(v["image"]), str(v["size"]), fmt_db(m["psnr_db"]),
+                     f"{m['max_abs_float']:.2e}", str(m["max_abs_8bit_levels"]),
+                     f"{100 * m['fraction_over_1_level']:.4f} %", f"{100 * m['fraction_any_level']:.4f} %",
+                     fmt_db(p.get("psnr_db", float("nan"))), str(p.get("max_abs_8bit_levels", "-"))])
+    lines += report_md.table(["view", "image", "size", "PSNR (dB)", "max abs diff (float)",
+                              "max abs diff (8-bit levels)", "pixel channels > 1 level off", "any level off",
+                              "PSNR vs our PNG (dB)", "max vs PNG"], "l" * 10, rows)
     lines += ["", f"Verdict: {doc['verdict']}", ""]
     if doc.get("notes"):
         lines += ["## Notes", ""] + [f"- {n}" for n in doc["notes"]] + [""]

@@ -114,14 +114,14 @@ def write_markdown(record):
             f"Made by `bench/studies/train_figures.py` on {device_line(record['device'])}, {record['date']}. Preset "
             f"`{record['preset']}` (batch and network in README, Presets), {record['steps']} steps, evaluated every "
             f"{record['every']} steps on {record['views']} val views. Wall s: training time up to that step "
-            "(`train_log.csv`, compile time included); rays/s: over the last logging window.\n\n"
-            "| scene | variant | step | wall s | rays/s | val PSNR | val SSIM | render s/MP | parameters |\n"
-            "|---|---|---:|---:|---:|---:|---:|---:|---:|\n")
-    for r in record["rows"]:
-        text += (f"| {r['scene']} | {r['variant']} | {r['step']} | {r['wall_seconds']:.0f} | {r['rays_per_second']:.0f} "
-                 f"| {r['val_psnr']:.2f} | {r['val_ssim']:.4f} | {r['render_seconds_per_megapixel']:.1f} | "
-                 f"{r['parameters']} |\n")
-    return text
+            "(`train_log.csv`, compile time included); rays/s: over the last logging window.\n\n")
+    table = report_md.table(
+        ["scene", "variant", "step", "wall s", "rays/s", "val PSNR", "val SSIM", "render s/MP", "parameters"],
+        "llrrrrrrr",
+        [[r["scene"], r["variant"], str(r["step"]), f"{r['wall_seconds']:.0f}", f"{r['rays_per_second']:.0f}",
+          f"{r['val_psnr']:.2f}", f"{r['val_ssim']:.4f}", f"{r['render_seconds_per_megapixel']:.1f}",
+          str(r["parameters"])] for r in record["rows"]])
+    return text + "\n".join(table) + "\n"
 
 
 def write_report(record, results):

@@ -389,36 +389,38 @@ def write_markdown(doc):
               "Each round times both sides (round 1 ours first, round 2 the official code first, ...). Per side: the "
               "median over rounds of the round's median s/step, with the min-max of the round medians; rays/s from "
               "that median. Ratio: ours' rays/s over the official's in each round (the official's median s/step "
-              "over ours), median over rounds and min-max.", "",
-              "| config | rounds × steps per side | mipnerf-cl s/step (min-max), rays/s | official s/step (min-max), "
-              "rays/s | ratio, rays/s (min-max) | parameters (both) |",
-              "|---|---:|---:|---:|---:|---:|"]
+              "over ours), median over rounds and min-max.", ""]
+    rows = []
     for r in doc["configs"]:
         s, c = r["summary"], r["our_config"]
         o, j, q = s["ours"], s["official"], s["ratio_rays_per_s"]
         label = (f"{r['name']}: {r['batch_rays']} rays × {c['num_samples']} samples/level, "
                  f"{c['mlp_depth']}×{c['mlp_width']} (skip after {c['mlp_skip']}), view {c['view_branch_width']}, "
                  f"L = {c['pos_max_deg']}")
-        lines.append(f"| {label} | {s['rounds']} × {r['steps_per_side_and_round']} | {o['median_s']:.3f} "
-                     f"({o['min_s']:.3f}-{o['max_s']:.3f}), {o['rays_per_s']:.0f} | {j['median_s']:.3f} "
-                     f"({j['min_s']:.3f}-{j['max_s']:.3f}), {j['rays_per_s']:.0f} | **{q['median']:.2f}×** "
-                     f"({q['min']:.2f}-{q['max']:.2f}) | {r['parameters']['mipnerf-cl']} |")
+        rows.append([label, f"{s['rounds']} × {r['steps_per_side_and_round']}",
+                     f"{o['median_s']:.3f} ({o['min_s']:.3f}-{o['max_s']:.3f}), {o['rays_per_s']:.0f}",
+                     f"{j['median_s']:.3f} ({j['min_s']:.3f}-{j['max_s']:.3f}), {j['rays_per_s']:.0f}",
+                     f"**{q['median']:.2f}×** ({q['min']:.2f}-{q['max']:.2f})", str(r["parameters"]["mipnerf-cl"])])
+    lines += report_md.table(["config", "rounds × steps per side", "mipnerf-cl s/step (min-max), rays/s",
+                              "official s/step (min-max), rays/s", "ratio, rays/s (min-max)", "parameters (both)"],
+                             "lrrrrr", rows)
     lines += ["", "All steps pooled instead (one median per side over every round's steps; not the headline): " +
               "; ".join(f"{r['name']} {r['summary']['pooled_all_steps']['ours_median_s']:.3f} against "
                         f"{r['summary']['pooled_all_steps']['official_median_s']:.3f} s/step, "
                         f"{r['summary']['pooled_all_steps']['ratio']:.2f}×" for r in doc["configs"]) + ".", ""]
-    lines += ["## Rounds", "",
-              "| config | round | order | mipnerf-cl median s/step | official median s/step | ratio | load average "
-              "before → after (1/5/15 min) | other processes' CPU (cores) | round wall s |",
-              "|---|---:|---|---:|---:|---:|---|---:|---:|"]
+    lines += ["## Rounds", ""]
+    rows = []
     for r in doc["configs"]:
         for x, ratio in zip(r["rounds"], r["summary"]["ratio_rays_per_s"]["per_round"]):
             u = statistics.median(x["ours"]["step_seconds"])
             o = statistics.median(x["official"]["step_seconds"])
             wall = "–" if x.get("wall_s") is None else f"{x['wall_s']:.0f}"
-            lines.append(f"| {r['name']} | {x['round']} | {' then '.join(x['order'])} | {u:.3f} | {o:.3f} | "
-                         f"{ratio:.2f}× | {fmt_load(x.get('load_before'))} → {fmt_load(x.get('load_after'))} | "
-                         f"{fmt_cores(x.get('other_cpu_cores'))} | {wall} |")
+            rows.append([r["name"], str(x["round"]), " then ".join(x["order"]), f"{u:.3f}", f"{o:.3f}", f"{ratio:.2f}×",
+                         f"{fmt_load(x.get('load_before'))} → {fmt_load(x.get('load_after'))}",
+                         fmt_cores(x.get("other_cpu_cores")), wall])
+    lines += report_md.table(["config", "round", "order", "mipnerf-cl median s/step", "official median s/step", "ratio",
+                              "load average before → after (1/5/15 min)", "other processes' CPU (cores)",
+                              "round wall s"], "lrlrrrlrr", rows)
     lines += ["", "Load averages include this benchmark's own processes (both cores busy during a round) and are "
               "updated by the kernel every 5 s, so a short round may show none of its own change; the "
               "other processes' CPU is the machine's busy CPU time during the round (/proc/stat) minus that of "
@@ -432,22 +434,24 @@ def write_markdown(doc):
                       "(ours: `mipnerf-cl bench`'s render of the same camera in the "
                       f"{'probe run' if r.get('probe') else 'first round'}, its first chunk timed apart; "
                       "official: models.render_image after one untimed render). One measurement per side, not "
-                      "alternated.", "",
-                      "| | mipnerf-cl | official |", "|---|---:|---:|",
-                      f"| render s | {', '.join(f'{s:.2f}' for s in x['ours_seconds'])} | "
-                      f"{', '.join(f'{s:.2f}' for s in x['official_seconds'])} |",
-                      f"| s/MP (best) | {x['ours_s_per_mp']:.0f} | {x['official_s_per_mp']:.0f} |",
-                      f"| ratio (time, lower is faster for us) | {x['ratio']:.2f}× | |", ""]
+                      "alternated.", ""]
+            lines += report_md.table(["", "mipnerf-cl", "official"], "lrr", [
+                ["render s", ", ".join(f"{s:.2f}" for s in x["ours_seconds"]),
+                 ", ".join(f"{s:.2f}" for s in x["official_seconds"])],
+                ["s/MP (best)", f"{x['ours_s_per_mp']:.0f}", f"{x['official_s_per_mp']:.0f}"],
+                ["ratio (time, lower is faster for us)", f"{x['ratio']:.2f}×", ""]])
+            lines.append("")
     t = doc.get("training")
     if t:
         o, j = t["ours"], t["official"]
         lines += [f"## Training on the scene for {t['steps']} steps (quick configuration), then val PSNR", "",
-                  "One run per side, after the rounds (not alternated).", "",
-                  "| | mipnerf-cl | official |", "|---|---:|---:|",
-                  f"| val PSNR (mean of the first {o['val_views']} val views) | {o['mean_psnr']:.2f} dB | "
-                  f"{j['mean_psnr']:.2f} dB |",
-                  f"| training wall time | {o['train_seconds']:.1f} s (whole command {o['command_wall_seconds']:.1f} s) "
-                  f"| {j['train_seconds']:.1f} s (+ {j['compile_s']:.1f} s XLA compile and 2 warm-up steps) |", "",
+                  "One run per side, after the rounds (not alternated).", ""]
+        lines += report_md.table(["", "mipnerf-cl", "official"], "lrr", [
+            [f"val PSNR (mean of the first {o['val_views']} val views)", f"{o['mean_psnr']:.2f} dB",
+             f"{j['mean_psnr']:.2f} dB"],
+            ["training wall time", f"{o['train_seconds']:.1f} s (whole command {o['command_wall_seconds']:.1f} s)",
+             f"{j['train_seconds']:.1f} s (+ {j['compile_s']:.1f} s XLA compile and 2 warm-up steps)"]])
+        lines += ["",
                   f"Ours: `mipnerf-cl {o['command']}`; official: fresh parameters, its learning_rate_decay with "
                   "our preset's schedule, a new batch of random rays over all images each step (made in the loop).",
                   ""]

@@ -202,27 +202,31 @@ def markdown(doc):
              "configs/llff.gin's settings and our preset's network and schedule (below). Test PSNR: mean over "
              "the held-out views (llffhold 8) of each view's PSNR, randomized=False, as eval.py reports it. Train "
              "seconds: ours as `train` reports them (steps, log lines, checkpoints; programs built before step 1), "
-             "the official code's after its jit compile.", "",
-             "| steps | ours: test PSNR mean (range), dB | official | ours − official per seed, dB | ours: train s, "
-             "median (range) | official | official s / ours s per seed |",
-             "|---|---|---|---|---|---|---|"]
-    for steps, s in doc["summary"].items():
-        o, f = s["ours"], s["official"]
-        lines.append(f"| {steps} | {fmt_range(o, 'psnr')} | {fmt_range(f, 'psnr')} | "
-                     f"{', '.join(f'{d:+.2f}' for d in s['psnr_difference_per_seed'])} | "
-                     f"{o['median_train_seconds']:.1f} ({o['min_train_seconds']:.1f}–{o['max_train_seconds']:.1f}) | "
-                     f"{f['median_train_seconds']:.1f} ({f['min_train_seconds']:.1f}–{f['max_train_seconds']:.1f}) | "
-                     f"{', '.join(f'{r:.2f}' for r in s['train_seconds_ratio_per_seed'])} |")
-    lines += ["", "## Every run", "", "| seed | steps | order | ours dB | official dB | ours train s | official "
-              "train s | ours render s/MP | official render s (all test views) | other processes' CPU, cores | "
-              "load before → after |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "the official code's after its jit compile.", ""]
+
+    def train_range(side):
+        return (f"{side['median_train_seconds']:.1f} ({side['min_train_seconds']:.1f}–"
+                f"{side['max_train_seconds']:.1f})")
+    lines += report_md.table(
+        ["steps", "ours: test PSNR mean (range), dB", "official", "ours − official per seed, dB",
+         "ours: train s, median (range)", "official", "official s / ours s per seed"], "lllllll",
+        [[str(steps), fmt_range(s["ours"], "psnr"), fmt_range(s["official"], "psnr"),
+          ", ".join(f"{d:+.2f}" for d in s["psnr_difference_per_seed"]), train_range(s["ours"]),
+          train_range(s["official"]), ", ".join(f"{r:.2f}" for r in s["train_seconds_ratio_per_seed"])]
+         for steps, s in doc["summary"].items()])
+    lines += ["", "## Every run", ""]
+    rows = []
     for p in doc["pairs"]:
         c = p["conditions"]
         other = "–" if c["other_cpu_cores"] is None else f"{c['other_cpu_cores']:.2f}"
-        lines.append(f"| {p['seed']} | {p['steps']} | {' then '.join(p['order'])} | {p['ours']['mean_psnr']:.2f} | "
-                     f"{p['official']['mean_psnr']:.2f} | {p['ours']['train_seconds']:.1f} | "
-                     f"{p['official']['train_seconds']:.1f} | {p['ours']['render_s_per_mp']:.0f} | "
-                     f"{p['official']['render_seconds']:.0f} | {other} | {c['load_before']} → {c['load_after']} |")
+        rows.append([str(p["seed"]), str(p["steps"]), " then ".join(p["order"]), f"{p['ours']['mean_psnr']:.2f}",
+                     f"{p['official']['mean_psnr']:.2f}", f"{p['ours']['train_seconds']:.1f}",
+                     f"{p['official']['train_seconds']:.1f}", f"{p['ours']['render_s_per_mp']:.0f}",
+                     f"{p['official']['render_seconds']:.0f}", other, f"{c['load_before']} → {c['load_after']}"])
+    lines += report_md.table(
+        ["seed", "steps", "order", "ours dB", "official dB", "ours train s", "official train s", "ours render s/MP",
+         "official render s (all test views)", "other processes' CPU, cores", "load before → after"],
+        "l" * 11, rows)
     off = first["official"]
     lines += ["", "## The official side's settings", "",
               f"- MipNerfModel: `{json.dumps(off['official_model'])}`", f"- MLP: `{json.dumps(off['official_mlp'])}`",
