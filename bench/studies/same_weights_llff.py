@@ -36,9 +36,11 @@ What it does:
      colours clipped to [0, 1]), max |difference| in 8-bit levels (of the rounded 8-bit images), the fraction of
      pixel channels more than 1 level apart; plus the same against our 8-bit PNG when it is there.
 
-Only the official checkout is read (sys.path); nothing is copied from it. The import-time stand-ins it needs with
-modern jax/flax (flax.nn names, a flax.optim placeholder, cv2/matplotlib
-placeholders) are installed in this process's memory only.
+Only the official checkout is read (sys.path); nothing is copied from it. The official side's pieces come from
+bench/lib/official.py, shared with the other studies that run the official code: the import-time stand-ins it needs
+with modern jax/flax (install_stubs: flax.nn names, flax.optim, cv2/matplotlib placeholders; STUBS lists them),
+installed in this process's memory only; the settings check and the gin bindings (check_computable, model_settings,
+bind_gin); the LLFF loader without its batch thread (llff_split).
 """
 
 import argparse
@@ -55,9 +57,9 @@ import zlib
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.provenance import REPO, file_sha256  # noqa: E402
-
-DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
+from lib.official import (DEFAULT_VENV, STUBS, OfficialError, bind_gin, check_computable,  # noqa: E402
+                          install_stubs, llff_split, model_settings, official_commit)
+from lib.provenance import REPO, commit_of, file_sha256  # noqa: E402
 
 
 def fail(message):
@@ -141,17 +143,14 @@ def layer_shapes(c):
 
 
 def check_config(c):
-    want = {"single_mlp": True, "integrated_encoding": True, "pos_identity": False, "multiscale": False,
-            "resample_blur": True, "density_activation": "softplus", "variant": "mipnerf", "num_levels": 2,
-            "spherify": False, "lindisp": False}
-    if "cov_max_deg" in c:
-        want["cov_max_deg"] = 0
-    for k, v in want.items():
-        if c.get(k) != v:
-            fail(f"our setting {k} = {c.get(k)} is not what the official MipNerfModel computes (want {v})")
-    depth, skip = c["mlp_depth"], c["mlp_skip"]
-    if [i for i in range(depth) if i > 0 and i % skip == 0] != [skip]:
-        fail(f"mlp_depth {depth} with mlp_skip {skip} has no official equivalent")
+    """Stops unless the checkpoint's config is one the official MipNerfModel computes on an LLFF capture as this
+    check runs it (IPE, two levels, no spherify or lindisp, black background)."""
+    try:
+        check_computable(c, {"single_mlp": True, "integrated_encoding": True, "pos_identity": False,
+                             "multiscale": False, "resample_blur": True, "density_activation": "softplus",
+                             "variant": "mipnerf", "num_levels": 2, "spherify": False, "lindisp": False})
+    except OfficialError as e:
+        fail(str(e))
     if c["background"] != "black":
         fail("LLFF in the official code renders on black (white_bkgd False)")
 
@@ -249,54 +248,18 @@ def load_ours(folder, n):
 
 # ---------------------------------------------------------------------------------------------- official side
 
-def install_stubs():
-    import types
-    import jax
-    import flax
-    from flax import linen
-    sys.modules["flax.nn"] = flax.nn = types.SimpleNamespace(
-        relu=linen.relu, sigmoid=linen.sigmoid, softplus=linen.softplus)
-    if not hasattr(jax, "tree_map"):
-        jax.tree_map = jax.tree_util.tree_map
-    for name in ["cv2", "matplotlib", "matplotlib.cm"]:
-        sys.modules.setdefault(name, types.ModuleType(name))
-    optim = types.ModuleType("flax.optim")  # utils.TrainState annotates with it; no optimiser is used here
-    optim.Optimizer = object
-    sys.modules["flax.optim"] = flax.optim = optim
-    tb = types.ModuleType("flax.metrics.tensorboard")
-    tb.SummaryWriter = object
-    sys.modules["flax.metrics.tensorboard"] = tb
-
-
 def official_rays(datasets, utils, data_dir, factor, n_views):
     """The official LLFF loader's test rays (split 'test', llffhold 8), spiral dropped, first n_views cameras."""
     cfg = utils.Config(dataset_loader="llff", factor=factor, near=0.0, far=1.0, llffhold=8, white_bkgd=False,
                        spherify=False, render_path=False)
-    ds = datasets.LLFF.__new__(datasets.LLFF)  # not Dataset.__init__: that would also start the batch thread
-    ds.split, ds.data_dir, ds.near, ds.far = "test", data_dir, cfg.near, cfg.far
-    ds._load_renderings(cfg)
-    ds.render_poses = ds.render_poses[:0]
-    ds.camtoworlds = ds.camtoworlds[:n_views]
-    ds.images = ds.images[:n_views]
-    ds._generate_rays()
-    return ds
+    return llff_split(datasets, data_dir, cfg, "test", first_views=n_views)
 
 
 def official_model(models, c):
-    import gin
-    gin.clear_config()
-    model = dict(num_samples=c["num_samples"], num_levels=c["num_levels"], resample_padding=c["resample_padding"],
-                 stop_level_grad=True, use_viewdirs=c["view_dependence"], lindisp=c["lindisp"],
-                 ray_shape=c["ray_shape"], min_deg_point=c["pos_min_deg"], max_deg_point=c["pos_max_deg"],
-                 deg_view=c["view_max_deg"], density_noise=c["density_noise"], density_bias=c["density_bias"],
-                 rgb_padding=c["rgb_padding"], disable_integration=False)
-    mlp = dict(net_depth=c["mlp_depth"], net_width=c["mlp_width"], net_depth_condition=1,
-               net_width_condition=c["view_branch_width"], skip_layer=c["mlp_skip"])
-
-    def val(v):
-        return repr(v) if isinstance(v, str) else str(v)
-    gin.parse_config([f"MipNerfModel.{k} = {val(v)}" for k, v in model.items()] +
-                     [f"MLP.{k} = {val(v)}" for k, v in mlp.items()])
+    """The official MipNerfModel with our config's settings (gin-bound), and those settings. Density noise as
+    ours: the official model applies it only to randomized renders, and these are not."""
+    model, mlp = model_settings(c, density_noise=c["density_noise"])
+    bind_gin(model, mlp)
     return models.MipNerfModel(), model, mlp
 
 
@@ -431,7 +394,7 @@ def main(argv):
     from internal import datasets, models, utils
     ds = official_rays(datasets, utils, data, c["factor"], args.views)
     h, w = ds.h, ds.w
-    model, model_settings, mlp_settings = official_model(models, c)
+    model, model_bound, mlp_bound = official_model(models, c)
     flat = utils.namedtuple_map(lambda r: np.asarray(r, np.float32).reshape(args.views, h, w, -1), ds.rays)
     example = utils.namedtuple_map(lambda r: r[0, 0, :2].reshape(2, -1), flat)
     variables = model.init(random.PRNGKey(0), rng=random.PRNGKey(1), rays=example, randomized=False,
@@ -471,8 +434,7 @@ def main(argv):
     worst = min(v["vs_exr"]["psnr_db"] for v in per_view)
     verdict = (f"PASS: every view >= 60 dB (worst {fmt_db(worst)} dB)" if worst >= 60 else
                f"BELOW 60 dB (worst {fmt_db(worst)} dB): a convention differs, see notes")
-    commit = subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip()
+    commit = commit_of(REPO)
     import flax
     doc = {"format": 1, "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
            "commit": commit, "device": args.device, "command": " ".join([os.path.basename(sys.executable)] +
@@ -484,7 +446,8 @@ def main(argv):
            "checkpoint": ckpt, "step": header.get("step"), "data": data, "factor": c["factor"],
            "views": args.views, "pixels_note": "all pixels of each view" if not args.rows else
            f"rows {r0}:{r1} of each view", "official": os.path.abspath(args.official),
-           "official_model_settings": model_settings, "official_mlp_settings": mlp_settings,
+           "official_commit": official_commit(args.official), "stubs": [{"name": n, "what": w} for n, w in STUBS],
+           "official_model_settings": model_bound, "official_mlp_settings": mlp_bound,
            "weight_mapping": mapping, "our_config": c, "per_view": per_view, "verdict": verdict,
            "versions": {"python": platform.python_version(), "jax": jax.__version__, "flax": flax.__version__,
                         "numpy": np.__version__},

@@ -28,8 +28,8 @@ from lib import report_md  # noqa: E402
 from lib.cli_runs import read_json, run, train_resumable  # noqa: E402
 from lib.machine import between, snapshot  # noqa: E402
 from lib.official import (Official, OfficialError, Worker, add_official_arguments,  # noqa: E402
-                          check_official_checkout, ensure_venv, gin_value, install_stubs, official_commit,
-                          official_settings, serve_requests)
+                          bind_gin, check_official_checkout, ensure_venv, install_stubs, llff_split,
+                          official_commit, official_settings, serve_requests)
 from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
 NAME = "vs_official_llff"
@@ -255,25 +255,14 @@ class OfficialLlff:
     def versions(self):
         return Official.versions(self)
 
-    def split(self, cfg, split):
-        """The official loader's rays of a split (object made without Dataset.__init__: no batch thread); the
-        test split's 120-pose video spiral is dropped before its rays are made (only videos use it)."""
-        ds = self.datasets.LLFF.__new__(self.datasets.LLFF)
-        ds.split, ds.data_dir, ds.near, ds.far = split, self.data, cfg.near, cfg.far
-        ds._load_renderings(cfg)
-        if split == "test":
-            ds.render_poses = ds.render_poses[:0]
-        ds._generate_rays()
-        return ds
-
     def load(self, cfg):
         if self.loaded == self.factor:
             return
         import numpy as np
-        train = self.split(cfg, "train")
+        train = llff_split(self.datasets, self.data, cfg, "train")
         self.train_rays = self.utils.namedtuple_map(lambda r: r.reshape(-1, r.shape[-1]), train.rays)
         self.train_pixels = train.images.reshape(-1, 3)
-        test = self.split(cfg, "test")
+        test = llff_split(self.datasets, self.data, cfg, "test")
         self.test_rays, self.test_images = test.rays, test.images
         self.loaded = self.factor
         self.np = np
@@ -285,13 +274,10 @@ class OfficialLlff:
 
     def train_llff(self, model, mlp, config, steps, seed, views):
         import functools
-        import gin
         import jax
         import numpy as np
         from jax import random
-        gin.clear_config()
-        gin.parse_config([f"MipNerfModel.{k} = {gin_value(v)}" for k, v in model.items()] +
-                         [f"MLP.{k} = {gin_value(v)}" for k, v in mlp.items()])
+        bind_gin(model, mlp)
         cfg = self.utils.Config(factor=self.factor, **config)
         self.config = cfg
         self.load(cfg)
