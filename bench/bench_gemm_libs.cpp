@@ -14,7 +14,7 @@
 // Every call is checked against OpenBLAS's result first (a library that computes something else, or cannot run the
 // shape, is not timed: libxsmm 1.17 has no JIT kernel for the backward-data products).
 // Each figure is the best and the median of `rounds` batches, each batch ≥ batch-seconds of back-to-back calls.
-// Measured, never asserted; bench/gemm_libs.py writes bench/results/gemm_libs_*.md from the JSON.
+// Measured, never asserted; bench/studies/gemm_libs.py writes bench/results/gemm_libs_*.md from the JSON.
 #include <algorithm>
 #include <atomic>
 #include <chrono>

@@ -12,7 +12,7 @@
 #   python            the python that runs the official code: its JAX and devices; gin-config from the carried wheels
 #                     when it lacks it
 #   official-default  the official google/mipnerf training step at the paper's configuration, with JAX's default
-#                     matmul precision (TF32 on the GPU) (bench/official_step.py)
+#                     matmul precision (TF32 on the GPU) (bench/studies/official_step.py)
 #   official-float32  the same with jax_default_matmul_precision = float32
 #   train             mipnerf-cl train --preset quick on the built-in scene for --train-steps steps, then its val score
 #   render            an orbit of 24 frames of that run
@@ -273,7 +273,7 @@ official() {
       timeout 60 "$BUNDLE/mipnerf-cl" make-scene "$WORK/scene" --scales 1 > /dev/null; then
     scene=(--data "$WORK/scene")
   fi
-  "$PYTHON" "$REPO/bench/official_step.py" --official "$OFFICIAL" "${scene[@]}" --precision "$1" \
+  "$PYTHON" "$REPO/bench/studies/official_step.py" --official "$OFFICIAL" "${scene[@]}" --precision "$1" \
     --steps "$OFFICIAL_STEPS" --batch "$PAPER_BATCH" --our-bench "$WORK/bench/paper/bench.json" \
     --out "$WORK/official/$1.json"
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The long fuzzing runs: every fuzz target (tests/fuzz, one per reader of outside data) for RUNS executions from a
 # copy of its committed seed corpus, under AddressSanitizer + UBSan, two targets at a time at most; writes
-# bench/results/fuzz.md (executions, coverage, corpus, wall time, crashes per target; machine, clang, date).
+# bench/results/fuzz/fuzz.md (executions, coverage, corpus, wall time, crashes per target; machine, clang, date).
 #
 #   scripts/fuzz.sh [--runs N] [--jobs J] [--report-only] [TARGET ...]   (default: 1000000 runs, 2 jobs, every target)
 #
@@ -93,7 +93,7 @@ finished=$(cat "$build_dir/fuzz-runs/finished" 2>/dev/null || echo "?")
 commit=$(cat "$build_dir/fuzz-runs/commit" 2>/dev/null || echo "?")
 
 # The report.
-out=bench/results/fuzz.md
+out=bench/results/fuzz/fuzz.md
 cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -1)
 clang_version=$(clang++ --version | head -1)
 failed=0

@@ -3,12 +3,15 @@
 The worker side runs in a python that has JAX (the studies' venv, or a GPU image's): install_stubs() puts in the
 import-time stand-ins the official code needs with modern jax/flax (STUBS lists them for the records), Official
 holds the official model, train_step and render in that process, serve_requests() is a worker's loop (one JSON
-request per stdin line, one JSON reply per stdout line). The orchestrator side: Worker drives such a process,
-official_settings() maps our preset's config to the official MipNerfModel/MLP/Config settings (checked, not
-assumed), ensure_venv() makes the venv once, official_commit() names the checkout.
+request per stdin line, one JSON reply per stdout line), bind_gin() configures the official model through gin,
+llff_split() runs the official LLFF loader without its batch thread. The orchestrator side: Worker drives such a
+process, official_settings() maps our preset's config to the official MipNerfModel/MLP/Config settings (checked by
+check_computable(), not assumed; model_settings() the model's and MLP's part), ensure_venv() makes the venv once,
+official_commit() names the checkout.
 
-Used by bench/vs_official.py, bench/vs_official_llff.py and bench/official_step.py (scripts/device-check.sh). Standard
-library at import; JAX, numpy and the official code are imported inside the functions that run them.
+Used by bench/studies/vs_official.py, vs_official_llff.py, same_weights_llff.py and official_step.py
+(scripts/device-check.sh). Standard library at import; JAX, numpy and the official code are imported inside the
+functions that run them.
 """
 
 import json
@@ -42,6 +45,28 @@ STUBS = [
 ]
 
 
+DEFAULT_VENV = os.path.join(os.path.expanduser("~"), ".cache", "mipnerf-cl", "vs-official-venv")
+
+
+def add_official_arguments(parser, repo, out_dir):
+    """The arguments every study that runs the official code beside ours takes (vs_official.py,
+    vs_official_llff.py): the checkout, our executable, the venv, the tree rule, where the results go."""
+    p = parser
+    p.add_argument("--official", help="checkout of github:google/mipnerf (contains train.py and internal/)")
+    p.add_argument("--official-commit", help="commit of --official when it is not a git work tree (e.g. a git archive)")
+    p.add_argument("--bin", default=os.path.join(repo, "build", "mipnerf-cl"), help="mipnerf-cl executable")
+    p.add_argument("--venv", default=DEFAULT_VENV, help="virtual environment for the official code")
+    p.add_argument("--python", default=sys.executable, help="python used to create the venv")
+    p.add_argument("--allow-dirty", action="store_true",
+                   help="run although the mipnerf-cl checkout has uncommitted changes (their sha256 is recorded)")
+    p.add_argument("--device-name", default="pocl_cpu", help="suffix of the results files")
+    p.add_argument("--out-dir", default=out_dir)
+    p.add_argument("--note", action="append", default=[], help="a line for the results' Notes (repeatable)")
+    p.add_argument("--report-only", metavar="JSON",
+                   help="regenerate the .md beside a results .json from it (keeping its hand-written notes); "
+                        "measure nothing")
+
+
 def check_official_checkout(official):
     """Raises OfficialError unless `official` is a google/mipnerf checkout (the folder holding internal/models.py)."""
     if not official:
@@ -50,28 +75,42 @@ def check_official_checkout(official):
         raise OfficialError(f"--official {official}: no internal/models.py there; pass the google/mipnerf checkout")
 
 
-def official_settings(our_config):
-    """The official model's and config's settings equal to our preset's (checked, not assumed)."""
-    c = our_config
+def check_computable(c, required):
+    """Raises OfficialError unless our config `c` is one the official MipNerfModel computes: the official skip rule,
+    and every setting in `required` (name: the value the official model has) as required. The concatenated-PE
+    variant's covariance encoding must be off (0, as in MipNerfModel) where the config has it."""
     depth, skip = c["mlp_depth"], c["mlp_skip"]
     # Official MLP: concat after layer i when i % skip_layer == 0 and i > 0; ours after layer mlp_skip.
     if [i for i in range(depth) if i > 0 and i % skip == 0] != [skip]:
         raise OfficialError(f"mlp_depth {depth} with mlp_skip {skip} has no official equivalent")
-    unsupported = {"single_mlp": True, "pos_identity": False, "multiscale": False, "resample_blur": True,
-                   "density_activation": "softplus", "jitter_pixels": False, "variant": "mipnerf"}
-    if "cov_max_deg" in c:  # the concatenated-PE variant's covariance encoding (0: not used, as in MipNerfModel)
-        unsupported["cov_max_deg"] = 0
-    for key, want in unsupported.items():
-        if c[key] != want:
-            raise OfficialError(f"our setting {key} = {c[key]} is not what the official MipNerfModel computes")
+    if "cov_max_deg" in c:
+        required = dict(required, cov_max_deg=0)
+    for key, want in required.items():
+        if c.get(key) != want:
+            raise OfficialError(f"our setting {key} = {c.get(key)} is not what the official MipNerfModel computes "
+                                f"(it needs {want})")
+
+
+def model_settings(c, density_noise):
+    """The official MipNerfModel's and MLP's gin settings for our config `c` (checked by check_computable first);
+    `density_noise`: the official model's (it only acts on randomized renders)."""
     model = dict(num_samples=c["num_samples"], num_levels=c["num_levels"],
                  resample_padding=c["resample_padding"], stop_level_grad=True,
                  use_viewdirs=c["view_dependence"], lindisp=c["lindisp"], ray_shape=c["ray_shape"],
                  min_deg_point=c["pos_min_deg"], max_deg_point=c["pos_max_deg"], deg_view=c["view_max_deg"],
-                 density_noise=0.0, density_bias=c["density_bias"], rgb_padding=c["rgb_padding"],
+                 density_noise=density_noise, density_bias=c["density_bias"], rgb_padding=c["rgb_padding"],
                  disable_integration=not c["integrated_encoding"])
-    mlp = dict(net_depth=depth, net_width=c["mlp_width"], net_depth_condition=1,
-               net_width_condition=c["view_branch_width"], skip_layer=skip)
+    mlp = dict(net_depth=c["mlp_depth"], net_width=c["mlp_width"], net_depth_condition=1,
+               net_width_condition=c["view_branch_width"], skip_layer=c["mlp_skip"])
+    return model, mlp
+
+
+def official_settings(our_config):
+    """The official model's and config's settings equal to our preset's (checked, not assumed)."""
+    c = our_config
+    check_computable(c, {"single_mlp": True, "pos_identity": False, "multiscale": False, "resample_blur": True,
+                         "density_activation": "softplus", "jitter_pixels": False, "variant": "mipnerf"})
+    model, mlp = model_settings(c, density_noise=0.0)
     config = dict(batch_size=c["batch_size"], coarse_loss_mult=c["coarse_loss_mult"],
                   randomized=c["randomized"], white_bkgd=c["background"] == "white",
                   near=c["near"] or 2.0, far=c["far"] or 6.0, lr_init=c["lr_init"], lr_final=c["lr_final"],
@@ -223,10 +262,7 @@ class Official:
         import gin
         import jax
         from jax import random
-        gin.clear_config()
-        bindings = [f"MipNerfModel.{k} = {gin_value(v)}" for k, v in model.items()]
-        bindings += [f"MLP.{k} = {gin_value(v)}" for k, v in mlp.items()]
-        gin.parse_config(bindings)
+        bind_gin(model, mlp)
         cfg = self.utils.Config(dataset_loader="blender", **config)
         self.config, self.rng = cfg, random.PRNGKey(20200823)
         if self.loaded != (cfg.near, cfg.far):
@@ -348,6 +384,31 @@ class Official:
 
 def gin_value(v):
     return repr(v) if isinstance(v, str) else ("True" if v is True else "False" if v is False else str(v))
+
+
+def bind_gin(model, mlp):
+    """Configures the official MipNerfModel and MLP through gin, as its configs/*.gin do (earlier bindings
+    cleared): `model` and `mlp` as model_settings returns them."""
+    import gin
+    gin.clear_config()
+    gin.parse_config([f"MipNerfModel.{k} = {gin_value(v)}" for k, v in model.items()] +
+                     [f"MLP.{k} = {gin_value(v)}" for k, v in mlp.items()])
+
+
+def llff_split(datasets, data, cfg, split, first_views=None):
+    """The official LLFF loader's rays and images of a split (internal/datasets.py LLFF on an object made without
+    Dataset.__init__, which would start its batch thread); the test split's 120-pose video spiral is dropped before
+    its rays are made (only videos use it, and it would cost GBs of rays). `first_views`: keep only that many
+    cameras, the rays of the rest never made. `cfg`: a utils.Config (factor, near, far, llffhold, spherify)."""
+    ds = datasets.LLFF.__new__(datasets.LLFF)
+    ds.split, ds.data_dir, ds.near, ds.far = split, data, cfg.near, cfg.far
+    ds._load_renderings(cfg)
+    if split == "test":
+        ds.render_poses = ds.render_poses[:0]
+    if first_views is not None:
+        ds.camtoworlds, ds.images = ds.camtoworlds[:first_views], ds.images[:first_views]
+    ds._generate_rays()
+    return ds
 
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """bench/lib/provenance.py, the one rule every study records its tree by (CTest: `bench: provenance ...`): on a
 scratch git repository, a clean tree, a changed tracked file, an untracked source (dirty: the old commit_of of
-study_common and from_photos' tree_state said clean), untracked files under build*/ and runs/ (clean), and the
+study_common (now lib/cli_runs) and from_photos' tree_state said clean), untracked files under build*/ and runs/ (clean), and the
 changes' hash following an untracked file's bytes.
 
 Usage: test_provenance.py BENCH_DIR"""
@@ -14,7 +14,7 @@ import unittest
 
 sys.path.insert(0, sys.argv.pop(1) if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "../../bench"))
 from lib import provenance  # noqa: E402
-import study_common  # noqa: E402
+from lib import cli_runs  # noqa: E402
 
 
 def git(repo, *args):
@@ -63,7 +63,7 @@ class TreeState(unittest.TestCase):
         self.assertIs(state["dirty"], True)
         self.assertEqual(state["dirty_paths"], ["?? host/b.cpp"])
         self.assertTrue(provenance.commit_of(self.repo).endswith("-dirty"))
-        self.assertTrue(study_common.commit_of(self.repo).endswith("-dirty"))  # the studies' name for it
+        self.assertTrue(cli_runs.commit_of(self.repo).endswith("-dirty"))  # the studies' name for it
 
     def test_hash_follows_untracked_bytes(self):
         write(self.repo, "host/b.cpp", "int b;\n")

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Every script of bench/ and bench/lib/ compiles and imports with the standard library alone, as the studies and the
-device check (scripts/device-check.sh runs bench/official_step.py) are run: a syntax error, a broken import between
+"""Every study of bench/studies/ and every module of bench/lib/ compiles and imports with the standard library alone, as the studies and the
+device check (scripts/device-check.sh runs bench/studies/official_step.py) are run: a syntax error, a broken import between
 modules or a module-level failure fails this (CTest `bench: every bench script imports`). The heavy dependencies
 (JAX, numpy) are imported inside the functions that need them, never at module level. And the imports between
 bench's own modules (at any level, read with ast) form no circle: shared code lives in bench/lib/ (until 2026-11-27,
@@ -16,8 +16,9 @@ import sys
 
 bench = os.path.abspath(sys.argv[1])
 sys.path.insert(0, bench)
+sys.path.insert(1, os.path.join(bench, "studies"))  # a study imports as its file name, as when it runs
 sys.dont_write_bytecode = True  # nothing written into the source tree
-names = sorted(os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.path.join(bench, "*.py")))
+names = sorted(os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.path.join(bench, "studies", "*.py")))
 names += sorted("lib." + os.path.splitext(os.path.basename(p))[0] for p in glob.glob(os.path.join(bench, "lib", "*.py"))
                 if not p.endswith("__init__.py"))
 failed = []
@@ -25,7 +26,8 @@ failed = []
 
 def local_imports(name):
     """The bench modules `name` imports anywhere in its source (lib.x as lib.x)."""
-    path = os.path.join(bench, *name.split(".")) + ".py"
+    path = os.path.join(bench, *name.split(".")) + ".py" if name.startswith("lib.") else \
+        os.path.join(bench, "studies", name + ".py")
     found = set()
     for node in ast.walk(ast.parse(open(path).read(), path)):
         if isinstance(node, ast.Import):

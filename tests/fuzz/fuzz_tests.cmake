@@ -2,7 +2,7 @@
 # short CTest entry (label `fuzz`): run_fuzz_test.cmake copies the committed seed corpus tests/fuzz/corpus/<target>
 # (test fixtures, and every input that once crashed a reader: regress-*) into the build folder and fuzzes from it
 # for MIPNERF_FUZZ_SECONDS; any crash, sanitizer report, hang or huge allocation fails the entry. The long runs:
-# scripts/fuzz.sh (bench/results/fuzz.md). Included by tests/CMakeLists.txt, whose folder the paths are relative to.
+# scripts/fuzz.sh (bench/results/fuzz/fuzz.md). Included by tests/CMakeLists.txt, whose folder the paths are relative to.
 set(MIPNERF_FUZZ_SECONDS 12 CACHE STRING "How long each fuzz target's CTest entry fuzzes, in seconds")
 set(MIPNERF_FUZZ_TARGETS blender transforms_json multiscale llff colmap png jpeg camera_path config checkpoint view)
 # The targets without a dictionary of their own (fuzz/dictionaries/<target>.dict) that read JSON share json.dict.

@@ -10,7 +10,7 @@ import-time stand-ins that modern jax/flax need are installed in this process's 
 Official commit: 84c969e0a623edd183b75693aed72a7e7c22902d (github:google/mipnerf; recorded in every fixture).
 
 Command used for the committed fixtures (the checkout is a `git archive` of that commit, hence --official-commit):
-  python3 -m venv ~/.cache/mipnerf-cl/vs-official-venv     # once, as bench/vs_official.py does, then:
+  python3 -m venv ~/.cache/mipnerf-cl/vs-official-venv     # once, as bench/studies/vs_official.py does, then:
   ~/.cache/mipnerf-cl/vs-official-venv/bin/pip install 'jax[cpu]' flax optax gin-config numpy pillow
   ~/.cache/mipnerf-cl/vs-official-venv/bin/python tests/official/make_vectors.py --official /tmp/official \\
       --official-commit 84c969e0a623edd183b75693aed72a7e7c22902d --out tests/official/fixtures

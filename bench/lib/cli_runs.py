@@ -1,0 +1,54 @@
+"""What the studies share about mipnerf-cl's runs: the procedural scene, a resumable training, reading a run's outputs
+(run() itself is lib/run.py)."""
+
+import json
+import os
+
+from lib.provenance import commit_of  # noqa: F401  (the studies import it from here)
+from lib.run import run  # noqa: F401  (the studies import it from here)
+
+
+def read_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def procedural_scene(exe, work):
+    """Makes the built-in procedural scene (64x64, with its multiscale copy) in work/procedural once."""
+    folder = os.path.join(work, "procedural")
+    if not os.path.exists(os.path.join(folder, "multiscale", "metadata.json")):
+        run([exe, "make-scene", folder, "--size", "64"], os.path.join(work, "make-scene.log"))
+    return folder
+
+
+def device_line(device):
+    return f"{device.get('name')} ({device.get('platform')}, driver {device.get('driver_version')})"
+
+
+def train_resumable(exe, data, out, preset, variant, settings, log):
+    """`mipnerf-cl train` into `out`, resumable: a finished run (summary.json at its step count) is reused, an
+    interrupted one (checkpoints, no summary) continues with --resume. Returns (summary, the command)."""
+    command = [exe, "train", "--data", data, "--out", out, "--preset", preset, "--variant", variant]
+    for name, value in settings.items():
+        command += ["--set", f"{name}={value}"]
+    summary_path = os.path.join(out, "summary.json")
+    steps = settings.get("steps")
+    if os.path.exists(summary_path):
+        summary = read_json(summary_path)
+        if not summary.get("interrupted") and (steps is None or summary.get("steps") == int(steps)) \
+                and "val" in summary:
+            return summary, command
+    if os.path.isdir(os.path.join(out, "checkpoints")) and os.listdir(os.path.join(out, "checkpoints")):
+        command.append("--resume")
+    run(command, log)
+    return read_json(summary_path), command
+
+
+def read_val_log(run_dir):
+    """The rows of a run's val_log.csv (val_every): dicts of floats keyed by the header."""
+    path = os.path.join(run_dir, "val_log.csv")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+        return [dict(zip(header, map(float, line.strip().split(",")))) for line in f if line.strip()]
