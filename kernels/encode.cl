@@ -34,7 +34,7 @@
 // FLT_MIN, so a denormal or 0) it is 0: the features it scales are then within 1.6e−38 of it anyway, and exp's
 // arguments stay ≥ −87. Why: at high degrees most attenuations underflow, and on PoCL's CPU device the exp of such
 // arguments and the denormal products after it made the fused kernel ~2.5x slower than with them cut off
-// (bench/results/kernel_runtimes.md).
+// (bench/results/kernel_runtimes/kernel_runtimes.md).
 #define IPE_MIN_EXPONENT -87.0f /* attenuations below exp(IPE_MIN_EXPONENT) are 0 */
 
 inline float3 attenuation(float3 var, float scale) {

@@ -33,7 +33,7 @@
 // R·(N + 1) fit, ops/render.cpp). With 64-bit indices PoCL's vectoriser kept the per-sample loads and stores out of
 // its vector loops ("store instruction cannot be vectorized") or made them 4 wide: on the AVX-512 Xeon render_fwd
 // took 3.85 ms and render_raw_bwd 10.6 ms for 524,288 samples, 1.9 and 4.6 ms with 32-bit ones
-// (bench/results/kernel_runtimes_xeon.md).
+// (bench/results/kernel_runtimes/kernel_runtimes_xeon.md).
 
 #ifndef MIPNERF_RENDER_CL
 #define MIPNERF_RENDER_CL

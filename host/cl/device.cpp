@@ -83,7 +83,7 @@ bool DeviceInfo::is_pocl() const {
 
 // PoCL's CPU device runs a kernel on worker threads that Linux places as it likes; waking the second one for a short
 // launch, the scheduler often puts it on the CPU of the first (which is busy), so the launch runs on one thread:
-// on the 2-core machine of bench/results/kernel_runtimes_xeon.md the sampler, render_fwd and the activations measured
+// on the 2-core machine of bench/results/kernel_runtimes/kernel_runtimes_xeon.md the sampler, render_fwd and the activations measured
 // either their two-thread or their one-thread time from run to run. PoCL pins worker i to CPU i when POCL_AFFINITY=1
 // (PoCL ≥ 1.6), which the tiny preset's training measured +30 % rays/s with (render −15 % s/MP; quick unchanged). So
 // it is the default here, set before PoCL reads it (at its first platform query), unless the user set

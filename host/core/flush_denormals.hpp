@@ -5,7 +5,7 @@
 // of a few. Training drives some values of the host MLP there (gradients of saturated units, products of tiny
 // gradients and activations), and the products and element-wise loops slowed step by step: the quick preset's step
 // went from 76 to 129 ms over 600 steps on an AVX-512 Xeon, and ran 70 ms flat to the end with denormals flushed
-// (bench/results/denormals.md). What is flushed is below 2^-126 ≈ 1.2e-38 in magnitude, far below anything a
+// (bench/results/denormals/denormals.md). What is flushed is below 2^-126 ≈ 1.2e-38 in magnitude, far below anything a
 // float32 result of the MLP is compared at; XLA's CPU backend (the official code's) flushes them the same way.
 //
 // Scope: only the host MLP's worker threads (mlp/host_mlp.cpp) hold one, for the duration of one pass. OpenCL

@@ -176,7 +176,7 @@ size_t HostMlp::backward_rays_per_block(size_t samples_per_ray) const {
 
 namespace {
 
-// MIPNERF_KEEP_DENORMALS=1: the host MLP computes with denormals as they come (bench/denormals.py compares the two);
+// MIPNERF_KEEP_DENORMALS=1: the host MLP computes with denormals as they come (bench/studies/denormals.py compares the two);
 // by default its threads flush them (core/flush_denormals.hpp: training's steps slowed 1.7x without).
 bool keep_denormals() {
   static const bool keep = [] {

@@ -38,7 +38,7 @@ struct ActivationRawGradients {
 // colour values' items in whole work-groups, then one per density), one per row (its density and 3 colour values),
 // or one per vector of 16 consecutive values (colour vectors, then density vectors, split by work-group as per
 // value). Measured on 524,288 rows: PoCL's vectoriser handles per value and not per row (6.2 against 17 ms on the
-// AMD EPYC), and runs per vector faster still (bench/results/kernel_runtimes_xeon.md); Intel's CPU runtime is 4x
+// AMD EPYC), and runs per vector faster still (bench/results/kernel_runtimes/kernel_runtimes_xeon.md); Intel's CPU runtime is 4x
 // faster per row than per value (2.0 against 8 ms); GPUs read consecutive floats with consecutive items per value.
 enum class ActivationItems { device_default, per_value, per_row, per_vector };
 

@@ -29,7 +29,7 @@ EncodeTuning::FusedItems choose_fused_items(const ocl::Context& ctx, const Encod
 }
 
 // A sincos every K degrees (IPE_SINCOS_EVERY; its error bound in encode.cl): K = 4 on CPUs, where the sincos of
-// every degree was ~70 % of the fused kernel (bench/results/kernel_runtimes.md measures K = 1 and 4 on PoCL and
+// every degree was ~70 % of the fused kernel (bench/results/kernel_runtimes/kernel_runtimes.md measures K = 1 and 4 on PoCL and
 // Intel's runtime); 1 elsewhere, where nothing has measured it. Items per (row, degree) cannot double.
 int choose_sincos_every(const ocl::Context& ctx, const EncodeTuning& tuning, EncodeTuning::FusedItems items) {
   if (items == EncodeTuning::FusedItems::per_row_and_degree) return 1;

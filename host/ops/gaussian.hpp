@@ -27,7 +27,7 @@ struct GaussianOutputs {
 
 // gaussian_fwd's items (GAUSSIAN_SAMPLES_PER_VECTOR of gaussian.cl): one per row, or one per 16 consecutive samples of
 // a ray as float16, which PoCL's CPU device runs in full-width vector registers
-// (bench/results/kernel_runtimes_xeon.md). The same floats either way, bit for bit.
+// (bench/results/kernel_runtimes/kernel_runtimes_xeon.md). The same floats either way, bit for bit.
 enum class GaussianItems { device_default, per_row, per_vector };
 
 class Gaussian {

@@ -60,7 +60,7 @@ struct RenderInputGradients {
 // work-group a sample at a time, a barrier after each (lockstep, SAMPLES_IN_LOCKSTEP), which PoCL's CPU device
 // vectorises across rays (render_raw_fwd on 4,096 rays x 128 samples 24 against 9 ms on the AMD EPYC, per ray against
 // lockstep); or a ray per item, 16 samples at a time as float16 (per_vector, SAMPLES_PER_VECTOR), which PoCL runs in
-// full-width vector registers without gathers (bench/results/kernel_runtimes_xeon.md). Lockstep gives the per-ray
+// full-width vector registers without gathers (bench/results/kernel_runtimes/kernel_runtimes_xeon.md). Lockstep gives the per-ray
 // values bit for bit; per vector sums the forward's optical depth and composite in another order, within the same
 // float32 bounds (render.cl).
 enum class RenderSampleLoop { device_default, per_ray, lockstep, per_vector };

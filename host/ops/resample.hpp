@@ -20,7 +20,7 @@ struct ResampleInputs {
 // Hierarchical resampling (no compile-time options; the ResampleOptions are kernel arguments).
 // resample_fwd's items (RESAMPLE_RAYS_PER_VECTOR of resample.cl): one per ray, or one per 16 rays walked together
 // lane by lane, which PoCL's CPU device runs without a mispredicted branch per step of a ray's walk
-// (bench/results/kernel_runtimes_xeon.md). The same edges either way, bit for bit.
+// (bench/results/kernel_runtimes/kernel_runtimes_xeon.md). The same edges either way, bit for bit.
 enum class ResampleItems { device_default, per_ray, per_vector };
 
 class Resample {

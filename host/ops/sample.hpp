@@ -29,7 +29,7 @@ struct MergeInputs {
 
 // sample_stratified_fwd's items (SAMPLE_GROUPS_PER_VECTOR of sample.cl): one per group of 4 edges, or one per 16
 // consecutive groups of a ray as uint16/float16, which PoCL's CPU device runs in full-width vector registers
-// (bench/results/kernel_runtimes_xeon.md). The same edges either way, bit for bit.
+// (bench/results/kernel_runtimes/kernel_runtimes_xeon.md). The same edges either way, bit for bit.
 enum class SampleItems { device_default, per_group, per_vector };
 
 // Stratified sampling and merging for one specialisation (lindisp or not; built on construction).

@@ -1,7 +1,7 @@
 // Which devices the ray-math stages give explicit 16-wide items by default (the kernels' *_PER_VECTOR switches and
 // ACTIVATION_ITEMS = per vector): PoCL's CPU device, which runs an item's float16 code as written in full-width
 // vector registers, where its own vectorisation across items ran the same stages 8 wide with long dependent chains or
-// through 4-wide gathers (bench/results/kernel_runtimes_xeon.md). Other devices keep their items.
+// through 4-wide gathers (bench/results/kernel_runtimes/kernel_runtimes_xeon.md). Other devices keep their items.
 #pragma once
 
 #include <cstddef>
