@@ -154,7 +154,7 @@ void run_inspect(const InspectArgs& args) {
   for (const auto& split : dataset.splits) {
     const data::SplitSummary summary = data::summarize(split);
     // An LLFF capture's near 0, far 1 are NDC bounds, not depths the look-at centre could be compared with.
-    print_split(summary, dataset.format == data::DatasetFormat::llff && summary.near_max == 0 && summary.far_min == 1);
+    print_split(summary, data::format_reader(dataset.format).ndc_bounds && summary.near_max == 0 && summary.far_min == 1);
   }
 }
 

@@ -43,7 +43,6 @@ const Split& Dataset::split(const std::string& name) const {
   throw Error(path + ": no split '" + name + "' (this dataset has: " + split_names() + ")");
 }
 
-DatasetFormat detect_format(const std::string& path) { return detect_reader(path).format; }
 
 Camera scale_camera(const Camera& camera, uint32_t factor) {
   if (factor == 1) return camera;

@@ -81,9 +81,6 @@ struct Dataset {
 // missing keys, images of differing size, non-finite or non-rigid poses, unreadable PNGs, distortion.
 Dataset load_dataset(const std::string& path, const LoadOptions& options = {});
 
-// The format `path` holds; throws saying what was expected when it holds none.
-DatasetFormat detect_format(const std::string& path);
-
 // Appends one image (straight RGBA) and its full-resolution camera to `split`, with `scales` pyramid levels
 // built by downsample2 (cameras scaled by scale_camera), each composited onto `background`.
 void append_image(Split& split, const RgbaImage& image, const Camera& camera, uint32_t base_level, int scales,

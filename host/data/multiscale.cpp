@@ -135,10 +135,10 @@ void write_level_png(const std::string& path, const RgbaImage& image, int bit_de
 void write_multiscale(const std::string& in_path, const std::string& out_dir, int scales, const LogFn& log) {
   if (scales < 1 || scales > 8) throw Error("make-multiscale: --scales must be 1 to 8, got " + std::to_string(scales));
   const FormatReader& reader = detect_reader(in_path);
-  if (reader.format == DatasetFormat::multiscale_blender) {
+  if (reader.scales_on_disk) {
     throw Error(in_path + ": is already a multiscale dataset (metadata.json); give the full-resolution Blender folder");
   }
-  if (reader.format != DatasetFormat::blender && reader.format != DatasetFormat::transforms_json) {
+  if (!reader.pyramid_source) {
     throw Error(in_path + ": is an " + reader.name + " dataset; make-multiscale builds the paper's pyramid from a "
                 "Blender folder or a transforms.json (train builds it on the fly for any format: --set multiscale=true)");
   }

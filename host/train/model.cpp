@@ -2,6 +2,8 @@
 // networks, and the data-loading options.
 #include "train/model.hpp"
 
+#include "data/formats/formats.hpp"
+
 namespace mipnerf::train {
 namespace {
 
@@ -99,7 +101,7 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.background = config.background;
   options.factor = static_cast<uint32_t>(config.factor);
   // A folder that is multiscale on disk (metadata.json) already holds its scales; build them otherwise.
-  const bool on_disk_multiscale = data::detect_format(data_path) == data::DatasetFormat::multiscale_blender;
+  const bool on_disk_multiscale = data::detect_reader(data_path).scales_on_disk;
   options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? config.multiscale_scales : 1;
   if (config.near > 0) options.near = config.near;
   if (config.far > 0) options.far = config.far;

@@ -25,6 +25,9 @@ const FormatReader kBlenderFormat = {DatasetFormat::blender,
                                      detail::parse_blender,
                                      add_traits,
                                      effects,
-                                     nullptr};
+                                     nullptr,
+                                     /*scales_on_disk=*/false,
+                                     /*pyramid_source=*/true,
+                                     /*ndc_bounds=*/false};
 
 }  // namespace mipnerf::data

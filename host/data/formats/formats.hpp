@@ -53,6 +53,12 @@ struct FormatReader {
   SceneEffects (*effects)(const SceneTraits& traits);
   // The format's own render path of `frames` views, or nullptr when it has none.
   FormatRenderPath (*render_path)(const std::string& path, const LoadOptions& options, int frames);
+  // Its images are already a scale pyramid on disk (train builds none on top; make-multiscale refuses it).
+  bool scales_on_disk;
+  // make-multiscale can build the paper's pyramid from it (a Blender folder or a transforms.json).
+  bool pyramid_source;
+  // Its splits' near 0, far 1 are NDC bounds (LLFF), not depths a look-at centre could be compared with.
+  bool ndc_bounds;
 };
 
 // The row of `format`.

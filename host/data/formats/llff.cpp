@@ -49,6 +49,7 @@ FormatRenderPath render_path(const std::string& path, const LoadOptions& options
 }  // namespace
 
 const FormatReader kLlffFormat = {
-    DatasetFormat::llff, "LLFF (poses_bounds.npy)", detect, detail::parse_llff, add_traits, effects, render_path};
+    DatasetFormat::llff, "LLFF (poses_bounds.npy)", detect, detail::parse_llff, add_traits, effects, render_path,
+    /*scales_on_disk=*/false, /*pyramid_source=*/false, /*ndc_bounds=*/true};
 
 }  // namespace mipnerf::data

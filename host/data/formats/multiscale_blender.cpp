@@ -32,6 +32,9 @@ const FormatReader kMultiscaleBlenderFormat = {DatasetFormat::multiscale_blender
                                                parse,
                                                add_traits,
                                                effects,
-                                               nullptr};
+                                               nullptr,
+                                               /*scales_on_disk=*/true,
+                                               /*pyramid_source=*/false,
+                                               /*ndc_bounds=*/false};
 
 }  // namespace mipnerf::data

@@ -21,6 +21,7 @@ SceneEffects effects(const SceneTraits& traits) { return object_or_photo_effects
 }  // namespace
 
 const FormatReader kTransformsJsonFormat = {
-    DatasetFormat::transforms_json, "transforms.json", detect, parse, add_traits, effects, nullptr};
+    DatasetFormat::transforms_json, "transforms.json", detect, parse, add_traits, effects, nullptr,
+    /*scales_on_disk=*/false, /*pyramid_source=*/true, /*ndc_bounds=*/false};
 
 }  // namespace mipnerf::data
