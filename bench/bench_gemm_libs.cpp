@@ -4,7 +4,7 @@
 //
 //   bench_gemm_libs [--presets quick,paper] [--rounds 5] [--batch-seconds 0.05] [--out FILE.json]
 //
-// Shapes: mlp::mlp_gemm_problems of each preset's network at the host MLP's block (HostMlpOptions'
+// Shapes: mlp::host_mlp_products of each preset's network at the host MLP's block (HostMlpOptions'
 // target_block_rows = 256 rows, rounded down to whole rays): forward, backward data, backward weights, each with
 // how often it occurs in one forward + backward. (The host MLP's backward of a network 256 wide runs twice as long
 // blocks, mlp::backward_block_rows_for; this benchmark times every product at the forward's block.) Two thread arrangements per library:
@@ -140,18 +140,18 @@ ordered_json bench_preset(const std::string& preset, const std::vector<gemm::Cpu
   const train::TrainConfig config = train::resolve_config(preset, "mipnerf", {});
   const graph::GraphSpec spec = train::make_graph_spec(config, false);
   const size_t samples = static_cast<size_t>(config.num_samples);
-  const size_t rows = mlp::rays_per_block(kBlockRows, samples) * samples;
+  mlp::HostMlpOptions blocks;  // every product at the forward's block (see the top of this file)
+  blocks.backward_target_block_rows = blocks.target_block_rows;
   ordered_json j;
   j["preset"] = preset;
-  j["block_rows"] = rows;
+  j["block_rows"] = mlp::forward_block_rows(blocks, samples);
   j["products"] = ordered_json::array();
-  for (const gemm::GemmProblem& problem : mlp::mlp_gemm_problems(spec.mlps.front(), rows)) {
+  for (const mlp::HostMlpProduct& product : mlp::host_mlp_products(spec.mlps.front(), samples, blocks)) {
     ordered_json p;
-    const gemm::GemmShape& g = problem.shape;
-    const gemm::HostProductShape shape{g.transpose_a, g.transpose_b, g.m, g.n, g.k};
-    p["label"] = gemm::host_product_label(shape);
-    p["count"] = problem.count;
-    p["gflop"] = problem.flops() * 1e-9;
+    const gemm::HostProductShape& shape = product.shape;
+    p["label"] = product.label;
+    p["count"] = product.problem.count;
+    p["gflop"] = product.problem.flops() * 1e-9;
     for (const auto& lib : libraries) {
       p["libraries"][lib.name] = time_product(lib, libraries.front(), shape, args);
       if (p["libraries"][lib.name].contains("skipped")) {

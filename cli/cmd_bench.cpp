@@ -216,7 +216,6 @@ std::map<std::string, std::string> explicit_settings(const BenchArgs& a) {
 void bench_preset(const BenchArgs& a, const std::string& preset, const std::string& scene, const fs::path& scratch,
                   const ocl::DeviceInfo& device, bench::DeviceBench& d) {
   auto ctx = fresh_context(device, a.profile_steps > 0);
-  gemm::load_gemm_tuning(*ctx);  // as `train` does
   bench::PresetBenchOptions options;
   options.preset = preset;
   options.settings = explicit_settings(a);

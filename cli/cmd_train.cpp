@@ -15,7 +15,6 @@
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"
 #include "io/checkpoint_file.hpp"
-#include "gemm/gemm_tuning.hpp"
 #include "train/checkpoint.hpp"
 #include "train/config_file.hpp"
 #include "train/scene_effects.hpp"
@@ -209,8 +208,6 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   run.resume = args.resume;
   run.val_image_folder = (fs::path(args.out) / "val").string();
   run.on_setup = [&](train::Trainer& trainer) {
-    // After the inputs are checked, before the first product; only where CLBlast runs the networks' products.
-    if (trainer.networks().front()->backend() == gemm::GemmBackend::clblast) gemm::load_gemm_tuning(*ctx);
     if (root) print_setup(trainer, *ctx, args.preset);
     // Ctrl-C, or a scheduler's (or mpirun's) SIGTERM: a clean stop, all ranks after the same step.
     stop_on_interrupt.emplace();

@@ -22,7 +22,7 @@
 #include <sstream>
 #include <thread>
 
-#include "bench/gemm_bench.hpp"
+#include "bench/backend_tuning.hpp"
 #include "common.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -33,10 +33,9 @@
 #include "gemm/gemm_tune_steps.hpp"
 #include "gemm/gemm_tuner.hpp"
 #include "gemm/gemm_tuning.hpp"
+#include "gemm/host_library_tuner.hpp"
 #include "mlp/mlp_products.hpp"
-#include "mlp/network.hpp"
 #include "progress.hpp"
-#include "tune_host_libraries.hpp"
 
 namespace mipnerf::cli {
 namespace {
@@ -50,7 +49,7 @@ struct TuneArgs {
   bool no_view = false;
   std::string output;       // default: the per-device file
   bool if_missing = false;  // do nothing when the per-device file already exists (quick start re-runs)
-  bool host_gemm_only = false;  // only the host step: the CPU GEMM library per product (tune_host_libraries.hpp)
+  bool host_gemm_only = false;  // only the host step: the CPU GEMM library per product (gemm/host_library_tuner.hpp)
   std::vector<std::string> host_gemm_presets{"tiny", "quick", "small", "paper"};  // whose networks' products
   int host_gemm_rounds = 5;  // timed batches per product and library (the median decides)
 };
@@ -246,10 +245,6 @@ void check_args(const TuneArgs& args) {
   if (s.width % 128 != 0) throw Error("--width must be a multiple of 128 for CLBlast's Xgemm tuner");
 }
 
-// After the parameter search: the whole network (forward + backward of one chunk, the tuned size) on each backend the
-// device supports, CLBlast with the parameters just found; the faster becomes what gemm_backend=auto takes on this
-// device (GemmTuning::auto_backend in the same file). Per network rather than per product: the host path fuses the
-// products with their element-wise work (mlp/host_mlp.hpp), so a product alone is not what it runs.
 // The network `tune` tunes for, from its flags (the bottleneck as wide as the trunk, as the presets have it).
 mlp::MlpConfig tuned_network(const TuneArgs& args) {
   mlp::MlpConfig config;
@@ -261,40 +256,43 @@ mlp::MlpConfig tuned_network(const TuneArgs& args) {
   return config;
 }
 
+// After the parameter search: which backend gemm_backend=auto takes on this device (bench/backend_tuning.hpp).
 void measure_backends(const ocl::DeviceInfo& device, const std::string& path, const TuneArgs& args) {
-  std::optional<gemm::GemmTuning> tuning = gemm::read_tuning(path);
-  if (!tuning) return;
-  ocl::Context ctx(device);
-  gemm::install_gemm_tuning(ctx, *tuning);
-  const mlp::MlpConfig config = tuned_network(args);
-  const size_t samples = 64, rays = std::max<size_t>(1, args.settings.rows / samples);
-  io::Json seconds = io::Json::object();
-  std::optional<std::pair<gemm::GemmBackend, double>> best;
-  for (const gemm::GemmBackend backend : {gemm::GemmBackend::clblast, gemm::GemmBackend::host}) {
-    std::unique_ptr<mlp::Network> net;
-    try {
-      net = mlp::make_network(ctx, config, backend);
-    } catch (const Error&) {
-      continue;  // not possible on this device or in this build
-    }
-    const bench::MlpChunkTimes t = bench::time_mlp_chunk(ctx, *net, rays, samples, 2);
-    const double step = t.forward + t.backward;
-    seconds[enum_name(backend)] = step;
-    if (!best || step < best->second) best = {backend, step};
-  }
-  if (!best) return;
-  tuning->auto_backend = best->first;
-  tuning->backend_measurement_json =
-      io::Json{{"what", "training forward + backward of the whole network, best of 2 after a warm-up"},
-               {"network", mlp::describe(config)},
-               {"rows", rays * samples},
-               {"seconds", seconds}}
-          .dump();
-  gemm::save_tuning(path, *tuning);
-  std::printf("gemm_backend=auto on this device: %s (whole network, %zu rows, forward + backward:", enum_name(best->first),
-              rays * samples);
-  for (const auto& [name, value] : seconds.items()) std::printf(" %s %.3f s", name.c_str(), value.get<double>());
+  const auto measured = bench::measure_auto_backend(device, path, tuned_network(args), args.settings.rows);
+  if (!measured) return;
+  std::printf("gemm_backend=auto on this device: %s (whole network, %zu rows, forward + backward:",
+              enum_name(measured->fastest), measured->rows);
+  for (const auto& [backend, seconds] : measured->seconds) std::printf(" %s %.3f s", enum_name(backend), seconds);
   std::printf(")\n");
+}
+
+// The host step: the CPU GEMM library per product of the host MLP (gemm/host_library_tuner.hpp), with a table as it
+// goes. Says why and does nothing where the host backend cannot run.
+void tune_host_libraries(const ocl::DeviceInfo& device, const std::string& path, const TuneArgs& args) {
+  try {
+    gemm::check_host_libraries_can_run(device);
+  } catch (const Error& e) {
+    std::cerr << "mipnerf-cl: tune: no host GEMM libraries to choose between: " << e.what() << "\n";
+    return;
+  }
+  for (const auto& line : gemm::cpu_sgemm_libraries_left_out()) std::cerr << "mipnerf-cl: tune: " << line << "\n";
+  const auto settings = gemm::host_library_timing_settings(device, args.host_gemm_rounds);
+  const auto products = bench::host_products_to_tune(tuned_network(args), args.host_gemm_presets);
+  std::cerr << "mipnerf-cl: tune: the host MLP's products, " << products.size() << " shapes x "
+            << gemm::cpu_sgemm_libraries().size() << " libraries, " << settings.threads
+            << " threads each on its own block (GFLOP/s, median of " << settings.rounds << "):\n";
+  gemm::tune_host_libraries(device, path, products, settings, [](const gemm::HostProductChoice& choice) {
+    std::fprintf(stderr, "  %-34s", choice.label.c_str());
+    for (const auto& [library, t] : choice.timings) {
+      if (t.skipped.empty()) {
+        std::fprintf(stderr, " %s %.0f", library.c_str(), t.gflops_median);
+      } else {
+        std::fprintf(stderr, " %s -", library.c_str());
+      }
+    }
+    std::fprintf(stderr, "  -> %s\n", choice.chosen.c_str());
+  });
+  std::cerr << "mipnerf-cl: tune: the host MLP's library per product is in " << path << "\n";
 }
 
 void run_tune(const TuneArgs& args) {
@@ -311,7 +309,7 @@ void run_tune(const TuneArgs& args) {
         return;
       }
     }
-    tune_host_libraries(device, path, tuned_network(args), args.host_gemm_presets, args.host_gemm_rounds);
+    tune_host_libraries(device, path, args);
     return;
   }
   if (args.if_missing && std::filesystem::exists(path)) {
@@ -346,7 +344,7 @@ void run_tune(const TuneArgs& args) {
   print_summary(tuner, device, settings.rows);
   if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + path);
   measure_backends(device, path, args);
-  tune_host_libraries(device, path, tuned_network(args), args.host_gemm_presets, args.host_gemm_rounds);
+  tune_host_libraries(device, path, args);
 }
 
 }  // namespace

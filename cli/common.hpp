@@ -24,7 +24,7 @@ struct GlobalOptions {
 GlobalOptions& global_options();
 
 // Opens the device chosen by --device, with the library's log routed to stderr.
-// Commands that run GEMMs then call gemm::load_gemm_tuning once their inputs are checked.
+// (A network that runs its products on CLBlast loads the device's tuned parameters itself: mlp::make_network.)
 std::unique_ptr<ocl::Context> open_context(bool profiling = false);
 
 // The view selection and sampling options that render and eval share (--views, --scales, --supersample):

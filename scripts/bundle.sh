@@ -47,8 +47,8 @@ done
 # The executables packed: the CLI, the self-test, and the test areas whose kernels a GPU run checks (their doctest
 # executables run without CTest: test_ops -tc='...'; test_official reads tests/official/fixtures, found through
 # MIPNERF_OFFICIAL_FIXTURES).
-executables=(mipnerf-cl mipnerf-selftest tests/test_ops tests/test_mlp tests/test_graph tests/test_official)
-targets=(mipnerf-cl mipnerf-selftest test_ops test_mlp test_graph test_official)
+executables=(mipnerf-cl mipnerf-selftest tests/test_ops tests/test_gemm tests/test_mlp tests/test_graph tests/test_official)
+targets=(mipnerf-cl mipnerf-selftest test_ops test_gemm test_mlp test_graph test_official)
 
 # glibc's own libraries and the dynamic loader: every Linux has them, and a copy of them must never be loaded.
 is_glibc() { [[ "$1" =~ ^(libc|libm|libdl|libpthread|librt|libresolv|libutil|libanl|libmvec|libnsl|libBrokenLocale|libthread_db)\.so\. || "$1" =~ ^ld-linux || "$1" =~ ^linux-vdso ]]; }

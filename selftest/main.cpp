@@ -24,8 +24,9 @@ namespace {
 
 using mipnerf::selftest::CheckResult;
 
-// The suite's test cases the self-test runs: the ray-math stages and their specialisations (tests/ops), the MLP's
-// kernels, products and Adam (tests/mlp), whole training steps (tests/graph), and the cross-device steps (selftest/).
+// The suite's test cases the self-test runs: the ray-math stages and their specialisations (tests/ops), the products
+// (tests/gemm), the MLP's kernels and Adam (tests/mlp), whole training steps (tests/graph), and the cross-device steps
+// (selftest/).
 // --quick keeps what fits a simulator (oclgrind runs kernels thousands of times slower): every specialisation of every
 // ray-math stage, the MLP's element-wise kernels, Adam and the small networks (the training step and CLBlast's larger
 // products take minutes there).

@@ -78,7 +78,8 @@ struct GemmBenchResult {
 };
 
 // Times every product with every configuration. Leaves CLBlast's defaults installed afterwards: a caller that wants
-// its tuning for later work installs it again (gemm::load_gemm_tuning).
+// its tuning for later work installs it again (a CLBlast network made afterwards loads the device's file itself:
+// gemm::prepare_clblast_tuning).
 // `progress` is called after each (round, configuration, product) with a label and the latest figure.
 GemmBenchResult run_gemm_bench(ocl::Context& ctx, const GemmBenchOptions& options,
                                const std::vector<GemmConfig>& configs, const ProgressFn& progress = {});

@@ -44,10 +44,13 @@ struct TrainTiming {
   size_t chunk_rays = 0;                 // rays per chunk, as planned for the device
   size_t planned_device_bytes = 0;       // train::Trainer::memory().total(): graph, dataset, networks, Adam
   size_t memory_budget_bytes = 0;        // what the plan allowed itself of the device's memory
-  bool gemm_tuned = false;               // tuned GEMM parameters were installed while it trained
-  bool gemm_on_host = false;             // the host BLAS ran the products (gemm_backend resolved to host)
-  // What ran the products, as the report shows it: "host BLAS", "tuned" or "default" (CLBlast's parameters).
-  const char* gemm_label() const { return gemm_on_host ? "host BLAS" : gemm_tuned ? "tuned" : "default"; }
+  bool gemm_tuned = false;               // tuned CLBlast parameters were installed while it trained
+  std::string gemm_backend = "clblast";  // the backend that ran the products (gemm::GemmBackend's name, never auto)
+  // What ran the products, as the report's table shows it: CLBlast's parameters ("tuned" or "default"), "host BLAS",
+  // or another backend's name.
+  std::string gemm_label() const;
+  // The same in the report's JSON ("CLBlast defaults" for CLBlast's own parameters).
+  std::string gemm_parameters() const;
   double setup_seconds = 0.0;            // Trainer construction: data load and upload, buffers, graph programs
   double first_step_seconds = 0.0;      // step 1: first kernel launches and CLBlast's program builds included
   Timings warm_steps;                    // steps 2 …, seconds each

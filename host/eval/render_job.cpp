@@ -10,8 +10,6 @@
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
-#include "gemm/gemm_backend.hpp"
-#include "gemm/gemm_tuning.hpp"
 #include "io/atomic_file.hpp"
 #include "io/png.hpp"
 #include "io/video.hpp"
@@ -69,19 +67,12 @@ void check_video_output(const VideoOutput& video, const ViewFrames& frames) {
   io::check_video_frame_size(video.path, first.width_px, first.height_px);
 }
 
-void prepare_for_rendering(ocl::Context& ctx) {
-  if (gemm::choose_gemm_backend(ctx, gemm::GemmBackend::automatic) == gemm::GemmBackend::clblast) {
-    gemm::load_gemm_tuning(ctx);
-  }
-}
-
 RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const ViewFrames& frames, const std::string& out,
                              const OutputFormats& formats, const VideoOutput& video) {
   if (video.enabled()) check_video_output(video, frames);  // on every rank, before anything is rendered
   const train::TrainedModel& model = *job.model;
   RenderedFrames result;
   result.chunk_rays = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
-  prepare_for_rendering(ctx);
   ImageRenderer renderer(ctx, model.spec, model.network_pointers(), frames.cameras,
                          RenderSettings{result.chunk_rays, job.supersample, job.seed});
   result.warm_up_seconds = renderer.warm_up();
@@ -136,7 +127,6 @@ SplitScores score_split(ocl::Context& ctx, const RenderJob& job, const data::Spl
                         const std::string& out, const ScoreOptions& options) {
   const train::TrainedModel& model = *job.model;
   const size_t chunk = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
-  prepare_for_rendering(ctx);
   ImageRenderer renderer(ctx, model.spec, model.network_pointers(), split.cameras,
                          RenderSettings{chunk, job.supersample, job.seed});
   const double warm_up = renderer.warm_up();

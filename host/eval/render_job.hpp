@@ -31,12 +31,6 @@ struct RenderJob {
   std::function<void(size_t done, size_t total, const std::string& detail)> progress;
 };
 
-// Makes the context ready to render: CLBlast's tuned parameters loaded where CLBlast runs the networks' products.
-// Rendering uses gemm_backend=auto's choice for this device (load_trained_model), not the checkpoint's setting: that
-// one chose for the training device, and a model trained on a CPU with the host BLAS must still render on a GPU. On
-// a device where the host BLAS runs them, nothing is loaded and no tune is suggested.
-void prepare_for_rendering(ocl::Context& ctx);
-
 // A render's frames as one video too: an H.264 MP4 (io/video), encoded on rank 0 as the frames arrive.
 struct VideoOutput {
   std::string path;  // empty: no video

@@ -10,6 +10,14 @@
 
 namespace mipnerf::gemm {
 
+std::vector<GemmBackend> gemm_backends() {
+  std::vector<GemmBackend> backends;
+  for (const auto& entry : enum_names(GemmBackend{})) {
+    if (entry.value != GemmBackend::automatic) backends.push_back(entry.value);
+  }
+  return backends;
+}
+
 bool host_blas_available() {
 #ifdef MIPNERF_HAVE_OPENBLAS
   return true;

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <optional>
+#include <vector>
 
 #include "cl/context.hpp"
 #include "core/enum_names.hpp"
@@ -19,6 +20,10 @@ enum class GemmBackend {
 constexpr std::array<EnumName<GemmBackend>, 3> enum_names(GemmBackend) {
   return {{{GemmBackend::automatic, "auto"}, {GemmBackend::clblast, "clblast"}, {GemmBackend::host, "host"}}};
 }
+
+// Every backend that runs products (each GemmBackend but `automatic`), in enum_names order: what tune measures for
+// gemm_backend=auto (bench/backend_tuning.hpp) and what a new backend joins by its name alone.
+std::vector<GemmBackend> gemm_backends();
 
 // Whether this build links a host BLAS (OpenBLAS found when CMake configured it).
 bool host_blas_available();

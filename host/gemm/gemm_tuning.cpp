@@ -229,7 +229,11 @@ GemmTuning tuning_from_json(const std::string& text, const std::string& where) {
     const std::string name = value.is_string() ? value.get<std::string>() : value.dump();
     t.auto_backend = enum_from_name<GemmBackend>(name);
     if (!t.auto_backend || *t.auto_backend == GemmBackend::automatic) {
-      throw Error(where + ": auto_backend '" + name + "' is not clblast or host; run `mipnerf-cl tune` again");
+      std::string names;
+      for (const GemmBackend backend : gemm_backends()) {
+        names += std::string(names.empty() ? "" : " or ") + enum_name(backend);
+      }
+      throw Error(where + ": auto_backend '" + name + "' is not " + names + "; run `mipnerf-cl tune` again");
     }
     t.backend_measurement_json = j.value("backend_measurement", nlohmann::json::object()).dump();
   }
@@ -343,6 +347,10 @@ bool load_gemm_tuning(ocl::Context& ctx) {
                                 "device, which can speed training up several times on a CPU)");
   }
   return false;
+}
+
+void prepare_clblast_tuning(ocl::Context& ctx) {
+  if (!gemm_tuning_installed(ctx)) load_gemm_tuning(ctx);
 }
 
 }  // namespace mipnerf::gemm

@@ -88,10 +88,14 @@ void clear_gemm_tuning(ocl::Context& ctx);
 // Whether parameters are installed for the context's device.
 bool gemm_tuning_installed(const ocl::Context& ctx);
 
-// What the CLI calls after opening a context, before the first GEMM: loads tuning_file_path(device) when it
-// exists and matches this device, driver and CLBlast (logging what it loaded); otherwise CLBlast's defaults
-// stay and it logs once per device that `mipnerf-cl tune` would help. Returns whether a file was loaded.
+// Loads tuning_file_path(device) when it exists and matches this device, driver and CLBlast (logging what it
+// loaded); otherwise CLBlast's defaults stay and it logs once per device that `mipnerf-cl tune` would help. Returns whether a file was loaded.
 bool load_gemm_tuning(ocl::Context& ctx);
+
+// The CLBlast backend's preparation, called once per network by mlp::DeviceNetwork: load_gemm_tuning, unless
+// parameters are installed for the context's device already (by an earlier network, or by tune or a benchmark that
+// installed its own). So no caller loads the tuning: a network that runs its products on CLBlast has it.
+void prepare_clblast_tuning(ocl::Context& ctx);
 
 // The host MLP's library choice for this device from its tuning file (tuning_file_path), empty when there is none
 // or it was made for another device or driver. Choices naming a library this build does not have are dropped with

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "mlp/network.hpp"
 
@@ -13,6 +14,21 @@ class MlpKernels;
 
 namespace mipnerf::mlp {
 
+// A DeviceNetwork's buffers in a workspace, all on the device.
+struct DeviceWorkspace : WorkspaceBuffers {
+  DeviceWorkspace(ocl::Context& ctx, const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode);
+  // Bytes of the buffers below for a workspace of this size and mode.
+  static size_t bytes_for(const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode);
+
+  std::vector<ocl::DeviceArray<float>> activations;  // training: one [rows][width] per trunk layer; inference: 2
+                                                     // ping-pong [rows][widest hidden layer]
+  ocl::DeviceArray<float> bottleneck;                // [rows][bottleneck_width] (training, view dependence)
+  ocl::DeviceArray<float> view_hidden;               // [rows][view_branch_width] (training, view dependence)
+  ocl::DeviceArray<float> ray_term;                  // [rays][view_branch_width]: the per-ray view product
+  ocl::DeviceArray<float> grad_a, grad_b;            // [rows][widest hidden layer]: backward ping-pong (training)
+  ocl::DeviceArray<float> partials;                  // [blocks or rays][widest layer]: column sums (training)
+};
+
 class DeviceNetwork : public Network {
  public:
   DeviceNetwork(ocl::Context& ctx, const MlpConfig& config);
@@ -20,17 +36,18 @@ class DeviceNetwork : public Network {
   gemm::GemmBackend backend() const override { return gemm::GemmBackend::clblast; }
 
  protected:
-  bool device_backward_buffers() const override { return true; }
+  std::unique_ptr<WorkspaceBuffers> make_workspace_buffers(size_t max_rows, size_t max_rays,
+                                                           WorkspaceMode mode) const override;
   void forward_impl(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) override;
-  void backward_impl(Workspace& ws, const MlpOutputGradients& d_out) override;
+  void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) override;
 
  private:
-  void trunk_forward(const MlpInputs& in, Workspace& ws, bool save);
-  void heads_forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save);
-  void heads_backward(Workspace& ws, const MlpOutputGradients& d_out);
-  void trunk_backward(Workspace& ws);
+  void trunk_forward(const MlpInputs& in, DeviceWorkspace& ws, bool save);
+  void heads_forward(const MlpInputs& in, const MlpOutputs& out, DeviceWorkspace& ws, bool save);
+  void heads_backward(const MlpInputs& in, DeviceWorkspace& ws, const MlpOutputGradients& d_out);
+  void trunk_backward(const MlpInputs& in, DeviceWorkspace& ws);
   void bias_gradient(const MatrixView& dz, const MatrixView* act, size_t rows, size_t cols, size_t bias_offset,
-                     Workspace& ws);
+                     DeviceWorkspace& ws);
 
   std::unique_ptr<ops::MlpKernels> kernels_;
 };

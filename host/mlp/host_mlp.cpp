@@ -135,12 +135,6 @@ void column_sums(const float* __restrict d, size_t ld, size_t rows, size_t cols,
   }
 }
 
-size_t widest(const MlpConfig& c) {
-  size_t w = c.width;
-  if (c.view_dependence) w = std::max({w, c.bottleneck_width, c.view_branch_width});
-  return w;
-}
-
 }  // namespace
 
 HostMlp::HostMlp(const MlpConfig& config, HostMlpOptions options)
@@ -163,15 +157,23 @@ size_t backward_block_rows_for(size_t width, size_t target_block_rows) {
   return width >= 256 ? 2 * target_block_rows : target_block_rows;
 }
 
+size_t forward_block_rows(const HostMlpOptions& options, size_t samples_per_ray) {
+  return rays_per_block(options.target_block_rows, samples_per_ray) * std::max<size_t>(1, samples_per_ray);
+}
+
+size_t backward_block_rows(const HostMlpOptions& options, size_t width, size_t samples_per_ray) {
+  const size_t target = options.backward_target_block_rows > 0
+                            ? options.backward_target_block_rows
+                            : backward_block_rows_for(width, options.target_block_rows);
+  return rays_per_block(target, samples_per_ray) * std::max<size_t>(1, samples_per_ray);
+}
+
 size_t HostMlp::rays_per_block(size_t samples_per_ray) const {
-  return mlp::rays_per_block(options_.target_block_rows, samples_per_ray);
+  return forward_block_rows(options_, samples_per_ray) / std::max<size_t>(1, samples_per_ray);
 }
 
 size_t HostMlp::backward_rays_per_block(size_t samples_per_ray) const {
-  const size_t rows = options_.backward_target_block_rows > 0
-                          ? options_.backward_target_block_rows
-                          : backward_block_rows_for(config_.width, options_.target_block_rows);
-  return mlp::rays_per_block(rows, samples_per_ray);
+  return backward_block_rows(options_, config_.width, samples_per_ray) / std::max<size_t>(1, samples_per_ray);
 }
 
 namespace {
@@ -249,7 +251,7 @@ HostMlpTimes HostMlp::forward(const HostForwardBuffers& b, bool timed) {
   const bool training = !b.trunk.empty();
   if (training && b.trunk.size() != c.depth) throw Error("host MLP forward: expected one activation per trunk layer");
   if (training && b.rgb == nullptr) throw Error("host MLP forward: a training forward needs its colour output");
-  const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
+  const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest_hidden(c);
   const size_t rays_per = rays_per_block(spr);
   const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
   const float* P = b.params;
@@ -322,7 +324,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
   const MlpConfig& c = config_;
   const HostForwardBuffers& b = bb.saved;
   if (b.trunk.size() != c.depth) throw Error("host MLP backward: the forward kept no activations (inference?)");
-  const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest(c);
+  const size_t spr = b.samples_per_ray, W = c.width, F = c.input_width, cols = widest_hidden(c);
   const size_t rays_per = backward_rays_per_block(spr);
   const size_t n_blocks = (b.n_rays + rays_per - 1) / rays_per;
   const float* P = b.params;

@@ -84,6 +84,12 @@ size_t rays_per_block(size_t target_rows, size_t samples_per_ray);
 // (1,024: 7.4–7.8); the quick preset's step was slower with 512 (0.19–0.24 against 0.17–0.21 s, 3 rounds).
 size_t backward_block_rows_for(size_t width, size_t target_block_rows);
 
+// The rows of the host MLP's forward and backward blocks for `config` at `samples_per_ray` under `options`: whole
+// rays, about target_block_rows (forward) or backward_target_block_rows, else backward_block_rows_for (backward).
+// HostMlp cuts its passes by these, and the shapes of its products (mlp_products.hpp) follow from them.
+size_t forward_block_rows(const HostMlpOptions& options, size_t samples_per_ray);
+size_t backward_block_rows(const HostMlpOptions& options, size_t width, size_t samples_per_ray);
+
 class HostMlp {
  public:
   HostMlp(const MlpConfig& config, HostMlpOptions options);

@@ -1,6 +1,7 @@
 // MLP configuration checks, parameter layout and initialisation.
 #include "mlp/mlp_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -45,6 +46,10 @@ void MlpConfig::validate() const {
 
 bool skip_after(const MlpConfig& config, size_t layer) {
   return config.skip_layer > 0 && layer > 0 && layer % config.skip_layer == 0;
+}
+
+size_t widest_hidden(const MlpConfig& c) {
+  return c.view_dependence ? std::max({c.width, c.bottleneck_width, c.view_branch_width}) : c.width;
 }
 
 std::vector<const DenseLayer*> ParameterLayout::all() const {

@@ -62,6 +62,10 @@ struct ParameterLayout {
 // True when the features are concatenated to the activation of trunk layer `layer` (official rule).
 bool skip_after(const MlpConfig& config, size_t layer);
 
+// The widest hidden layer: the trunk, or with view dependence the bottleneck or view branch when wider (the columns
+// a buffer that holds any hidden activation needs).
+size_t widest_hidden(const MlpConfig& config);
+
 ParameterLayout parameter_layout(const MlpConfig& config);
 
 // Glorot-uniform weights, U(−√(6/(in+out)), √(6/(in+out))) with in = the layer's full (concatenated)

@@ -1,4 +1,4 @@
-// The matrix products of a network, layer by layer.
+// The matrix products of a network, layer by layer, and the host MLP's blocks of them.
 #include "mlp/mlp_products.hpp"
 
 namespace mipnerf::mlp {
@@ -30,6 +30,32 @@ std::vector<gemm::GemmProblem> mlp_gemm_problems(const MlpConfig& c, size_t rows
     gemm::add_gemm_problem(problems, Wb, Wv, rows, true, false, 1);
   }
   return problems;
+}
+
+namespace {
+
+HostMlpProduct as_host_product(const gemm::GemmProblem& p) {
+  const gemm::HostProductShape shape{p.shape.transpose_a, p.shape.transpose_b, p.shape.m, p.shape.n, p.shape.k};
+  return {p, shape, gemm::host_product_label(shape)};
+}
+
+}  // namespace
+
+std::vector<HostMlpProduct> host_mlp_products(const MlpConfig& config, size_t samples_per_ray,
+                                              const HostMlpOptions& options) {
+  const size_t forward_rows = forward_block_rows(options, samples_per_ray);
+  const size_t backward_rows = backward_block_rows(options, config.width, samples_per_ray);
+  std::vector<HostMlpProduct> products;
+  // Blocks of one size: mlp_gemm_problems' list as it is; else its forward products at the forward's rows, then its
+  // backward ones at the backward's.
+  for (const gemm::GemmProblem& p : mlp_gemm_problems(config, forward_rows)) {
+    if (forward_rows == backward_rows || p.kind() == gemm::GemmKind::forward) products.push_back(as_host_product(p));
+  }
+  if (forward_rows == backward_rows) return products;
+  for (const gemm::GemmProblem& p : mlp_gemm_problems(config, backward_rows)) {
+    if (p.kind() != gemm::GemmKind::forward) products.push_back(as_host_product(p));
+  }
+  return products;
 }
 
 }  // namespace mipnerf::mlp

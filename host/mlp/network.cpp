@@ -8,75 +8,24 @@
 #include "core/error.hpp"
 #include "mlp/device_network.hpp"
 #include "mlp/host_network.hpp"
-#include "ops/mlp.hpp"
 
 namespace mipnerf::mlp {
-namespace {
-
-size_t widest_hidden(const MlpConfig& c) {
-  size_t w = c.width;
-  if (c.view_dependence) w = std::max({w, c.bottleneck_width, c.view_branch_width});
-  return w;
-}
-
-// Partials rows: blocks of kRowsPerBlock rows for bias gradients, or one per ray for the view branch.
-size_t partial_rows(const MlpConfig& c, size_t max_rows, size_t max_rays) {
-  const size_t blocks = ops::MlpKernels::blocks_for(max_rows, ops::MlpKernels::kRowsPerBlock);
-  return c.view_dependence ? std::max(blocks, max_rays) : blocks;
-}
-
-size_t partial_cols(const MlpConfig& c) { return std::max({widest_hidden(c), c.density_outputs, c.rgb_outputs}); }
-
-}  // namespace
-
 // ---- Workspace ----
 
-Workspace::Workspace(ocl::Context& ctx, const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode,
-                     bool device_backward)
-    : config_(config), mode_(mode), max_rows_(max_rows), max_rays_(max_rays), max_cols_(widest_hidden(config)) {
-  config.validate();
-  if (max_rows == 0 || max_rays == 0) throw Error("MLP workspace: max_rows and max_rays must be positive");
-  if (mode == WorkspaceMode::training) {
-    for (size_t i = 0; i < config.depth; ++i) {
-      activations_.emplace_back(ctx, max_rows * config.width,
-                                "mlp activation of trunk " + std::to_string(i) + " [rows][width]");
-    }
-    if (config.view_dependence) {
-      bottleneck_ = ocl::DeviceArray<float>(ctx, max_rows * config.bottleneck_width, "mlp bottleneck [rows][width]");
-      view_hidden_ = ocl::DeviceArray<float>(ctx, max_rows * config.view_branch_width,
-                                             "mlp view-branch activation [rows][view_branch_width]");
-    }
-    // The device network's backward buffers; the host network keeps activation gradients in per-thread scratch.
-    device_backward_ = device_backward;
-    if (device_backward_) {
-      grad_a_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer A [rows][width]");
-      grad_b_ = ocl::DeviceArray<float>(ctx, max_rows * max_cols_, "mlp backward buffer B [rows][width]");
-      partials_ = ocl::DeviceArray<float>(ctx, partial_rows(config, max_rows, max_rays) * partial_cols(config),
-                                          "mlp column-sum partials [blocks][width]");
-    }
-  } else {
-    for (int i = 0; i < 2; ++i) {
-      activations_.emplace_back(ctx, max_rows * max_cols_,
-                                "mlp inference buffer " + std::to_string(i) + " [rows][width]");
-    }
-  }
-  if (config.view_dependence) {
-    ray_term_ = ocl::DeviceArray<float>(ctx, max_rays * config.view_branch_width,
-                                        "mlp per-ray view product [rays][view_branch_width]");
-  }
+WorkspaceBuffers::~WorkspaceBuffers() = default;
+
+Workspace::Workspace(const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode,
+                     std::unique_ptr<WorkspaceBuffers> buffers)
+    : config_(config), mode_(mode), max_rows_(max_rows), max_rays_(max_rays), buffers_(std::move(buffers)) {}
+
+size_t Workspace::bytes_for(const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode) {
+  return DeviceWorkspace::bytes_for(config, max_rows, max_rays, mode);  // the largest (see network.hpp)
 }
 
-size_t Workspace::bytes_for(const MlpConfig& c, size_t max_rows, size_t max_rays, WorkspaceMode mode) {
-  const size_t cols = widest_hidden(c);
-  size_t floats = c.view_dependence ? max_rays * c.view_branch_width : 0;
-  if (mode == WorkspaceMode::training) {
-    floats +=
-        c.depth * max_rows * c.width + 2 * max_rows * cols + partial_rows(c, max_rows, max_rays) * partial_cols(c);
-    if (c.view_dependence) floats += max_rows * (c.bottleneck_width + c.view_branch_width);
-  } else {
-    floats += 2 * max_rows * cols;
-  }
-  return floats * sizeof(float);
+void Workspace::throw_made_by_another_backend(const char* where) {
+  throw Error(std::string("MLP ") + where +
+              ": the workspace was made by a network on another GEMM backend (its buffers are that backend's); make "
+              "each network's workspaces with its own make_workspace");
 }
 
 // ---- Network ----
@@ -110,7 +59,9 @@ std::vector<float> Network::download_grads() const { return grads_.download(*ctx
 void Network::zero_grad() { grads_.fill(*ctx_, 0.0f); }
 
 Workspace Network::make_workspace(size_t max_rows, size_t max_rays, WorkspaceMode mode) const {
-  return Workspace(*ctx_, config_, max_rows, max_rays, mode, device_backward_buffers());
+  config_.validate();
+  if (max_rows == 0 || max_rays == 0) throw Error("MLP workspace: max_rows and max_rays must be positive");
+  return Workspace(config_, max_rows, max_rays, mode, make_workspace_buffers(max_rows, max_rays, mode));
 }
 
 void Network::check_inputs(const MlpInputs& in, const Workspace& ws, const char* where) const {
@@ -166,21 +117,19 @@ void Network::backward(Workspace& ws, const MlpOutputGradients& d_out) {
   check_inputs(ws.inputs_, ws, "backward");
   ocl::require_matrix(d_out.d_raw_density, ws.inputs_.rows(), config_.density_outputs, "d_raw_density", "MLP backward");
   ocl::require_matrix(d_out.d_raw_rgb, ws.inputs_.rows(), config_.rgb_outputs, "d_raw_rgb", "MLP backward");
-  if (device_backward_buffers() && !ws.device_backward_) {
-    throw Error(
-        "MLP backward: the workspace was made by a network on the host backend (it has no device backward "
-        "buffers); make each network's workspaces with its own make_workspace");
-  }
-  backward_impl(ws, d_out);
+  backward_impl(ws.inputs_, ws, d_out);
 }
 
-std::unique_ptr<Network> make_network(ocl::Context& ctx, const MlpConfig& config, gemm::GemmBackend backend,
-                                      const HostMlpOptions* host_options) {
-  const gemm::GemmBackend chosen = gemm::choose_gemm_backend(ctx, backend);
-  if (chosen == gemm::GemmBackend::host) {
-    return std::make_unique<HostNetwork>(ctx, config, host_options ? *host_options : default_host_options(ctx));
+std::unique_ptr<Network> make_network(ocl::Context& ctx, const MlpConfig& config, gemm::GemmBackend backend) {
+  switch (gemm::choose_gemm_backend(ctx, backend)) {
+    case gemm::GemmBackend::clblast:
+      return std::make_unique<DeviceNetwork>(ctx, config);
+    case gemm::GemmBackend::host:
+      return std::make_unique<HostNetwork>(ctx, config, default_host_options(ctx));
+    case gemm::GemmBackend::automatic:
+      break;  // choose_gemm_backend never returns it
   }
-  return std::make_unique<DeviceNetwork>(ctx, config);
+  throw Error(std::string("internal error: gemm backend '") + enum_name(backend) + "' has no network");
 }
 
 std::vector<Network*> network_pointers(const std::vector<std::unique_ptr<Network>>& networks) {

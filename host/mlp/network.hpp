@@ -20,7 +20,6 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "gemm/gemm_backend.hpp"
-#include "mlp/host_mlp.hpp"
 #include "mlp/mlp_config.hpp"
 
 namespace mipnerf::mlp {
@@ -53,19 +52,25 @@ struct MlpOutputGradients {
 
 enum class WorkspaceMode {
   training,   // saves every activation the backward needs
-  inference,  // forward only: two ping-pong buffers, no backward
+  inference,  // forward only: no saved activations (at most ping-pong buffers), no backward
 };
 
-// Device memory for forwards (and backwards) of up to max_rows samples from up to max_rays rays.
+// A backend's own memory in a workspace (the activations its forward saves, its backward's buffers), made by the
+// network of that backend (Network::make_workspace_buffers); no other code reads it.
+class WorkspaceBuffers {
+ public:
+  virtual ~WorkspaceBuffers();
+};
+
+// Memory for forwards (and backwards) of up to max_rows samples from up to max_rays rays: what every backend's
+// workspace has (its size, mode, and the forward waiting for its backward), and the backend's own buffers.
 class Workspace {
  public:
-  // `device_backward`: also the backward buffers a DeviceNetwork needs (a HostNetwork keeps activation gradients in
-  // per-thread host scratch instead).
-  Workspace(ocl::Context& ctx, const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode,
-            bool device_backward);
+  Workspace(const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode,
+            std::unique_ptr<WorkspaceBuffers> buffers);
 
-  // Bytes a workspace of this size takes, to choose a chunk size that fits the device (an upper bound: a HostNetwork's
-  // workspaces have no device backward buffers).
+  // Bytes a workspace of this size takes, to choose a chunk size that fits the device: an upper bound over the
+  // backends (the device network's, whose backward buffers live on the device too).
   static size_t bytes_for(const MlpConfig& config, size_t max_rows, size_t max_rays, WorkspaceMode mode);
 
   // Movable, not copyable (a copy would share the device buffers).
@@ -78,21 +83,22 @@ class Workspace {
   size_t max_rows() const { return max_rows_; }
   size_t max_rays() const { return max_rays_; }
 
+  // The backend's buffers, as that backend knows them. Throws mipnerf::Error naming `where` when another backend's
+  // network made this workspace (make each network's workspaces with its own make_workspace).
+  template <class Buffers>
+  Buffers& buffers(const char* where) {
+    auto* own = dynamic_cast<Buffers*>(buffers_.get());
+    if (own == nullptr) throw_made_by_another_backend(where);
+    return *own;
+  }
+
  private:
-  friend class Network;
-  friend class DeviceNetwork;
-  friend class HostNetwork;
+  friend class Network;  // the checks and the forward waiting for its backward, common to every backend
+  [[noreturn]] static void throw_made_by_another_backend(const char* where);
   MlpConfig config_;
   WorkspaceMode mode_;
   size_t max_rows_, max_rays_;
-  size_t max_cols_;                                   // widest hidden layer
-  std::vector<ocl::DeviceArray<float>> activations_;  // training: one [rows][width] per trunk layer; inference: 2
-  ocl::DeviceArray<float> bottleneck_;                // [rows][bottleneck_width] (training, view dependence)
-  ocl::DeviceArray<float> view_hidden_;               // [rows][view_branch_width] (training, view dependence)
-  ocl::DeviceArray<float> ray_term_;                  // [rays][view_branch_width]: the per-ray view product
-  bool device_backward_ = false;                      // the device network's backward buffers below exist
-  ocl::DeviceArray<float> grad_a_, grad_b_;           // [rows][max_cols]: backward ping-pong (training, device path)
-  ocl::DeviceArray<float> partials_;                  // [blocks or rays][max_cols]: column sums (training)
+  std::unique_ptr<WorkspaceBuffers> buffers_;
   // The forward waiting for its backward: its inputs (the caller keeps them alive and unchanged) and size.
   bool has_forward_ = false;
   MlpInputs inputs_;
@@ -123,7 +129,7 @@ class Network {
   void upload_params(const std::vector<float>& values);  // size must be parameter_count()
   std::vector<float> download_grads() const;
 
-  // A workspace for this network's backend (only a DeviceNetwork's has device backward buffers).
+  // A workspace with this network's backend's buffers (another backend's network refuses it).
   Workspace make_workspace(size_t max_rows, size_t max_rays, WorkspaceMode mode) const;
 
   // Enqueues the forward of one chunk. In a training workspace, saves what backward() needs and remembers
@@ -140,9 +146,12 @@ class Network {
  protected:
   // Parameters from glorot_uniform_init(config); gradients zero.
   Network(ocl::Context& ctx, const MlpConfig& config);
-  virtual bool device_backward_buffers() const = 0;  // whether workspaces need them
+  // The backend's buffers for a workspace of this size and mode.
+  virtual std::unique_ptr<WorkspaceBuffers> make_workspace_buffers(size_t max_rows, size_t max_rays,
+                                                                   WorkspaceMode mode) const = 0;
   virtual void forward_impl(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) = 0;
-  virtual void backward_impl(Workspace& ws, const MlpOutputGradients& d_out) = 0;
+  // `in`: what the forward through `ws` read (checked again, unchanged sizes).
+  virtual void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) = 0;
 
   ocl::Context* ctx_;
   MlpConfig config_;
@@ -155,11 +164,11 @@ class Network {
 };
 
 // A network of `config` on ctx's device, its products on `backend` (automatic: tune's measurement for the device,
-// else the rule of gemm::resolve_gemm_backend; logged through the context). Throws mipnerf::Error when the backend
-// cannot run on the device or in this build, saying why and what to do. `host_options` (HostNetwork only; default:
-// 256-row blocks, one thread per compute unit) sets how the host path splits its work.
-std::unique_ptr<Network> make_network(ocl::Context& ctx, const MlpConfig& config, gemm::GemmBackend backend,
-                                      const HostMlpOptions* host_options = nullptr);
+// else the rule of gemm::resolve_gemm_backend; logged through the context), each backend prepared by its own
+// constructor (CLBlast's: the device's tuned parameters; the host's: tune's CPU GEMM library per product). Throws
+// mipnerf::Error when the backend cannot run on the device or in this build, saying why and what to do.
+// (A host network with other blocks or threads: mlp::make_host_network, host_network.hpp.)
+std::unique_ptr<Network> make_network(ocl::Context& ctx, const MlpConfig& config, gemm::GemmBackend backend);
 
 // Raw pointers to a list of networks, as the graph and the renderer take them.
 std::vector<Network*> network_pointers(const std::vector<std::unique_ptr<Network>>& networks);

@@ -111,7 +111,6 @@ ViewRenderer::ViewRenderer(ocl::Context& ctx, ViewRendererOptions options)
     throw Error(options_.run_folder + ": no checkpoint that loads (a run folder of `mipnerf-cl train`, with "
                 "checkpoints/ckpt_*.mnck; while training, wait for the first checkpoint)");
   }
-  eval::prepare_for_rendering(ctx);
   chunk_rays_ = eval::render_chunk_rays(*model_, ctx.device_info(), options_.chunk_rays);
   eval::OrbitRequest one;
   one.frames = 1;

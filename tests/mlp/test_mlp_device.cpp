@@ -18,6 +18,7 @@
 #include "gemm/clblast_check.hpp"
 #include "gemm/cpu_sgemm.hpp"
 #include "mlp/host_mlp.hpp"
+#include "mlp/host_network.hpp"
 #include "mlp/mlp_products.hpp"
 #include "mlp/network.hpp"
 #include "mlp_checks.hpp"
@@ -103,7 +104,8 @@ void check_against_reference_on(gemm::GemmBackend backend, const mlp::MlpConfig&
   auto& ctx = test::test_context();
   INFO("gemm_backend = " << enum_name(backend));
   std::mt19937 rng(seed);
-  const auto network = mlp::make_network(ctx, config, backend, host_options);
+  const auto network =
+      host_options ? mlp::make_host_network(ctx, config, *host_options) : mlp::make_network(ctx, config, backend);
   REQUIRE(network->backend() == backend);
   mlp::Network& net = *network;
   // Random biases (Glorot leaves them at zero) so every bias path carries a value.
@@ -261,7 +263,7 @@ TEST_CASE("mlp device: the host path flushes denormals in its threads and gives 
   mlp::MlpConfig config = test::small_mlp_config(false);
   config.skip_layer = 0;  // no skip: the features reach the first layer only
   const mlp::HostMlpOptions options = host_options(1, 2);
-  const auto network = mlp::make_network(ctx, config, gemm::GemmBackend::host, &options);
+  const auto network = mlp::make_host_network(ctx, config, options);
   const float tiny = std::ldexp(1.0f, -70);
   auto params = network->download_params();
   std::fill(params.begin(), params.end(), 0.0f);  // biases 0
@@ -399,6 +401,32 @@ TEST_CASE("mlp device: misuse is refused with a message that says what to do, on
     mlp::MlpInputs no_view = inputs_for(d, p, config);
     no_view.view_encoding = {};
     CHECK_THROWS_WITH_AS(net.forward(no_view, outputs_for(d, config), ws), doctest::Contains("view encoding"), Error);
+  }
+}
+
+TEST_CASE("mlp device: a training workspace made by another backend's network is refused, saying whose it is") {
+  auto& ctx = test::test_context();
+  const auto backends = test::supported_gemm_backends(ctx);
+  if (backends.size() < 2) {
+    test::skip_test("the device runs one GEMM backend: no other backend's workspace to refuse");
+    return;
+  }
+  const auto config = test::small_mlp_config(true);
+  std::mt19937 rng(9);
+  const Pass p = make_pass(config, 4, 4, rng);
+  DevicePass d(ctx, config, p);
+  for (const gemm::GemmBackend backend : backends) {
+    for (const gemm::GemmBackend maker : backends) {
+      if (maker == backend) continue;
+      INFO("network on " << enum_name(backend) << ", workspace from " << enum_name(maker));
+      const auto net = mlp::make_network(ctx, config, backend);
+      const auto other = mlp::make_network(ctx, config, maker);
+      auto foreign = other->make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+      CHECK_THROWS_WITH_AS(net->forward(inputs_for(d, p, config), outputs_for(d, config), foreign),
+                           doctest::Contains("made by a network on another GEMM backend"), Error);
+      CHECK_THROWS_WITH_AS(net->forward(inputs_for(d, p, config), outputs_for(d, config), foreign),
+                           doctest::Contains("make each network's workspaces with its own make_workspace"), Error);
+    }
   }
 }
 
@@ -552,20 +580,3 @@ TEST_CASE("mlp device: a density-only inference forward gives the full forward's
   });
 }
 
-TEST_CASE("mlp device: a host network's workspace refuses the device network's backward, saying what to do") {
-  auto& ctx = test::test_context();
-  if (test::supported_gemm_backends(ctx).size() < 2) {
-    test::skip_test("the test device cannot run the host GEMM backend (host BLAS, shared memory)");
-    return;
-  }
-  const mlp::MlpConfig config = test::small_mlp_config(true);
-  std::mt19937 rng(110);
-  const auto device_network = mlp::make_network(ctx, config, gemm::GemmBackend::clblast);
-  const auto host_network = mlp::make_network(ctx, config, gemm::GemmBackend::host);
-  const Pass p = make_pass(config, 2, 4, rng);
-  DevicePass d(ctx, config, p);
-  auto ws = host_network->make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
-  device_network->forward(inputs_for(d, p, config), outputs_for(d, config), ws);
-  CHECK_THROWS_WITH_AS(device_network->backward(ws, gradients_for(d, config)),
-                       doctest::Contains("make each network's workspaces with its own make_workspace"), Error);
-}

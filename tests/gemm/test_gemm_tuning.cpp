@@ -16,7 +16,7 @@
 #include "gemm/gemm.hpp"
 #include "gemm/gemm_tuning.hpp"
 #include "mlp/network.hpp"
-#include "mlp_checks.hpp"
+#include "mlp/mlp_checks.hpp"
 #include "ref/gemm_ref.hpp"
 #include "support/mlp_fixtures.hpp"
 #include "support/test_context.hpp"
@@ -215,6 +215,31 @@ TEST_CASE("gemm tuning: the CLI's load step uses the device's file, and says onc
   CHECK(messages[0].first == LogLevel::warning);
   CHECK(messages[0].second.find("another device, driver or CLBlast version") != std::string::npos);
   ctx.set_log(nullptr);
+}
+
+TEST_CASE("gemm tuning: a network on CLBlast loads the device's file itself, and keeps parameters already installed") {
+  ScratchCache cache;
+  auto& ctx = test::test_context();
+  const auto config = test::small_mlp_config(true);
+  gemm::clear_gemm_tuning(ctx);
+  // No file: CLBlast's defaults stay.
+  mlp::make_network(ctx, config, gemm::GemmBackend::clblast);
+  CHECK_FALSE(gemm::gemm_tuning_installed(ctx));
+
+  // The device's file: the network's preparation installs it (no caller loads it).
+  gemm::save_tuning(gemm::tuning_file_path(ctx.device_info()), tuning_for_this_device());
+  mlp::make_network(ctx, config, gemm::GemmBackend::clblast);
+  CHECK(gemm::gemm_tuning_installed(ctx));
+  CHECK(current("GemmRoutine").at("XGEMM_MIN_INDIRECT_SIZE") == 8);
+  gemm::clear_gemm_tuning(ctx);
+
+  // Parameters installed by the caller (tune's own file, a benchmark's set) are not replaced by the device's file.
+  auto own = tuning_for_this_device();
+  own.per_kind[gemm::GemmKind::forward]["Xgemm"] = xgemm_set(16);
+  gemm::install_gemm_tuning(ctx, own);
+  mlp::make_network(ctx, config, gemm::GemmBackend::clblast);
+  gemm::select_gemm_kind(ctx, gemm::GemmKind::forward);
+  CHECK(current("Xgemm").at("MWG") == 16);
 }
 
 TEST_CASE("gemm tuning: auto_backend round-trips, and gemm_backend=auto follows tune's measurement for its device") {

@@ -53,9 +53,7 @@ std::vector<gemm::HostProductShape> shapes_to_check() {
   quick.width = 128, quick.input_width = 72, quick.view_branch_width = 64, quick.bottleneck_width = 128;
   quick.depth = 4, quick.skip_layer = 2;
   std::vector<gemm::HostProductShape> shapes;
-  for (const auto& p : mlp::mlp_gemm_problems(quick, 256)) {
-    shapes.push_back({p.shape.transpose_a, p.shape.transpose_b, p.shape.m, p.shape.n, p.shape.k});
-  }
+  for (const auto& p : mlp::host_mlp_products(quick, 64)) shapes.push_back(p.shape);  // 256-row blocks both ways
   for (const bool ta : {false, true}) {  // awkward sizes: nothing a multiple of a vector width
     for (const bool tb : {false, true}) {
       if (!(ta && tb)) shapes.push_back({ta, tb, 37, 29, 53});

@@ -1,6 +1,9 @@
 // Choosing the GEMM backend: the rule for each device kind, the refusals and their messages, the setting's names.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "core/error.hpp"
 #include "gemm/gemm_backend.hpp"
 
@@ -61,4 +64,13 @@ TEST_CASE("gemm backend: the setting's names") {
   CHECK(enum_from_name<GemmBackend>("auto") == GemmBackend::automatic);
   CHECK(enum_from_name<GemmBackend>("host") == GemmBackend::host);
   CHECK_FALSE(enum_from_name<GemmBackend>("openblas").has_value());
+}
+
+TEST_CASE("gemm backend: the list of backends is every setting but auto, each once") {
+  const std::vector<GemmBackend> backends = gemm::gemm_backends();
+  CHECK(backends.size() + 1 == enum_names(GemmBackend{}).size());
+  for (const auto& entry : enum_names(GemmBackend{})) {
+    const auto count = std::count(backends.begin(), backends.end(), entry.value);
+    CHECK_MESSAGE(count == (entry.value == GemmBackend::automatic ? 0 : 1), entry.name);
+  }
 }
