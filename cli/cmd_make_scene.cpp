@@ -9,8 +9,8 @@
 #include "common.hpp"
 #include "core/error.hpp"
 #include "core/lens_models.hpp"
-#include "data/forward_facing.hpp"
-#include "data/procedural.hpp"
+#include "data/synthetic/forward_facing.hpp"
+#include "data/synthetic/procedural.hpp"
 
 namespace mipnerf::cli {
 

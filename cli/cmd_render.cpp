@@ -12,7 +12,7 @@
 #include "core/suggest.hpp"
 #include "parallel/world.hpp"
 #include "common.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
 #include "eval/render_job.hpp"

@@ -10,7 +10,7 @@
 #include "core/error.hpp"
 #include "parallel/world.hpp"
 #include "common.hpp"
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 #include "eval/report.hpp"
 #include "eval/train_and_evaluate.hpp"
 #include "io/atomic_file.hpp"

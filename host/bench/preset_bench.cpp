@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/train_and_evaluate.hpp"

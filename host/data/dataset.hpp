@@ -18,7 +18,7 @@ enum class DatasetFormat {
   blender,             // DIR/transforms_<split>.json, frames with file_path + transform_matrix, camera_angle_x
   multiscale_blender,  // DIR/metadata.json as written by mip-NeRF's convert_blender_data.py (or make-multiscale)
   transforms_json,     // one transforms.json with every frame; intrinsics fl_x, fl_y, cx, cy, w, h
-  llff,                // DIR/poses_bounds.npy + DIR/images[_<factor>]/ (forward-facing captures; data/llff.hpp)
+  llff,                // DIR/poses_bounds.npy + DIR/images[_<factor>]/ (forward-facing captures; data/formats/llff_capture.hpp)
   count                // not a format: the number of them (data/formats checks every one has its row)
 };
 const char* format_name(DatasetFormat format);

@@ -1,5 +1,5 @@
 // Internal to host/data: what a dataset file lists, before any image is read. The parsers of each format
-// (blender.cpp, multiscale.cpp) produce these; the loader (dataset.cpp) and the multiscale writer read
+// (formats/transforms_parse.cpp, formats/multiscale_blender_parse.cpp, formats/llff_capture.cpp) produce these; the loader (dataset.cpp) and the multiscale writer read
 // the images they name.
 #pragma once
 
@@ -39,7 +39,7 @@ std::vector<SplitSpec> parse_multiscale_metadata(const std::string& file, const 
 // The splits of a format that holds out views itself (transforms.json, LLFF): train, then the held-out views as
 // "val" (what `train` scores at its end) and as "test"; those options.splits asks for (all when empty) and not empty.
 std::vector<SplitSpec> with_held_out_splits(SplitSpec train, SplitSpec test, const LoadOptions& options);
-// LLFF: DIR/poses_bounds.npy and its images (data/llff.hpp); "val" holds the held-out views, as "test".
+// LLFF: DIR/poses_bounds.npy and its images (data/formats/llff_capture.hpp); "val" holds the held-out views, as "test".
 std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& options);
 
 // The PNG a frame's file_path names, relative to `base_dir`: as given, or with ".png" appended (Blender

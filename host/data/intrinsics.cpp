@@ -133,4 +133,11 @@ io::Json lens_json(const Lens& lens) {
   return json;
 }
 
+io::Json intrinsics_json(const Camera& c) {
+  io::Json json = {{"fl_x", c.focal_x_px}, {"fl_y", c.focal_y_px}, {"cx", c.center_x_px},
+                   {"cy", c.center_y_px},  {"w", c.width_px},     {"h", c.height_px}};
+  json.update(lens_json(c.lens));
+  return json;
+}
+
 }  // namespace mipnerf::data

@@ -36,4 +36,9 @@ void resolve_intrinsics(const IntrinsicsSpec& spec, uint32_t width, uint32_t hei
 // pinhole: what read_intrinsics reads back (make-scene's and import-colmap's transforms files, render's camera paths).
 io::Json lens_json(const Lens& lens);
 
+// A camera's intrinsics as the transforms keys read_intrinsics reads back: fl_x, fl_y, cx, cy, w, h and its lens. The
+// one writer of a camera's intrinsics: camera paths' frames (data/paths/camera_path.hpp) and import-colmap's
+// transforms.json go through it.
+io::Json intrinsics_json(const Camera& camera);
+
 }  // namespace mipnerf::data

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "eval/image_renderer.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"

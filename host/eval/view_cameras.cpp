@@ -7,7 +7,7 @@
 
 #include "core/error.hpp"
 #include "data/formats/formats.hpp"
-#include "data/keyframes.hpp"
+#include "data/paths/keyframes.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"
 #include "eval/render_setup.hpp"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/camera.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "train/checkpoint.hpp"
 
 namespace mipnerf::eval {

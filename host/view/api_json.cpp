@@ -2,7 +2,7 @@
 #include "view/api_json.hpp"
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 
 namespace mipnerf::view {
 namespace {

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "io/video.hpp"
 
 namespace mipnerf::view {

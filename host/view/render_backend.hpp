@@ -10,7 +10,7 @@
 
 #include "core/camera.hpp"
 #include "core/vec3.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 
 namespace mipnerf::view {
 

@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "data/intrinsics.hpp"
 #include "data/pose.hpp"
 #include "eval/image_renderer.hpp"

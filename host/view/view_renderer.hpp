@@ -15,7 +15,7 @@
 #include <string>
 
 #include "cl/context.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "eval/image_renderer.hpp"
 #include "train/checkpoint.hpp"
 #include "view/path_job.hpp"

@@ -9,7 +9,7 @@
 #include "cl/launch.hpp"
 #include "data/dataset.hpp"
 #include "data/device_dataset.hpp"
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 #include "support/data_fixtures.hpp"
 #include "ops/batch.hpp"
 #include "ops/rays.hpp"

@@ -7,8 +7,8 @@
 #include <fstream>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
-#include "data/procedural.hpp"
+#include "data/paths/camera_path.hpp"
+#include "data/synthetic/procedural.hpp"
 #include "support/temp_scene.hpp"
 
 using namespace mipnerf;

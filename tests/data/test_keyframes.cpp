@@ -6,7 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/vec3.hpp"
-#include "data/keyframes.hpp"
+#include "data/paths/keyframes.hpp"
 #include "data/pose.hpp"
 
 using namespace mipnerf;

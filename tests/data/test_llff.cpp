@@ -1,4 +1,4 @@
-// LLFF captures (data/llff.hpp, io/npy.hpp) on the forward-facing built-in scene (data/forward_facing.hpp): the
+// LLFF captures (data/formats/llff_capture.hpp, io/npy.hpp) on the forward-facing built-in scene (data/synthetic/forward_facing.hpp): the
 // official transformations against the cameras that rendered it, splits, factors, NDC or world bounds, the render
 // path, the .npy reader's errors, and malformed captures as one line each.
 #include <doctest/doctest.h>
@@ -9,8 +9,8 @@
 
 #include "core/error.hpp"
 #include "data/dataset.hpp"
-#include "data/forward_facing.hpp"
-#include "data/llff.hpp"
+#include "data/synthetic/forward_facing.hpp"
+#include "data/formats/llff_capture.hpp"
 #include "data/formats/formats.hpp"
 #include "io/npy.hpp"
 #include "support/jpeg_writer.hpp"

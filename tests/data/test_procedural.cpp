@@ -8,7 +8,7 @@
 
 #include "data/dataset.hpp"
 #include "data/inspect.hpp"
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 #include "support/data_fixtures.hpp"
 
 using namespace mipnerf;

@@ -10,7 +10,7 @@
 #include <map>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "data/dataset.hpp"
 #include "eval/evaluate.hpp"
 #include "eval/image_output.hpp"

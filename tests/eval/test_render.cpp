@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "data/dataset.hpp"
 #include "eval/image_output.hpp"
 #include "eval/image_renderer.hpp"

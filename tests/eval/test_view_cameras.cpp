@@ -6,7 +6,7 @@
 #include <filesystem>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "eval/view_cameras.hpp"
 #include "io/json.hpp"
 #include "io/png.hpp"

@@ -2,7 +2,7 @@
 // input gives the reader a default image size (as --size does), an even-sized one none, so both ways are fuzzed.
 #include <cmath>
 
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "data/dataset.hpp"
-#include "data/llff.hpp"
+#include "data/formats/llff_capture.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -15,8 +15,8 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "data/camera_path.hpp"
-#include "data/keyframes.hpp"
+#include "data/paths/camera_path.hpp"
+#include "data/paths/keyframes.hpp"
 #include "fuzz_support.hpp"
 #include "view/handler.hpp"
 #include "view/request_guard.hpp"

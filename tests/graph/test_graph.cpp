@@ -10,7 +10,7 @@
 #include <set>
 
 #include "data/device_dataset.hpp"
-#include "data/forward_facing.hpp"
+#include "data/synthetic/forward_facing.hpp"
 #include "graph/graph.hpp"
 #include "ops/batch.hpp"
 #include "ref/encode.hpp"

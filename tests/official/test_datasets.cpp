@@ -14,7 +14,7 @@
 
 #include "core/camera.hpp"
 #include "data/dataset.hpp"
-#include "data/llff.hpp"
+#include "data/formats/llff_capture.hpp"
 #include "io/json.hpp"
 #include "io/npy.hpp"
 #include "io/png.hpp"

@@ -1,4 +1,4 @@
-// Our multiscale Blender loader (host/data/multiscale.cpp: metadata.json as the official converter writes it) and ray
+// Our multiscale Blender loader (host/data/formats/multiscale_blender_parse.cpp: metadata.json as the official converter writes it) and ray
 // kernel against the official datasets.Multicam's own outputs (tests/official/fixtures/multicam.json, written by
 // make_vectors.py from google/mipnerf): pixels, rays, radii, lossmult, near and far of every image at every scale.
 #include <doctest/doctest.h>

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 
 namespace mipnerf::test {
 

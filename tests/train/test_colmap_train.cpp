@@ -8,7 +8,7 @@
 
 #include "data/import/colmap_import.hpp"
 #include "data/dataset.hpp"
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 #include "support/colmap_writer.hpp"
 #include "support/test_context.hpp"
 #include "support/train_fixtures.hpp"

@@ -21,7 +21,7 @@
 #include "data/pose.hpp"
 #include "support/test_context.hpp"
 #include "train/checkpoint.hpp"
-#include "data/forward_facing.hpp"
+#include "data/synthetic/forward_facing.hpp"
 #include "train/model.hpp"
 #include "train/scene_effects.hpp"
 #include "train/trainer.hpp"

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "train/config.hpp"

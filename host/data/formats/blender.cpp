@@ -1,5 +1,5 @@
 // The Blender format: DIR/transforms_{train,val,test}.json, frames with file_path and transform_matrix, one
-// camera_angle_x per split, RGBA PNGs (detail::parse_blender, data/blender.cpp).
+// camera_angle_x per split, RGBA PNGs (detail::parse_blender, data/formats/transforms_parse.cpp).
 #include "data/formats/formats.hpp"
 
 namespace mipnerf::data {

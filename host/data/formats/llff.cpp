@@ -1,6 +1,6 @@
 // LLFF captures (forward-facing photos; 360° captures spherified): DIR/poses_bounds.npy and DIR/images[_<factor>]/,
-// read with the official conventions (data/llff.hpp), and their official render paths.
-#include "data/llff.hpp"
+// read with the official conventions (data/formats/llff_capture.hpp), and their official render paths.
+#include "data/formats/llff_capture.hpp"
 
 #include "data/formats/formats.hpp"
 

@@ -59,6 +59,19 @@ struct Intrinsics {
   Lens lens;
 };
 
+// The intrinsics as a camera (no pose): what the lens check and the transforms writer take.
+Camera as_camera(const Intrinsics& in) {
+  Camera camera;
+  camera.focal_x_px = in.fx;
+  camera.focal_y_px = in.fy;
+  camera.center_x_px = in.cx;
+  camera.center_y_px = in.cy;
+  camera.width_px = static_cast<uint32_t>(in.width);
+  camera.height_px = static_cast<uint32_t>(in.height);
+  camera.lens = in.lens;
+  return camera;
+}
+
 // The intrinsics and lens of a camera the images use, read through its model's row (core/lens_models.hpp: COLMAP's
 // parameter orders); a model without a row is refused with what to run.
 Intrinsics camera_intrinsics(const ColmapModel& model, const ColmapCamera& camera) {
@@ -73,15 +86,7 @@ Intrinsics camera_intrinsics(const ColmapModel& model, const ColmapCamera& camer
   const ColmapIntrinsics read = read_colmap_params(*row, camera.params, at);
   Intrinsics in{read.fx, read.fy, read.cx, read.cy, camera.width, camera.height, read.lens};
   if (!(in.fx > 0.0) || !(in.fy > 0.0)) throw Error(at + ": the focal length must be positive");
-  Camera as_camera;  // the lens must invert over the whole image, or no ray leaves some pixels
-  as_camera.focal_x_px = in.fx;
-  as_camera.focal_y_px = in.fy;
-  as_camera.center_x_px = in.cx;
-  as_camera.center_y_px = in.cy;
-  as_camera.width_px = static_cast<uint32_t>(in.width);
-  as_camera.height_px = static_cast<uint32_t>(in.height);
-  as_camera.lens = in.lens;
-  check_lens_over_image(as_camera, at);
+  check_lens_over_image(as_camera(in), at);  // the lens must invert over the whole image, or no ray leaves some pixels
   return in;
 }
 
@@ -117,12 +122,8 @@ std::string relative_path(const fs::path& path, const fs::path& from_dir) {
   return relative.generic_string();
 }
 
-// The camera as a transforms file holds it (nerfstudio's keys for the lens, data/intrinsics.hpp).
-io::Json intrinsics_json(const Intrinsics& in) {
-  io::Json json = {{"fl_x", in.fx}, {"fl_y", in.fy}, {"cx", in.cx}, {"cy", in.cy}, {"w", in.width}, {"h", in.height}};
-  json.update(lens_json(in.lens));
-  return json;
-}
+// The camera as a transforms file holds it (data/intrinsics.hpp's one writer).
+io::Json intrinsics_json(const Intrinsics& in) { return data::intrinsics_json(as_camera(in)); }
 
 }  // namespace
 

@@ -3,7 +3,7 @@
 //    becomes an LLFF capture, as LLFF's own imgs2poses makes one from a COLMAP model: OUT/poses_bounds.npy (poses in
 //    LLFF's axes, h, w, focal; per image the 0.1th and 99.9th percentile depth of the points it sees) and OUT/images/
 //    (links to the registered photos, in pose order). It then trains as an LLFF capture does: NDC rays, cylinders,
-//    and every official LLFF convention (data/llff.hpp).
+//    and every official LLFF convention (data/formats/llff_capture.hpp).
 //  - anything else becomes OUT/transforms.json: poses converted from COLMAP's world-to-camera (OpenCV axes) to
 //    camera-to-world in OpenGL/Blender axes, the world recentred and rescaled, pinhole intrinsics per camera,
 //    near/far from the sparse points' depths, and OUT/images/ (links to the registered photos) that its frames name:

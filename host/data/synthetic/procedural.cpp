@@ -1,5 +1,5 @@
 // The procedural scene: geometry, shading, cameras, the supersampled renderer and the writer.
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 
 #include <algorithm>
 #include <atomic>

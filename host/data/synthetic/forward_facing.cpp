@@ -1,5 +1,5 @@
 // The forward-facing scene: backdrop, camera grid, LLFF writer.
-#include "data/forward_facing.hpp"
+#include "data/synthetic/forward_facing.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -9,7 +9,7 @@
 #include "core/error.hpp"
 #include "data/image.hpp"
 #include "data/pose.hpp"
-#include "data/procedural.hpp"
+#include "data/synthetic/procedural.hpp"
 #include "io/file.hpp"
 #include "io/npy.hpp"
 #include "io/jpeg.hpp"

@@ -1,5 +1,5 @@
 // Keyframe interpolation: Catmull–Rom positions, slerped orientations, linear intrinsics.
-#include "data/keyframes.hpp"
+#include "data/paths/keyframes.hpp"
 
 #include <algorithm>
 #include <cmath>

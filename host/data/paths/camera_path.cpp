@@ -1,5 +1,5 @@
 // Orbits, camera path files and resized cameras.
-#include "data/camera_path.hpp"
+#include "data/paths/camera_path.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -163,17 +163,10 @@ std::vector<Camera> camera_path_from_json(const nlohmann::json& root, const std:
 }
 
 io::Json camera_frame_json(const Camera& c) {
-  io::Json frame = io::Json::object();
-  frame["fl_x"] = c.focal_x_px;
-  frame["fl_y"] = c.focal_y_px;
-  frame["cx"] = c.center_x_px;
-  frame["cy"] = c.center_y_px;
-  frame["w"] = c.width_px;
-  frame["h"] = c.height_px;
+  io::Json frame = intrinsics_json(c);  // with the lens: a camera behind a lens renders through it again
   frame["near"] = c.near;
   frame["far"] = c.far;
   frame["transform_matrix"] = pose_to_json(c.camera_to_world);
-  frame.update(lens_json(c.lens));  // a camera behind a lens renders through it again
   return frame;
 }
 

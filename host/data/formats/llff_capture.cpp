@@ -1,5 +1,5 @@
 // LLFF captures: poses_bounds.npy, the official transformations, splits and the render path.
-#include "data/llff.hpp"
+#include "data/formats/llff_capture.hpp"
 
 #include <algorithm>
 #include <cmath>
