@@ -34,12 +34,14 @@ std::string lens_model_named(const io::Json& object, const std::string& where) {
     return object.at("camera_model").get<std::string>();
   }
   if (object.contains("is_fisheye") && object.at("is_fisheye").is_boolean() && object.at("is_fisheye").get<bool>()) {
-    return "OPENCV_FISHEYE";
+    return lens_model_name(LensModel::opencv_fisheye);
   }
   for (const auto& name : lens_coefficient_names()) {
-    if (object.contains(name) && coefficient(object, name.c_str(), where) != 0.0) return "OPENCV";
+    if (object.contains(name) && coefficient(object, name.c_str(), where) != 0.0) {
+      return lens_model_name(LensModel::opencv);
+    }
   }
-  return "PINHOLE";
+  return lens_model_name(LensModel::pinhole);
 }
 
 // The lens a transforms file describes, as nerfstudio writes it ("camera_model" with the coefficients its row takes,
