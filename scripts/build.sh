@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Configures and builds mipnerf-cl (Release) into ${BUILD_DIR:-build}: every target, or only the targets named
-# (scripts/quickstart.sh builds the executable alone).
+# (scripts/quickstart.sh builds the executable alone). --configure-only: the configure step alone (the quick start
+# times it apart from the build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir="${BUILD_DIR:-build}"
@@ -10,7 +11,9 @@ export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v 
 # Paths below the checkout hash as relative ones, so a clean checkout elsewhere reuses the cache.
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release
-if [ $# -gt 0 ]; then
+if [ "${1:-}" = "--configure-only" ]; then
+  exit 0
+elif [ $# -gt 0 ]; then
   cmake --build "$build_dir" -j "$jobs" --target "$@"
 else
   cmake --build "$build_dir" -j "$jobs"

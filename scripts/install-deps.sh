@@ -7,9 +7,11 @@
 # Idempotent and non-interactive: packages already installed are skipped; uses sudo when not root.
 set -euo pipefail
 
+# What the quick start needs: to configure and link the executable (the optional libraries below are linked when
+# found, so each is kept), to run it on PoCL, and python3 for scripts/time_to_output.py.
 packages=(
-  build-essential cmake pkg-config python3 python3-venv ccache
-  ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
+  build-essential cmake pkg-config python3
+  ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd
   libclblast-dev libopenexr-dev libcli11-dev doctest-dev
   nlohmann-json3-dev libpng-dev libjpeg-dev zlib1g-dev
   libplplot-dev plplot-driver-cairo  # `mipnerf-cl plot`: curves as SVG, and as PNG through PLplot's cairo driver
@@ -19,6 +21,8 @@ packages=(
   libcpp-httplib-dev  # `mipnerf-cl view`'s HTTP server
 )
 test_packages=(
+  ccache            # rebuilds after a checkout switch (scripts/build.sh, scripts/test-sanitize.sh use it when found)
+  clinfo python3-venv  # scripts/install-intel-opencl.sh: the Intel CPU runtime's stage
   oclgrind          # the OpenCL simulator the kernel tests also run under (tests/oclgrind)
   clang libclang-rt-dev  # the sanitizer build and the fuzz targets (scripts/test-sanitize.sh, scripts/fuzz.sh)
   libopenmpi-dev openmpi-bin  # mpirun: data-parallel training and sharded rendering (optional at build time)

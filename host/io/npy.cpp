@@ -110,7 +110,8 @@ class HeaderParser {
   size_t at_ = 0;
 };
 
-uint64_t read_le(std::string_view bytes, size_t at, int count) {
+// The unsigned little-endian integer of `count` bytes at `at` (the header length: 2 bytes in version 1, 4 after).
+uint64_t little_endian_at(std::string_view bytes, size_t at, int count) {
   uint64_t v = 0;
   for (int i = 0; i < count; ++i) v |= static_cast<uint64_t>(static_cast<unsigned char>(bytes[at + i])) << (8 * i);
   return v;
@@ -126,7 +127,7 @@ NpyArray parse_npy(std::string_view bytes, const std::string& where) {
   const int length_bytes = major == 1 ? 2 : 4;
   const size_t header_start = 8 + static_cast<size_t>(length_bytes);
   if (bytes.size() < header_start) throw Error(where + ": truncated .npy file");
-  const uint64_t header_length = read_le(bytes, 8, length_bytes);
+  const uint64_t header_length = little_endian_at(bytes, 8, length_bytes);
   if (header_length > bytes.size() - header_start) throw Error(where + ": truncated .npy header");
   const Header header = HeaderParser(bytes.substr(header_start, header_length), where).parse();
   if (header.fortran_order) throw Error(where + ": a Fortran-order array; save it in C order (numpy's default)");

@@ -78,7 +78,7 @@ struct WriteGuard {
   }
 };
 
-struct Header {
+struct PngHeader {
   png_uint_32 width = 0, height = 0;
   int bit_depth = 0;
   bool has_alpha = false;
@@ -96,7 +96,7 @@ constexpr int kSkippedChunkCount = sizeof(kSkippedChunks) / 5;
 constexpr png_alloc_size_t kChunkMallocMax = 1 << 16;
 
 // Reads the header and sets the transformations that give 8- or 16-bit RGBA. False on a libpng error.
-bool decode_header(png_structp png, png_infop info, Header* header) {
+bool decode_header(png_structp png, png_infop info, PngHeader* header) {
   if (setjmp(png_jmpbuf(png))) return false;
   // Large but sane limits: a corrupt header must not make us allocate gigabytes.
   png_set_user_limits(png, 1u << 15, 1u << 15);
@@ -177,7 +177,7 @@ PngImage decode_png(const unsigned char* bytes, size_t size, const std::string& 
   if (!guard.png || !guard.info) throw unreadable(name, "libpng could not allocate its state");
   png_set_read_fn(guard.png, &io, on_png_read);
 
-  Header header;
+  PngHeader header;
   if (!decode_header(guard.png, guard.info, &header)) throw unreadable(name, io.message);
   // Deflate expands at most 1032:1 (zlib's FAQ), so a header whose pixels could not fit in the whole file compressed
   // belongs to a truncated or corrupt file: refused before allocating for them (up to 8 GiB at 32768x32768).
