@@ -15,14 +15,9 @@ set(MIPNERF_UNITY_BATCH ${mipnerf_unity_default} CACHE STRING "Files per unity-b
 
 # Files left out of the unity batches (each still compiled on its own). host/data/formats/: every format's file
 # defines the same local names (detect, add_traits, effects) by design, so a new format is a copy of a row's file.
-# The others share an anonymous-namespace name with another file of their folder (number_text with
-# data/camera_path.cpp, Operands with gemm/cpu_sgemm_timing.cpp); renaming them is left to the step that owns those
-# folders, after which they leave this list. A new clash shows as a "redefinition of ... {anonymous}::" error in the
+# A new clash shows as a "redefinition of ... {anonymous}::" error in the
 # unity build: rename the local name (or list the file here).
 file(GLOB MIPNERF_UNITY_EXCLUDED CONFIGURE_DEPENDS "${CMAKE_CURRENT_LIST_DIR}/../host/data/formats/*.cpp")
-list(APPEND MIPNERF_UNITY_EXCLUDED "${CMAKE_CURRENT_LIST_DIR}/../host/data/pose.cpp"
-  "${CMAKE_CURRENT_LIST_DIR}/../host/data/import/colmap_model.cpp"
-  "${CMAKE_CURRENT_LIST_DIR}/../host/gemm/gemm_tune_steps.cpp")
 
 # mipnerf_unity_build(target): the target's files in unity batches, as MIPNERF_UNITY_BATCH says.
 function(mipnerf_unity_build target)

@@ -10,7 +10,7 @@
 namespace mipnerf::data {
 namespace {
 
-std::string number_text(double v) {
+std::string three_digits(double v) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.3g", v);
   return text;
@@ -102,8 +102,8 @@ Matrix34 pose_from_json(const io::Json& value, const std::string& where) {
       if (row < 3) m[row * 4 + col] = values[col];
       else if (std::abs(values[col] - (col == 3 ? 1.0 : 0.0)) > 1e-6) {
         throw Error(where + ": the pose's last row must be 0 0 0 1 (a rigid camera-to-world matrix), got " +
-                    number_text(values[0]) + " " + number_text(values[1]) + " " + number_text(values[2]) + " " +
-                    number_text(values[3]));
+                    three_digits(values[0]) + " " + three_digits(values[1]) + " " + three_digits(values[2]) + " " +
+                    three_digits(values[3]));
       }
     }
   }
@@ -134,12 +134,12 @@ void check_rigid_pose(const Matrix34& m, const std::string& where) {
                      r(0, 1) * (r(1, 0) * r(2, 2) - r(1, 2) * r(2, 0)) +
                      r(0, 2) * (r(1, 0) * r(2, 1) - r(1, 1) * r(2, 0));
   if (deviation > kRigidTolerance) {
-    throw Error(where + ": the pose's rotation is not orthonormal (max |R^T R - I| = " + number_text(deviation) +
-                ", tolerance " + number_text(kRigidTolerance) +
+    throw Error(where + ": the pose's rotation is not orthonormal (max |R^T R - I| = " + three_digits(deviation) +
+                ", tolerance " + three_digits(kRigidTolerance) +
                 "): the matrix is scaled or sheared; scale the scene through the translations only");
   }
   if (std::abs(det - 1.0) > kRigidTolerance) {
-    throw Error(where + ": the pose's rotation has determinant " + number_text(det) +
+    throw Error(where + ": the pose's rotation has determinant " + three_digits(det) +
                 " instead of +1: it is a reflection (a left-handed or mirrored axis convention); "
                 "convert it to OpenGL/Blender axes (x right, y up, camera looking down -z)");
   }

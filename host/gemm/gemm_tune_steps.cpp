@@ -74,18 +74,18 @@ Json run_kernel_tuner(ocl::Context& ctx, const Json& spec, const LogFn& log) {
 // ---- evaluate: a candidate through the real routine ----
 
 // Host copies of a product's operands, row-major, with their leading dimensions.
-struct Operands {
+struct OperandViews {
   const std::vector<float>& a;
   const std::vector<float>& b;
   size_t lda, ldb;
 };
 
-Operands operands_of(const GemmShape& s, const std::vector<float>& a, const std::vector<float>& b) {
+OperandViews operands_of(const GemmShape& s, const std::vector<float>& a, const std::vector<float>& b) {
   return {a, b, s.transpose_a ? s.m : s.k, s.transpose_b ? s.k : s.n};
 }
 
 // Element (i, j) of op(A)·op(B) in double, with Σ|a·b| for its error bound.
-std::pair<double, double> exact_element(const GemmShape& s, const Operands& x, size_t i, size_t j) {
+std::pair<double, double> exact_element(const GemmShape& s, const OperandViews& x, size_t i, size_t j) {
   double sum = 0.0, magnitude = 0.0;
   for (size_t p = 0; p < s.k; ++p) {
     const double term = static_cast<double>(s.transpose_a ? x.a[p * x.lda + i] : x.a[i * x.lda + p]) *
@@ -128,7 +128,7 @@ double probe_correctness(ocl::Context& ctx, const ParameterSet& set) {
       b_dev.upload(ctx, b);
       run_gemm(ctx, s, a_dev, b_dev, c_dev, "probe");
       const auto c = c_dev.download(ctx);
-      const Operands x = operands_of(s, a, b);
+      const OperandViews x = operands_of(s, a, b);
       for (size_t i = 0; i < m; ++i) {
         for (size_t j = 0; j < n; ++j) {
           const auto [exact, magnitude] = exact_element(s, x, i, j);
@@ -141,7 +141,7 @@ double probe_correctness(ocl::Context& ctx, const ParameterSet& set) {
 }
 
 // Worst error ratio of 64 elements of the product in `c_dev`, drawn with `rng`.
-double sampled_error_ratio(ocl::Context& ctx, const GemmShape& s, const Operands& x,
+double sampled_error_ratio(ocl::Context& ctx, const GemmShape& s, const OperandViews& x,
                            const ocl::DeviceArray<float>& c_dev, std::mt19937& rng) {
   std::vector<float> c(s.m * s.n);
   c_dev.download(ctx, c.data(), c.size());

@@ -46,7 +46,7 @@ constexpr int kFewestParams = 2;
 // Larger sides are not a camera image (and would overflow the loader's 32-bit sizes).
 constexpr uint64_t kMaxImageSide = 1u << 20;
 
-std::string number_text(double v) {
+std::string six_digits(double v) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.6g", v);
   return text;
@@ -98,7 +98,7 @@ std::array<double, 4> checked_quaternion(const std::array<double, 4>& q, const s
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   if (norm == 0.0) throw Error(at + ": the quaternion (QW QX QY QZ) is zero: not a rotation");
   if (std::abs(norm - 1.0) > kQuaternionTolerance) {
-    throw Error(at + ": the quaternion (QW QX QY QZ) has norm " + number_text(norm) +
+    throw Error(at + ": the quaternion (QW QX QY QZ) has norm " + six_digits(norm) +
                 ", not 1: not a rotation COLMAP wrote");
   }
   return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
