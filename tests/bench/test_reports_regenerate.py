@@ -37,7 +37,7 @@ REGENERATIONS = [
      ["vs_official_llff_pocl_cpu.md"]),
 ] + [("before_after", ["--report-only", f"bench/results/before_after/{os.path.basename(p)}"],
       [os.path.basename(p)[:-5] + ".md"])
-     for p in sorted(glob.glob(os.path.join(bench, "results", "before_after", "renovation2_before_after*.json")))]
+     for p in sorted(glob.glob(os.path.join(bench, "results", "before_after", "renovation*_before_after*.json")))]
 
 explicit = {f"{study}/{name}" for study, _, reports in REGENERATIONS for name in reports}
 for path in sorted(glob.glob(os.path.join(bench, "results", "*", "*.md"))):
