@@ -1,6 +1,7 @@
 // The viewer's recorded paths, rendered in the background into the run folder.
 #include "view/path_job.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -12,6 +13,18 @@
 namespace mipnerf::view {
 namespace fs = std::filesystem;
 namespace {
+
+// The nearest even frame size at or below the path's (its first frame's: a path's frames share one size), or an
+// empty request when both sides are even already.
+data::ResolutionRequest even_video_size(const eval::ViewFrames& frames) {
+  data::ResolutionRequest even;
+  if (frames.cameras.empty()) return even;
+  const Camera& first = frames.cameras.front();
+  if (first.width_px % 2 == 0 && first.height_px % 2 == 0) return even;
+  even.width = std::max<uint32_t>(2, first.width_px - first.width_px % 2);
+  even.height = std::max<uint32_t>(2, first.height_px - first.height_px % 2);
+  return even;
+}
 
 struct PathCancelled {};  // thrown from a path render's progress callback when the page cancelled it
 
@@ -83,6 +96,13 @@ PathReply PathJob::start(const PathRequest& request) {
     data::ResolutionRequest size;
     if (request.divisor > 1) size.scale = 1.0 / request.divisor;
     frames = eval::path_views(request.keyframes, "the viewer's recorded path", size, request.frames);
+    if (io::video_supported()) {
+      // H.264 in 4:2:0 needs even sides, and the page's divisors are sizes for people, not exact ones: 1/8 of the
+      // LLFF flower's 504x378 is 63x47. Such a path renders one pixel smaller per odd side (62x46), the field of
+      // view kept with square pixels (data::resize_camera), instead of being refused.
+      const data::ResolutionRequest even = even_video_size(frames);
+      if (even.width != 0) frames = eval::path_views(request.keyframes, "the viewer's recorded path", even, request.frames);
+    }
     for (const Camera& c : frames.cameras) {
       if (static_cast<uint64_t>(c.width_px) * c.height_px > max_pixels_) {
         throw Error("the path's frames are larger than the viewer renders");
