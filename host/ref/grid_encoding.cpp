@@ -1,0 +1,87 @@
+// Zip-NeRF's grid lookups and level weights in double precision (the official conventions, grid_encoding.hpp).
+#include "ref/grid_encoding.hpp"
+
+#include <cmath>
+
+namespace mipnerf::ref {
+namespace {
+
+// The 8 corners of the cell block around `position` (already shifted to corner coordinates) and their trilinear
+// weights, in the official order (x slowest, z fastest).
+struct Corners {
+  int64_t cell[8][3];
+  double weight[8];
+};
+
+Corners corners_of(const double position[3]) {
+  Corners c{};
+  const double floor_x[3] = {std::floor(position[0]), std::floor(position[1]), std::floor(position[2])};
+  for (int corner = 0; corner < 8; ++corner) {
+    double weight = 1.0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const int up = (corner >> (2 - axis)) & 1;  // x is the corner index's high bit, z its low bit
+      const double fraction = position[axis] - floor_x[axis];
+      c.cell[corner][axis] = static_cast<int64_t>(floor_x[axis]) + up;
+      weight *= up ? fraction : 1.0 - fraction;
+    }
+    c.weight[corner] = weight;
+  }
+  return c;
+}
+
+}  // namespace
+
+std::vector<int> grid_level_sizes(int min_grid_size, int max_grid_size, double scale_supersample) {
+  const double desired = 1.0 + scale_supersample * std::log2(static_cast<double>(max_grid_size) / min_grid_size);
+  const double count = std::round(desired);
+  if (std::abs(desired - count) > 1e-4 || count < 1) return {};
+  std::vector<int> sizes;
+  const int levels = static_cast<int>(count);
+  for (int l = 0; l < levels; ++l) {
+    const double t = levels == 1 ? 0.0 : static_cast<double>(l) / (levels - 1);
+    // geomspace: min · (max/min)^t, its ends exact.
+    const double size = l == levels - 1 ? max_grid_size : min_grid_size * std::pow(double(max_grid_size) / min_grid_size, t);
+    sizes.push_back(static_cast<int>(std::round(size)));
+  }
+  return sizes;
+}
+
+uint32_t hash_slot(int64_t x, int64_t y, int64_t z, uint32_t table_size) {
+  const uint32_t ux = static_cast<uint32_t>(x), uy = static_cast<uint32_t>(y), uz = static_cast<uint32_t>(z);
+  return (ux ^ (uy * 19349663u) ^ (uz * 83492791u)) % table_size;
+}
+
+std::vector<double> trilerp_hashed(const std::vector<double>& table, uint32_t table_size, int features,
+                                   const double cell_coord[3]) {
+  const double position[3] = {cell_coord[0] - 0.5, cell_coord[1] - 0.5, cell_coord[2] - 0.5};
+  const Corners c = corners_of(position);
+  std::vector<double> out(features, 0.0);
+  for (int corner = 0; corner < 8; ++corner) {
+    const uint32_t slot = hash_slot(c.cell[corner][0], c.cell[corner][1], c.cell[corner][2], table_size);
+    for (int f = 0; f < features; ++f) out[f] += c.weight[corner] * table[size_t(slot) * features + f];
+  }
+  return out;
+}
+
+std::vector<double> trilerp_dense(const std::vector<double>& grid, int grid_size, int features,
+                                  const double cell_coord[3]) {
+  const double position[3] = {cell_coord[0] - 0.5, cell_coord[1] - 0.5, cell_coord[2] - 0.5};
+  const Corners c = corners_of(position);
+  std::vector<double> out(features, 0.0);
+  for (int corner = 0; corner < 8; ++corner) {
+    bool inside = true;
+    for (int axis = 0; axis < 3; ++axis) inside = inside && c.cell[corner][axis] >= 0 && c.cell[corner][axis] < grid_size;
+    if (!inside) continue;  // the zero padding around the grid
+    const size_t cell = (size_t(c.cell[corner][0]) * grid_size + size_t(c.cell[corner][1])) * grid_size +
+                        size_t(c.cell[corner][2]);
+    for (int f = 0; f < features; ++f) out[f] += c.weight[corner] * grid[cell * features + f];
+  }
+  return out;
+}
+
+double level_feature_weight(double scale_cells) {
+  const double x = 1.0 / (std::sqrt(8.0) * scale_cells);
+  return (x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0) * std::sqrt(1.0 - std::exp(-(4.0 / M_PI) * x * x));
+}
+
+}  // namespace mipnerf::ref

@@ -1,0 +1,90 @@
+// Zip-NeRF's grid encoding reference (host/ref/grid_encoding.hpp) against the official camp_zipnerf functions'
+// own outputs (fixtures/zipnerf_grid.json, written by make_grid_vectors.py): level sizes, the hashed lookup (the
+// corner hash and trilinear weights, also at cell boundaries, negative cells and cells whose hash products wrap), the
+// dense lookup (zero outside the grid) and the per-level feature weight. The official math ran in float64, so the
+// bound is roundoff.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "official_fixtures.hpp"
+#include "ref/grid_encoding.hpp"
+
+using namespace mipnerf;
+
+namespace {
+
+const char* kZipnerfCommit = "8e6d57e3aee34235faf3ef99decca0994efe66c9";
+
+io::Json grid_fixture() {
+  const auto path = official::fixture_dir() / "zipnerf_grid.json";
+  INFO("fixture " << path.string());
+  REQUIRE(std::filesystem::is_regular_file(path));
+  io::Json json = io::read_json(path.string());
+  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kZipnerfCommit);
+  return json;
+}
+
+// The largest |ours − official| over a lookup's coordinates (`lookup` gives our features at one coordinate).
+template <typename Lookup>
+double worst_lookup_error(const io::Json& case_json, int features, Lookup lookup) {
+  const auto coords = official::flat(case_json.at("coords"));
+  const auto expected = official::flat(case_json.at("values"));
+  REQUIRE(expected.size() == coords.size() / 3 * features);
+  double worst = 0;
+  for (size_t i = 0; i < coords.size() / 3; ++i) {
+    const std::vector<double> ours = lookup(&coords[3 * i]);
+    for (int f = 0; f < features; ++f) worst = std::max(worst, std::abs(ours[f] - expected[i * features + f]));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("zipnerf grid: the level sizes are HashEncoding.grid_sizes'") {
+  for (const auto& setting : grid_fixture().at("level_sizes")) {
+    const auto sizes = ref::grid_level_sizes(setting.at("min").get<int>(), setting.at("max").get<int>(),
+                                             setting.at("supersample").get<double>());
+    CHECK(sizes == setting.at("sizes").get<std::vector<int>>());
+  }
+  CHECK(ref::grid_level_sizes(16, 100, 1.0).empty());  // 1 + log2(6.25) levels: not an integer, refused
+}
+
+TEST_CASE("zipnerf grid: a hashed level's lookup is hash_resample_3d's, also at boundaries and wrapping cells") {
+  const io::Json hash = grid_fixture().at("hash");
+  const auto table = official::flat(hash.at("table"));
+  const uint32_t table_size = static_cast<uint32_t>(hash.at("table").size());
+  const double worst = worst_lookup_error(hash, 2, [&](const double* coord) {
+    return ref::trilerp_hashed(table, table_size, 2, coord);
+  });
+  INFO("worst difference " << worst);
+  CHECK(worst < 1e-12);
+}
+
+TEST_CASE("zipnerf grid: a dense level's lookup is resample_3d's as trilerp calls it, zero outside the grid") {
+  const io::Json dense = grid_fixture().at("dense");
+  const auto grid = official::flat(dense.at("grid"));
+  const int grid_size = static_cast<int>(dense.at("grid").size());
+  const double worst = worst_lookup_error(dense, 2, [&](const double* coord) {
+    return ref::trilerp_dense(grid, grid_size, 2, coord);
+  });
+  INFO("worst difference " << worst);
+  CHECK(worst < 1e-12);
+}
+
+TEST_CASE("zipnerf grid: a level's feature weight is approx_erf(1 / (sqrt(8) scale N)), finite at both extremes") {
+  const io::Json weight = grid_fixture().at("weight");
+  const auto scales = official::flat(weight.at("scale_cells"));
+  const auto expected = official::flat(weight.at("values"));
+  for (size_t i = 0; i < scales.size(); ++i) {
+    CAPTURE(scales[i]);
+    const double ours = ref::level_feature_weight(scales[i]);
+    CHECK(std::isfinite(ours));
+    CHECK(std::abs(ours - expected[i]) < 1e-12);
+  }
+  CHECK(ref::level_feature_weight(1e-30) == 1.0);  // a point: the cell's features whole
+  CHECK(ref::level_feature_weight(1e30) >= 0.0);   // a footprint of many cells: faded to (nearly) nothing
+  CHECK(ref::level_feature_weight(1e30) < 1e-29);
+}
