@@ -81,7 +81,73 @@ std::vector<double> trilerp_dense(const std::vector<double>& grid, int grid_size
 
 double level_feature_weight(double scale_cells) {
   const double x = 1.0 / (std::sqrt(8.0) * scale_cells);
-  return (x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0) * std::sqrt(1.0 - std::exp(-(4.0 / M_PI) * x * x));
+  // √(−expm1(−y)) = √(1 − e^−y) without its cancellation for a footprint of many cells.
+  return (x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0) * std::sqrt(-std::expm1(-(4.0 / M_PI) * x * x));
+}
+
+namespace {
+
+// Point p's corners at level l: table entries (−1 outside a dense grid) and weights, as the kernel's grid_corners.
+void level_corners(const uint32_t* level, const double* point, int64_t entry[8], double weight[8]) {
+  const double n = level[1];
+  const double position[3] = {point[0] * n - 0.5, point[1] * n - 0.5, point[2] * n - 0.5};
+  const Corners c = corners_of(position);
+  for (int corner = 0; corner < 8; ++corner) {
+    weight[corner] = c.weight[corner];
+    const int64_t* cell = c.cell[corner];
+    if (level[3]) {
+      entry[corner] = int64_t(level[0]) + hash_slot(cell[0], cell[1], cell[2], level[2]);
+    } else {
+      const int64_t size = level[1];
+      const bool inside = cell[0] >= 0 && cell[0] < size && cell[1] >= 0 && cell[1] < size && cell[2] >= 0 &&
+                          cell[2] < size;
+      entry[corner] = inside ? int64_t(level[0]) + (cell[0] * size + cell[1]) * size + cell[2] : -1;
+    }
+  }
+}
+
+}  // namespace
+
+void grid_encoding_fwd(const std::vector<uint32_t>& levels, const std::vector<double>& coords,
+                       const std::vector<double>& scales, const std::vector<double>& table, int features,
+                       bool downweight, std::vector<double>& out) {
+  const size_t n_levels = levels.size() / 4, n_points = coords.size() / 3;
+  out.assign(n_points * n_levels * features, 0.0);
+  for (size_t p = 0; p < n_points; ++p) {
+    for (size_t l = 0; l < n_levels; ++l) {
+      int64_t entry[8];
+      double weight[8];
+      level_corners(&levels[4 * l], &coords[3 * p], entry, weight);
+      const double level_weight = downweight ? level_feature_weight(scales[p] * levels[4 * l + 1]) : 1.0;
+      double* f_out = &out[(p * n_levels + l) * features];
+      for (int corner = 0; corner < 8; ++corner) {
+        if (entry[corner] < 0) continue;
+        for (int f = 0; f < features; ++f) f_out[f] += weight[corner] * table[size_t(entry[corner]) * features + f];
+      }
+      for (int f = 0; f < features; ++f) f_out[f] *= level_weight;
+    }
+  }
+}
+
+void grid_encoding_bwd(const std::vector<uint32_t>& levels, const std::vector<double>& coords,
+                       const std::vector<double>& scales, const std::vector<double>& d_features, int features,
+                       bool downweight, std::vector<double>& d_table) {
+  const size_t n_levels = levels.size() / 4, n_points = coords.size() / 3;
+  for (size_t p = 0; p < n_points; ++p) {
+    for (size_t l = 0; l < n_levels; ++l) {
+      int64_t entry[8];
+      double weight[8];
+      level_corners(&levels[4 * l], &coords[3 * p], entry, weight);
+      const double level_weight = downweight ? level_feature_weight(scales[p] * levels[4 * l + 1]) : 1.0;
+      for (int corner = 0; corner < 8; ++corner) {
+        if (entry[corner] < 0) continue;
+        for (int f = 0; f < features; ++f) {
+          d_table[size_t(entry[corner]) * features + f] +=
+              level_weight * weight[corner] * d_features[(p * n_levels + l) * features + f];
+        }
+      }
+    }
+  }
 }
 
 }  // namespace mipnerf::ref

@@ -37,4 +37,14 @@ std::vector<double> trilerp_dense(const std::vector<double>& grid, int grid_size
 // faded out, as IPE fades the frequencies a frustum is wider than.
 double level_feature_weight(double scale_cells);
 
+// kernels/grid_encoding.cl's two kernels, same names and layouts: `levels` [L][4] (first entry, N, T, hashed), coords
+// [P][3] in the unit cube, scales [P] (with downweight), table [entries][features] → features [P][L][features]; the
+// backward adds the table's gradient to d_table (in a fixed order, in double).
+void grid_encoding_fwd(const std::vector<uint32_t>& levels, const std::vector<double>& coords,
+                       const std::vector<double>& scales, const std::vector<double>& table, int features,
+                       bool downweight, std::vector<double>& out);
+void grid_encoding_bwd(const std::vector<uint32_t>& levels, const std::vector<double>& coords,
+                       const std::vector<double>& scales, const std::vector<double>& d_features, int features,
+                       bool downweight, std::vector<double>& d_table);
+
 }  // namespace mipnerf::ref
