@@ -8,7 +8,8 @@ sys.path, never copied). It calls the official functions themselves on fixed inp
     on a small fixed table, at coordinates that include cell boundaries, negative cells and far-out ones;
   - resample.resample_3d as grid_utils.trilerp calls it for the dense levels (coordinates − 0.5, flipped, zero
     outside the grid), on a small fixed grid, inside, on the border and outside it;
-  - math.approx_erf at 1 / (√8 · scale · grid_size), the weight each level's features get (models' downweighting).
+  - math.approx_erf at 1 / (√8 · scale · grid_size), the weight each level's features get (models' downweighting);
+  - coord.hexify without a random key: the 6 multisamples of each interval (one ray along +z, the basis' other case).
 host/ref/grid_encoding.hpp is checked against them (tests/official/test_grid_encoding.cpp).
 
 Official commit: 8e6d57e3aee34235faf3ef99decca0994efe66c9 (github:jonbarron/camp_zipnerf), recorded in the fixture.
@@ -22,9 +23,12 @@ Inputs come from numpy.random.default_rng(20261127) and are float32 values; the 
 jax_enable_x64 on float64 arrays holding them, so the fixture is the official math without float32 rounding.
 """
 import argparse
+import importlib
 import importlib.util
 import json
 import os
+import sys
+import types
 
 import numpy as np
 
@@ -36,6 +40,16 @@ def load(zipnerf, name):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def load_package_module(zipnerf, name):
+    """A module of camp_zipnerf/internal that imports its siblings (coord: geopoly, math), without the package's
+    __init__ (which imports every module, flax and gin included): a bare package object whose path is that folder."""
+    if "zipnerf_internal" not in sys.modules:
+        package = types.ModuleType("zipnerf_internal")
+        package.__path__ = [os.path.join(zipnerf, "camp_zipnerf", "internal")]
+        sys.modules["zipnerf_internal"] = package
+    return importlib.import_module("zipnerf_internal." + name)
 
 
 def level_sizes(min_size, max_size, supersample):
@@ -85,6 +99,17 @@ def main():
     scale_cells = f32(np.concatenate([rng.uniform(0.01, 3.0, size=12), [1e-6, 1e-3, 0.1, 1.0, 10.0, 1e3]]))
     weights = np.asarray(zmath.approx_erf(1 / (jnp.sqrt(8) * jnp.asarray(scale_cells))))
 
+    # The deterministic multisamples (coord.hexify with rng=None): 5 rays, 4 intervals each; one ray along +z, where
+    # construct_perp_basis takes its other cross product.
+    coord = load_package_module(args.zipnerf, "coord")
+    origins = f32(rng.uniform(-1, 1, size=(5, 3)))
+    directions = f32(rng.uniform(-1, 1, size=(5, 3)))
+    directions[4] = [0.0, 0.0, 1.0]
+    radii = f32(rng.uniform(0.0005, 0.01, size=(5, 1)))
+    tdist = np.sort(f32(rng.uniform(0.5, 6.0, size=(5, 5))), axis=-1)
+    control, perp_mag = coord.hexify(None, origins=jnp.asarray(origins), directions=jnp.asarray(directions),
+                                     radii=jnp.asarray(radii), tdist=jnp.asarray(tdist))
+
     out = {
         "generator": "tests/official/make_grid_vectors.py",
         "zipnerf_commit": args.zipnerf_commit,
@@ -94,6 +119,9 @@ def main():
         "hash": {"table": table.tolist(), "coords": coords.tolist(), "values": hashed.tolist()},
         "dense": {"grid": grid.tolist(), "coords": grid_coords.tolist(), "values": dense.tolist()},
         "weight": {"scale_cells": scale_cells.tolist(), "values": weights.tolist()},
+        "hexify": {"origins": origins.tolist(), "directions": directions.tolist(), "radii": radii.tolist(),
+                   "tdist": tdist.tolist(), "control": np.asarray(control).tolist(),
+                   "perp_mag": np.asarray(perp_mag).tolist()},
     }
     with open(args.out, "w", encoding="utf-8") as f:
         json.dump(out, f)

@@ -1,8 +1,8 @@
-// Zip-NeRF's grid encoding reference (host/ref/grid_encoding.hpp) against the official camp_zipnerf functions'
-// own outputs (fixtures/zipnerf_grid.json, written by make_grid_vectors.py): level sizes, the hashed lookup (the
-// corner hash and trilinear weights, also at cell boundaries, negative cells and cells whose hash products wrap), the
-// dense lookup (zero outside the grid) and the per-level feature weight. The official math ran in float64, so the
-// bound is roundoff.
+// Zip-NeRF's grid encoding and multisample references (host/ref/grid_encoding.hpp, multisample.hpp) against the
+// official camp_zipnerf functions' own outputs (fixtures/zipnerf_grid.json, written by make_grid_vectors.py): level
+// sizes, the hashed lookup (the corner hash and trilinear weights, also at cell boundaries, negative cells and cells
+// whose hash products wrap), the dense lookup (zero outside the grid), the per-level feature weight and the
+// deterministic hexagonal multisamples. The official math ran in float64, so the bound is roundoff.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -11,6 +11,7 @@
 
 #include "official_fixtures.hpp"
 #include "ref/grid_encoding.hpp"
+#include "ref/multisample.hpp"
 
 using namespace mipnerf;
 
@@ -87,4 +88,32 @@ TEST_CASE("zipnerf grid: a level's feature weight is approx_erf(1 / (sqrt(8) sca
   CHECK(ref::level_feature_weight(1e-30) == 1.0);  // a point: the cell's features whole
   CHECK(ref::level_feature_weight(1e30) >= 0.0);   // a footprint of many cells: faded to (nearly) nothing
   CHECK(ref::level_feature_weight(1e30) < 1e-29);
+}
+
+TEST_CASE("zipnerf multisamples: the deterministic hexagons are coord.hexify's, also for a ray along +z") {
+  const io::Json hex = grid_fixture().at("hexify");
+  const auto origins = official::flat(hex.at("origins")), directions = official::flat(hex.at("directions"));
+  const auto radii = official::flat(hex.at("radii")), tdist = official::flat(hex.at("tdist"));
+  const auto control = official::flat(hex.at("control")), perp_mag = official::flat(hex.at("perp_mag"));
+  const size_t rays = origins.size() / 3, edges = tdist.size() / rays, intervals = edges - 1;
+  REQUIRE(control.size() == rays * intervals * 6 * 3);
+  double worst_point = 0, worst_perp = 0;
+  for (size_t r = 0; r < rays; ++r) {
+    for (size_t i = 0; i < intervals; ++i) {
+      const ref::Multisamples m = ref::hexify_multisamples(
+          {origins[3 * r], origins[3 * r + 1], origins[3 * r + 2]},
+          {directions[3 * r], directions[3 * r + 1], directions[3 * r + 2]}, radii[r], tdist[r * edges + i],
+          tdist[r * edges + i + 1], static_cast<int>(i));
+      for (int j = 0; j < 6; ++j) {
+        const size_t sample = (r * intervals + i) * 6 + j;
+        worst_perp = std::max(worst_perp, std::abs(m.perp_radius[j] - perp_mag[sample]));
+        for (int a = 0; a < 3; ++a) {
+          worst_point = std::max(worst_point, std::abs(m.points_world[j][a] - control[3 * sample + a]));
+        }
+      }
+    }
+  }
+  INFO("worst point difference " << worst_point << ", off-axis radius " << worst_perp);
+  CHECK(worst_point < 1e-12);
+  CHECK(worst_perp < 1e-12);
 }
