@@ -56,6 +56,8 @@ def level_sizes(min_size, max_size, supersample):
     # grid_utils.HashEncoding.grid_sizes, evaluated on its own numbers (the class needs flax and gin to construct).
     desired = 1 + supersample * np.log2(max_size / min_size)
     count = int(np.round(desired))
+    if abs(desired - count) > 1e-4:
+        raise ValueError(f"({min_size}, {max_size}, {supersample}) gives {desired} levels, which the official refuses")
     return np.round(np.geomspace(min_size, max_size, count)).astype(np.int32).tolist()
 
 
@@ -115,7 +117,7 @@ def main():
         "zipnerf_commit": args.zipnerf_commit,
         "jax": jax.__version__,
         "level_sizes": [{"min": a, "max": b, "supersample": s, "sizes": level_sizes(a, b, s)}
-                        for a, b, s in [(16, 2048, 2.0), (16, 8192, 1.0), (16, 512, 0.5), (16, 2048, 1.0)]],
+                        for a, b, s in [(16, 2048, 2.0), (16, 8192, 1.0), (16, 4096, 0.5), (16, 2048, 1.0)]],
         "hash": {"table": table.tolist(), "coords": coords.tolist(), "values": hashed.tolist()},
         "dense": {"grid": grid.tolist(), "coords": grid_coords.tolist(), "values": dense.tolist()},
         "weight": {"scale_cells": scale_cells.tolist(), "values": weights.tolist()},

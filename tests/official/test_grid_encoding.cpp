@@ -45,12 +45,15 @@ double worst_lookup_error(const io::Json& case_json, int features, Lookup lookup
 }  // namespace
 
 TEST_CASE("zipnerf grid: the level sizes are HashEncoding.grid_sizes'") {
-  for (const auto& setting : grid_fixture().at("level_sizes")) {
+  const io::Json fixture = grid_fixture();  // held: a range-for over grid_fixture().at(…) would read a freed temporary
+  for (const auto& setting : fixture.at("level_sizes")) {
     const auto sizes = ref::grid_level_sizes(setting.at("min").get<int>(), setting.at("max").get<int>(),
                                              setting.at("supersample").get<double>());
     CHECK(sizes == setting.at("sizes").get<std::vector<int>>());
   }
   CHECK(ref::grid_level_sizes(16, 100, 1.0).empty());  // 1 + log2(6.25) levels: not an integer, refused
+  CHECK(ref::grid_level_sizes(16, 512, 0.5).empty());  // 3.5 levels, refused too
+  CHECK(fixture.at("level_sizes").size() == 4);        // the loop above compared something
 }
 
 TEST_CASE("zipnerf grid: a hashed level's lookup is hash_resample_3d's, also at boundaries and wrapping cells") {
