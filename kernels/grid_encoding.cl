@@ -60,6 +60,15 @@ inline float level_feature_weight(float scale_cells) {
   return sqrt(-expm1(-1.2732395447351628f * x * x));
 }
 
+// Point p's weight at `level`: its footprint's with GRID_DOWNWEIGHT, else 1 (instant-ngp's plain grid).
+inline float point_level_weight(__global const float* scales, uint p, uint4 level) {
+#if GRID_DOWNWEIGHT
+  return level_feature_weight(scales[p] * (float)level.y);
+#else
+  return 1.0f;
+#endif
+}
+
 __kernel void grid_encoding_fwd(__global const uint4* levels, __global const float* coords,
                                 __global const float* scales, __global const float* table,
                                 __global float* features, const uint n_points, const uint n_levels) {
@@ -74,11 +83,7 @@ __kernel void grid_encoding_fwd(__global const uint4* levels, __global const flo
     if (c.entry[corner] < 0) continue;
     for (int f = 0; f < GRID_FEATURES; ++f) sum[f] += c.weight[corner] * table[c.entry[corner] * GRID_FEATURES + f];
   }
-#if GRID_DOWNWEIGHT
-  const float weight = level_feature_weight(scales[p] * (float)level.y);
-#else
-  const float weight = 1.0f;
-#endif
+  const float weight = point_level_weight(scales, p, level);
   for (int f = 0; f < GRID_FEATURES; ++f) features[(size_t)item * GRID_FEATURES + f] = weight * sum[f];
 }
 
@@ -107,11 +112,7 @@ __kernel void grid_encoding_bwd(__global const uint4* levels, __global const flo
   const uint p = item / n_levels, l = item % n_levels;
   const uint4 level = levels[l];
   const GridCorners c = grid_corners(level, vload3(p, coords));
-#if GRID_DOWNWEIGHT
-  const float weight = level_feature_weight(scales[p] * (float)level.y);
-#else
-  const float weight = 1.0f;
-#endif
+  const float weight = point_level_weight(scales, p, level);
   for (int corner = 0; corner < 8; ++corner) {
     if (c.entry[corner] < 0) continue;
     for (int f = 0; f < GRID_FEATURES; ++f) {

@@ -51,46 +51,12 @@ uint32_t hash_slot(int64_t x, int64_t y, int64_t z, uint32_t table_size) {
   return (ux ^ (uy * 19349663u) ^ (uz * 83492791u)) % table_size;
 }
 
-std::vector<double> trilerp_hashed(const std::vector<double>& table, uint32_t table_size, int features,
-                                   const double cell_coord[3]) {
-  const double position[3] = {cell_coord[0] - 0.5, cell_coord[1] - 0.5, cell_coord[2] - 0.5};
-  const Corners c = corners_of(position);
-  std::vector<double> out(features, 0.0);
-  for (int corner = 0; corner < 8; ++corner) {
-    const uint32_t slot = hash_slot(c.cell[corner][0], c.cell[corner][1], c.cell[corner][2], table_size);
-    for (int f = 0; f < features; ++f) out[f] += c.weight[corner] * table[size_t(slot) * features + f];
-  }
-  return out;
-}
-
-std::vector<double> trilerp_dense(const std::vector<double>& grid, int grid_size, int features,
-                                  const double cell_coord[3]) {
-  const double position[3] = {cell_coord[0] - 0.5, cell_coord[1] - 0.5, cell_coord[2] - 0.5};
-  const Corners c = corners_of(position);
-  std::vector<double> out(features, 0.0);
-  for (int corner = 0; corner < 8; ++corner) {
-    bool inside = true;
-    for (int axis = 0; axis < 3; ++axis) inside = inside && c.cell[corner][axis] >= 0 && c.cell[corner][axis] < grid_size;
-    if (!inside) continue;  // the zero padding around the grid
-    const size_t cell = (size_t(c.cell[corner][0]) * grid_size + size_t(c.cell[corner][1])) * grid_size +
-                        size_t(c.cell[corner][2]);
-    for (int f = 0; f < features; ++f) out[f] += c.weight[corner] * grid[cell * features + f];
-  }
-  return out;
-}
-
-double level_feature_weight(double scale_cells) {
-  const double x = 1.0 / (std::sqrt(8.0) * scale_cells);
-  // √(−expm1(−y)) = √(1 − e^−y) without its cancellation for a footprint of many cells.
-  return (x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0) * std::sqrt(-std::expm1(-(4.0 / M_PI) * x * x));
-}
-
 namespace {
 
-// Point p's corners at level l: table entries (−1 outside a dense grid) and weights, as the kernel's grid_corners.
-void level_corners(const uint32_t* level, const double* point, int64_t entry[8], double weight[8]) {
-  const double n = level[1];
-  const double position[3] = {point[0] * n - 0.5, point[1] * n - 0.5, point[2] * n - 0.5};
+// The corners around `cell_coord` (x·N) at a level {first entry, N, T, hashed}: table entries (−1 outside a dense
+// grid) and trilinear weights, as the kernel's grid_corners.
+void level_corners(const uint32_t* level, const double cell_coord[3], int64_t entry[8], double weight[8]) {
+  const double position[3] = {cell_coord[0] - 0.5, cell_coord[1] - 0.5, cell_coord[2] - 0.5};
   const Corners c = corners_of(position);
   for (int corner = 0; corner < 8; ++corner) {
     weight[corner] = c.weight[corner];
@@ -106,7 +72,48 @@ void level_corners(const uint32_t* level, const double* point, int64_t entry[8],
   }
 }
 
+// The level's features at `cell_coord`: the corners' entries of `table` weighted and summed.
+std::vector<double> level_lookup(const uint32_t* level, const std::vector<double>& table, int features,
+                                 const double cell_coord[3]) {
+  int64_t entry[8];
+  double weight[8];
+  level_corners(level, cell_coord, entry, weight);
+  std::vector<double> out(features, 0.0);
+  for (int corner = 0; corner < 8; ++corner) {
+    if (entry[corner] < 0) continue;
+    for (int f = 0; f < features; ++f) out[f] += weight[corner] * table[size_t(entry[corner]) * features + f];
+  }
+  return out;
+}
+
+// Point p's cell coordinates at `level` (x·N) and its feature weight there (1 without the downweighting).
+double point_at_level(const uint32_t* level, const std::vector<double>& coords, const std::vector<double>& scales,
+                      size_t p, bool downweight, double cell_coord[3]) {
+  for (int a = 0; a < 3; ++a) cell_coord[a] = coords[3 * p + a] * level[1];
+  return downweight ? level_feature_weight(scales[p] * level[1]) : 1.0;
+}
+
 }  // namespace
+
+std::vector<double> trilerp_hashed(const std::vector<double>& table, uint32_t table_size, int features,
+                                   const double cell_coord[3]) {
+  const uint32_t level[4] = {0, 1, table_size, 1};  // the grid size plays no part in a hashed lookup
+  return level_lookup(level, table, features, cell_coord);
+}
+
+std::vector<double> trilerp_dense(const std::vector<double>& grid, int grid_size, int features,
+                                  const double cell_coord[3]) {
+  const uint32_t n = static_cast<uint32_t>(grid_size);
+  const uint32_t level[4] = {0, n, n * n * n, 0};
+  return level_lookup(level, grid, features, cell_coord);
+}
+
+double level_feature_weight(double scale_cells) {
+  const double x = 1.0 / (std::sqrt(8.0) * scale_cells);
+  // √(−expm1(−y)) = √(1 − e^−y) without its cancellation for a footprint of many cells.
+  return (x > 0 ? 1.0 : x < 0 ? -1.0 : 0.0) * std::sqrt(-std::expm1(-(4.0 / M_PI) * x * x));
+}
+
 
 void grid_encoding_fwd(const std::vector<uint32_t>& levels, const std::vector<double>& coords,
                        const std::vector<double>& scales, const std::vector<double>& table, int features,
@@ -115,16 +122,10 @@ void grid_encoding_fwd(const std::vector<uint32_t>& levels, const std::vector<do
   out.assign(n_points * n_levels * features, 0.0);
   for (size_t p = 0; p < n_points; ++p) {
     for (size_t l = 0; l < n_levels; ++l) {
-      int64_t entry[8];
-      double weight[8];
-      level_corners(&levels[4 * l], &coords[3 * p], entry, weight);
-      const double level_weight = downweight ? level_feature_weight(scales[p] * levels[4 * l + 1]) : 1.0;
-      double* f_out = &out[(p * n_levels + l) * features];
-      for (int corner = 0; corner < 8; ++corner) {
-        if (entry[corner] < 0) continue;
-        for (int f = 0; f < features; ++f) f_out[f] += weight[corner] * table[size_t(entry[corner]) * features + f];
-      }
-      for (int f = 0; f < features; ++f) f_out[f] *= level_weight;
+      double cell_coord[3];
+      const double level_weight = point_at_level(&levels[4 * l], coords, scales, p, downweight, cell_coord);
+      const std::vector<double> f_level = level_lookup(&levels[4 * l], table, features, cell_coord);
+      for (int f = 0; f < features; ++f) out[(p * n_levels + l) * features + f] = level_weight * f_level[f];
     }
   }
 }
@@ -135,10 +136,11 @@ void grid_encoding_bwd(const std::vector<uint32_t>& levels, const std::vector<do
   const size_t n_levels = levels.size() / 4, n_points = coords.size() / 3;
   for (size_t p = 0; p < n_points; ++p) {
     for (size_t l = 0; l < n_levels; ++l) {
+      double cell_coord[3];
+      const double level_weight = point_at_level(&levels[4 * l], coords, scales, p, downweight, cell_coord);
       int64_t entry[8];
       double weight[8];
-      level_corners(&levels[4 * l], &coords[3 * p], entry, weight);
-      const double level_weight = downweight ? level_feature_weight(scales[p] * levels[4 * l + 1]) : 1.0;
+      level_corners(&levels[4 * l], cell_coord, entry, weight);
       for (int corner = 0; corner < 8; ++corner) {
         if (entry[corner] < 0) continue;
         for (int f = 0; f < features; ++f) {
