@@ -51,10 +51,6 @@ uint32_t hash_slot(int64_t x, int64_t y, int64_t z, uint32_t table_size) {
   return (ux ^ (uy * 19349663u) ^ (uz * 83492791u)) % table_size;
 }
 
-namespace {
-
-// The corners around `cell_coord` (x·N) at a level {first entry, N, T, hashed}: table entries (−1 outside a dense
-// grid) and trilinear weights, as the kernel's grid_corners.
 void level_corners(const uint32_t* level, const double cell_coord[3], int64_t entry[8], double weight[8]) {
   const double position[3] = {cell_coord[0] - 0.5, cell_coord[1] - 0.5, cell_coord[2] - 0.5};
   const Corners c = corners_of(position);
@@ -71,6 +67,8 @@ void level_corners(const uint32_t* level, const double cell_coord[3], int64_t en
     }
   }
 }
+
+namespace {
 
 // The level's features at `cell_coord`: the corners' entries of `table` weighted and summed.
 std::vector<double> level_lookup(const uint32_t* level, const std::vector<double>& table, int features,

@@ -31,6 +31,11 @@ std::vector<double> trilerp_hashed(const std::vector<double>& table, uint32_t ta
 std::vector<double> trilerp_dense(const std::vector<double>& grid, int grid_size, int features,
                                   const double cell_coord[3]);
 
+// The 8 corners around `cell_coord` (x·N) at a level {first entry, N, T, hashed}: their table entries (−1 outside a
+// dense grid) and trilinear weights, in the official order (x the corner index's high bit), as the kernel's
+// grid_corners.
+void level_corners(const uint32_t* level, const double cell_coord[3], int64_t entry[8], double weight[8]);
+
 // The weight of a level's features for a Gaussian whose standard deviation is `scale_cells` cells (scale · N):
 // approx_erf(1 / (√8 · scale_cells)), approx_erf(x) = sign(x)·√(1 − exp(−4x²/π)) (math.approx_erf, within 0.007 of
 // erf): the fraction of the Gaussian inside one cell, so a footprint wider than a cell sees the cell's features

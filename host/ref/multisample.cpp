@@ -29,8 +29,13 @@ std::array<Vec3d, 2> perpendicular_basis(const Vec3d& direction) {
 
 Multisamples hexify_multisamples(const Vec3d& origin, const Vec3d& direction, double radius, double t0, double t1,
                                  int interval) {
-  static const int kOrder[6] = {0, 2, 4, 3, 5, 1};
   const bool odd = interval % 2 != 0;
+  return hexify_multisamples(origin, direction, radius, t0, t1, odd, odd ? M_PI / 6 : 0.0, false);
+}
+
+Multisamples hexify_multisamples(const Vec3d& origin, const Vec3d& direction, double radius, double t0, double t1,
+                                 bool reversed, double turn, bool cylinder) {
+  static const int kOrder[6] = {0, 2, 4, 3, 5, 1};
   const auto basis = perpendicular_basis(direction);
   const double s = 0.5 * (t0 + t1), d = 0.5 * (t1 - t0);
   const double denominator = d * d + 3 * s * s;
@@ -39,8 +44,8 @@ Multisamples hexify_multisamples(const Vec3d& origin, const Vec3d& direction, do
   Multisamples out;
   for (int j = 0; j < 6; ++j) {
     const double t = t0 + scale * ((t1 * t1 + 2 * s * s) + (3 / std::sqrt(7.0)) * (j * 0.4 - 1) * spread);
-    const double theta = (M_PI / 3) * kOrder[odd ? 5 - j : j] + (odd ? M_PI / 6 : 0.0);
-    const double perp = std::sqrt(0.5) * radius * t;
+    const double theta = (M_PI / 3) * kOrder[reversed ? 5 - j : j] + turn;
+    const double perp = std::sqrt(0.5) * radius * (cylinder ? 1.0 : t);
     out.perp_radius[j] = perp;
     for (int a = 0; a < 3; ++a) {
       out.points_world[j][a] = origin[a] + basis[0][a] * perp * std::cos(theta) +

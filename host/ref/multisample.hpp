@@ -27,4 +27,10 @@ struct Multisamples {
 Multisamples hexify_multisamples(const Vec3d& origin, const Vec3d& direction, double radius, double t0, double t1,
                                  int interval);
 
+// Any pattern of the hexagon: its angles' order reversed or not, then turned by `turn` radians (training draws both per
+// interval, kernels/multisample.cl; the deterministic pattern is reversed = odd interval, turn = π/6 then). A
+// cylinder's points sit √½ · radius off the axis whatever t (NDC rays, whose footprint does not grow along the ray).
+Multisamples hexify_multisamples(const Vec3d& origin, const Vec3d& direction, double radius, double t0, double t1,
+                                 bool reversed, double turn, bool cylinder);
+
 }  // namespace mipnerf::ref

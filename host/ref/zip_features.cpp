@@ -1,0 +1,125 @@
+// Zip-NeRF's interval features in double precision (zip_features.hpp): multisamples, then the grid encoding's
+// reference on them, then the mean over each interval's multisamples.
+#include "ref/zip_features.hpp"
+
+#include <cmath>
+
+#include "core/rng.hpp"
+#include "ref/grid_encoding.hpp"
+#include "ref/multisample.hpp"
+
+namespace mipnerf::ref {
+namespace {
+
+constexpr int kMultisamples = 6;
+constexpr uint32_t kMultisampleStream = 5;  // RNG_STREAM_MULTISAMPLE
+
+// The pattern of one interval, as multisample_pattern draws it (the float uniforms the kernel gets, bit for bit).
+void interval_pattern(const ZipFeatureSettings& s, uint32_t ray_number, uint32_t interval, bool& reversed,
+                      double& turn) {
+  if (s.randomized) {
+    const auto u = rng_uniform4(s.seed, ray_number, s.step, interval, kMultisampleStream);
+    reversed = u[0] < 0.5f;
+    turn = 2 * M_PI * u[1];
+  } else {
+    reversed = interval % 2 != 0;
+    turn = reversed ? M_PI / 6 : 0.0;
+  }
+}
+
+size_t level_count(const std::vector<uint32_t>& levels) { return levels.size() / 4; }
+
+}  // namespace
+
+void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vector<double>& unit_points,
+                      std::vector<double>& scales) {
+  const size_t n_samples = rays.n_rays * rays.n_intervals;
+  unit_points.assign(n_samples * kMultisamples * 3, 0.0);
+  scales.assign(n_samples * kMultisamples, 0.0);
+  for (size_t ray = 0; ray < rays.n_rays; ++ray) {
+    const Vec3d origin{rays.origins[3 * ray], rays.origins[3 * ray + 1], rays.origins[3 * ray + 2]};
+    const Vec3d direction{rays.directions[3 * ray], rays.directions[3 * ray + 1], rays.directions[3 * ray + 2]};
+    for (size_t i = 0; i < rays.n_intervals; ++i) {
+      bool reversed = false;
+      double turn = 0.0;
+      interval_pattern(s, s.first_ray + static_cast<uint32_t>(ray), static_cast<uint32_t>(i), reversed, turn);
+      const double* edges = &rays.t_edges[ray * (rays.n_intervals + 1) + i];
+      const Multisamples m =
+          hexify_multisamples(origin, direction, rays.radii[ray], edges[0], edges[1], reversed, turn, s.cylinder);
+      for (int j = 0; j < kMultisamples; ++j) {
+        const size_t p = (ray * rays.n_intervals + i) * kMultisamples + j;
+        for (int a = 0; a < 3; ++a) unit_points[3 * p + a] = (m.points_world[j][a] - s.box[a]) / s.box[3];
+        scales[p] = s.scale_mult * m.perp_radius[j] / s.box[3];
+      }
+    }
+  }
+}
+
+std::vector<double> zip_level_scale(const std::vector<uint32_t>& levels, const std::vector<double>& table,
+                                    int features, double maxval) {
+  std::vector<double> out;
+  for (size_t l = 0; l < level_count(levels); ++l) {
+    const size_t first = size_t(levels[4 * l]) * features, count = size_t(levels[4 * l + 2]) * features;
+    double sum = 0.0;
+    for (size_t i = 0; i < count; ++i) sum += table[first + i] * table[first + i];
+    out.push_back(std::sqrt(maxval * maxval + sum / double(count)));
+  }
+  return out;
+}
+
+void zip_features_fwd(const ZipRays& rays, const std::vector<uint32_t>& levels, const std::vector<double>& table,
+                      const std::vector<double>& level_scale, const ZipFeatureSettings& s,
+                      std::vector<double>& features) {
+  std::vector<double> points, scales, point_features;
+  zip_multisamples(rays, s, points, scales);
+  grid_encoding_fwd(levels, points, scales, table, s.features, s.downweight, point_features);
+  const size_t n_levels = level_count(levels), width = s.features + (s.append_scale ? 1 : 0);
+  const size_t n_samples = rays.n_rays * rays.n_intervals;
+  const double mean = s.precondition / kMultisamples;
+  features.assign(n_samples * n_levels * width, 0.0);
+  for (size_t sample = 0; sample < n_samples; ++sample) {
+    for (size_t l = 0; l < n_levels; ++l) {
+      double* out = &features[(sample * n_levels + l) * width];
+      for (int j = 0; j < kMultisamples; ++j) {
+        const size_t p = sample * kMultisamples + j;
+        for (int f = 0; f < s.features; ++f) out[f] += mean * point_features[(p * n_levels + l) * s.features + f];
+        if (s.append_scale) {
+          const double weight = s.downweight ? level_feature_weight(scales[p] * levels[4 * l + 1]) : 1.0;
+          out[s.features] += mean * (2 * weight - 1) * level_scale[l];
+        }
+      }
+    }
+  }
+}
+
+void zip_features_bwd(const ZipRays& rays, const std::vector<uint32_t>& levels, const std::vector<double>& d_features,
+                      const ZipFeatureSettings& s, std::vector<double>& d_table) {
+  std::vector<double> points, scales;
+  zip_multisamples(rays, s, points, scales);
+  const size_t n_levels = level_count(levels), width = s.features + (s.append_scale ? 1 : 0);
+  const size_t n_samples = rays.n_rays * rays.n_intervals;
+  const double mean = s.precondition / kMultisamples;
+  // Every multisample of an interval gets the interval's gradient / 6 (the mean's), then the grid's backward.
+  std::vector<double> d_points(n_samples * kMultisamples * n_levels * s.features);
+  for (size_t sample = 0; sample < n_samples; ++sample) {
+    for (int j = 0; j < kMultisamples; ++j) {
+      for (size_t l = 0; l < n_levels; ++l) {
+        for (int f = 0; f < s.features; ++f) {
+          d_points[((sample * kMultisamples + j) * n_levels + l) * s.features + f] =
+              mean * d_features[(sample * n_levels + l) * width + f];
+        }
+      }
+    }
+  }
+  grid_encoding_bwd(levels, points, scales, d_points, s.features, s.downweight, d_table);
+}
+
+void grid_weight_decay(const std::vector<uint32_t>& levels, const std::vector<double>& table, int features,
+                       double mult, std::vector<double>& d_table) {
+  for (size_t l = 0; l < level_count(levels); ++l) {
+    const size_t first = size_t(levels[4 * l]) * features, count = size_t(levels[4 * l + 2]) * features;
+    for (size_t i = first; i < first + count; ++i) d_table[i] += mult * table[i] / double(count);
+  }
+}
+
+}  // namespace mipnerf::ref

@@ -1,0 +1,155 @@
+// Zip-NeRF's features of a conical frustum (Barron et al. 2023; camp_zipnerf internal/models.py predict_density,
+// grid_utils.HashEncoding): its 6 multisamples (multisample.cl) looked up in every level of the grid (grid_encoding.cl),
+// each level's features downweighted by the multisample's footprint against the level's cells, then, per level,
+// GRID_APPEND_SCALE's extra feature (2w − 1) · level_scale[l] (w the footprint weight; level_scale[l] =
+// √(maxval² + mean(table_l²)), a constant of the step: the official stop-gradient), all averaged over the
+// multisamples and multiplied by `precondition` (the official precondition_scaling, 10).
+//
+//   rays     origins, directions [R][3], radii [R]; t_edges [R][N+1] (the level's intervals)
+//   box      float4 (min x, min y, min z, size): the cube of the grid, unit_coord = (point − min) / size, and the
+//            footprint's standard deviation = scale_mult · perp_radius / size (the official unscented_scale_mult 0.5)
+//   features [R·N][L][GRID_FEATURES + GRID_APPEND_SCALE]
+// One work-item per interval (sample): the multisamples are built once and looked up in every level.
+// Reference: host/ref/zip_features.hpp (same names).
+
+#ifndef GRID_APPEND_SCALE
+#define GRID_APPEND_SCALE 1
+#endif
+#define ZIP_LEVEL_WIDTH (GRID_FEATURES + GRID_APPEND_SCALE)
+
+// The multisamples of interval `sample` (ray · N + i) in the grid's unit cube, with their footprints in its units.
+inline void zip_multisamples(__global const float* origins, __global const float* directions,
+                             __global const float* radii, __global const float* t_edges, uint sample,
+                             uint n_intervals, float4 box, float scale_mult, ulong seed, uint step, uint first_ray,
+                             float3 unit_points[ZIP_MULTISAMPLES], float scales[ZIP_MULTISAMPLES]) {
+  const uint ray = sample / n_intervals, interval = sample % n_intervals;
+  const float3 origin = vload3(ray, origins), direction = vload3(ray, directions);
+  const float radius = radii[ray];
+  const size_t edge = (size_t)ray * (n_intervals + 1) + interval;
+  const float t0 = t_edges[edge], t1 = t_edges[edge + 1];
+  float3 axis1, axis2;
+  perpendicular_basis(direction, &axis1, &axis2);
+  bool reversed;
+  float turn;
+  multisample_pattern(interval, seed, step, first_ray + ray, &reversed, &turn);
+  const float inv_size = 1.0f / box.w;
+  for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
+    float perp;
+    const float3 point = multisample_point(origin, direction, axis1, axis2, radius, t0, t1, j, reversed, turn, &perp);
+    unit_points[j] = (point - box.xyz) * inv_size;
+    scales[j] = scale_mult * perp * inv_size;
+  }
+}
+
+inline float zip_level_weight(float scale, uint4 level) {
+#if GRID_DOWNWEIGHT
+  return level_feature_weight(scale * (float)level.y);
+#else
+  return 1.0f;
+#endif
+}
+
+__kernel void zip_features_fwd(__global const float* origins, __global const float* directions,
+                               __global const float* radii, __global const float* t_edges,
+                               __global const uint4* levels, __global const float* table,
+                               __global const float* level_scale, __global float* features, const uint n_samples,
+                               const uint n_intervals, const uint n_levels, const float4 box, const float scale_mult,
+                               const float precondition, const ulong seed, const uint step, const uint first_ray) {
+  const uint sample = get_global_id(0);
+  if (sample >= n_samples) return;
+  float3 points[ZIP_MULTISAMPLES];
+  float scales[ZIP_MULTISAMPLES];
+  zip_multisamples(origins, directions, radii, t_edges, sample, n_intervals, box, scale_mult, seed, step, first_ray,
+                   points, scales);
+  const float mean = precondition / (float)ZIP_MULTISAMPLES;
+  __global float* out = features + (size_t)sample * n_levels * ZIP_LEVEL_WIDTH;
+  for (uint l = 0; l < n_levels; ++l) {
+    const uint4 level = levels[l];
+    float sum[ZIP_LEVEL_WIDTH];
+    for (int f = 0; f < ZIP_LEVEL_WIDTH; ++f) sum[f] = 0.0f;
+    for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
+      const GridCorners c = grid_corners(level, points[j]);
+      const float weight = zip_level_weight(scales[j], level);
+      for (int corner = 0; corner < 8; ++corner) {
+        if (c.entry[corner] < 0) continue;
+        const float w = weight * c.weight[corner];
+        for (int f = 0; f < GRID_FEATURES; ++f) sum[f] += w * table[c.entry[corner] * GRID_FEATURES + f];
+      }
+#if GRID_APPEND_SCALE
+      sum[GRID_FEATURES] += (2.0f * weight - 1.0f) * level_scale[l];
+#endif
+    }
+    for (int f = 0; f < ZIP_LEVEL_WIDTH; ++f) out[l * ZIP_LEVEL_WIDTH + f] = mean * sum[f];
+  }
+}
+
+// d_table += the features' gradients spread onto the corners of every multisample (atomic_add_float: its order
+// bound is grid_encoding.cl's). The scale feature has no table gradient (the official stop-gradient).
+__kernel void zip_features_bwd(__global const float* origins, __global const float* directions,
+                               __global const float* radii, __global const float* t_edges,
+                               __global const uint4* levels, __global const float* d_features,
+                               __global float* d_table, const uint n_samples, const uint n_intervals,
+                               const uint n_levels, const float4 box, const float scale_mult, const float precondition,
+                               const ulong seed, const uint step, const uint first_ray) {
+  const uint sample = get_global_id(0);
+  if (sample >= n_samples) return;
+  float3 points[ZIP_MULTISAMPLES];
+  float scales[ZIP_MULTISAMPLES];
+  zip_multisamples(origins, directions, radii, t_edges, sample, n_intervals, box, scale_mult, seed, step, first_ray,
+                   points, scales);
+  const float mean = precondition / (float)ZIP_MULTISAMPLES;
+  __global const float* d_out = d_features + (size_t)sample * n_levels * ZIP_LEVEL_WIDTH;
+  for (uint l = 0; l < n_levels; ++l) {
+    const uint4 level = levels[l];
+    float d_mean[GRID_FEATURES];
+    bool any = false;
+    for (int f = 0; f < GRID_FEATURES; ++f) {
+      d_mean[f] = mean * d_out[l * ZIP_LEVEL_WIDTH + f];
+      any = any || d_mean[f] != 0.0f;
+    }
+    if (!any) continue;
+    for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
+      const GridCorners c = grid_corners(level, points[j]);
+      const float weight = zip_level_weight(scales[j], level);
+      for (int corner = 0; corner < 8; ++corner) {
+        if (c.entry[corner] < 0) continue;
+        const float w = weight * c.weight[corner];
+        for (int f = 0; f < GRID_FEATURES; ++f) {
+          const float g = w * d_mean[f];
+          if (g != 0.0f) atomic_add_float(&d_table[c.entry[corner] * GRID_FEATURES + f], g);
+        }
+      }
+    }
+  }
+}
+
+// level_scale[l] = √(maxval² + mean over level l's table of value²): the scale feature's factor (the official
+// `f_scale`, whose stop-gradient makes it a constant of the step). One work-item per level; the sum in double when
+// the device has it would not change the float it ends as by more than the order error, so float it is, in order.
+__kernel void zip_level_scale(__global const uint4* levels, __global const float* table,
+                              __global float* level_scale, const uint n_levels, const float maxval) {
+  const uint l = get_global_id(0);
+  if (l >= n_levels) return;
+  const uint4 level = levels[l];
+  const size_t first = (size_t)level.x * GRID_FEATURES, count = (size_t)level.z * GRID_FEATURES;
+  float sum = 0.0f, compensation = 0.0f;  // Kahan: a hashed level has millions of terms
+  for (size_t i = 0; i < count; ++i) {
+    const float term = table[first + i] * table[first + i] - compensation;
+    const float next = sum + term;
+    compensation = (next - sum) - term;
+    sum = next;
+  }
+  level_scale[l] = sqrt(maxval * maxval + sum / (float)count);
+}
+
+// The official param_regularizers' gradient, added: mult · ½ · mean(table_l²) per level has the gradient
+// mult · value / count_l on each of level l's values (count_l = its entries × features). One work-item per value.
+__kernel void grid_weight_decay(__global const uint4* levels, __global const float* table, __global float* d_table,
+                                const uint n_levels, const float mult) {
+  const uint i = get_global_id(0);
+  const uint4 last = levels[n_levels - 1];
+  if (i >= (last.x + last.z) * GRID_FEATURES) return;
+  uint l = 0;
+  while (l + 1 < n_levels && i >= levels[l + 1].x * GRID_FEATURES) ++l;
+  d_table[i] += mult * table[i] / (float)(levels[l].z * GRID_FEATURES);
+}
