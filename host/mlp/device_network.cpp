@@ -88,10 +88,11 @@ void DeviceNetwork::forward_impl(const MlpInputs& in, const MlpOutputs& out, Wor
   heads_forward(in, out, buffers, save);
 }
 
-void DeviceNetwork::backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) {
+void DeviceNetwork::backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out,
+                                  const MatrixView& d_features) {
   DeviceWorkspace& buffers = ws.buffers<DeviceWorkspace>("backward");
   heads_backward(in, buffers, d_out);
-  trunk_backward(in, buffers);
+  trunk_backward(in, buffers, d_features);
 }
 
 // Layer i: act_i = ReLU(in_i · W_i + b_i), in_0 = features; after a skip point in_i = [act_{i−1} | features],
@@ -224,7 +225,21 @@ void DeviceNetwork::heads_backward(const MlpInputs& in, DeviceWorkspace& ws, con
               d_out.d_raw_density, weights(params_, density), 1.0f, dh, "density input gradient");
 }
 
-void DeviceNetwork::trunk_backward(const MlpInputs& in, DeviceWorkspace& ws) {
+// d_features [rows][input_width] (=, or += once `written`) dz · W_layer[first_row : first_row + input_width]ᵀ: the
+// gradient through the input rows of `layer` that take the features. The first call overwrites (the caller's buffer
+// holds anything), the later ones add on.
+void DeviceNetwork::features_gradient(const MatrixView& dz, const DenseLayer& layer, size_t first_row, size_t rows,
+                                      const MatrixView& d_features, bool& written) {
+  gemm::sgemm(*ctx_, gemm::GemmBackend::clblast, gemm::gemm_shape(rows, config_.input_width, layer.out, false, true),
+              1.0f, dz, weights(params_, layer, first_row), written ? 1.0f : 0.0f, d_features,
+              layer.name + " features gradient");
+  written = true;
+}
+
+// d_features (array null: not asked for) gets ∂loss/∂features: the deepest skip layer's share first, layer 0's last.
+void DeviceNetwork::trunk_backward(const MlpInputs& in, DeviceWorkspace& ws, const MatrixView& d_features) {
+  const bool want_features = d_features.array != nullptr;
+  bool features_written = false;
   const size_t rows = in.rows();
   const size_t W = config_.width;
   ocl::DeviceArray<float>* current = &ws.grad_a;  // holds ∂loss/∂act_i on entry to layer i
@@ -238,6 +253,7 @@ void DeviceNetwork::trunk_backward(const MlpInputs& in, DeviceWorkspace& ws) {
     if (i == 0) {
       gemm::sgemm(*ctx_, gemm::GemmBackend::clblast, gemm::gemm_shape(config_.input_width, W, rows, true), 1.0f,
                   in.features, dz, 1.0f, weights(grads_, layer), name);
+      if (want_features) features_gradient(dz, layer, 0, rows, d_features, features_written);
       break;
     }
     const MatrixView prev = view(ws.activations[i - 1], W);
@@ -246,8 +262,9 @@ void DeviceNetwork::trunk_backward(const MlpInputs& in, DeviceWorkspace& ws) {
     if (skip_after(config_, i - 1)) {
       gemm::sgemm(*ctx_, gemm::GemmBackend::clblast, gemm::gemm_shape(config_.input_width, W, rows, true), 1.0f,
                   in.features, dz, 1.0f, weights(grads_, layer, W), name + " (skip input)");
+      if (want_features) features_gradient(dz, layer, W, rows, d_features, features_written);
     }
-    // Only the first W input rows of a skip layer come from act_{i−1}; the features need no gradient.
+    // The first W input rows of a skip layer come from act_{i−1}, the rest from the features (above).
     gemm::sgemm(*ctx_, gemm::GemmBackend::clblast, gemm::gemm_shape(rows, W, W, false, true), 1.0f, dz,
                 weights(params_, layer), 0.0f, view(*other, W), layer.name + " input gradient");
     std::swap(current, other);

@@ -39,13 +39,16 @@ class DeviceNetwork : public Network {
   std::unique_ptr<WorkspaceBuffers> make_workspace_buffers(size_t max_rows, size_t max_rays,
                                                            WorkspaceMode mode) const override;
   void forward_impl(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) override;
-  void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) override;
+  void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out,
+                     const MatrixView& d_features) override;
 
  private:
   void trunk_forward(const MlpInputs& in, DeviceWorkspace& ws, bool save);
   void heads_forward(const MlpInputs& in, const MlpOutputs& out, DeviceWorkspace& ws, bool save);
   void heads_backward(const MlpInputs& in, DeviceWorkspace& ws, const MlpOutputGradients& d_out);
-  void trunk_backward(const MlpInputs& in, DeviceWorkspace& ws);
+  void trunk_backward(const MlpInputs& in, DeviceWorkspace& ws, const MatrixView& d_features);
+  void features_gradient(const MatrixView& dz, const DenseLayer& layer, size_t first_row, size_t rows,
+                         const MatrixView& d_features, bool& written);
   void bias_gradient(const MatrixView& dz, const MatrixView* act, size_t rows, size_t cols, size_t bias_offset,
                      DeviceWorkspace& ws);
 

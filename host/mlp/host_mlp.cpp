@@ -396,6 +396,15 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
       w.product(ProductKind::backward_data, false, true, rows, W, D.out, d_density, bb.d_density_ld,
                 P + D.weight_offset, D.out, 1.0f, dh, W);
       // Trunk, last layer first: dz_i = dact_i masked; W_i's gradient from its input; dact_{i−1} = dz_i · W_iᵀ.
+      // Asked for, ∂loss/∂features = Σ over the layers the features feed of dz_i · W_i[their input rows]ᵀ: the
+      // deepest skip layer's share overwrites the block's rows, the others (layer 0 last) add on.
+      float* d_x = bb.d_features ? bb.d_features + row0 * bb.d_features_ld : nullptr;
+      float d_x_beta = 0.0f;
+      auto features_gradient = [&](const float* dz, const DenseLayer& L, size_t first_row) {
+        w.product(ProductKind::backward_data, false, true, rows, F, W, dz, W, P + L.weight_offset + first_row * W, W,
+                  d_x_beta, d_x, bb.d_features_ld);
+        d_x_beta = 1.0f;
+      };
       float* current = dh;
       float* other = w.scratch[1].data();
       for (size_t i = c.depth; i-- > 0;) {
@@ -404,6 +413,7 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
         if (i == 0) {
           w.product(ProductKind::backward_weights, true, false, F, W, rows, x, b.features_ld, current, W, 1.0f,
                     G + L.weight_offset, W);
+          if (d_x) features_gradient(current, L, 0);
           break;
         }
         const float* prev = b.trunk[i - 1] + row0 * W;
@@ -412,8 +422,9 @@ HostMlpTimes HostMlp::backward(const HostBackwardBuffers& bb, bool timed) {
         if (skip_after(c, i - 1)) {
           w.product(ProductKind::backward_weights, true, false, F, W, rows, x, b.features_ld, current, W, 1.0f,
                     G + L.weight_offset + W * W, W);
+          if (d_x) features_gradient(current, L, W);
         }
-        // Only the first W input rows of a skip layer come from act_{i−1}; the features need no gradient.
+        // The first W input rows of a skip layer come from act_{i−1}, the rest from the features (above).
         w.product(ProductKind::backward_data, false, true, rows, W, W, current, W, P + L.weight_offset, W, 0.0f, other,
                   W);
         std::swap(current, other);

@@ -11,7 +11,8 @@
 //             the outputs and uses per-thread scratch);
 //   backward: dz_i = (dact_i masked by act_i > 0) in per-thread scratch; bias sums and weight gradients
 //             (in_iᵀ · dz_i) accumulate in a per-thread gradient buffer; dact_{i−1} = dz_i · W_iᵀ goes to the next
-//             scratch. No gradient of an activation ever goes to device memory.
+//             scratch. No gradient of an activation ever goes to device memory; only ∂loss/∂features, when the
+//             caller asks for it, goes to the caller's buffer (each block writes its own rows: no reduction).
 // Threads take contiguous ranges of blocks (static, so a given thread count always gives the same result); their
 // gradient buffers are added to the network's in thread order at the end. The block decomposition depends on the
 // rows only, so training and inference forwards give bit-equal outputs.
@@ -64,6 +65,10 @@ struct HostBackwardBuffers {
   const float* d_rgb = nullptr;  // [rows][rgb_outputs], ld d_rgb_ld
   size_t d_rgb_ld = 0;
   float* grads = nullptr;  // [parameters], accumulated into (+=)
+  // [rows][input_width], ld d_features_ld: ∂loss/∂features, overwritten (each block its own rows); null: not asked
+  // for, and no product for it runs
+  float* d_features = nullptr;
+  size_t d_features_ld = 0;
 };
 
 // Where a call's time went, summed over its threads (seconds of thread time), for the stage profiler.

@@ -119,13 +119,15 @@ void HostNetwork::forward_impl(const MlpInputs& in, const MlpOutputs& out, Works
   profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
-void HostNetwork::backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) {
+void HostNetwork::backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out,
+                                const MatrixView& d_features) {
   const HostWorkspace& saved = ws.buffers<HostWorkspace>("backward");
   gemm::MappedBuffers mapped(*ctx_, "the host MLP's backward");
   need_host_buffers(mapped, in, &saved, false);
   mapped.need(&grads_, true);
   mapped.need(d_out.d_raw_density, false);
   mapped.need(d_out.d_raw_rgb, false);
+  mapped.need(d_features, true);  // an empty view (not asked for) maps nothing
   mapped.map();
   const auto start = std::chrono::steady_clock::now();
   HostBackwardBuffers b;
@@ -135,6 +137,8 @@ void HostNetwork::backward_impl(const MlpInputs& in, Workspace& ws, const MlpOut
   b.d_rgb = mapped.at(d_out.d_raw_rgb);
   b.d_rgb_ld = d_out.d_raw_rgb.ld;
   b.grads = mapped.at(&grads_);
+  b.d_features = mapped.at(d_features);  // null when not asked for
+  b.d_features_ld = d_features.ld;
   const HostMlpTimes times = host_.backward(b, ctx_->recording_profiler() != nullptr);
   profile_host_call(*ctx_, times, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }

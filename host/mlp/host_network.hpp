@@ -37,7 +37,8 @@ class HostNetwork : public Network {
   // Map what the pass reads and writes (blocking: the kernels that wrote the features have finished), run it on the
   // host, unmap (the kernels enqueued next see the outputs).
   void forward_impl(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) override;
-  void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) override;
+  void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out,
+                     const MatrixView& d_features) override;
 
  private:
   void need_host_buffers(gemm::MappedBuffers& mapped, const MlpInputs& in, const HostWorkspace* saved,

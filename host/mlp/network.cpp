@@ -107,7 +107,18 @@ void Network::forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws)
   }
 }
 
-void Network::backward(Workspace& ws, const MlpOutputGradients& d_out) {
+namespace {
+
+// Whether two matrices of `rows` rows share an element's storage (a conservative test: their spans in one buffer).
+bool spans_overlap(const MatrixView& a, size_t a_cols, const MatrixView& b, size_t b_cols, size_t rows) {
+  if (a.array == nullptr || b.array == nullptr || a.array->raw() != b.array->raw() || rows == 0) return false;
+  const size_t a_end = a.offset + (rows - 1) * a.ld + a_cols, b_end = b.offset + (rows - 1) * b.ld + b_cols;
+  return a.offset < b_end && b.offset < a_end;
+}
+
+}  // namespace
+
+void Network::backward(Workspace& ws, const MlpOutputGradients& d_out, MatrixView d_features) {
   if (ws.mode_ != WorkspaceMode::training) {
     throw Error(
         "MLP backward: the workspace is an inference workspace (it keeps no activations); make it with "
@@ -117,7 +128,15 @@ void Network::backward(Workspace& ws, const MlpOutputGradients& d_out) {
   check_inputs(ws.inputs_, ws, "backward");
   ocl::require_matrix(d_out.d_raw_density, ws.inputs_.rows(), config_.density_outputs, "d_raw_density", "MLP backward");
   ocl::require_matrix(d_out.d_raw_rgb, ws.inputs_.rows(), config_.rgb_outputs, "d_raw_rgb", "MLP backward");
-  backward_impl(ws.inputs_, ws, d_out);
+  if (d_features.array != nullptr) {
+    ocl::require_matrix(d_features, ws.inputs_.rows(), config_.input_width, "d_features", "MLP backward");
+    // The backward reads the features after it has begun writing their gradient (the host one block by block).
+    if (spans_overlap(d_features, config_.input_width, ws.inputs_.features, config_.input_width, ws.inputs_.rows())) {
+      throw Error("MLP backward: d_features ('" + d_features.array->name() +
+                  "') overlaps the features it is the gradient of; give it a buffer (or range) of its own");
+    }
+  }
+  backward_impl(ws.inputs_, ws, d_out, d_features);
 }
 
 std::unique_ptr<Network> make_network(ocl::Context& ctx, const MlpConfig& config, gemm::GemmBackend backend) {

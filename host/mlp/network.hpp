@@ -137,9 +137,14 @@ class Network {
   void forward(const MlpInputs& in, const MlpOutputs& out, Workspace& ws);
 
   // Enqueues the backward of the last forward through `ws`: grads += ∂loss/∂params (beta = 1, so chunks,
-  // levels and passes accumulate until zero_grad()). No gradient flows to the features (they have no
-  // parameters before the MLP).
-  void backward(Workspace& ws, const MlpOutputGradients& d_out);
+  // levels and passes accumulate until zero_grad()).
+  // d_features [rows][input_width] (ld ≥ input_width), optional: when given, the backward also OVERWRITES it with
+  // ∂loss/∂features of that forward — the first trunk layer's input gradient plus, for every skip layer, the
+  // gradient through its input rows that take the features — for an encoding with parameters of its own before the
+  // MLP (Zip-NeRF's hash grid). It must not overlap the features. Not given (empty view, the default): no gradient
+  // flows to the features, and the backward runs exactly the products it would without this argument (mip-NeRF's
+  // integrated encoding has no parameters).
+  void backward(Workspace& ws, const MlpOutputGradients& d_out, MatrixView d_features = {});
 
   void zero_grad();
 
@@ -150,8 +155,10 @@ class Network {
   virtual std::unique_ptr<WorkspaceBuffers> make_workspace_buffers(size_t max_rows, size_t max_rays,
                                                                    WorkspaceMode mode) const = 0;
   virtual void forward_impl(const MlpInputs& in, const MlpOutputs& out, Workspace& ws, bool save) = 0;
-  // `in`: what the forward through `ws` read (checked again, unchanged sizes).
-  virtual void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out) = 0;
+  // `in`: what the forward through `ws` read (checked again, unchanged sizes). d_features: as backward(), checked
+  // (its array null: not asked for).
+  virtual void backward_impl(const MlpInputs& in, Workspace& ws, const MlpOutputGradients& d_out,
+                             const MatrixView& d_features) = 0;
 
   ocl::Context* ctx_;
   MlpConfig config_;

@@ -55,6 +55,13 @@ std::vector<double> left_columns(const std::vector<double>& m, size_t total, siz
   return out;
 }
 
+// acc [rows][cols] += the last `cols` columns of a [rows][total] matrix.
+void add_right_columns(const std::vector<double>& m, size_t total, size_t cols, size_t rows, std::vector<double>& acc) {
+  for (size_t r = 0; r < rows; ++r) {
+    for (size_t c = 0; c < cols; ++c) acc[r * cols + c] += m[r * total + (total - cols) + c];
+  }
+}
+
 }  // namespace
 
 void mlp_bias_act_fwd(double* z, size_t z_offset, size_t ld, size_t rows, size_t cols, const double* params,
@@ -146,7 +153,7 @@ void mlp_forward(const mlp::MlpConfig& config, const std::vector<double>& params
 
 void mlp_backward(const mlp::MlpConfig& config, const std::vector<double>& params, const MlpTape& tape,
                   const std::vector<double>& d_raw_density, const std::vector<double>& d_raw_rgb,
-                  std::vector<double>& grads) {
+                  std::vector<double>& grads, std::vector<double>* d_features) {
   const mlp::ParameterLayout layout = mlp::parameter_layout(config);
   const size_t rows = tape.n_rays * tape.samples_per_ray;
   if (grads.empty()) grads.assign(layout.total, 0.0);
@@ -168,14 +175,18 @@ void mlp_backward(const mlp::MlpConfig& config, const std::vector<double>& param
   }
   for (size_t i = 0; i < dh.size(); ++i) dh[i] += dh_colour[i];
 
+  // The features feed layer 0 (its whole input) and every skip layer (its input's last input_width columns).
+  std::vector<double> d_x(rows * config.input_width, 0.0);
   std::vector<double> d_act = std::move(dh);
   for (size_t i = config.depth; i-- > 0;) {
     const mlp::DenseLayer& layer = layout.trunk[i];
     std::vector<double> d_in =
         dense_backward(layer, params, tape.trunk_inputs[i], d_act, tape.activations[i].data(), rows, grads);
-    // A skip layer's input is [act_{i−1} | features]: only the first `width` columns flow further back.
+    if (i == 0 || mlp::skip_after(config, i - 1)) add_right_columns(d_in, layer.in, config.input_width, rows, d_x);
+    // A skip layer's input is [act_{i−1} | features]: the first `width` columns flow further back.
     if (i > 0) d_act = left_columns(d_in, layer.in, config.width, rows);
   }
+  if (d_features != nullptr) *d_features = std::move(d_x);
 }
 
 }  // namespace mipnerf::ref

@@ -48,8 +48,10 @@ void mlp_forward(const mlp::MlpConfig& config, const std::vector<double>& params
                  std::vector<double>& raw_density, std::vector<double>& raw_rgb, MlpTape* tape = nullptr);
 
 // grads (parameter layout, resized if empty) += ∂loss/∂params for ∂loss/∂raw_density and ∂loss/∂raw_rgb.
+// d_features (optional): set to ∂loss/∂features [rows][input_width] (resized, overwritten), the first trunk layer's
+// input gradient plus every skip layer's through the features' columns of its concatenated input.
 void mlp_backward(const mlp::MlpConfig& config, const std::vector<double>& params, const MlpTape& tape,
                   const std::vector<double>& d_raw_density, const std::vector<double>& d_raw_rgb,
-                  std::vector<double>& grads);
+                  std::vector<double>& grads, std::vector<double>* d_features = nullptr);
 
 }  // namespace mipnerf::ref

@@ -95,8 +95,39 @@ mlp::MlpOutputGradients gradients_for(const DevicePass& d, const mlp::MlpConfig&
   return {ocl::view(d.d_density, config.density_outputs), ocl::view(d.d_rgb, config.rgb_outputs)};
 }
 
+// ∂loss/∂features as a backward writes it: [rows][input_width] at an offset, rows padded (ld > input_width), filled
+// with a sentinel first so that the test sees that the backward overwrites every value and leaves the padding alone.
+struct FeatureGradient {
+  static constexpr float kSentinel = 1234.5f;
+  size_t offset = 3, ld = 0, rows = 0, width = 0;
+  ocl::DeviceArray<float> array;
+  FeatureGradient(ocl::Context& ctx, const mlp::MlpConfig& config, size_t rows_)
+      : ld(config.input_width + 2),
+        rows(rows_),
+        width(config.input_width),
+        array(test::device_copy(ctx, std::vector<float>(offset + rows_ * ld, kSentinel), "d_features")) {}
+  ocl::MatrixView view() const { return ocl::view(array, ld, offset); }
+  // The gradient, dense [rows][input_width]; CHECKs that the padding kept its sentinel.
+  std::vector<float> download(ocl::Context& ctx) const {
+    const std::vector<float> all = array.download(ctx);
+    std::vector<float> dense(rows * width);
+    size_t padding_changed = 0;
+    for (size_t i = 0; i < all.size(); ++i) {
+      const bool inside = i >= offset && (i - offset) % ld < width && (i - offset) / ld < rows;
+      if (inside) {
+        dense[((i - offset) / ld) * width + (i - offset) % ld] = all[i];
+      } else {
+        padding_changed += all[i] != kSentinel;
+      }
+    }
+    CHECK(padding_changed == 0);
+    return dense;
+  }
+};
+
 // Two passes (think coarse and fine, different sample counts) through one MLP: forward A, forward B,
-// backward B, backward A, as the training graph orders them; gradients accumulate into one buffer.
+// backward B, backward A, as the training graph orders them; gradients accumulate into one buffer. Pass A's backward
+// also asks for ∂loss/∂features, pass B's does not (both paths against the reference in one run).
 // host_options: how the host path splits the rows (blocks, threads); its defaults when null.
 void check_against_reference_on(gemm::GemmBackend backend, const mlp::MlpConfig& config, size_t n_rays,
                                 size_t samples_a, size_t samples_b, unsigned seed,
@@ -124,11 +155,12 @@ void check_against_reference_on(gemm::GemmBackend backend, const mlp::MlpConfig&
   net.zero_grad();
   net.forward(inputs_for(da, a, config), outputs_for(da, config), ws_a);
   net.forward(inputs_for(db, b, config), outputs_for(db, config), ws_b);
+  FeatureGradient d_features_a(ctx, config, a.rows());
   net.backward(ws_b, gradients_for(db, config));
-  net.backward(ws_a, gradients_for(da, config));
+  net.backward(ws_a, gradients_for(da, config), d_features_a.view());
   const auto grads = net.download_grads();
 
-  std::vector<double> ref_grads;
+  std::vector<double> ref_grads, ref_d_features_a;
   for (const Pass* p : {&a, &b}) {
     const DevicePass& d = p == &a ? da : db;
     std::vector<double> density, rgb;
@@ -139,8 +171,11 @@ void check_against_reference_on(gemm::GemmBackend backend, const mlp::MlpConfig&
     test::check_close(d.raw_density.download(ctx), density, 0, density.size(), kRelative, kAbsolute,
                       pass + " raw_density");
     test::check_close(d.raw_rgb.download(ctx), rgb, 0, rgb.size(), kRelative, kAbsolute, pass + " raw_rgb");
-    ref::mlp_backward(config, params_d, tape, test::as_double(p->d_density), test::as_double(p->d_rgb), ref_grads);
+    ref::mlp_backward(config, params_d, tape, test::as_double(p->d_density), test::as_double(p->d_rgb), ref_grads,
+                      p == &a ? &ref_d_features_a : nullptr);
   }
+  test::check_close(d_features_a.download(ctx), ref_d_features_a, 0, ref_d_features_a.size(), kRelative, kAbsolute,
+                    "pass A d_features");
   for (const auto* layer : net.layout().all()) {
     test::check_close(grads, ref_grads, layer->weight_offset, layer->in * layer->out, kRelative, kAbsolute,
                       layer->name + " weight gradient");
@@ -208,6 +243,13 @@ TEST_CASE("mlp device: small network with view dependence matches the reference"
 
 TEST_CASE("mlp device: small network without view dependence matches the reference") {
   check_against_reference(test::small_mlp_config(false), 4, 7, 3, 102);
+}
+
+TEST_CASE("mlp device: small network without a skip layer matches the reference") {
+  // The features feed the first layer only: their gradient is that layer's input gradient alone.
+  mlp::MlpConfig config = test::small_mlp_config(true);
+  config.skip_layer = 0;
+  check_against_reference(config, 4, 5, 3, 112);
 }
 
 TEST_CASE("mlp device: the paper's network (8x256, skip, view branch) matches the reference") {
@@ -398,6 +440,12 @@ TEST_CASE("mlp device: misuse is refused with a message that says what to do, on
     net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
     CHECK_THROWS_WITH_AS(net.backward(ws, {ocl::view(short_density, 1), ocl::view(d.d_rgb, config.rgb_outputs)}),
                          doctest::Contains("raw_density too short"), Error);
+    // ∂loss/∂features: too short, or over the features it is the gradient of (the backward would read what it wrote).
+    ocl::DeviceArray<float> short_d_features(ctx, p.rows() * config.input_width - 1, "d_features too short");
+    CHECK_THROWS_WITH_AS(net.backward(ws, gradients_for(d, config), ocl::view(short_d_features, config.input_width)),
+                         doctest::Contains("d_features too short"), Error);
+    CHECK_THROWS_WITH_AS(net.backward(ws, gradients_for(d, config), inputs_for(d, p, config).features),
+                         doctest::Contains("overlaps the features"), Error);
     mlp::MlpInputs no_view = inputs_for(d, p, config);
     no_view.view_encoding = {};
     CHECK_THROWS_WITH_AS(net.forward(no_view, outputs_for(d, config), ws), doctest::Contains("view encoding"), Error);
@@ -550,6 +598,81 @@ TEST_CASE("mlp device: the stage profile counts every product's FLOPs, the same 
     CHECK(forward->seconds > 0.0);
     CHECK(profile.stage_seconds() <= profile.wall_seconds);
   });
+}
+
+namespace {
+
+// The features feed layer 0 and every skip layer: their gradient takes one [rows][input_width] × width product each.
+double features_gradient_flops(const mlp::MlpConfig& c, double rows) {
+  size_t layers = 1;
+  for (size_t i = 1; i < c.depth; ++i) layers += mlp::skip_after(c, i - 1) ? 1 : 0;
+  return 2.0 * rows * c.input_width * c.width * static_cast<double>(layers);
+}
+
+// The parameter gradients of one backward of `pass` (after net's forward through ws) from zero, and its profile.
+std::vector<float> gradients_of_backward(ocl::Context& ctx, mlp::Network& net, mlp::Workspace& ws,
+                                         const mlp::MlpOutputGradients& d_out, const ocl::MatrixView& d_features,
+                                         ocl::StageProfile* profile) {
+  net.zero_grad();
+  const auto run = [&] { net.backward(ws, d_out, d_features); };
+  if (profile) {
+    *profile = test::profile_once(ctx, run);
+  } else {
+    run();
+  }
+  return net.download_grads();
+}
+
+}  // namespace
+
+TEST_CASE("mlp device: asking for the features' gradient changes no parameter gradient and adds only its products") {
+  // mip-NeRF's paths never ask for it: they must compute what they did, bit for bit, with no product more.
+  ocl::Context ctx(test::test_context().device_info(), true);  // profiling on
+  for_each_small_network(ctx, 113, mlp::WorkspaceMode::training, [&](const mlp::MlpConfig& config, mlp::Network& net,
+                                                                      const Pass& p, DevicePass& d, mlp::Workspace& ws) {
+    net.forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+    FeatureGradient d_features(ctx, config, p.rows());
+    ocl::StageProfile without, with;
+    const auto grads_without = gradients_of_backward(ctx, net, ws, gradients_for(d, config), {}, &without);
+    const auto grads_with = gradients_of_backward(ctx, net, ws, gradients_for(d, config), d_features.view(), &with);
+    CHECK(grads_with == grads_without);
+    const auto* data_without = without.find("gemm backward_data");
+    const auto* data_with = with.find("gemm backward_data");
+    const auto* weights_without = without.find("gemm backward_weights");
+    const auto* weights_with = with.find("gemm backward_weights");
+    REQUIRE(data_without != nullptr);
+    REQUIRE(data_with != nullptr);
+    REQUIRE(weights_without != nullptr);
+    REQUIRE(weights_with != nullptr);
+    const double rows = static_cast<double>(p.rows());
+    CHECK(data_without->flops == backward_data_flops(config, rows));  // nothing extra when not asked for
+    CHECK(data_with->flops == backward_data_flops(config, rows) + features_gradient_flops(config, rows));
+    CHECK(weights_with->flops == weights_without->flops);
+    CHECK(without.find("gemm forward") == nullptr);
+    // A second backward overwrites the features' gradient (it does not add to it).
+    const auto first = d_features.download(ctx);
+    gradients_of_backward(ctx, net, ws, gradients_for(d, config), d_features.view(), nullptr);
+    CHECK(d_features.download(ctx) == first);
+  });
+}
+
+TEST_CASE("mlp device: the host path's threads leave the parameter gradients bit for bit when asked for the features'") {
+  // Blocks of one ray on three threads (each block writes its own rows of the features' gradient), the paper's network.
+  if (!host_backend_runs_here()) return;
+  auto& ctx = test::test_context();
+  mlp::MlpConfig config;
+  config.seed = 10;
+  const auto network = mlp::make_host_network(ctx, config, host_options(1, 3));
+  std::mt19937 rng(114);
+  const Pass p = make_pass(config, 5, 8, rng);
+  DevicePass d(ctx, config, p);
+  auto ws = network->make_workspace(p.rows(), p.n_rays, mlp::WorkspaceMode::training);
+  network->forward(inputs_for(d, p, config), outputs_for(d, config), ws);
+  FeatureGradient d_features(ctx, config, p.rows());
+  const auto grads_without = gradients_of_backward(ctx, *network, ws, gradients_for(d, config), {}, nullptr);
+  const auto grads_with =
+      gradients_of_backward(ctx, *network, ws, gradients_for(d, config), d_features.view(), nullptr);
+  CHECK(grads_with == grads_without);
 }
 
 // Rendering evaluates the levels before the last for their densities only (graph.hpp): an inference forward without

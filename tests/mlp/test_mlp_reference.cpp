@@ -1,5 +1,5 @@
-// The double reference MLP's backward against central finite differences of its own forward, and its
-// per-ray view term against an explicitly per-sample computation.
+// The double reference MLP's backward (parameters and features) against central finite differences of its own
+// forward, and its per-ray view term against an explicitly per-sample computation.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -19,12 +19,13 @@ struct Problem {
   std::vector<double> params, features, view_encoding, d_density, d_rgb;
 };
 
-Problem make_problem(bool view_dependence, unsigned seed) {
+// skip: the features concatenated again after layer index 2; without, they feed layer 0 only.
+Problem make_problem(bool view_dependence, unsigned seed, bool skip = true) {
   Problem p;
   p.config.input_width = 5;
   p.config.depth = 4;
   p.config.width = 8;
-  p.config.skip_layer = 2;  // features concatenated after layer index 2
+  p.config.skip_layer = skip ? 2 : 0;
   p.config.view_dependence = view_dependence;
   p.config.view_width = 3;
   p.config.view_branch_width = 6;
@@ -50,13 +51,18 @@ Problem make_problem(bool view_dependence, unsigned seed) {
 }
 
 // loss = Σ d_density · raw_density + Σ d_rgb · raw_rgb, so ∂loss/∂raw = the given upstream gradients.
-double loss(const Problem& p, const std::vector<double>& params, ref::MlpTape* tape) {
+double loss(const Problem& p, const std::vector<double>& params, const std::vector<double>& features,
+            ref::MlpTape* tape) {
   std::vector<double> density, rgb;
-  ref::mlp_forward(p.config, params, p.features, p.view_encoding, p.n_rays, p.samples_per_ray, density, rgb, tape);
+  ref::mlp_forward(p.config, params, features, p.view_encoding, p.n_rays, p.samples_per_ray, density, rgb, tape);
   double total = 0.0;
   for (size_t i = 0; i < density.size(); ++i) total += p.d_density[i] * density[i];
   for (size_t i = 0; i < rgb.size(); ++i) total += p.d_rgb[i] * rgb[i];
   return total;
+}
+
+double loss(const Problem& p, const std::vector<double>& params, ref::MlpTape* tape) {
+  return loss(p, params, p.features, tape);
 }
 
 // Whether two tapes have the same ReLU pattern (a difference step across a kink is not a derivative test).
@@ -106,7 +112,54 @@ void check_finite_differences(bool view_dependence) {
   CHECK(checked > 0);
 }
 
+// ∂loss/∂features against central differences of the forward's loss in each feature. Within one ReLU pattern the
+// network is affine in any single feature (every layer is, and the ReLUs are fixed), so, as for the parameters, the
+// quotient is exact up to rounding.
+void check_feature_gradient(bool view_dependence, bool skip, unsigned seed) {
+  const Problem p = make_problem(view_dependence, seed, skip);
+  ref::MlpTape tape;
+  loss(p, p.params, &tape);
+  std::vector<double> grads, d_features(3, 7.0);  // of the wrong size and not zero: the backward sets it
+  ref::mlp_backward(p.config, p.params, tape, p.d_density, p.d_rgb, grads, &d_features);
+  REQUIRE(d_features.size() == p.features.size());
+  // The parameter gradients do not depend on whether the features' gradient is asked for.
+  std::vector<double> grads_alone;
+  ref::mlp_backward(p.config, p.params, tape, p.d_density, p.d_rgb, grads_alone);
+  CHECK(grads == grads_alone);
+  const double h = 1e-5;
+  size_t checked = 0, skipped = 0, nonzero = 0;
+  double worst = 0.0;
+  for (size_t i = 0; i < p.features.size(); ++i) {
+    auto plus = p.features, minus = p.features;
+    plus[i] += h;
+    minus[i] -= h;
+    ref::MlpTape tape_plus, tape_minus;
+    const double f_plus = loss(p, p.params, plus, &tape_plus), f_minus = loss(p, p.params, minus, &tape_minus);
+    if (!same_pattern(tape_plus, tape_minus)) {
+      ++skipped;
+      continue;
+    }
+    const double numeric = (f_plus - f_minus) / (2.0 * h);
+    worst = std::max(worst, std::abs(numeric - d_features[i]));
+    nonzero += std::abs(d_features[i]) > 1e-3;
+    ++checked;
+  }
+  INFO("checked " << checked << " features, skipped " << skipped << " at a ReLU kink; worst |error| " << worst);
+  CHECK(worst <= 1e-8);                      // rounding only, as for the parameters
+  CHECK(skipped * 50 <= p.features.size());  // at most 2 % skipped (60 features: at most one)
+  CHECK(nonzero * 2 > checked);              // a real gradient, not zeros matching zeros
+}
+
 }  // namespace
+
+TEST_CASE("mlp reference: the features' gradient matches finite differences (skip and view dependence or not)") {
+  for (const bool view : {true, false}) {
+    for (const bool skip : {true, false}) {
+      INFO("view dependence " << view << ", skip layer " << skip);
+      check_feature_gradient(view, skip, 31 + 2 * view + skip);
+    }
+  }
+}
 
 TEST_CASE("mlp reference: backward matches finite differences, with view dependence") {
   check_finite_differences(true);
