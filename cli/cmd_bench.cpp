@@ -293,7 +293,7 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   run.presets.time_box_seconds = a.time_box;
   run.presets.render_reps = a.render_reps;
   run.presets.settings = explicit_settings(a);
-  for (const auto& preset : a.presets) train::resolve_config(preset, "mipnerf", run.presets.settings);  // bad --set
+  for (const auto& preset : a.presets) train::resolve_config(preset, train::preset_variant(preset), run.presets.settings);  // bad --set
   {  // after every argument is checked: a bad one fails at once
     bench::MachineProbeSettings probe;  // a few seconds: the limits the stage profile's rates are held against
     probe.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

@@ -41,7 +41,9 @@ inline GridCorners grid_corners(uint4 level, float3 point) {
     const float3 w = select(1.0f - up_fraction, up_fraction, up != 0);
     c.weight[corner] = w.x * w.y * w.z;
     if (level.w != 0u) {
-      const uint slot = ((uint)cell.x ^ ((uint)cell.y * 19349663u) ^ ((uint)cell.z * 83492791u)) % level.z;
+      const uint hash = (uint)cell.x ^ ((uint)cell.y * 19349663u) ^ ((uint)cell.z * 83492791u);
+      // mod T; a power-of-two T (every table the model builds) takes a mask instead of the division, same value.
+      const uint slot = (level.z & (level.z - 1u)) == 0u ? hash & (level.z - 1u) : hash % level.z;
       c.entry[corner] = (int)(level.x + slot);
     } else {
       const int size = (int)level.y;

@@ -123,6 +123,46 @@ __kernel void zip_features_bwd(__global const float* origins, __global const flo
   }
 }
 
+// The same gradient, deterministic: one work-item per level walks every sample in order and adds without atomics (no
+// other work-item writes that level's entries). The order is fixed, so a run and its resume sum bit for bit alike;
+// only n_levels work-items run, which suits a CPU device with a few cores (the atomic kernel there spends its time in
+// compare-and-swap retries on the coarse levels, where thousands of samples share a cell), not a GPU.
+__kernel void zip_features_bwd_by_level(__global const float* origins, __global const float* directions,
+                                        __global const float* radii, __global const float* t_edges,
+                                        __global const uint4* levels, __global const float* d_features,
+                                        __global float* d_table, const uint n_samples, const uint n_intervals,
+                                        const uint n_levels, const float4 box, const float scale_mult,
+                                        const float precondition, const ulong seed, const uint step,
+                                        const uint first_ray) {
+  const uint l = get_global_id(0);
+  if (l >= n_levels) return;
+  const uint4 level = levels[l];
+  const float mean = precondition / (float)ZIP_MULTISAMPLES;
+  for (uint sample = 0; sample < n_samples; ++sample) {
+    __global const float* d_out = d_features + ((size_t)sample * n_levels + l) * ZIP_LEVEL_WIDTH;
+    float d_mean[GRID_FEATURES];
+    bool any = false;
+    for (int f = 0; f < GRID_FEATURES; ++f) {
+      d_mean[f] = mean * d_out[f];
+      any = any || d_mean[f] != 0.0f;
+    }
+    if (!any) continue;
+    float3 points[ZIP_MULTISAMPLES];
+    float scales[ZIP_MULTISAMPLES];
+    zip_multisamples(origins, directions, radii, t_edges, sample, n_intervals, box, scale_mult, seed, step, first_ray,
+                     points, scales);
+    for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
+      const GridCorners c = grid_corners(level, points[j]);
+      const float weight = zip_level_weight(scales[j], level);
+      for (int corner = 0; corner < 8; ++corner) {
+        if (c.entry[corner] < 0) continue;
+        const float w = weight * c.weight[corner];
+        for (int f = 0; f < GRID_FEATURES; ++f) d_table[c.entry[corner] * GRID_FEATURES + f] += w * d_mean[f];
+      }
+    }
+  }
+}
+
 // level_scale[l] = √(maxval² + mean over level l's table of value²): the scale feature's factor (the official
 // `f_scale`, whose stop-gradient makes it a constant of the step). One work-item per level; the sum in double when
 // the device has it would not change the float it ends as by more than the order error, so float it is, in order.

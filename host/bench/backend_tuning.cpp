@@ -59,7 +59,7 @@ std::map<std::string, gemm::HostProductShape> host_products_to_tune(const mlp::M
   };
   add(network, 64);
   for (const auto& preset : presets) {
-    const train::TrainConfig config = train::resolve_config(preset, "mipnerf", {});
+    const train::TrainConfig config = train::resolve_config(preset, train::preset_variant(preset), {});
     add(train::make_graph_spec(config, false).mlps.front(), static_cast<size_t>(config.num_samples));
   }
   return shapes;

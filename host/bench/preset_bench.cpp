@@ -21,7 +21,7 @@ train::TrainConfig bench_config(const PresetBenchOptions& options) {
   settings["log_every"] = std::to_string(steps);
   settings["checkpoint_every"] = std::to_string(steps);  // one checkpoint, after the last (untimed) step
   settings["keep_checkpoints"] = "1";
-  return train::resolve_config(options.preset, "mipnerf", settings);
+  return train::resolve_config(options.preset, train::preset_variant(options.preset), settings);
 }
 
 // The run's phases: the first step, timed warm steps, then (optionally) profiled steps.
@@ -87,7 +87,7 @@ RenderTiming time_render(ocl::Context& ctx, train::Trainer& trainer, const Prese
   timing.chunk_rays =
       eval::render_chunk_rays(trainer.spec(), static_cast<size_t>(trainer.config().render_chunk_rays),
                               ctx.device_info(), 0);
-  eval::ImageRenderer renderer(ctx, trainer.spec(), trainer.network_pointers(), {camera},
+  eval::ImageRenderer renderer(ctx, trainer.spec(), trainer.network_pointers(), trainer.grid_pointers(), {camera},
                                eval::RenderSettings{timing.chunk_rays, 1, 0});
   timing.warm_up_seconds = renderer.warm_up();
   for (size_t r = 0; r < std::max<size_t>(1, options.render_reps); ++r) timing.renders.add(renderer.render(0).seconds);

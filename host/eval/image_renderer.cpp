@@ -48,10 +48,15 @@ ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, st
 
 ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                              const std::vector<Camera>& cameras, const RenderSettings& settings)
+    : ImageRenderer(ctx, spec, std::move(networks), {}, cameras, settings) {}
+
+ImageRenderer::ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
+                             std::vector<mlp::GridTable*> grids, const std::vector<Camera>& cameras,
+                             const RenderSettings& settings)
     : ctx_(&ctx),
       cameras_(renderable(cameras)),
       settings_(checked(settings)),
-      graph_(ctx, spec, std::move(networks), mode_for(settings), settings.chunk_rays),
+      graph_(ctx, spec, std::move(networks), std::move(grids), mode_for(settings), settings.chunk_rays),
       device_cameras_(ctx, cameras_, {}, "render"),
       camera_ids_(ctx, settings.chunk_rays, "render camera_ids [chunk]"),
       pixel_ids_(ctx, settings.chunk_rays, "render pixel_ids [chunk]") {}

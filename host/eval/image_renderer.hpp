@@ -42,6 +42,9 @@ class ImageRenderer {
                 const std::vector<Camera>& cameras, size_t chunk_rays);
   ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
                 const std::vector<Camera>& cameras, const RenderSettings& settings);
+  // With Zip-NeRF's grids (spec.grids; they outlive the renderer).
+  ImageRenderer(ocl::Context& ctx, const graph::GraphSpec& spec, std::vector<mlp::Network*> networks,
+                std::vector<mlp::GridTable*> grids, const std::vector<Camera>& cameras, const RenderSettings& settings);
 
   // Replaces the cameras (uploaded once more; the graph and its buffers stay): the viewer renders each request's
   // camera through one renderer instead of building a graph per request.

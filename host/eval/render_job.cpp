@@ -73,7 +73,7 @@ RenderedFrames render_frames(ocl::Context& ctx, const RenderJob& job, const View
   const train::TrainedModel& model = *job.model;
   RenderedFrames result;
   result.chunk_rays = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
-  ImageRenderer renderer(ctx, model.spec, model.network_pointers(), frames.cameras,
+  ImageRenderer renderer(ctx, model.spec, model.network_pointers(), model.grid_pointers(), frames.cameras,
                          RenderSettings{result.chunk_rays, job.supersample, job.seed});
   result.warm_up_seconds = renderer.warm_up();
   const size_t total = rays_of(frames.cameras, job.supersample);
@@ -127,7 +127,7 @@ SplitScores score_split(ocl::Context& ctx, const RenderJob& job, const data::Spl
                         const std::string& out, const ScoreOptions& options) {
   const train::TrainedModel& model = *job.model;
   const size_t chunk = render_chunk_rays(model, ctx.device_info(), job.chunk_rays);
-  ImageRenderer renderer(ctx, model.spec, model.network_pointers(), split.cameras,
+  ImageRenderer renderer(ctx, model.spec, model.network_pointers(), model.grid_pointers(), split.cameras,
                          RenderSettings{chunk, job.supersample, job.seed});
   const double warm_up = renderer.warm_up();
   const std::vector<size_t> views = select_views(split, options.views);

@@ -41,8 +41,9 @@ data::Dataset load_val(const train::TrainConfig& c, const std::string& data_path
 
 std::unique_ptr<ImageRenderer> val_renderer(ocl::Context& ctx, train::Trainer& trainer, const data::Split& val) {
   const size_t chunk = static_cast<size_t>(trainer.config().render_chunk_rays);
-  return std::make_unique<ImageRenderer>(ctx, trainer.spec(), trainer.network_pointers(), val.cameras,
-                                         render_chunk_rays(trainer.spec(), chunk, ctx.device_info(), 0));
+  return std::make_unique<ImageRenderer>(
+      ctx, trainer.spec(), trainer.network_pointers(), trainer.grid_pointers(), val.cameras,
+      RenderSettings{render_chunk_rays(trainer.spec(), chunk, ctx.device_info(), 0), 1, 0});
 }
 
 // Each val render written as the final evaluation writes it (val_image_folder; under mpirun, rank 0 writes).

@@ -3,6 +3,7 @@
 
 #include "core/error.hpp"
 #include "graph/stage_traffic.hpp"
+#include "parallel/world.hpp"
 
 namespace mipnerf::graph {
 namespace {
@@ -14,6 +15,7 @@ struct BufferPlan {
   size_t view_width = 0;
   size_t feature_width = 0;
   bool needs_points = false;  // a PE encoding needs means/covs buffers
+  bool grid_gradients = false;  // training a grid level: d_features [S][F]
   size_t drawn_edges = 0;     // union levels: R · (new + 1)
   std::vector<size_t> level_intervals;
   size_t partial_slots = 0;  // per level (training)
@@ -24,6 +26,7 @@ struct BufferPlan {
     size_t n = rays * view_width + samples * feature_width + samples * 4 + drawn_edges;
     if (needs_points) n += 2 * 3 * samples;
     if (training) n += rays * 3 + samples * 4;
+    if (grid_gradients) n += samples * feature_width;
     for (size_t intervals : level_intervals) {
       n += rays * (2 * intervals + 1) + rays * 5 + (training ? 2 * partial_slots : 0);
     }
@@ -40,10 +43,12 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
   plan.level_intervals = spec.intervals_per_level();
   plan.training = mode == GraphMode::training;
   for (const auto& level : spec.levels) {
-    plan.feature_width = std::max(plan.feature_width, spec.feature_width(level.encoding));
-    // The fused kernels (IPE, concatenated PE) compute their Gaussians inline; the PE paths stage means first.
-    plan.needs_points =
-        plan.needs_points || (level.encoding != Encoding::integrated && level.encoding != Encoding::concat_pe);
+    plan.feature_width = std::max(plan.feature_width, spec.feature_width(level));
+    // The fused kernels (IPE, concatenated PE, grid features) compute their Gaussians or multisamples inline; the PE
+    // paths stage means first.
+    plan.needs_points = plan.needs_points || level.encoding == Encoding::frustum_mean_pe ||
+                        level.encoding == Encoding::midpoint_pe;
+    plan.grid_gradients = plan.grid_gradients || (plan.training && level.encoding == Encoding::zip_grid);
     if (level.sampling == Sampling::resample_union) {
       plan.drawn_edges = std::max(plan.drawn_edges, max_chunk_rays * (level.new_samples + 1));
     }
@@ -84,9 +89,14 @@ size_t Graph::bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_
 
 Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*> networks, GraphMode mode,
              size_t max_chunk_rays, size_t max_batch_rays)
+    : Graph(ctx, spec, std::move(networks), {}, mode, max_chunk_rays, max_batch_rays) {}
+
+Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*> networks,
+             std::vector<mlp::GridTable*> grids, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays)
     : ctx_(&ctx),
       spec_(spec),
       networks_(std::move(networks)),
+      grids_(std::move(grids)),
       mode_(mode),
       max_chunk_rays_(max_chunk_rays),
       max_batch_rays_(max_batch_rays) {
@@ -94,6 +104,17 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   if (networks_.size() != spec_.mlps.size()) {
     throw Error("graph: " + std::to_string(spec_.mlps.size()) + " networks in the spec, " +
                 std::to_string(networks_.size()) + " given");
+  }
+  if (grids_.size() != spec_.grids.size()) {
+    throw Error("graph: " + std::to_string(spec_.grids.size()) + " grids in the spec, " +
+                std::to_string(grids_.size()) + " given");
+  }
+  for (size_t g = 0; g < grids_.size(); ++g) {
+    if (grids_[g] == nullptr || mlp::grid_level_sizes(grids_[g]->config()) != mlp::grid_level_sizes(spec_.grids[g]) ||
+        grids_[g]->config().features != spec_.grids[g].features ||
+        grids_[g]->config().hash_table_size != spec_.grids[g].hash_table_size) {
+      throw Error("graph: grid " + std::to_string(g) + " is not the spec's (" + mlp::describe(spec_.grids[g]) + ")");
+    }
   }
   if (max_chunk_rays_ == 0) throw Error("graph: the chunk size must be at least one ray");
   const bool training = mode_ == GraphMode::training;
@@ -120,6 +141,16 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   if (!training) render_options.density_noise = 0.0f;
   render_ = std::make_unique<ops::Render>(ctx, render_options, spec_.activation);
   if (training) loss_ = std::make_unique<ops::Loss>(ctx, spec_.loss);
+  for (size_t g = 0; g < spec_.grids.size(); ++g) {
+    ops::ZipFeatureOptions zip_options = spec_.zip_options(g);
+    zip_options.randomized = training && spec_.zip.randomized;  // rendering: the fixed pattern
+    // A CPU device adds the table's gradient level by level, in a fixed order (deterministic: a resumed run equals an
+    // uninterrupted one); a GPU needs the per-sample atomic scatter's parallelism.
+    zip_options.scatter = (ctx.device_info().type & CL_DEVICE_TYPE_CPU) ? ops::ZipFeatureOptions::Scatter::by_level
+                                                                        : ops::ZipFeatureOptions::Scatter::atomic;
+    zip_.push_back(std::make_unique<ops::ZipFeatures>(ctx, zip_options));
+    level_scales_.emplace_back(ctx, mlp::grid_level_sizes(spec_.grids[g]).size(), "grid level_scale [L]");
+  }
 
   const BufferPlan plan =
       plan_for(spec_, mode_, max_chunk_rays_, max_batch_rays_, training ? loss_->group_size() : kSmallestLossGroup);
@@ -141,6 +172,7 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     d_raw_density_ = ocl::DeviceArray<float>(ctx, S, "d_raw_density [samples]");
     d_raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * S, "d_raw_rgb [samples][3]");
   }
+  if (plan.grid_gradients) d_features_ = ocl::DeviceArray<float>(ctx, S * plan.feature_width, "d_features [samples][F]");
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     LevelBuffers level;
     level.intervals = plan.level_intervals[l];
@@ -220,14 +252,27 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
   }
 }
 
-void Graph::encode_level(size_t l, size_t n_rays) {
+void Graph::grid_level_scales() {
+  for (size_t g = 0; g < grids_.size(); ++g) {
+    zip_[g]->level_scale({grids_[g]->levels(), grids_[g]->layout()}, grids_[g]->params(), level_scales_[g]);
+  }
+}
+
+void Graph::encode_level(size_t l, size_t n_rays, const RngKey& key) {
   const LevelSpec& level = spec_.levels[l];
   const LevelBuffers& buffers = levels_[l];
   const ops::GaussianInputs intervals{chunk_rays_, buffers.t_edges, n_rays, buffers.intervals};
   const size_t rows = n_rays * buffers.intervals;
   ocl::StageScope stage(*ctx_, "encoding");
-  ocl::add_stage_bytes(*ctx_, traffic::encoding(n_rays, buffers.intervals, spec_.feature_width(level.encoding)));
+  ocl::add_stage_bytes(*ctx_, traffic::encoding(n_rays, buffers.intervals, spec_.feature_width(level)));
   switch (level.encoding) {
+    case Encoding::zip_grid: {
+      mlp::GridTable& grid = *grids_[level.grid_index];
+      zip_[level.grid_index]->fwd({chunk_rays_, buffers.t_edges, n_rays, buffers.intervals},
+                                  {grid.levels(), grid.layout()}, grid.params(), level_scales_[level.grid_index],
+                                  features_, key);
+      break;
+    }
     case Encoding::integrated:
       encode_->gaussian_ipe(spec_.position_encoding, intervals, features_);
       break;
@@ -273,7 +318,7 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const Den
 }
 
 void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
-                           const DensityNoiseKey& noise) {
+                           const DensityNoiseKey& noise, const RngKey& key) {
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& buffers = levels_[l];
   const ops::LossChunk loss_chunk{n_rays, chunk.first, step_groups_};
@@ -287,9 +332,18 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   ocl::add_stage_bytes(*ctx_, traffic::render_backward(n_rays, buffers.intervals));
   render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals}, buffers.weights,
                    {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_}, noise);
-  ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
-  networks_[level.mlp_index]->backward(workspaces_[level.mlp_index],
-                                       {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)});
+  const bool grid_level = level.encoding == Encoding::zip_grid;
+  mlp::Network& network = *networks_[level.mlp_index];
+  {
+    ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
+    network.backward(workspaces_[level.mlp_index], {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)},
+                     grid_level ? mlp::view(d_features_, network.config().input_width) : mlp::MatrixView{});
+  }
+  if (!grid_level) return;
+  ocl::StageScope grid_stage(*ctx_, "grid backward");
+  mlp::GridTable& grid = *grids_[level.grid_index];
+  zip_[level.grid_index]->bwd({chunk_rays_, buffers.t_edges, n_rays, buffers.intervals},
+                              {grid.levels(), grid.layout()}, d_features_, grid.grads(), key);
 }
 
 void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
@@ -304,6 +358,16 @@ void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
   step_groups_ = 0;
   ocl::StageScope stage(*ctx_, "adam");  // zeroing the gradients is part of the optimiser's work
   for (auto* network : networks_) network->zero_grad();
+  for (size_t g = 0; g < grids_.size(); ++g) {
+    grids_[g]->zero_grad();
+    // The regulariser's gradient once per step (it does not depend on the batch), on rank 0 only: the ranks'
+    // gradients are summed (train_step), so every rank adding it would count it once per rank.
+    if (spec_.grid_weight_decay > 0.0f && parallel::world().rank() == 0) {
+      zip_[g]->weight_decay({grids_[g]->levels(), grids_[g]->layout()}, grids_[g]->params(), grids_[g]->grads(),
+                            spec_.grid_weight_decay);
+    }
+  }
+  grid_level_scales();
 }
 
 void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key) {
@@ -313,10 +377,11 @@ void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTa
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     // The level's density noise (when the spec has it): the same key for its forward and its backward.
     const DensityNoiseKey noise{{key.seed, key.step, static_cast<uint32_t>(chunk.first)}, static_cast<uint32_t>(l)};
+    const RngKey rng{key.seed, key.step, static_cast<uint32_t>(chunk.first)};
     sample_level(l, chunk.count, key, static_cast<uint32_t>(chunk.first));
-    encode_level(l, chunk.count);
+    encode_level(l, chunk.count, rng);
     forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], noise);
-    backward_level(l, chunk.count, targets, chunk, noise);
+    backward_level(l, chunk.count, targets, chunk, noise, rng);
   }
   step_groups_ += loss_->groups_for(chunk.count);
 }
@@ -334,9 +399,10 @@ std::vector<ops::LevelLoss> Graph::end_step() {
 
 void Graph::render_chunk(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray_number) {
   generate_rays(source, chunk, key, first_ray_number + static_cast<uint32_t>(chunk.first));
+  grid_level_scales();  // per chunk: the tables may change between chunks (a live viewer renders while training)
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
-    encode_level(l, chunk.count);
+    encode_level(l, chunk.count, RngKey{});
     const bool shown = l + 1 == spec_.levels.size();  // only the last level's colour is shown
     forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], DensityNoiseKey{},  // no noise compiled in
                   shown || every_level_colour_);

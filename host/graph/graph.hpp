@@ -17,6 +17,7 @@
 #include "cl/context.hpp"
 #include "data/device_cameras.hpp"
 #include "graph/graph_spec.hpp"
+#include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
@@ -26,6 +27,7 @@
 #include "ops/render.hpp"
 #include "ops/resample.hpp"
 #include "ops/sample.hpp"
+#include "ops/zip_features.hpp"
 
 namespace mipnerf::graph {
 
@@ -76,6 +78,10 @@ class Graph {
   // chunks of up to max_chunk_rays and (training) batches of up to max_batch_rays.
   Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*> networks, GraphMode mode,
         size_t max_chunk_rays, size_t max_batch_rays = 0);
+  // With Zip-NeRF's grids: `grids[i]` is the table of spec.grids[i] (they outlive the graph); a training graph adds
+  // each grid level's table gradient (the weight decay's too) to its grads().
+  Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*> networks,
+        std::vector<mlp::GridTable*> grids, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays = 0);
   ~Graph();
 
   // Device bytes the graph's own buffers and workspaces take (networks and datasets not included).
@@ -86,7 +92,8 @@ class Graph {
 
   // ---- training ----
   // Starts a step over a batch of batch_rays rays whose Σ lossmult is lossmult_sum (the loss normaliser,
-  // known before any chunk runs). Zeroes every network's gradients.
+  // known before any chunk runs). Zeroes every network's and grid's gradients, adds the grids' weight decay
+  // gradient, and takes each grid's level scales (the step's constant).
   void begin_step(size_t batch_rays, double lossmult_sum);
   void train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key);
   // Waits for the step's work and returns each level's loss sums over the batch.
@@ -116,17 +123,20 @@ class Graph {
   // Ray i of the chunk draws its sub-pixel jitter (when compiled in) as ray number first_ray + i.
   void generate_rays(const RaySource& source, ChunkRange chunk, StepKey key, uint32_t first_ray);
   void sample_level(size_t level, size_t n_rays, StepKey key, uint32_t first_ray);
-  void encode_level(size_t level, size_t n_rays);
+  // `key` draws a grid level's multisample patterns (training graphs only).
+  void encode_level(size_t level, size_t n_rays, const RngKey& key);
+  void grid_level_scales();  // every grid's level_scale from its current table
   // `noise` keys the level's density noise (RenderOptions::density_noise; training graphs only). Without
   // `with_colour` (inference only) the level's density alone: its weights, acc and distance, no comp_rgb.
   void forward_level(size_t level, size_t n_rays, mlp::Workspace& ws, const DensityNoiseKey& noise,
                      bool with_colour = true);
   void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
-                      const DensityNoiseKey& noise);
+                      const DensityNoiseKey& noise, const RngKey& key);
 
   ocl::Context* ctx_;
   GraphSpec spec_;
   std::vector<mlp::Network*> networks_;
+  std::vector<mlp::GridTable*> grids_;
   GraphMode mode_;
   size_t max_chunk_rays_;
   size_t max_batch_rays_;
@@ -142,6 +152,7 @@ class Graph {
   std::unique_ptr<ops::Encode> encode_;
   std::unique_ptr<ops::Render> render_;
   std::unique_ptr<ops::Loss> loss_;
+  std::vector<std::unique_ptr<ops::ZipFeatures>> zip_;  // one per grid (its features are compiled in)
   ResampleOptions resample_options_;
 
   // Chunk buffers, R = max_chunk_rays, S = R · max intervals.
@@ -154,6 +165,8 @@ class Graph {
   ocl::DeviceArray<float> raw_density_, raw_rgb_;      // [S], [S][3]
   ocl::DeviceArray<float> d_comp_rgb_;                 // [R][3] (training)
   ocl::DeviceArray<float> d_raw_density_, d_raw_rgb_;  // [S], [S][3] (training)
+  ocl::DeviceArray<float> d_features_;                 // [S][F] (training with a grid level)
+  std::vector<ocl::DeviceArray<float>> level_scales_;  // per grid: [its levels]
   std::vector<LevelBuffers> levels_;
   std::vector<mlp::Workspace> workspaces_;  // one per network
 

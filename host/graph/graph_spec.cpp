@@ -14,11 +14,29 @@ size_t GraphSpec::feature_width(Encoding encoding) const {
       return static_cast<size_t>(position_encoding.ipe_width());
     case Encoding::concat_pe:
       return static_cast<size_t>(position_encoding.concat_pe_width());
+    case Encoding::zip_grid:
+      throw Error("graph: a grid level's feature width is its grid's (GraphSpec::feature_width(level))");
     case Encoding::frustum_mean_pe:
     case Encoding::midpoint_pe:
       break;
   }
   return static_cast<size_t>(position_encoding.pe_width());
+}
+
+ops::ZipFeatureOptions GraphSpec::zip_options(size_t index) const {
+  if (index >= grids.size()) {
+    throw Error("graph: grid " + std::to_string(index) + " named, " + std::to_string(grids.size()) + " in the spec");
+  }
+  ops::ZipFeatureOptions options = zip;
+  options.features = grids[index].features;
+  options.init_range = grids[index].init_range;
+  options.precondition = grids[index].precondition;
+  return options;
+}
+
+size_t GraphSpec::feature_width(const LevelSpec& level) const {
+  if (level.encoding != Encoding::zip_grid) return feature_width(level.encoding);
+  return mlp::grid_level_sizes(grids.at(level.grid_index)).size() * zip_options(level.grid_index).level_width();
 }
 
 std::vector<size_t> GraphSpec::intervals_per_level() const {
@@ -47,7 +65,11 @@ void GraphSpec::validate() const {
       throw Error(where + ": names network " + std::to_string(level.mlp_index) + " but there are " +
                   std::to_string(mlps.size()));
     const auto& mlp = mlps[level.mlp_index];
-    const size_t width = feature_width(level.encoding);
+    if (level.encoding == Encoding::zip_grid && level.grid_index >= grids.size()) {
+      throw Error(where + ": names grid " + std::to_string(level.grid_index) + " but there are " +
+                  std::to_string(grids.size()));
+    }
+    const size_t width = feature_width(level);
     if (mlp.input_width != width) {
       throw Error(where + ": the encoding gives " + std::to_string(width) + " features but network " +
                   std::to_string(level.mlp_index) + " expects " + std::to_string(mlp.input_width));
@@ -55,7 +77,8 @@ void GraphSpec::validate() const {
     if (level.encoding == Encoding::integrated && position_encoding.append_identity) {
       throw Error(where + ": IPE has no identity features; set pos_identity = false or use PE");
     }
-    if ((level.encoding == Encoding::concat_pe) != (position_encoding.covariance_degrees > 0)) {
+    if (level.encoding != Encoding::zip_grid &&
+        (level.encoding == Encoding::concat_pe) != (position_encoding.covariance_degrees > 0)) {
       throw Error(where +
                   ": covariance degrees (cov_max_deg = " + std::to_string(position_encoding.covariance_degrees) +
                   ") go with the concatenated PE and only with it");
@@ -81,10 +104,16 @@ std::string GraphSpec::describe() const {
     const char* encoding = level.encoding == Encoding::integrated        ? "IPE"
                            : level.encoding == Encoding::frustum_mean_pe ? "PE of frustum means"
                            : level.encoding == Encoding::concat_pe       ? "PE of frustum means ++ PE of sqrt(cov)"
+                           : level.encoding == Encoding::zip_grid        ? "multisampled grid"
                                                                          : "PE of midpoints";
-    out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals, " << encoding
-        << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1 << ", network "
-        << level.mlp_index << ", loss weight " << level.loss_weight;
+    out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals, " << encoding;
+    if (level.encoding == Encoding::zip_grid) {
+      out << " " << level.grid_index << " (" << mlp::describe(grids[level.grid_index])
+          << (zip.downweight ? ", footprint-weighted" : ", plain") << ")";
+    } else {
+      out << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1;
+    }
+    out << ", network " << level.mlp_index << ", loss weight " << level.loss_weight;
   }
   return out.str();
 }

@@ -7,8 +7,10 @@
 #include <vector>
 
 #include "core/stage_options.hpp"
+#include "mlp/grid_table.hpp"
 #include "mlp/mlp_config.hpp"
 #include "ops/loss.hpp"
+#include "ops/zip_features.hpp"
 
 namespace mipnerf::graph {
 
@@ -25,6 +27,7 @@ enum class Encoding {
   frustum_mean_pe,  // PE of the Gaussian's mean, covariance ignored (mip-NeRF "w/o IPE")
   midpoint_pe,      // PE of the interval's midpoint on the ray (NeRF's point samples)
   concat_pe,        // PE of the Gaussian's mean ++ PE of its covariance's signed square roots (supplement §7)
+  zip_grid,         // Zip-NeRF: the interval's multisamples looked up in a trained grid (zip_features.cl)
 };
 
 struct LevelSpec {
@@ -32,6 +35,7 @@ struct LevelSpec {
   size_t new_samples = 128;  // edges drawn by this level's sampling: new_samples + 1
   Encoding encoding = Encoding::integrated;
   size_t mlp_index = 0;      // which network evaluates this level (mip-NeRF: one shared; NeRF: one each)
+  size_t grid_index = 0;     // which grid a zip_grid level reads (GraphSpec::grids)
   float loss_weight = 1.0f;  // λ = 0.1 on coarse levels, 1 on the last
   // Intervals this level renders: new_samples, or previous + new_samples + 1 for a union of edge sets.
   size_t intervals(size_t previous_intervals) const {
@@ -42,6 +46,11 @@ struct LevelSpec {
 struct GraphSpec {
   std::vector<LevelSpec> levels;
   std::vector<mlp::MlpConfig> mlps;  // the networks, indexed by LevelSpec::mlp_index
+  std::vector<mlp::GridConfig> grids;  // Zip-NeRF's grids, indexed by LevelSpec::grid_index (empty for mip-NeRF)
+  // The grids' feature stage (its `features`, `init_range` and `precondition` follow each grid's config; `randomized`
+  // is set per graph: training draws the multisample patterns, rendering uses the fixed one).
+  ops::ZipFeatureOptions zip;
+  float grid_weight_decay = 0.1f;  // mult of each grid level's ½·mean(value²) in the loss (official param_regularizers)
   RaysOptions rays;
   SampleOptions sample;      // `randomized` is set per call (training vs rendering)
   ResampleOptions resample;  // idem
@@ -52,8 +61,12 @@ struct GraphSpec {
   RenderOptions render;
   ops::LossOptions loss;
 
-  // Features per row of `encoding` with position_encoding's degrees.
+  // Features per row of `encoding` with position_encoding's degrees (not zip_grid: its width is its grid's).
   size_t feature_width(Encoding encoding) const;
+  // Features per row of `level`: its encoding's, or its grid's levels × (features + the scale feature).
+  size_t feature_width(const LevelSpec& level) const;
+  // The feature stage options of grid `index` (zip with the grid's features, init range and precondition).
+  ops::ZipFeatureOptions zip_options(size_t index) const;
   // Intervals of each level, in order.
   std::vector<size_t> intervals_per_level() const;
   size_t max_intervals() const;

@@ -25,6 +25,7 @@ ZipFeatures::ZipFeatures(ocl::Context& ctx, const ZipFeatureOptions& options) : 
                               zip_features_build_options(options_));
   fwd_ = &program.kernel("zip_features_fwd");
   bwd_ = &program.kernel("zip_features_bwd");
+  bwd_by_level_ = &program.kernel("zip_features_bwd_by_level");
   level_scale_ = &program.kernel("zip_level_scale");
   weight_decay_ = &program.kernel("grid_weight_decay");
 }
@@ -76,12 +77,15 @@ void ZipFeatures::bwd(const ZipFeatureInputs& in, const ZipGrid& grid, const ocl
   const size_t samples = in.n_rays * in.n_intervals;
   detail::require(d_table, grid_table_entries(grid.layout) * options_.features, where);
   detail::require(d_features, samples * grid.layout.size() * options_.level_width(), where);
-  ocl::set_args(*bwd_, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, grid.levels, d_features,
+  const bool by_level = options_.scatter == ZipFeatureOptions::Scatter::by_level;
+  ::cl::Kernel& kernel = by_level ? *bwd_by_level_ : *bwd_;
+  ocl::set_args(kernel, where, in.rays.origins, in.rays.directions, in.rays.radii, in.t_edges, grid.levels, d_features,
                 d_table, static_cast<cl_uint>(samples), static_cast<cl_uint>(in.n_intervals),
                 static_cast<cl_uint>(grid.layout.size()), box_of(options_), options_.scale_mult,
                 options_.precondition, static_cast<cl_ulong>(key.seed), static_cast<cl_uint>(key.step),
                 static_cast<cl_uint>(key.first_ray));
-  ocl::launch_1d(*ctx_, *bwd_, samples, where);
+  // One work-item per work-group by level, so a CPU device runs the levels on all its cores.
+  ocl::launch_1d(*ctx_, kernel, by_level ? grid.layout.size() : samples, where, by_level ? 1 : 0);
 }
 
 void ZipFeatures::weight_decay(const ZipGrid& grid, const ocl::DeviceArray<float>& table,

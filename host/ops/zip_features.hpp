@@ -28,6 +28,9 @@ struct ZipFeatureOptions {
   float scale_mult = 0.5f;    // footprint = scale_mult · the multisample's distance from the axis [unscented_scale_mult]
   float precondition = 10.0f;  // features × this [precondition_scaling]
   float init_range = 1e-4f;    // table values start U(−r/precondition, r/precondition) [hash_init_range]
+  // How the backward adds onto the table: one work-item per level in a fixed order (deterministic, no atomics: for
+  // CPU devices) or one per sample with atomic adds (the parallel scatter a GPU needs; the order varies by run).
+  enum class Scatter { by_level, atomic } scatter = Scatter::by_level;
 
   int level_width() const { return features + (append_scale ? 1 : 0); }
   float maxval() const { return init_range / precondition; }
@@ -59,7 +62,7 @@ class ZipFeatures {
   // features [R·N][L][level_width] (`key` draws the patterns when randomized).
   void fwd(const ZipFeatureInputs& in, const ZipGrid& grid, const ocl::DeviceArray<float>& table,
            const ocl::DeviceArray<float>& level_scale, ocl::DeviceArray<float>& features, RngKey key = {});
-  // ADDS the table's gradient to d_table (same `key` as the forward).
+  // ADDS the table's gradient to d_table (same `key` as the forward), by options().scatter.
   void bwd(const ZipFeatureInputs& in, const ZipGrid& grid, const ocl::DeviceArray<float>& d_features,
            ocl::DeviceArray<float>& d_table, RngKey key = {});
   // d_table += mult · value / count_l (the official param_regularizers' mean-square decay, per level).
@@ -73,6 +76,7 @@ class ZipFeatures {
   ZipFeatureOptions options_;
   ::cl::Kernel* fwd_;
   ::cl::Kernel* bwd_;
+  ::cl::Kernel* bwd_by_level_;
   ::cl::Kernel* level_scale_;
   ::cl::Kernel* weight_decay_;
 };

@@ -12,7 +12,7 @@ namespace mipnerf::ref {
 namespace {
 
 constexpr int kMultisamples = 6;
-constexpr uint32_t kMultisampleStream = 5;  // RNG_STREAM_MULTISAMPLE
+constexpr uint32_t kMultisampleStream = rng_stream_multisample;  // RNG_STREAM_MULTISAMPLE
 
 // The pattern of one interval, as multisample_pattern draws it (the float uniforms the kernel gets, bit for bit).
 void interval_pattern(const ZipFeatureSettings& s, uint32_t ray_number, uint32_t interval, bool& reversed,

@@ -32,9 +32,11 @@ constexpr const char* device = "device";
 constexpr const char* data = "data";
 constexpr const char* data_fingerprint = "data_fingerprint";
 constexpr const char* adam_steps = "adam_steps";  // one per network, in order
+constexpr const char* grid_adam_steps = "grid_adam_steps";  // one per grid (Zip-NeRF), in order
 }  // namespace key
 
 std::string tensor_name(size_t network, const char* what) { return "network" + std::to_string(network) + "." + what; }
+std::string grid_tensor_name(size_t grid, const char* what) { return "grid" + std::to_string(grid) + "." + what; }
 
 // Typed reading of a header's keys: a missing key takes the default where there is one; a value of the wrong type
 // (or a negative count) names the file and the key, instead of escaping as a JSON library exception.
@@ -204,12 +206,18 @@ CheckpointHeader read_checkpoint_header(const io::CheckpointFile& c, const std::
     if (!steps->is_array()) throw Error(where + ": corrupt training checkpoint: '" + key::adam_steps + "' must be an array");
     for (const auto& step : *steps) h.adam_steps.push_back(read.count(step, key::adam_steps));
   }
+  if (const nlohmann::json* steps = read.find(key::grid_adam_steps)) {
+    if (!steps->is_array()) {
+      throw Error(where + ": corrupt training checkpoint: '" + key::grid_adam_steps + "' must be an array");
+    }
+    for (const auto& step : *steps) h.grid_adam_steps.push_back(read.count(step, key::grid_adam_steps));
+  }
   return h;
 }
 
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
                               const std::vector<std::unique_ptr<mlp::Network>>& networks,
-                              const std::vector<std::unique_ptr<mlp::Adam>>& optimisers) {
+                              const std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const GridParts& grids) {
   io::CheckpointFile c;
   c.header[key::format] = kFormat;
   c.header[key::version] = kVersion;
@@ -229,13 +237,25 @@ void save_training_checkpoint(const std::string& path, const TrainConfig& config
     c.add(tensor_name(i, "adam_v"), std::move(state.v));
   }
   c.header[key::adam_steps] = adam_steps;
+  if (grids.size() > 0) {
+    nlohmann::json grid_steps = nlohmann::json::array();
+    for (size_t i = 0; i < grids.size(); ++i) {
+      c.add(grid_tensor_name(i, "params"), (*grids.tables)[i]->download_params());
+      mlp::AdamState state = (*grids.optimisers)[i]->state();
+      grid_steps.push_back(state.step);
+      c.add(grid_tensor_name(i, "adam_m"), std::move(state.m));
+      c.add(grid_tensor_name(i, "adam_v"), std::move(state.v));
+    }
+    c.header[key::grid_adam_steps] = grid_steps;
+  }
   io::write_checkpoint_file(path, c);
 }
 
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
                                              const TrainingData& data,
                                              std::vector<std::unique_ptr<mlp::Network>>& networks,
-                                             std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log) {
+                                             std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log,
+                                             const GridParts& grids) {
   const io::CheckpointFile c = io::read_checkpoint_file(path);
   const CheckpointHeader header = read_checkpoint_header(c, path);
   // The same training data, by content, before anything else is said (older checkpoints have no fingerprint: their
@@ -259,12 +279,25 @@ CheckpointRecord restore_training_checkpoint(const std::string& path, const Trai
     state.v = c.tensor(tensor_name(i, "adam_v"), path);
     optimisers[i]->restore(state);
   }
+  if (header.grid_adam_steps.size() != grids.size()) {
+    throw Error(path + ": corrupt training checkpoint: " + std::to_string(header.grid_adam_steps.size()) +
+                " grid Adam step counts for " + std::to_string(grids.size()) + " grids");
+  }
+  for (size_t i = 0; i < grids.size(); ++i) {
+    (*grids.tables)[i]->upload_params(c.tensor(grid_tensor_name(i, "params"), path));
+    mlp::AdamState state;
+    state.step = header.grid_adam_steps[i];
+    state.m = c.tensor(grid_tensor_name(i, "adam_m"), path);
+    state.v = c.tensor(grid_tensor_name(i, "adam_v"), path);
+    (*grids.optimisers)[i]->restore(state);
+  }
   return header.record;
 }
 
 // ---- Trained networks, for rendering ----
 
 std::vector<mlp::Network*> TrainedModel::network_pointers() const { return mlp::network_pointers(networks); }
+std::vector<mlp::GridTable*> TrainedModel::grid_pointers() const { return mlp::grid_pointers(grids); }
 
 TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint_path, gemm::GemmBackend backend) {
   const io::CheckpointFile c = io::read_checkpoint_file(checkpoint_path);
@@ -276,6 +309,10 @@ TrainedModel load_trained_model(ocl::Context& ctx, const std::string& checkpoint
   model.networks = make_networks(ctx, model.spec, backend);
   for (size_t i = 0; i < model.networks.size(); ++i) {
     model.networks[i]->upload_params(c.tensor(tensor_name(i, "params"), checkpoint_path));
+  }
+  model.grids = make_grids(ctx, model.spec);
+  for (size_t i = 0; i < model.grids.size(); ++i) {
+    model.grids[i]->upload_params(c.tensor(grid_tensor_name(i, "params"), checkpoint_path));
   }
   model.step = record.step;
   model.data_path = record.data_path;

@@ -14,6 +14,7 @@
 #include "graph/graph_spec.hpp"
 #include "io/checkpoint_file.hpp"
 #include "mlp/adam.hpp"
+#include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
 #include "train/config.hpp"
 
@@ -57,7 +58,16 @@ struct CheckpointRecord {
 struct CheckpointHeader {
   CheckpointRecord record;
   TrainConfig config;
-  std::vector<int64_t> adam_steps;  // [networks]
+  std::vector<int64_t> adam_steps;       // [networks]
+  std::vector<int64_t> grid_adam_steps;  // [grids] (Zip-NeRF)
+};
+
+// A run's grids and their optimisers (Zip-NeRF), saved and restored beside the networks: tensors grid<i>.params,
+// grid<i>.adam_m, grid<i>.adam_v and the header's grid_adam_steps.
+struct GridParts {
+  std::vector<std::unique_ptr<mlp::GridTable>>* tables = nullptr;
+  std::vector<std::unique_ptr<mlp::Adam>>* optimisers = nullptr;
+  size_t size() const { return tables ? tables->size() : 0; }
 };
 // Reads the header of a parsed checkpoint file; throws mipnerf::Error naming `where` (the file) when it is not a
 // training checkpoint's.
@@ -67,7 +77,7 @@ CheckpointHeader read_checkpoint_header(const io::CheckpointFile& checkpoint, co
 // network<i>.params, network<i>.adam_m, network<i>.adam_v with the Adam step counts.
 void save_training_checkpoint(const std::string& path, const TrainConfig& config, const CheckpointRecord& record,
                               const std::vector<std::unique_ptr<mlp::Network>>& networks,
-                              const std::vector<std::unique_ptr<mlp::Adam>>& optimisers);
+                              const std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const GridParts& grids = {});
 
 // The data a run resumes on: its path (for messages) and data::fingerprint of its training split.
 struct TrainingData {
@@ -82,7 +92,8 @@ struct TrainingData {
 CheckpointRecord restore_training_checkpoint(const std::string& path, const TrainConfig& config,
                                              const TrainingData& data,
                                              std::vector<std::unique_ptr<mlp::Network>>& networks,
-                                             std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log);
+                                             std::vector<std::unique_ptr<mlp::Adam>>& optimisers, const LogFn& log,
+                                             const GridParts& grids = {});
 
 // ---- Trained networks, for rendering ----
 
@@ -92,11 +103,13 @@ struct TrainedModel {
   TrainConfig config;
   graph::GraphSpec spec;
   std::vector<std::unique_ptr<mlp::Network>> networks;
+  std::vector<std::unique_ptr<mlp::GridTable>> grids;  // Zip-NeRF's; none for mip-NeRF
   int64_t step = 0;
   std::string data_path;     // the training data's folder or file (absolute); empty in older checkpoints
   double train_seconds = 0;  // training time up to this checkpoint
   std::string trained_on;    // the device that trained it
   std::vector<mlp::Network*> network_pointers() const;
+  std::vector<mlp::GridTable*> grid_pointers() const;
 };
 // Throws mipnerf::Error naming the file when it is not a training checkpoint or does not fit its configuration. The
 // networks run their products on `backend` (automatic: the device's choice, mlp::make_network).

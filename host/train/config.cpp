@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "mlp/grid_table.hpp"
 #include "core/suggest.hpp"
 
 namespace mipnerf::train {
@@ -93,6 +94,23 @@ const std::vector<Entry>& table() {
       {{"mlp_skip", "trunk layer (0-based) after which the input is concatenated again", "model"},
        &TrainConfig::mlp_skip},
       {{"view_branch_width", "width of the view-dependent colour branch", "model"}, &TrainConfig::view_branch_width},
+      {{"grid_min", "zipnerf: cells a side of the grid's coarsest level", "model"}, &TrainConfig::grid_min},
+      {{"grid_max", "zipnerf: cells a side of the grid's finest level", "model"}, &TrainConfig::grid_max},
+      {{"grid_supersample", "zipnerf: levels per doubling of the grid size (official scale_supersample)", "model"},
+       &TrainConfig::grid_supersample},
+      {{"grid_hash_log2", "zipnerf: log2 of the entries of a hashed grid level (official hash_map_size 2^21)", "model"},
+       &TrainConfig::grid_hash_log2},
+      {{"grid_features", "zipnerf: features per grid level", "model"}, &TrainConfig::grid_features},
+      {{"grid_bound", "zipnerf: the grid covers [-b, b]^3 (0 = from the scene: NDC 1, world rays 1.5)", "model"},
+       &TrainConfig::grid_bound},
+      {{"grid_downweight",
+        "zipnerf: fade each grid level by the frustum's footprint (Zip-NeRF's anti-aliasing; false: a plain hash grid)",
+        "model"},
+       &TrainConfig::grid_downweight},
+      {{"grid_append_scale", "zipnerf: append each level's footprint weight as a feature", "model"},
+       &TrainConfig::grid_append_scale},
+      {{"grid_weight_decay", "zipnerf: weight of each grid level's mean squared value in the loss", "optimisation"},
+       &TrainConfig::grid_weight_decay},
       {{"batch_size", "rays per optimisation step", "optimisation"}, &TrainConfig::batch_size},
       {{"steps", "optimisation steps of the run", "optimisation"}, &TrainConfig::steps},
       {{"lr_init", "initial learning rate", "optimisation"}, &TrainConfig::lr_init},
@@ -101,6 +119,8 @@ const std::vector<Entry>& table() {
       {{"lr_warmup_mult", "learning-rate multiplier at step 0 of the warm-up", "optimisation"},
        &TrainConfig::lr_warmup_mult},
       {{"grad_max_norm", "clip the global gradient norm (0 = off)", "optimisation"}, &TrainConfig::grad_max_norm},
+      {{"adam_beta2", "Adam's second-moment decay", "optimisation"}, &TrainConfig::adam_beta2},
+      {{"adam_epsilon", "Adam's epsilon", "optimisation"}, &TrainConfig::adam_epsilon},
       {{"coarse_loss_mult", "lambda: weight of the coarse level's loss", "optimisation"},
        &TrainConfig::coarse_loss_mult},
       {{"randomized", "jitter samples during training", "optimisation"}, &TrainConfig::randomized},
@@ -299,6 +319,10 @@ const std::map<std::string, Bundle>& presets() {
        {{"num_samples", "32"}, {"mlp_depth", "8"}, {"mlp_width", "128"}, {"view_branch_width", "64"},
         {"batch_size", "1024"}, {"steps", "2000"}, {"lr_init", "1e-3"}, {"lr_final", "1e-5"},
         {"lr_warmup_steps", "200"}, {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "8"}}},
+      {"fast",  // Zip-NeRF's for two CPU cores (--model zipnerf picks it): a smaller grid, fewer samples
+       {{"num_samples", "32"}, {"grid_max", "2048"}, {"grid_hash_log2", "19"}, {"batch_size", "1024"},
+        {"steps", "3000"}, {"lr_init", "1e-2"}, {"lr_final", "5e-4"}, {"lr_warmup_steps", "100"},
+        {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "4"}}},
   };
   return bundles;
 }
@@ -341,6 +365,11 @@ Bundle variant_settings(Variant variant) {
     case Variant::nerf_area_center_misc:
       return without(variant_settings(Variant::nerf_area_center),
                      {"density_activation", "density_bias", "rgb_padding"});
+    // Zip-NeRF (camp_zipnerf configs/zipnerf/360.gin): the grid's features into a tiny MLP (one hidden layer of 64),
+    // a 64-wide view branch, Adam with β2 = 0.99 and ε = 1e-15. Sizes and learning rates come from the preset.
+    case Variant::zipnerf:
+      return {{"variant", "zipnerf"}, {"mlp_depth", "1"}, {"mlp_width", "64"}, {"mlp_skip", "0"},
+              {"view_branch_width", "64"}, {"adam_beta2", "0.99"}, {"adam_epsilon", "1e-15"}};
   }
   throw Error("internal error: variant " + std::to_string(static_cast<int>(variant)) + " has no settings");
 }
@@ -354,6 +383,8 @@ const std::map<std::string, Bundle>& variants() {
   }();
   return bundles;
 }
+
+std::string preset_variant(const std::string& preset) { return preset == "fast" ? "zipnerf" : "mipnerf"; }
 
 std::string describe_bundles() {
   std::string out = "presets:";
@@ -381,6 +412,10 @@ TrainConfig resolve_config(const std::string& preset, const std::string& variant
   for (const auto& [name, value] : variant_settings(parsed_variant)) set_value(config, name, value);
   for (const auto& [name, value] : explicit_settings) set_value(config, name, value);
   config.variant_bundle = parsed_variant;
+  if (preset_variant(preset) == "zipnerf" && config.variant != ModelFamily::zipnerf) {
+    throw Error("the fast preset is Zip-NeRF's (a grid and a tiny MLP): give --model zipnerf with it, or a mip-NeRF "
+                "preset (quick, small, paper) without");
+  }
   validate(config);
   return config;
 }
@@ -402,6 +437,22 @@ void validate(const TrainConfig& c) {
           "cov_max_deg (the concatenated PE of the covariance) needs integrated_encoding = false and the mipnerf "
           "model family (frustums, not NeRF's points)");
   require(c.view_max_deg >= 1, "view_max_deg must be at least 1");
+  require(c.grid_hash_log2 >= 4 && c.grid_hash_log2 <= 26, "grid_hash_log2 must be in 4..26");
+  if (c.variant == ModelFamily::zipnerf) {
+    mlp::GridConfig grid;
+    grid.min_grid_size = c.grid_min;
+    grid.max_grid_size = c.grid_max;
+    grid.scale_supersample = c.grid_supersample;
+    grid.features = c.grid_features;
+    try {
+      grid.validate();
+    } catch (const Error& e) {
+      require(false, e.what());
+    }
+  }
+  require(c.grid_bound >= 0, "grid_bound must be >= 0 (0 = from the scene)");
+  require(c.grid_weight_decay >= 0, "grid_weight_decay must be >= 0");
+  require(c.adam_beta2 > 0 && c.adam_beta2 < 1 && c.adam_epsilon > 0, "need 0 < adam_beta2 < 1 and adam_epsilon > 0");
   require(c.mlp_depth >= 1 && c.mlp_width >= 1 && c.view_branch_width >= 1, "MLP sizes must be positive");
   require(c.mlp_skip >= 0, "mlp_skip must be >= 0 (use a value >= mlp_depth for no skip)");
   require(c.batch_size >= 1, "batch_size must be positive");

@@ -22,9 +22,10 @@ namespace mipnerf::train {
 enum class ModelFamily {
   mipnerf,  // conical frustums: IPE of their Gaussians, N stratified then N resampled intervals
   nerf,     // points: PE of interval midpoints, N/2 stratified then N more merged with them (original NeRF)
+  zipnerf,  // Zip-NeRF: each frustum's multisamples looked up in a multi-resolution grid, a tiny MLP (grid_* settings)
 };
-constexpr std::array<EnumName<ModelFamily>, 2> enum_names(ModelFamily) {
-  return {{{ModelFamily::mipnerf, "mipnerf"}, {ModelFamily::nerf, "nerf"}}};
+constexpr std::array<EnumName<ModelFamily>, 3> enum_names(ModelFamily) {
+  return {{{ModelFamily::mipnerf, "mipnerf"}, {ModelFamily::nerf, "nerf"}, {ModelFamily::zipnerf, "zipnerf"}}};
 }
 
 // The --variant bundles: rows of the paper's tables, each a set of settings (variants()).
@@ -38,10 +39,11 @@ enum class Variant {
   nerf,
   nerf_area,
   nerf_area_center,
-  nerf_area_center_misc
+  nerf_area_center_misc,
+  zipnerf
 };
 // Alphabetical: the order --help and the unknown-variant error have always listed them in.
-constexpr std::array<EnumName<Variant>, 10> enum_names(Variant) {
+constexpr std::array<EnumName<Variant>, 11> enum_names(Variant) {
   return {{{Variant::mipnerf, "mipnerf"},
            {Variant::mipnerf_concat_pe, "mipnerf-concat-pe"},
            {Variant::mipnerf_no_area_loss, "mipnerf-no-area-loss"},
@@ -51,7 +53,8 @@ constexpr std::array<EnumName<Variant>, 10> enum_names(Variant) {
            {Variant::nerf, "nerf"},
            {Variant::nerf_area, "nerf-area"},
            {Variant::nerf_area_center, "nerf-area-center"},
-           {Variant::nerf_area_center_misc, "nerf-area-center-misc"}}};
+           {Variant::nerf_area_center_misc, "nerf-area-center-misc"},
+           {Variant::zipnerf, "zipnerf"}}};
 }
 
 // Every setting of a run. Defaults are the paper's (mip-NeRF, Blender); see presets() for smaller ones.
@@ -100,6 +103,18 @@ struct TrainConfig {
   int mlp_width = 256;
   int mlp_skip = 4;                 // the input is concatenated again after trunk layer index mlp_skip (0-based)
   int view_branch_width = 128;
+  // Zip-NeRF's grid (variant zipnerf; camp_zipnerf's HashEncoding, its 360.gin values): levels of grid_min …
+  // grid_max cells a side, 1 + grid_supersample · log2(grid_max / grid_min) of them, each a dense grid up to
+  // 2^grid_hash_log2 cells and hashed into that many entries beyond; grid_features per level.
+  int grid_min = 16;
+  int grid_max = 8192;
+  double grid_supersample = 1.0;
+  int grid_hash_log2 = 21;
+  int grid_features = 4;
+  double grid_bound = 0.0;        // the grid covers [−b, b]³; 0 = from the scene (NDC: 1, world rays: 1.5)
+  bool grid_downweight = true;    // fade each level by the multisample's footprint (false: a plain hash grid)
+  bool grid_append_scale = true;  // append each level's footprint weight as a feature (official append_scale)
+  double grid_weight_decay = 0.1;  // mult of each grid level's ½·mean(value²) in the loss (official param_regularizers)
 
   // --- optimisation ---
   int batch_size = 4096;            // rays per step
@@ -109,6 +124,8 @@ struct TrainConfig {
   int64_t lr_warmup_steps = 2500;   // ... times a sine warm-up from lr_warmup_mult over these steps
   double lr_warmup_mult = 0.01;
   double grad_max_norm = 0.0;       // clip the global gradient norm; 0 disables
+  double adam_beta2 = 0.999;        // Adam's second-moment decay (flax default; Zip-NeRF: 0.99)
+  double adam_epsilon = 1e-8;       // Adam's ε (flax default; Zip-NeRF: 1e-15)
   double coarse_loss_mult = 0.1;    // λ on the coarse level's loss
   bool randomized = true;           // jittered stratified sampling and resampling during training
   uint64_t seed = 20200823;         // everything random is a function of (seed, step, ray)
@@ -159,6 +176,8 @@ std::string get_value(const TrainConfig& config, const std::string& name);
 using Bundle = std::map<std::string, std::string>;
 const std::map<std::string, Bundle>& presets();
 const std::map<std::string, Bundle>& variants();
+// The variant bundle a preset is made for: "zipnerf" for fast (Zip-NeRF's), "mipnerf" for the others.
+std::string preset_variant(const std::string& preset);
 // A one-line description of each preset and variant, for --help.
 std::string describe_bundles();
 

@@ -33,6 +33,26 @@ mlp::MlpConfig network(const TrainConfig& c, size_t input_width, size_t index) {
   return m;
 }
 
+// Zip-NeRF's grid of a configuration (the seed apart from the networks').
+mlp::GridConfig grid_config(const TrainConfig& c) {
+  mlp::GridConfig g;
+  g.min_grid_size = c.grid_min;
+  g.max_grid_size = c.grid_max;
+  g.scale_supersample = c.grid_supersample;
+  g.hash_table_size = uint32_t{1} << c.grid_hash_log2;
+  g.features = c.grid_features;
+  g.seed = c.seed ^ 0x5A49504E45524647ull;  // "ZIPNERFG"
+  return g;
+}
+
+// The grid's cube: [−b, b]³, b from the setting or the scene (NDC space spans [−1, 1]³; a Blender object fits in
+// [−1.5, 1.5]³).
+void set_grid_box(const TrainConfig& c, ops::ZipFeatureOptions& zip) {
+  const double bound = c.grid_bound > 0 ? c.grid_bound : c.ray_shape == RayShape::cylinder ? 1.0 : 1.5;
+  for (float& m : zip.box_min) m = static_cast<float>(-bound);
+  zip.box_size = static_cast<float>(2 * bound);
+}
+
 }  // namespace
 
 graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
@@ -43,11 +63,24 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.view_encoding.max_deg = c.view_max_deg;
   spec.view_encoding.append_identity = true;
 
-  const graph::Encoding encoding = nerf                    ? graph::Encoding::midpoint_pe
+  const bool zipnerf = c.variant == ModelFamily::zipnerf;
+  if (zipnerf) {
+    spec.grids.push_back(grid_config(c));
+    spec.zip.downweight = c.grid_downweight;
+    spec.zip.append_scale = c.grid_append_scale;
+    spec.zip.cylinder = c.ray_shape == RayShape::cylinder;
+    spec.zip.randomized = c.randomized;
+    set_grid_box(c, spec.zip);
+    spec.grid_weight_decay = static_cast<float>(c.grid_weight_decay);
+  }
+  const graph::Encoding encoding = zipnerf                 ? graph::Encoding::zip_grid
+                                   : nerf                  ? graph::Encoding::midpoint_pe
                                    : c.integrated_encoding ? graph::Encoding::integrated
                                    : c.cov_max_deg > 0     ? graph::Encoding::concat_pe
                                                            : graph::Encoding::frustum_mean_pe;
-  const size_t input_width = spec.feature_width(encoding);
+  graph::LevelSpec encoded;
+  encoded.encoding = encoding;
+  const size_t input_width = spec.feature_width(encoded);
   for (int l = 0; l < c.num_levels; ++l) {
     graph::LevelSpec level;
     const bool first = l == 0, last = l == c.num_levels - 1;
@@ -86,6 +119,12 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.loss.multiscale = multiscale_data && c.area_loss;
   spec.validate();
   return spec;
+}
+
+std::vector<std::unique_ptr<mlp::GridTable>> make_grids(ocl::Context& ctx, const graph::GraphSpec& spec) {
+  std::vector<std::unique_ptr<mlp::GridTable>> grids;
+  for (const auto& config : spec.grids) grids.push_back(std::make_unique<mlp::GridTable>(ctx, config));
+  return grids;
 }
 
 std::vector<std::unique_ptr<mlp::Network>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec,

@@ -10,6 +10,7 @@
 #include "cl/context.hpp"
 #include "data/dataset.hpp"
 #include "graph/graph_spec.hpp"
+#include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
 #include "train/config.hpp"
 
@@ -23,6 +24,9 @@ graph::GraphSpec make_graph_spec(const TrainConfig& config, bool multiscale_data
 // resolved for ctx's device by mlp::make_network).
 std::vector<std::unique_ptr<mlp::Network>> make_networks(ocl::Context& ctx, const graph::GraphSpec& spec,
                                                         gemm::GemmBackend backend);
+
+// One table per entry of spec.grids (Zip-NeRF; none for mip-NeRF), freshly initialised (GridConfig::seed).
+std::vector<std::unique_ptr<mlp::GridTable>> make_grids(ocl::Context& ctx, const graph::GraphSpec& spec);
 
 // How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
 // (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0

@@ -66,17 +66,25 @@ StepOutcome train_step(StepParts& p, int64_t step, const AfterBackward& after_ba
   ocl::StageScope adam_stage(p.ctx, "adam");
   size_t parameters = 0;
   for (const auto& network : p.networks) parameters += network->params().size();
+  for (const auto& grid : p.grids) parameters += grid->params().size();
   ocl::add_stage_bytes(p.ctx, graph::traffic::adam(parameters));
-  std::vector<mlp::GradientStats> stats;
+  std::vector<mlp::GradientStats> stats, grid_stats;
   for (size_t i = 0; i < p.networks.size(); ++i) {
     stats.push_back(p.optimisers[i]->gradient_stats(p.networks[i]->grads()));
     finite = finite && stats.back().finite();
+  }
+  for (size_t i = 0; i < p.grids.size(); ++i) {
+    grid_stats.push_back(p.grid_optimisers[i]->gradient_stats(p.grids[i]->grads()));
+    finite = finite && grid_stats.back().finite();
   }
   outcome.learning_rate = mlp::learning_rate(schedule_of(p.config), step);
   outcome.applied = finite;
   if (!finite) return outcome;
   for (size_t i = 0; i < p.networks.size(); ++i) {
     p.optimisers[i]->step(p.networks[i]->params(), p.networks[i]->grads(), outcome.learning_rate, &stats[i]);
+  }
+  for (size_t i = 0; i < p.grids.size(); ++i) {
+    p.grid_optimisers[i]->step(p.grids[i]->params(), p.grids[i]->grads(), outcome.learning_rate, &grid_stats[i]);
   }
   return outcome;
 }

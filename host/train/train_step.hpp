@@ -29,6 +29,8 @@ struct StepParts {
   graph::Graph& graph;
   std::vector<std::unique_ptr<mlp::Network>>& networks;
   std::vector<std::unique_ptr<mlp::Adam>>& optimisers;
+  std::vector<std::unique_ptr<mlp::GridTable>>& grids;  // Zip-NeRF's (empty for mip-NeRF)
+  std::vector<std::unique_ptr<mlp::Adam>>& grid_optimisers;
   size_t chunk_rays;
 };
 

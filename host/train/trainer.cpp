@@ -57,10 +57,10 @@ struct Trainer::Impl {
   std::vector<float> reduce;    // the gradient sum's host buffer (mpirun), reused between steps
 
   Impl(ocl::Context& ctx, const data::Split& split, size_t batch_rays, const graph::GraphSpec& spec,
-       std::vector<mlp::Network*> networks, size_t chunk_rays)
+       std::vector<mlp::Network*> networks, std::vector<mlp::GridTable*> grids, size_t chunk_rays)
       : device_data(ctx, split),
         batch(ctx, batch_rays),
-        graph(ctx, spec, std::move(networks), graph::GraphMode::training, chunk_rays, batch_rays) {}
+        graph(ctx, spec, std::move(networks), std::move(grids), graph::GraphMode::training, chunk_rays, batch_rays) {}
 };
 
 Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string& data_path, const std::string& out_dir,
@@ -84,14 +84,25 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   }
   memory_ = plan_memory(spec_, ctx.device_info(), batch_rays, training_fixed_bytes(train, spec_, batch_rays),
                         static_cast<size_t>(config_.chunk_rays), true);
+  if (!spec_.grids.empty() && parallel::world().distributed()) {
+    throw parallel::CollectiveError("the zipnerf model trains in one process for now (its grids' gradients are not "
+                                    "summed over ranks yet): run it without mpirun");
+  }
   networks_ = make_networks(ctx, spec_, config_.gemm_backend);
+  mlp::AdamHyper hyper;
+  hyper.grad_max_norm = config_.grad_max_norm;
+  hyper.beta2 = config_.adam_beta2;
+  hyper.epsilon = static_cast<float>(config_.adam_epsilon);
   for (const auto& network : networks_) {
-    mlp::AdamHyper hyper;
-    hyper.grad_max_norm = config_.grad_max_norm;
     optimisers_.push_back(std::make_unique<mlp::Adam>(ctx, network->parameter_count(), hyper));
   }
+  grids_ = make_grids(ctx, spec_);
+  for (const auto& grid : grids_) {
+    grid_optimisers_.push_back(std::make_unique<mlp::Adam>(ctx, grid->parameter_count(), hyper));
+  }
 
-  impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, network_pointers(), memory_.chunk_rays);
+  impl_ = std::make_unique<Impl>(ctx, train, batch_rays, spec_, network_pointers(), grid_pointers(),
+                                 memory_.chunk_rays);
 
   // Rank 0 alone touches the output folder (under mpirun the others read the checkpoint it chose).
   const parallel::World& world = parallel::world();
@@ -142,10 +153,12 @@ Trainer::~Trainer() = default;
 size_t Trainer::parameter_count() const {
   size_t n = 0;
   for (const auto& network : networks_) n += network->parameter_count();
+  for (const auto& grid : grids_) n += grid->parameter_count();
   return n;
 }
 
 std::vector<mlp::Network*> Trainer::network_pointers() const { return mlp::network_pointers(networks_); }
+std::vector<mlp::GridTable*> Trainer::grid_pointers() const { return mlp::grid_pointers(grids_); }
 
 std::string Trainer::checkpoint_folder() const { return (fs::path(out_dir_) / "checkpoints").string(); }
 
@@ -161,7 +174,8 @@ std::string Trainer::save_checkpoint() {
   record.data_path = fs::absolute(dataset_.path).lexically_normal().string();
   record.data_fingerprint = data_fingerprint_;
   try {
-    save_training_checkpoint(path, config_, record, networks_, optimisers_);
+    save_training_checkpoint(path, config_, record, networks_, optimisers_,
+                             GridParts{&grids_, &grid_optimisers_});
   } catch (const Error& e) {
     // A full disk (or a file-size limit) stops the run here; the atomic write left the older checkpoints as
     // they were, so the message says which one a --resume continues from.
@@ -178,15 +192,16 @@ std::string Trainer::save_checkpoint() {
 void Trainer::restore(const std::string& path) {
   LogFn log = [this](LogLevel level, const std::string& message) { ctx_->log(level, message); };
   const CheckpointRecord record =
-      restore_training_checkpoint(path, config_, {dataset_.path, data_fingerprint_}, networks_, optimisers_, log);
+      restore_training_checkpoint(path, config_, {dataset_.path, data_fingerprint_}, networks_, optimisers_, log,
+                                  GridParts{&grids_, &grid_optimisers_});
   step_ = record.step;
   seconds_before_ = record.train_seconds;
   ctx_->log(LogLevel::info, "resuming from " + path + " at step " + std::to_string(step_));
 }
 
 StepParts Trainer::step_parts() {
-  return StepParts{*ctx_,   config_,              spec_,        impl_->device_data, impl_->batch, impl_->graph,
-                   networks_, optimisers_, memory_.chunk_rays};
+  return StepParts{*ctx_,     config_,     spec_,  impl_->device_data, impl_->batch,       impl_->graph,
+                   networks_, optimisers_, grids_, grid_optimisers_,   memory_.chunk_rays};
 }
 
 StepOutcome Trainer::profiled_step(StepParts& parts, int64_t step, const TrainHooks& hooks) {

@@ -12,6 +12,7 @@
 #include "data/dataset.hpp"
 #include "graph/graph_spec.hpp"
 #include "mlp/adam.hpp"
+#include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
 #include "ops/loss.hpp"
 #include "train/config.hpp"
@@ -82,6 +83,7 @@ class Trainer {
   const std::vector<std::unique_ptr<mlp::Network>>& networks() const { return networks_; }
   const std::vector<std::unique_ptr<mlp::Adam>>& optimisers() const { return optimisers_; }  // one per network
   std::vector<mlp::Network*> network_pointers() const;  // as the graph and the renderer take them
+  std::vector<mlp::GridTable*> grid_pointers() const;   // Zip-NeRF's grids (none for mip-NeRF)
   int64_t step() const { return step_; }
   size_t parameter_count() const;
 
@@ -115,6 +117,8 @@ class Trainer {
   MemoryPlan memory_;
   std::vector<std::unique_ptr<mlp::Network>> networks_;
   std::vector<std::unique_ptr<mlp::Adam>> optimisers_;
+  std::vector<std::unique_ptr<mlp::GridTable>> grids_;
+  std::vector<std::unique_ptr<mlp::Adam>> grid_optimisers_;  // one per grid
   std::unique_ptr<Impl> impl_;
   int64_t step_ = 0;             // steps completed
   double seconds_before_ = 0.0;  // training seconds of earlier runs (resume)

@@ -148,7 +148,7 @@ eval::ImageRenderer& ViewRenderer::renderer_for(const Camera& camera) {
     renderer_->set_cameras({camera});
   } else {
     renderer_ = std::make_unique<eval::ImageRenderer>(*ctx_, model_->spec, model_->network_pointers(),
-                                                      std::vector<Camera>{camera},
+                                                      model_->grid_pointers(), std::vector<Camera>{camera},
                                                       eval::RenderSettings{chunk_rays_, 1, 0});
     ++renderers_built_;
   }

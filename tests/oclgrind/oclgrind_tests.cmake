@@ -101,6 +101,9 @@ mipnerf_add_oclgrind_test("rng kernels" test_core "rng:*" oclgrind ON)
 # Zip-NeRF's grid encoding (issue 46: not yet a stage of the model, so not in the stage list): its gathers and its
 # atomic scatter, whose compare-and-swap loop oclgrind's race check sees.
 mipnerf_add_oclgrind_test("grid encoding kernels" test_ops "grid encoding:*" oclgrind ON)
+# Zip-NeRF's interval features (multisamples, every level's lookups, the scale feature, the scatter, the level scales
+# and the weight decay): the kernels --model zipnerf runs.
+mipnerf_add_oclgrind_test("zip feature kernels" test_ops "zip features:*" oclgrind ON)
 # The two program tests that make the OpenCL API fail on purpose (a build error, an unknown kernel) are left out:
 # --check-api reports exactly those failures.
 set(MIPNERF_OCLGRIND_EXCLUDE "program: a compile error*,program: an unknown kernel*")

@@ -69,8 +69,10 @@ ref::ZipRays to_ref(const ZipTestRays& r) {
           test::to_double(r.t_edges), r.n_rays, r.n_intervals};
 }
 
-ops::ZipFeatureOptions zip_options(bool randomized, bool cylinder, bool downweight) {
+ops::ZipFeatureOptions zip_options(bool randomized, bool cylinder, bool downweight,
+                                   ops::ZipFeatureOptions::Scatter scatter = ops::ZipFeatureOptions::Scatter::atomic) {
   ops::ZipFeatureOptions o;
+  o.scatter = scatter;
   o.features = kZipFeatures;
   o.randomized = randomized;
   o.cylinder = cylinder;
@@ -185,13 +187,17 @@ TEST_CASE("zip features: forward and backward equal the double reference (patter
   const auto levels_flat = zip_flat_levels(layout);
   const std::vector<float> table = zip_uniform(rng, ops::grid_table_entries(layout) * kZipFeatures, 1.0f);
   const RngKey key{0x5eedULL, 17, 300};
+  using Scatter = ops::ZipFeatureOptions::Scatter;
   for (bool randomized : {false, true}) {
     for (bool cylinder : {false, true}) {
       for (bool downweight : {true, false}) {
+        // Both scatters over the configurations, alternating (each is compared with the same reference).
+        const Scatter scatter = (randomized != cylinder) ? Scatter::by_level : Scatter::atomic;
         CAPTURE(randomized);
         CAPTURE(cylinder);
         CAPTURE(downweight);
-        const auto options = zip_options(randomized, cylinder, downweight);
+        CAPTURE(static_cast<int>(scatter));
+        const auto options = zip_options(randomized, cylinder, downweight, scatter);
         const size_t width = options.level_width(), samples = r.n_rays * r.n_intervals;
         const std::vector<float> d_features = zip_uniform(rng, samples * layout.size() * width, 1.0f);
         const ZipDeviceRun device = run_zip_device(options, r, table, d_features, key);
@@ -264,6 +270,18 @@ TEST_CASE("zip features: the training pattern is keyed by (seed, step, ray) and 
 
 // Any turn and reversal of the hexagon keeps the multisamples' mean on the ray at the same place (Σ cos = Σ sin = 0
 // over a hexagon): the random pattern changes where the points sit around the axis, not the frustum they stand for.
+// The level-by-level scatter adds in a fixed order: two runs give the same bits.
+TEST_CASE("zip features: the level-by-level backward is deterministic") {
+  std::mt19937 rng(4650);
+  const ZipTestRays r = zip_test_rays(rng);
+  const auto layout = zip_test_levels();
+  const std::vector<float> table = zip_uniform(rng, ops::grid_table_entries(layout) * kZipFeatures, 1.0f);
+  const std::vector<float> d = zip_uniform(rng, r.n_rays * r.n_intervals * layout.size() * (kZipFeatures + 1), 1.0f);
+  const auto options = zip_options(true, false, true, ops::ZipFeatureOptions::Scatter::by_level);
+  const auto first = run_zip_device(options, r, table, d, {7, 8, 9}).d_table;
+  CHECK(first == run_zip_device(options, r, table, d, {7, 8, 9}).d_table);
+}
+
 TEST_CASE("zip features: every pattern's multisamples have the frustum's mean") {
   const ref::Vec3d origin{0.1, -0.2, 3.0}, direction{0.2, 0.1, -1.0};
   const auto fixed = ref::hexify_multisamples(origin, direction, 0.01, 2.0, 2.5, 0);

@@ -435,7 +435,9 @@ TEST_CASE("train: every variant trains a few steps on multiscale data and render
     const std::string& variant = entry.first;  // INFO cannot capture a structured binding (C++17)
     INFO("variant " << variant);
     const std::string out = test::fresh_run_dir("variant-" + variant);
-    train::Trainer trainer(ctx, tiny({{"steps", "3"}, {"batch_size", "128"}}, variant), multiscale, out, false);
+    std::map<std::string, std::string> settings{{"steps", "3"}, {"batch_size", "128"}};
+    if (variant == "zipnerf") settings.insert({{"grid_max", "128"}, {"grid_hash_log2", "14"}});  // a test-sized grid
+    train::Trainer trainer(ctx, tiny(settings, variant), multiscale, out, false);
     CHECK(trainer.spec().loss.multiscale == trainer.config().area_loss);
     const auto result = trainer.run();
     CHECK(result.skipped_steps == 0);
@@ -445,7 +447,9 @@ TEST_CASE("train: every variant trains a few steps on multiscale data and render
     auto model = train::load_trained_model(ctx, train::find_checkpoint(out));
     CHECK(model.step == 3);
     const auto dataset = data::load_dataset(multiscale, {});
-    eval::ImageRenderer renderer(ctx, model.spec, model.network_pointers(), dataset.split("val").cameras, 512);
+    CHECK(model.grids.size() == (trainer.config().variant == train::ModelFamily::zipnerf ? 1u : 0u));
+    eval::ImageRenderer renderer(ctx, model.spec, model.network_pointers(), model.grid_pointers(),
+                                 dataset.split("val").cameras, eval::RenderSettings{512, 1, 0});
     const auto image = renderer.render(1);  // the ×2 downsampled copy of the first val view
     CHECK(image.width == 16);
     for (float v : image.rgb) REQUIRE(std::isfinite(v));
