@@ -27,7 +27,8 @@ Duration of the default study on two CPU cores: about 2 hours (two 30-minute tra
 5 views at 504x378 about 2.5 minutes for quick and 5 for small, about 16 scores). `--quick` (budgets 0.5 and 1 minute,
 the quick preset only, with the official conversion): about 12 minutes. Resumable: finished runs and scores in --work
 are reused, an interrupted training is continued with --resume (its recorded step count). Needs matplotlib for the
-PNG (bench/setup.sh); without it the table is written and the plot skipped with a note.
+PNG (bench/setup.sh installs Debian's python3-matplotlib: run the script with /usr/bin/python3 when another python3
+comes first in PATH); without it the table is written and the plot skipped with a note.
 
   python3 bench/studies/time_to_quality.py [--flower ../shared/data/llff/flower] [--budgets 1,2,5,10,15,30]
       [--extra NAME='train args']... [--quick] [--work /tmp/mipnerf-time-to-quality] [--report-only]
@@ -49,6 +50,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
 from lib.cli_runs import commit_of, read_json, run  # noqa: E402
+from lib.machine import load_average  # noqa: E402
 from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
 STUDY = "time_to_quality"
@@ -177,7 +179,8 @@ def official_seconds_per_step(path):
     ours = [p["ours"]["train_seconds"] / p["ours"]["steps"] for p in record["pairs"]]
     return {"seconds_per_step": statistics.median(per_step), "runs": len(per_step),
             "ours_then_seconds_per_step": statistics.median(ours),
-            "source": os.path.relpath(path, REPO), "date": record.get("date"), "checkout": record.get("checkout"),
+            "source": os.path.relpath(path, REPO), "date": record.get("date"),
+            "checkout": (record.get("checkout") or {}).get("commit", "unknown")[:10],
             "official_commit": record.get("official_commit"), "cpu": record.get("cpu"),
             "capture": record.get("capture"), "factor": record.get("factor")}
 
@@ -189,8 +192,10 @@ def measure_model(args, name, train_args, log):
     every = checkpoint_every(probe, budgets_s, args.max_checkpoints)
     print(f"{STUDY}: {name}: {probe:.3f} s/step in the probe; training {args.budgets[-1]:g} min, a checkpoint every "
           f"{every} steps", flush=True)
+    load_before = load_average()
     run_dir = train_longest(args.exe, args.flower, args.factor, args.work, name, train_args, args.budgets[-1], every,
                             log)
+    load_after = load_average()
     summary = read_json(os.path.join(run_dir, "summary.json"))
     config = read_json(os.path.join(run_dir, "config.json"))
     points = []
@@ -208,7 +213,8 @@ def measure_model(args, name, train_args, log):
     return {"name": name, "train_args": train_args, "run_dir": run_dir, "probe_seconds_per_step": probe,
             "checkpoint_every": every, "time_budget": read_json(os.path.join(run_dir, "time_budget.json")),
             "steps": summary["steps"], "train_seconds": summary["train_seconds"], "parameters": summary["parameters"],
-            "device": summary["device"], "scene_effects": config.get("scene_effects"), "points": points}
+            "device": summary["device"], "scene_effects": config.get("scene_effects"),
+            "load_before": load_before, "load_after": load_after, "points": points}
 
 
 def measure_official(args, base, official, log):
@@ -296,7 +302,8 @@ def write_markdown(record):
         "on the run's checkpoint at the last logged step within that budget's time (training clock: the warm-up "
         "included, checkpoints included, val scoring excluded). A shorter budget's point is a prefix of the longest "
         "run, whose learning rate has not decayed there yet: at or below what `train --minutes` of that budget "
-        "would reach.",
+        "would reach. The machine is shared: when its load changes after a run's warm-up, the run's pace changes and "
+        "it ends early or late (each run's ratio to its budget below); the points keep their real seconds.",
         "",
     ]
     header = ["model"] + [f"{b:g} min" for b in budgets]
@@ -311,7 +318,10 @@ def write_markdown(record):
         lines.append(f"- {m['name']} (`train {m['train_args']}`; {m['parameters']:,} parameters): warm-up "
                      f"{tb['warmup_seconds']:.1f} s measured {tb['seconds_per_step']:.4f} s/step -> {m['steps']:,} "
                      f"steps, trained {m['train_seconds']:.0f} s; probe {m['probe_seconds_per_step']:.4f} s/step; a "
-                     f"checkpoint every {m['checkpoint_every']} steps. Scene effects: {m['scene_effects']}.")
+                     f"checkpoint every {m['checkpoint_every']} steps; "
+                     f"{m['train_seconds'] / tb['budget_seconds']:.2f}x its budget"
+                     + (f", load average {m['load_before']} before and {m['load_after']} after training"
+                        if m.get("load_before") else "") + f". Scene effects: {m['scene_effects']}.")
     if official:
         lines += [
             "",
