@@ -20,8 +20,9 @@ is scored on the checkpoint at the last logged step whose training clock (train_
 included, val scoring excluded) is within the budget: the step count that budget's time corresponds to in that run.
 K comes from a short probe run of the same entry (its s/step): about 2 % of the shortest budget, and at most
 --max-checkpoints checkpoints per run. Caveat, stated in the report: a shorter budget's point is a prefix of the
-longest run, whose learning rate has not yet decayed there, so it is at or below what a run sized to that budget
-(`train --minutes b`, its schedule annealed) would reach.
+longest run, whose learning rate has not decayed there as a run sized to that budget (`train --minutes b`) would
+have decayed it, so it differs from what that run reaches, in either direction (early on the higher rate can even
+be ahead: see the hand notes of the committed --quick report).
 
 Duration of the default study on two CPU cores: about 2 hours (two 30-minute trainings, each held-out score of the
 5 views at 504x378 about 2.5 minutes for quick and 5 for small, about 16 scores). `--quick` (budgets 0.5 and 1 minute,
@@ -270,8 +271,12 @@ def plot(record, path):
         done = [p for p in points if p.get("step") is not None]
         for axis, key in zip(axes, ("psnr", "ssim")):
             axis.plot([p["train_seconds"] / 60.0 for p in done], [p[key] for p in done], style, label=name)
+    from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
     for axis, label in zip(axes, ("test PSNR (dB)", "test SSIM")):
         axis.set_xscale("log")
+        axis.xaxis.set_major_locator(FixedLocator(record["budgets_minutes"]))  # the budgets, written as minutes
+        axis.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        axis.xaxis.set_minor_locator(NullLocator())
         axis.set_xlabel("training minutes (log)")
         axis.set_ylabel(label)
         axis.grid(True, which="both", alpha=0.3)
@@ -301,8 +306,8 @@ def write_markdown(record):
         f"`train --minutes {budgets[-1]:g}` (its steps fixed by the CLI's timed warm-up); a shorter budget is scored "
         "on the run's checkpoint at the last logged step within that budget's time (training clock: the warm-up "
         "included, checkpoints included, val scoring excluded). A shorter budget's point is a prefix of the longest "
-        "run, whose learning rate has not decayed there yet: at or below what `train --minutes` of that budget "
-        "would reach. The machine is shared: when its load changes after a run's warm-up, the run's pace changes and "
+        "run, whose learning rate has not decayed there as a run sized to that budget (`train --minutes` of it) "
+        "would have decayed it: it differs from that run's score, in either direction. The machine is shared: when its load changes after a run's warm-up, the run's pace changes and "
         "it ends early or late (each run's ratio to its budget below); the points keep their real seconds.",
         "",
     ]
