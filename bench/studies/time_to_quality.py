@@ -364,7 +364,8 @@ def main():
                         help="the vs_official_llff results whose official s/step converts the official code")
     parser.add_argument("--work", default="/tmp/mipnerf-time-to-quality")
     parser.add_argument("--results", default=report_md.results_folder(STUDY))
-    parser.add_argument("--report-only", action="store_true", help="rewrite the .md (and the plot) from the .json")
+    parser.add_argument("--report-only", action="store_true",
+                        help="rewrite the .md from the .json, and the plot when matplotlib is there")
     args = parser.parse_args()
     args.exe = os.path.abspath(args.exe)
     args.flower = os.path.abspath(args.flower)
@@ -384,13 +385,16 @@ def main():
         record = measure(args)
         record["results_name"] = name
     os.makedirs(args.results, exist_ok=True)
-    record["plot_note"] = plot(record, os.path.join(args.results, name + ".png"))
-    with open(json_path, "w") as f:
-        json.dump(record, f, indent=1)
-        f.write("\n")
+    note = plot(record, os.path.join(args.results, name + ".png"))
+    if not args.report_only:  # the .json says whether the measurement drew its plot; --report-only changes no .json
+        record["plot_note"] = note
+        with open(json_path, "w") as f:
+            json.dump(record, f, indent=1)
+            f.write("\n")
     report_md.write_report(os.path.join(args.results, name + ".md"), write_markdown(record),
                            f"python3 {SCRIPT} --report-only" + (" --quick" if args.quick else ""))
-    print(f"{STUDY}: wrote {args.results}/{name}.md, .json" + ("" if record["plot_note"] else " and .png"))
+    print(f"{STUDY}: wrote {args.results}/{name}.md" + ("" if args.report_only else ", .json")
+          + (f" ({note})" if note else " and .png"))
 
 
 if __name__ == "__main__":
