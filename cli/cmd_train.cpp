@@ -18,6 +18,7 @@
 #include "train/checkpoint.hpp"
 #include "train/config_file.hpp"
 #include "train/scene_effects.hpp"
+#include "train/step_budget.hpp"
 #include "interrupt.hpp"
 #include "progress.hpp"
 
@@ -33,6 +34,7 @@ struct TrainArgs {
   std::string model;  // --model: the model family's variant bundle (zipnerf picks the fast preset by default)
   bool resume = false;
   bool profile = false;                   // --profile: stage breakdown of steps 2…, in OUT/profile.md
+  std::optional<double> minutes;          // --minutes N: the steps of a new run sized to a wall-clock budget
   std::string config_file;                // --config FILE
   std::vector<std::string> sets;          // --set name=value
   std::map<std::string, std::string> flag_values;  // --<setting> value
@@ -74,6 +76,7 @@ std::string default_scene(const std::string& out_dir) {
 void print_setup(train::Trainer& trainer, ocl::Context& ctx, const std::string& preset) {
   const auto& config = trainer.config();
   if (!config.scene_effects.empty()) std::cerr << "mipnerf-cl: " << config.scene_effects << "\n";
+  if (!config.time_budget.empty()) std::cerr << "mipnerf-cl: " << config.time_budget << "\n";
   std::cerr << "mipnerf-cl: training " << enum_name(config.variant) << " (preset " << preset << ") on " << ctx.device_info().name
             << ": " << trainer.dataset().split("train").num_images() << " images, " << trainer.parameter_count()
             << " parameters, " << trainer.spec().describe() << "\n"
@@ -143,10 +146,27 @@ void apply_model(TrainArgs& args, CLI::App& cmd) {
   if (args.model == "zipnerf" && cmd.get_option("--preset")->count() == 0) args.preset = "fast";
 }
 
+// --minutes: a positive budget, for a new run, and not together with a step count (both would fix the steps).
+void check_minutes(const TrainArgs& args, const std::map<std::string, std::string>& settings,
+                   const std::optional<train::CheckpointHeader>& previous) {
+  if (!args.minutes) return;
+  train::check_budget_minutes(*args.minutes);
+  if (settings.count("steps") > 0) {
+    throw Error("--minutes and steps (" + settings.at("steps") + ", from --steps, --set or --config) both fix the "
+                "run's step count: give one of them");
+  }
+  if (previous) {
+    throw Error("--minutes sizes a new run, but " + args.out + " holds one at step " +
+                std::to_string(previous->record.step) + " of its recorded " + std::to_string(previous->config.steps) +
+                " steps, which --resume continues: drop --minutes (or give --steps N to change the step count)");
+  }
+}
+
 WhatToTrain what_to_train(const TrainArgs& args, CLI::App& cmd) {
   const auto settings = explicit_settings(args, cmd);
   WhatToTrain what;
   if (args.resume) what.previous = run_in(args.out);
+  check_minutes(args, settings, what.previous);
   const bool bundle_given = cmd.get_option("--preset")->count() > 0 || cmd.get_option("--variant")->count() > 0 ||
                             cmd.get_option("--model")->count() > 0;
   if (args.resume && !what.previous && args.data.empty()) {
@@ -220,12 +240,19 @@ void run_train(TrainArgs& args, CLI::App& cmd) {
   run.data_path = data_path;
   run.out_dir = args.out;
   run.resume = args.resume;
+  if (args.minutes) {
+    run.budget_seconds = *args.minutes * 60.0;
+    if (root) {
+      std::cerr << "mipnerf-cl: --minutes " << *args.minutes << ": timing a warm-up of a few steps to size the run "
+                << "(discarded; its time is spent from the budget)\n";
+    }
+  }
   run.val_image_folder = (fs::path(args.out) / "val").string();
   run.on_setup = [&](train::Trainer& trainer) {
     if (root) print_setup(trainer, *ctx, args.preset);
     // Ctrl-C, or a scheduler's (or mpirun's) SIGTERM: a clean stop, all ranks after the same step.
     stop_on_interrupt.emplace();
-    train_progress.emplace("train", config.steps);
+    train_progress.emplace("train", trainer.config().steps);  // --minutes: the steps the warm-up chose
   };
   run.hooks.should_stop = [] { return StopOnInterrupt::requested(); };
   run.hooks.on_step = [&](const train::StepReport& r) {
@@ -302,6 +329,15 @@ void register_train(CLI::App& app) {
   cmd->add_flag("--resume", args->resume,
                 "Continue the run in --out from its newest checkpoint: its own data and settings (the settings given "
                 "change it, e.g. --steps); with --data, that data must hold the same images and cameras");
+  cmd->add_option("--minutes", args->minutes,
+                  "Train for a wall-clock budget of N minutes (decimals allowed) instead of a step count: after data "
+                  "loading, one cold step and then warm steps (at least 3, and at least 2 % of the budget up to 10 s, "
+                  "at most 50) are timed and discarded (the networks and Adam are put back); steps = floor((budget - "
+                  "warm-up) / measured s/step), and the learning-rate schedule spans them. The choice is recorded "
+                  "(config.json time_budget and steps, OUT/time_budget.json, checkpoints), so --resume continues the "
+                  "same step count and `--steps` with it reproduces the run bit for bit. A new run only; not with "
+                  "--steps (both fix the step count). Checkpoint writes count against the budget; val scoring (val_every) and the final val do not")
+      ->type_name("FLOAT");
   cmd->add_flag("--profile", args->profile,
                 "Time every step after the first by stage (OpenCL profiling events, host timers); print the table "
                 "and write OUT/profile.md. Profiled steps wait for the device at their end, so they run slower");

@@ -111,6 +111,7 @@ struct PeriodicVal {
 TrainAndEvaluateResult train_and_evaluate(ocl::Context& ctx, const train::TrainConfig& config,
                                           const TrainAndEvaluateOptions& options) {
   train::Trainer trainer(ctx, config, options.data_path, options.out_dir, options.resume);
+  if (options.budget_seconds > 0.0) trainer.fit_steps_to_budget(options.budget_seconds);
   if (options.on_setup) options.on_setup(trainer);
   TrainAndEvaluateResult result;
   result.record = train_record(trainer, ctx.device_info().name);
@@ -123,7 +124,7 @@ TrainAndEvaluateResult train_and_evaluate(ocl::Context& ctx, const train::TrainC
   result.train = trainer.run(hooks);
   if (options.on_trained) options.on_trained(trainer, result.train);
   if (!options.evaluate_val || result.train.interrupted) return result;
-  if (periodic && periodic->last_step_scores && trainer.step() == config.steps) {
+  if (periodic && periodic->last_step_scores && trainer.step() == trainer.config().steps) {
     result.val = std::move(periodic->last_step_scores);  // rendered and written at the last step
     return result;
   }

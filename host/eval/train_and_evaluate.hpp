@@ -21,6 +21,9 @@ struct TrainAndEvaluateOptions {
   std::string out_dir;    // the run's folder: checkpoints, log, config.json (train::Trainer)
   bool resume = false;    // continue from the newest checkpoint in out_dir/checkpoints
   train::TrainHooks hooks;
+  // > 0 (train --minutes): a new run's steps are sized to this wall-clock budget by a timed warm-up before
+  // on_setup (train::Trainer::fit_steps_to_budget), which replaces config.steps; 0: config.steps as given.
+  double budget_seconds = 0.0;
   // After the trainer is built (data loaded, memory planned, any resume applied), before the first step.
   std::function<void(train::Trainer&)> on_setup;
   // After training, interrupted or not, before the val evaluation; the trainer still holds its networks.

@@ -32,6 +32,7 @@ struct Entry {
 
 constexpr const char* kVariantBundleKey = "variant_bundle";  // the record's JSON key (TrainConfig::variant_bundle)
 constexpr const char* kSceneEffectsKey = "scene_effects";  // the record's JSON key (TrainConfig::scene_effects)
+constexpr const char* kTimeBudgetKey = "time_budget";  // the record's JSON key (TrainConfig::time_budget)
 
 const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
@@ -493,6 +494,7 @@ nlohmann::ordered_json config_json(const TrainConfig& config) {
     }
   }
   if (!config.scene_effects.empty()) j[kSceneEffectsKey] = config.scene_effects;
+  if (!config.time_budget.empty()) j[kTimeBudgetKey] = config.time_budget;
   return j;
 }
 
@@ -519,6 +521,11 @@ TrainConfig config_from_json(const nlohmann::json& j, const std::string& where) 
     if (name == kSceneEffectsKey) {
       if (!value.is_string()) throw Error(where + ": \"" + kSceneEffectsKey + "\" must be a string");
       config.scene_effects = value.get<std::string>();
+      continue;
+    }
+    if (name == kTimeBudgetKey) {
+      if (!value.is_string()) throw Error(where + ": \"" + kTimeBudgetKey + "\" must be a string");
+      config.time_budget = value.get<std::string>();
       continue;
     }
     try {

@@ -150,6 +150,10 @@ struct TrainConfig {
   // The scene effects `train` chose from the data (train/scene_effects.hpp), as the line it printed; recorded in
   // config.json and checkpoints as "scene_effects". A record, not a setting: empty when none was applied.
   std::string scene_effects;
+  // The wall-clock budget `train --minutes` sized this run's steps by (train/step_budget.hpp), as the line it
+  // printed: the measured s/step and the steps chosen. A record, not a setting (the steps are in `steps`): empty when
+  // the steps were given.
+  std::string time_budget;
 };
 
 // One named setting: how to read it from text and write it back, with its help line.

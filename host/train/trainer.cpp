@@ -199,6 +199,60 @@ void Trainer::restore(const std::string& path) {
   ctx_->log(LogLevel::info, "resuming from " + path + " at step " + std::to_string(step_));
 }
 
+StepBudget Trainer::time_warmup(double budget_seconds) {
+  StepParts parts = step_parts();
+  StepBudget budget;
+  budget.budget_seconds = budget_seconds;
+  const auto cold_start = Clock::now();
+  train_step(parts, 1, {}, impl_->reduce);
+  ctx_->finish();  // a step's last kernels (Adam) are asynchronous: time them inside the step they belong to
+  budget.cold_step_seconds = std::chrono::duration<double>(Clock::now() - cold_start).count();
+  const auto warm_start = Clock::now();
+  // Under mpirun every rank takes the same steps (each step is collective): the stop is any rank's.
+  while (!any_rank(warmup_done(budget.warm_steps, budget.warm_seconds, budget_seconds))) {
+    train_step(parts, budget.warm_steps + 2, {}, impl_->reduce);
+    ctx_->finish();
+    ++budget.warm_steps;
+    budget.warm_seconds = std::chrono::duration<double>(Clock::now() - warm_start).count();
+  }
+  budget.seconds_per_step = budget.warm_seconds / static_cast<double>(budget.warm_steps);
+  return budget;
+}
+
+StepBudget Trainer::fit_steps_to_budget(double budget_seconds) {
+  check_budget_minutes(budget_seconds / 60.0);
+  if (step_ != 0) {
+    throw Error("a time budget sizes a new run, but this run is at step " + std::to_string(step_) +
+                ": it keeps the " + std::to_string(config_.steps) + " steps it recorded (give --steps to change them)");
+  }
+  // The warm-up's steps are thrown away: what they changed is put back, so step 1 starts from the initial state.
+  std::vector<std::vector<float>> initial_params;
+  std::vector<mlp::AdamState> initial_moments;
+  for (const auto& network : networks_) initial_params.push_back(network->download_params());
+  for (const auto& optimiser : optimisers_) initial_moments.push_back(optimiser->state());
+  StepBudget budget = time_warmup(budget_seconds);
+  for (size_t i = 0; i < networks_.size(); ++i) networks_[i]->upload_params(initial_params[i]);
+  for (size_t i = 0; i < optimisers_.size(); ++i) optimisers_[i]->restore(initial_moments[i]);
+  // Rank 0's measurement decides for every rank (each measured its own clock).
+  std::string measured = budget.to_json().dump();
+  parallel::world().broadcast(measured);
+  const nlohmann::json chosen = nlohmann::json::parse(measured);
+  budget.cold_step_seconds = chosen.at("cold_step_seconds").get<double>();
+  budget.warm_steps = chosen.at("warm_steps").get<int64_t>();
+  budget.warm_seconds = chosen.at("warm_seconds").get<double>();
+  budget.seconds_per_step = chosen.at("seconds_per_step").get<double>();
+  budget.steps = steps_for_budget(budget_seconds, budget.warmup_seconds(), budget.seconds_per_step);
+  config_.steps = budget.steps;
+  config_.time_budget = budget.describe();
+  validate(config_);
+  seconds_before_ = budget.warmup_seconds();
+  if (parallel::world().is_root()) {
+    io::write_bytes_atomically((fs::path(out_dir_) / "config.json").string(), to_json(config_) + "\n");
+    io::write_bytes_atomically((fs::path(out_dir_) / "time_budget.json").string(), budget.to_json().dump(2) + "\n");
+  }
+  return budget;
+}
+
 StepParts Trainer::step_parts() {
   return StepParts{*ctx_,     config_,     spec_,  impl_->device_data, impl_->batch,       impl_->graph,
                    networks_, optimisers_, grids_, grid_optimisers_,   memory_.chunk_rays};

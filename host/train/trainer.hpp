@@ -18,6 +18,7 @@
 #include "train/config.hpp"
 #include "train/memory_plan.hpp"
 #include "train/run_log.hpp"
+#include "train/step_budget.hpp"
 #include "train/train_step.hpp"
 
 namespace mipnerf::train {
@@ -87,6 +88,15 @@ class Trainer {
   int64_t step() const { return step_; }
   size_t parameter_count() const;
 
+  // train --minutes: before the first step of a new run, times a warm-up (train/step_budget.hpp: a cold step, then
+  // warm steps), puts the networks and Adam back to their initial state, and sets config().steps to the steps that
+  // fit in what the warm-up left of `budget_seconds`, so the run (its learning-rate schedule too) is bit for bit the
+  // run of `steps = config().steps`. The warm-up's time counts as training time (train_seconds). Records the choice
+  // in config().time_budget, OUT/config.json and OUT/time_budget.json. Throws mipnerf::Error for a budget that is
+  // not positive, one too short for a single step after the warm-up, and a run already past step 0 (a resumed run
+  // keeps the steps it recorded).
+  StepBudget fit_steps_to_budget(double budget_seconds);
+
   // Writes out_dir/checkpoints/ckpt_<step>.mnck (atomically, train/checkpoint.hpp) and prunes old ones; returns
   // its path.
   std::string save_checkpoint();
@@ -107,6 +117,7 @@ class Trainer {
   // --resume continues from ("" = step 0), or in `refusal` why this folder cannot be trained into.
   std::string choose_start(bool resume, std::string& refusal);
   std::string checkpoint_folder() const;  // out_dir/checkpoints
+  StepBudget time_warmup(double budget_seconds);  // fit_steps_to_budget's measurement (every rank: same steps)
 
   ocl::Context* ctx_;
   TrainConfig config_;

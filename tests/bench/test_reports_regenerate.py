@@ -35,6 +35,7 @@ REGENERATIONS = [
      ["vs_official_pocl_cpu_xeon.md"]),
     ("vs_official_llff", ["--report-only", "bench/results/vs_official_llff/vs_official_llff_pocl_cpu.json"],
      ["vs_official_llff_pocl_cpu.md"]),
+    ("time_to_quality", ["--quick", "--report-only"], ["time_to_quality_quick.md"]),
 ] + [("before_after", ["--report-only", f"bench/results/before_after/{os.path.basename(p)}"],
       [os.path.basename(p)[:-5] + ".md"])
      for p in sorted(glob.glob(os.path.join(bench, "results", "before_after", "renovation*_before_after*.json")))]

@@ -140,6 +140,22 @@ mipnerf_add_checked_test("cli: render --path spiral of an LLFF run" EXPECT "rend
   COMMAND mipnerf-cl render
   --checkpoint "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run" --path spiral --frames 3)
 set_tests_properties("cli: render --path spiral of an LLFF run" PROPERTIES FIXTURES_REQUIRED cli_llff_run)
+# train --minutes (host/train/step_budget.*): what it refuses, and a budget run on the LLFF capture whose recorded
+# steps a --resume keeps (the warm-up, the steps and the resume themselves: tests/train/test_step_budget.cpp).
+mipnerf_add_cli_error_test("train: --minutes must be positive" PATTERN "--minutes 0: the training budget must be a positive number of minutes"
+  ARGS train --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad" --minutes 0)
+mipnerf_add_cli_error_test("train: --minutes with --steps is refused" PATTERN "--minutes and steps \\(5, from --steps, --set or --config\\) both fix the run's step count: give one of them"
+  ARGS train --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad" --minutes 1 --steps 5)
+mipnerf_add_cli_error_test("train: --minutes with --resume of a run is refused" PATTERN "--minutes sizes a new run, but .*cli-llff-run holds one at step 4 of its recorded 4 steps, which --resume continues: drop --minutes"
+  ARGS train --out "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run" --resume --minutes 1)
+set_tests_properties("cli: train: --minutes with --resume of a run is refused" PROPERTIES FIXTURES_REQUIRED cli_llff_run)
+add_test(NAME "cli: train --minutes: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-minutes-run")
+set_tests_properties("cli: train --minutes: clear the run folder" PROPERTIES FIXTURES_SETUP cli_minutes_clean)
+mipnerf_add_checked_test("cli: train --minutes sizes the steps by a warm-up and says so" EXPECT "time budget 0.1 min: warm-up of 1 cold step \\([0-9.]+ s\\) and [0-9]+ timed steps \\([0-9.]+ s\\) measured [0-9.]+ s/step. [0-9]+ steps fill the [0-9.]+ s left.*trained [0-9]+ steps"
+  COMMAND mipnerf-cl train
+  --data "${CMAKE_CURRENT_BINARY_DIR}/cli-llff" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-minutes-run" --preset tiny --factor 4
+  --minutes 0.1 --val_views 1)
+set_tests_properties("cli: train --minutes sizes the steps by a warm-up and says so" PROPERTIES FIXTURES_REQUIRED "cli_llff;cli_minutes_clean" FIXTURES_SETUP cli_minutes_run)
 mipnerf_add_cli_error_test("make-scene: a Blender option with --forward-facing" PATTERN "--views applies to the Blender scene, not --forward-facing"
   ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --forward-facing --views 3)
 mipnerf_add_cli_error_test("make-scene: bad --grid" PATTERN "--grid '5by4': expected COLUMNSxROWS"
