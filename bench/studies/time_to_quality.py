@@ -56,7 +56,8 @@ from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
 STUDY = "time_to_quality"
 SCRIPT = "bench/studies/time_to_quality.py"
-DEFAULT_MODELS = {"mip-NeRF quick": "--preset quick", "mip-NeRF small": "--preset small"}
+DEFAULT_MODELS = {"mip-NeRF quick": "--preset quick", "mip-NeRF small": "--preset small",
+                  "Zip-NeRF fast": "--model zipnerf --preset fast"}
 QUICK_MODELS = {"mip-NeRF quick": "--preset quick"}
 # The entry whose network the official code was timed with (vs_official_llff: "the quick network").
 OFFICIAL_BASE = "mip-NeRF quick"
@@ -359,6 +360,8 @@ def main():
     parser.add_argument("--quick", action="store_true",
                         help="budgets 0.5 and 1 minute, the quick preset only (and the official conversion): an "
                              "end-to-end check in about 12 minutes; results as time_to_quality_quick.*")
+    parser.add_argument("--models", default="", , metavar="NAME,NAME",
+                        help="only these of the default models (by name, e.g. 'mip-NeRF quick,Zip-NeRF fast')")
     parser.add_argument("--max-checkpoints", type=int, default=200, help="at most this many checkpoints per run")
     parser.add_argument("--official-results", default=OFFICIAL_RESULTS,
                         help="the vs_official_llff results whose official s/step converts the official code")
@@ -372,7 +375,14 @@ def main():
     name = STUDY + ("_quick" if args.quick else "")
     if args.budgets is None:
         args.budgets = [0.5, 1.0] if args.quick else [1.0, 2.0, 5.0, 10.0, 15.0, 30.0]
+    only = args.models
     args.models = dict(QUICK_MODELS if args.quick else DEFAULT_MODELS)
+    if only:
+        wanted = [name.strip() for name in only.split(",") if name.strip()]
+        unknown = [name for name in wanted if name not in DEFAULT_MODELS]
+        if unknown:
+            parser.error(f"--models: unknown {unknown}; the default models are {sorted(DEFAULT_MODELS)}")
+        args.models = {name: DEFAULT_MODELS[name] for name in wanted}
     args.models.update(dict(args.extra))
     if args.quick:
         args.work = os.path.join(args.work, "quick")

@@ -321,7 +321,7 @@ const std::map<std::string, Bundle>& presets() {
         {"batch_size", "1024"}, {"steps", "2000"}, {"lr_init", "1e-3"}, {"lr_final", "1e-5"},
         {"lr_warmup_steps", "200"}, {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "8"}}},
       {"fast",  // Zip-NeRF's for two CPU cores (--model zipnerf picks it): a smaller grid, fewer samples
-       {{"num_samples", "32"}, {"grid_max", "2048"}, {"grid_hash_log2", "19"}, {"batch_size", "1024"},
+       {{"num_samples", "32"}, {"grid_max", "2048"}, {"grid_hash_log2", "17"}, {"batch_size", "1024"},
         {"steps", "3000"}, {"lr_init", "1e-2"}, {"lr_final", "5e-4"}, {"lr_warmup_steps", "100"},
         {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "4"}}},
   };

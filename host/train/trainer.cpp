@@ -230,9 +230,15 @@ StepBudget Trainer::fit_steps_to_budget(double budget_seconds) {
   std::vector<mlp::AdamState> initial_moments;
   for (const auto& network : networks_) initial_params.push_back(network->download_params());
   for (const auto& optimiser : optimisers_) initial_moments.push_back(optimiser->state());
+  std::vector<std::vector<float>> initial_tables;  // Zip-NeRF's grids and their optimisers, likewise
+  std::vector<mlp::AdamState> initial_grid_moments;
+  for (const auto& grid : grids_) initial_tables.push_back(grid->download_params());
+  for (const auto& optimiser : grid_optimisers_) initial_grid_moments.push_back(optimiser->state());
   StepBudget budget = time_warmup(budget_seconds);
   for (size_t i = 0; i < networks_.size(); ++i) networks_[i]->upload_params(initial_params[i]);
   for (size_t i = 0; i < optimisers_.size(); ++i) optimisers_[i]->restore(initial_moments[i]);
+  for (size_t i = 0; i < grids_.size(); ++i) grids_[i]->upload_params(initial_tables[i]);
+  for (size_t i = 0; i < grid_optimisers_.size(); ++i) grid_optimisers_[i]->restore(initial_grid_moments[i]);
   // Rank 0's measurement decides for every rank (each measured its own clock).
   std::string measured = budget.to_json().dump();
   parallel::world().broadcast(measured);
