@@ -360,7 +360,7 @@ def main():
     parser.add_argument("--quick", action="store_true",
                         help="budgets 0.5 and 1 minute, the quick preset only (and the official conversion): an "
                              "end-to-end check in about 12 minutes; results as time_to_quality_quick.*")
-    parser.add_argument("--models", default="", , metavar="NAME,NAME",
+    parser.add_argument("--models", default="", metavar="NAME,NAME",
                         help="only these of the default models (by name, e.g. 'mip-NeRF quick,Zip-NeRF fast')")
     parser.add_argument("--max-checkpoints", type=int, default=200, help="at most this many checkpoints per run")
     parser.add_argument("--official-results", default=OFFICIAL_RESULTS,
