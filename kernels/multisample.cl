@@ -16,7 +16,17 @@
 #define ZIP_RANDOMIZED 0
 #endif
 
+#ifndef ZIP_MULTISAMPLE
+#define ZIP_MULTISAMPLE 1
+#endif
+
+// ZIP_MULTISAMPLE 0 is a plain grid's lookup, the comparison Zip-NeRF's anti-aliasing is measured against: one point,
+// the frustum's mean on the axis (mip-NeRF's t_μ), and no footprint.
+#if ZIP_MULTISAMPLE
 #define ZIP_MULTISAMPLES 6
+#else
+#define ZIP_MULTISAMPLES 1
+#endif
 #define RNG_STREAM_MULTISAMPLE 5u /* turn and reversal of each interval's hexagon (training) */
 
 // Two unit vectors perpendicular to `direction` and each other: direction × ẑ, or × (1, 1, 1) when that is (nearly)
@@ -28,14 +38,18 @@ inline void perpendicular_basis(float3 direction, float3* axis1, float3* axis2) 
   *axis2 = normalize(cross(direction, first));
 }
 
-// Where along the ray multisample j of [t0, t1] sits (the formula above, in mip-NeRF's stable form).
-inline float multisample_t(float t0, float t1, int j) {
+// Where along the ray the point of [t0, t1] at `offset` = 2j/5 − 1 ∈ [−1, 1] sits (the formula above, in mip-NeRF's
+// stable form); offset 0 is the frustum's mean t_μ = s + 2sd²/(3s² + d²).
+inline float frustum_t_at(float t0, float t1, float offset) {
   const float s = 0.5f * (t0 + t1), d = 0.5f * (t1 - t0);
   const float denominator = d * d + 3.0f * s * s;
   const float scale = denominator < FLT_MIN ? 0.0f : d / denominator;  // math.safe_div's guard
   const float spread = sqrt((d * d - s * s) * (d * d - s * s) + 4.0f * s * s * s * s);
-  return t0 + scale * ((t1 * t1 + 2.0f * s * s) + 1.1338934190276817f * ((float)j * 0.4f - 1.0f) * spread);
+  return t0 + scale * ((t1 * t1 + 2.0f * s * s) + 1.1338934190276817f * offset * spread);
 }
+
+// Where along the ray multisample j of [t0, t1] sits.
+inline float multisample_t(float t0, float t1, int j) { return frustum_t_at(t0, t1, (float)j * 0.4f - 1.0f); }
 
 // The hexagon's angle of multisample j: the official order, reversed or not, turned by `turn` radians.
 inline float multisample_angle(int j, bool reversed, float turn) {

@@ -24,21 +24,26 @@ inline void zip_multisamples(__global const float* origins, __global const float
                              float3 unit_points[ZIP_MULTISAMPLES], float scales[ZIP_MULTISAMPLES]) {
   const uint ray = sample / n_intervals, interval = sample % n_intervals;
   const float3 origin = vload3(ray, origins), direction = vload3(ray, directions);
-  const float radius = radii[ray];
   const size_t edge = (size_t)ray * (n_intervals + 1) + interval;
   const float t0 = t_edges[edge], t1 = t_edges[edge + 1];
+  const float inv_size = 1.0f / box.w;
+#if ZIP_MULTISAMPLE
+  const float radius = radii[ray];
   float3 axis1, axis2;
   perpendicular_basis(direction, &axis1, &axis2);
   bool reversed;
   float turn;
   multisample_pattern(interval, seed, step, first_ray + ray, &reversed, &turn);
-  const float inv_size = 1.0f / box.w;
   for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
     float perp;
     const float3 point = multisample_point(origin, direction, axis1, axis2, radius, t0, t1, j, reversed, turn, &perp);
     unit_points[j] = (point - box.xyz) * inv_size;
     scales[j] = scale_mult * perp * inv_size;
   }
+#else
+  unit_points[0] = (origin + direction * frustum_t_at(t0, t1, 0.0f) - box.xyz) * inv_size;
+  scales[0] = 0.0f;
+#endif
 }
 
 inline float zip_level_weight(float scale, uint4 level) {
@@ -83,6 +88,40 @@ __kernel void zip_features_fwd(__global const float* origins, __global const flo
   }
 }
 
+// The mean's gradient at one level of one interval: mean · d_features (false when it is all zero: nothing to add).
+inline bool zip_level_gradient(__global const float* d_level, float mean, float d_mean[GRID_FEATURES]) {
+  bool any = false;
+  for (int f = 0; f < GRID_FEATURES; ++f) {
+    d_mean[f] = mean * d_level[f];
+    any = any || d_mean[f] != 0.0f;
+  }
+  return any;
+}
+
+// d_table += d_mean spread onto the corners of every multisample of one interval at one level, each term weighted by
+// the multisample's level weight and its corner's trilinear weight: the scatter both backward kernels share. `atomic`
+// is a constant of each call site, so the branch folds away.
+inline void zip_scatter_level(__global float* d_table, uint4 level, const float3 points[ZIP_MULTISAMPLES],
+                              const float scales[ZIP_MULTISAMPLES], const float d_mean[GRID_FEATURES], bool atomic) {
+  for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
+    const GridCorners c = grid_corners(level, points[j]);
+    const float weight = zip_level_weight(scales[j], level);
+    for (int corner = 0; corner < 8; ++corner) {
+      if (c.entry[corner] < 0) continue;
+      const float w = weight * c.weight[corner];
+      __global float* entry = d_table + c.entry[corner] * GRID_FEATURES;
+      for (int f = 0; f < GRID_FEATURES; ++f) {
+        const float g = w * d_mean[f];
+        if (!atomic) {
+          entry[f] += g;
+        } else if (g != 0.0f) {
+          atomic_add_float(&entry[f], g);
+        }
+      }
+    }
+  }
+}
+
 // d_table += the features' gradients spread onto the corners of every multisample (atomic_add_float: its order
 // bound is grid_encoding.cl's). The scale feature has no table gradient (the official stop-gradient).
 __kernel void zip_features_bwd(__global const float* origins, __global const float* directions,
@@ -100,25 +139,9 @@ __kernel void zip_features_bwd(__global const float* origins, __global const flo
   const float mean = precondition / (float)ZIP_MULTISAMPLES;
   __global const float* d_out = d_features + (size_t)sample * n_levels * ZIP_LEVEL_WIDTH;
   for (uint l = 0; l < n_levels; ++l) {
-    const uint4 level = levels[l];
     float d_mean[GRID_FEATURES];
-    bool any = false;
-    for (int f = 0; f < GRID_FEATURES; ++f) {
-      d_mean[f] = mean * d_out[l * ZIP_LEVEL_WIDTH + f];
-      any = any || d_mean[f] != 0.0f;
-    }
-    if (!any) continue;
-    for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
-      const GridCorners c = grid_corners(level, points[j]);
-      const float weight = zip_level_weight(scales[j], level);
-      for (int corner = 0; corner < 8; ++corner) {
-        if (c.entry[corner] < 0) continue;
-        const float w = weight * c.weight[corner];
-        for (int f = 0; f < GRID_FEATURES; ++f) {
-          const float g = w * d_mean[f];
-          if (g != 0.0f) atomic_add_float(&d_table[c.entry[corner] * GRID_FEATURES + f], g);
-        }
-      }
+    if (zip_level_gradient(d_out + l * ZIP_LEVEL_WIDTH, mean, d_mean)) {
+      zip_scatter_level(d_table, levels[l], points, scales, d_mean, true);
     }
   }
 }
@@ -139,27 +162,13 @@ __kernel void zip_features_bwd_by_level(__global const float* origins, __global 
   const uint4 level = levels[l];
   const float mean = precondition / (float)ZIP_MULTISAMPLES;
   for (uint sample = 0; sample < n_samples; ++sample) {
-    __global const float* d_out = d_features + ((size_t)sample * n_levels + l) * ZIP_LEVEL_WIDTH;
     float d_mean[GRID_FEATURES];
-    bool any = false;
-    for (int f = 0; f < GRID_FEATURES; ++f) {
-      d_mean[f] = mean * d_out[f];
-      any = any || d_mean[f] != 0.0f;
-    }
-    if (!any) continue;
+    if (!zip_level_gradient(d_features + ((size_t)sample * n_levels + l) * ZIP_LEVEL_WIDTH, mean, d_mean)) continue;
     float3 points[ZIP_MULTISAMPLES];
     float scales[ZIP_MULTISAMPLES];
     zip_multisamples(origins, directions, radii, t_edges, sample, n_intervals, box, scale_mult, seed, step, first_ray,
                      points, scales);
-    for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
-      const GridCorners c = grid_corners(level, points[j]);
-      const float weight = zip_level_weight(scales[j], level);
-      for (int corner = 0; corner < 8; ++corner) {
-        if (c.entry[corner] < 0) continue;
-        const float w = weight * c.weight[corner];
-        for (int f = 0; f < GRID_FEATURES; ++f) d_table[c.entry[corner] * GRID_FEATURES + f] += w * d_mean[f];
-      }
-    }
+    zip_scatter_level(d_table, level, points, scales, d_mean, false);
   }
 }
 

@@ -104,12 +104,13 @@ std::string GraphSpec::describe() const {
     const char* encoding = level.encoding == Encoding::integrated        ? "IPE"
                            : level.encoding == Encoding::frustum_mean_pe ? "PE of frustum means"
                            : level.encoding == Encoding::concat_pe       ? "PE of frustum means ++ PE of sqrt(cov)"
-                           : level.encoding == Encoding::zip_grid        ? "multisampled grid"
+                           : level.encoding == Encoding::zip_grid        ? (zip.multisample ? "multisampled grid"
+                                                                                            : "grid at frustum means")
                                                                          : "PE of midpoints";
     out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals, " << encoding;
     if (level.encoding == Encoding::zip_grid) {
       out << " " << level.grid_index << " (" << mlp::describe(grids[level.grid_index])
-          << (zip.downweight ? ", footprint-weighted" : ", plain") << ")";
+          << (zip.downweight ? ", footprint-weighted" : ", not footprint-weighted") << ")";
     } else {
       out << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1;
     }

@@ -12,6 +12,7 @@ ocl::BuildOptions zip_features_build_options(const ZipFeatureOptions& options) {
       .define("GRID_FEATURES", options.features)
       .define("GRID_DOWNWEIGHT", options.downweight ? 1 : 0)
       .define("GRID_APPEND_SCALE", options.append_scale ? 1 : 0)
+      .define("ZIP_MULTISAMPLE", options.multisample ? 1 : 0)
       .define("ZIP_CYLINDER", options.cylinder ? 1 : 0)
       .define("ZIP_RANDOMIZED", options.randomized ? 1 : 0);
 }

@@ -11,7 +11,6 @@
 namespace mipnerf::ref {
 namespace {
 
-constexpr int kMultisamples = 6;
 constexpr uint32_t kMultisampleStream = rng_stream_multisample;  // RNG_STREAM_MULTISAMPLE
 
 // The pattern of one interval, as multisample_pattern draws it (the float uniforms the kernel gets, bit for bit).
@@ -29,25 +28,39 @@ void interval_pattern(const ZipFeatureSettings& s, uint32_t ray_number, uint32_t
 
 size_t level_count(const std::vector<uint32_t>& levels) { return levels.size() / 4; }
 
+// The plain grid's one point of [t0, t1]: the frustum's mean on the axis, t_μ = s + 2sd²/(3s² + d²) (mip-NeRF eq. 7).
+Vec3d frustum_mean_point(const Vec3d& origin, const Vec3d& direction, double t0, double t1) {
+  const double s = 0.5 * (t0 + t1), d = 0.5 * (t1 - t0);
+  const double denominator = 3 * s * s + d * d;
+  const double t = denominator < 1.1754943508222875e-38 ? t0 : s + 2 * s * d * d / denominator;
+  return {origin[0] + direction[0] * t, origin[1] + direction[1] * t, origin[2] + direction[2] * t};
+}
+
 }  // namespace
 
 void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vector<double>& unit_points,
                       std::vector<double>& scales) {
-  const size_t n_samples = rays.n_rays * rays.n_intervals;
-  unit_points.assign(n_samples * kMultisamples * 3, 0.0);
-  scales.assign(n_samples * kMultisamples, 0.0);
+  const size_t n_samples = rays.n_rays * rays.n_intervals, per_interval = zip_points_per_interval(s);
+  unit_points.assign(n_samples * per_interval * 3, 0.0);
+  scales.assign(n_samples * per_interval, 0.0);
   for (size_t ray = 0; ray < rays.n_rays; ++ray) {
     const Vec3d origin{rays.origins[3 * ray], rays.origins[3 * ray + 1], rays.origins[3 * ray + 2]};
     const Vec3d direction{rays.directions[3 * ray], rays.directions[3 * ray + 1], rays.directions[3 * ray + 2]};
     for (size_t i = 0; i < rays.n_intervals; ++i) {
+      const double* edges = &rays.t_edges[ray * (rays.n_intervals + 1) + i];
+      const size_t first = (ray * rays.n_intervals + i) * per_interval;
+      if (!s.multisample) {
+        const Vec3d point = frustum_mean_point(origin, direction, edges[0], edges[1]);
+        for (int a = 0; a < 3; ++a) unit_points[3 * first + a] = (point[a] - s.box[a]) / s.box[3];
+        continue;  // no footprint: scales stay 0
+      }
       bool reversed = false;
       double turn = 0.0;
       interval_pattern(s, s.first_ray + static_cast<uint32_t>(ray), static_cast<uint32_t>(i), reversed, turn);
-      const double* edges = &rays.t_edges[ray * (rays.n_intervals + 1) + i];
       const Multisamples m =
           hexify_multisamples(origin, direction, rays.radii[ray], edges[0], edges[1], reversed, turn, s.cylinder);
-      for (int j = 0; j < kMultisamples; ++j) {
-        const size_t p = (ray * rays.n_intervals + i) * kMultisamples + j;
+      for (size_t j = 0; j < per_interval; ++j) {
+        const size_t p = first + j;
         for (int a = 0; a < 3; ++a) unit_points[3 * p + a] = (m.points_world[j][a] - s.box[a]) / s.box[3];
         scales[p] = s.scale_mult * m.perp_radius[j] / s.box[3];
       }
@@ -75,13 +88,14 @@ void zip_features_fwd(const ZipRays& rays, const std::vector<uint32_t>& levels, 
   grid_encoding_fwd(levels, points, scales, table, s.features, s.downweight, point_features);
   const size_t n_levels = level_count(levels), width = s.features + (s.append_scale ? 1 : 0);
   const size_t n_samples = rays.n_rays * rays.n_intervals;
-  const double mean = s.precondition / kMultisamples;
+  const size_t per_interval = zip_points_per_interval(s);
+  const double mean = s.precondition / per_interval;
   features.assign(n_samples * n_levels * width, 0.0);
   for (size_t sample = 0; sample < n_samples; ++sample) {
     for (size_t l = 0; l < n_levels; ++l) {
       double* out = &features[(sample * n_levels + l) * width];
-      for (int j = 0; j < kMultisamples; ++j) {
-        const size_t p = sample * kMultisamples + j;
+      for (size_t j = 0; j < per_interval; ++j) {
+        const size_t p = sample * per_interval + j;
         for (int f = 0; f < s.features; ++f) out[f] += mean * point_features[(p * n_levels + l) * s.features + f];
         if (s.append_scale) {
           const double weight = s.downweight ? level_feature_weight(scales[p] * levels[4 * l + 1]) : 1.0;
@@ -98,14 +112,15 @@ void zip_features_bwd(const ZipRays& rays, const std::vector<uint32_t>& levels, 
   zip_multisamples(rays, s, points, scales);
   const size_t n_levels = level_count(levels), width = s.features + (s.append_scale ? 1 : 0);
   const size_t n_samples = rays.n_rays * rays.n_intervals;
-  const double mean = s.precondition / kMultisamples;
-  // Every multisample of an interval gets the interval's gradient / 6 (the mean's), then the grid's backward.
-  std::vector<double> d_points(n_samples * kMultisamples * n_levels * s.features);
+  const size_t per_interval = zip_points_per_interval(s);
+  const double mean = s.precondition / per_interval;
+  // Every point of an interval gets the interval's gradient / P (the mean's), then the grid's backward.
+  std::vector<double> d_points(n_samples * per_interval * n_levels * s.features);
   for (size_t sample = 0; sample < n_samples; ++sample) {
-    for (int j = 0; j < kMultisamples; ++j) {
+    for (size_t j = 0; j < per_interval; ++j) {
       for (size_t l = 0; l < n_levels; ++l) {
         for (int f = 0; f < s.features; ++f) {
-          d_points[((sample * kMultisamples + j) * n_levels + l) * s.features + f] =
+          d_points[((sample * per_interval + j) * n_levels + l) * s.features + f] =
               mean * d_features[(sample * n_levels + l) * width + f];
         }
       }

@@ -13,6 +13,7 @@ namespace mipnerf::ref {
 // What the stage is compiled and called with, as the kernel takes it.
 struct ZipFeatureSettings {
   int features = 4;               // per level (GRID_FEATURES)
+  bool multisample = true;        // ZIP_MULTISAMPLE: 6 multisamples, or one point at the frustum's mean
   bool downweight = true;         // GRID_DOWNWEIGHT
   bool append_scale = true;       // GRID_APPEND_SCALE
   bool cylinder = false;          // ZIP_CYLINDER
@@ -32,7 +33,10 @@ struct ZipRays {
   size_t n_intervals = 0;
 };
 
-// Each multisample of every interval in the unit cube ([R·N·6][3]) and its footprint there ([R·N·6]).
+// Points per interval: 6 multisamples, or the plain grid's one.
+inline int zip_points_per_interval(const ZipFeatureSettings& s) { return s.multisample ? 6 : 1; }
+
+// Each multisample of every interval in the unit cube ([R·N·P][3]) and its footprint there ([R·N·P]), P points per interval.
 void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vector<double>& unit_points,
                       std::vector<double>& scales);
 

@@ -66,6 +66,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   const bool zipnerf = c.variant == ModelFamily::zipnerf;
   if (zipnerf) {
     spec.grids.push_back(grid_config(c));
+    spec.zip.multisample = c.grid_multisample;
     spec.zip.downweight = c.grid_downweight;
     spec.zip.append_scale = c.grid_append_scale;
     spec.zip.cylinder = c.ray_shape == RayShape::cylinder;

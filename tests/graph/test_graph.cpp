@@ -30,6 +30,7 @@
 #include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 #include "support/train_fixtures.hpp"
+#include "support/zip_fixtures.hpp"
 #include "train/model.hpp"
 
 using namespace mipnerf;
@@ -134,21 +135,7 @@ struct ReferenceGrids {
 // The reference settings of grid g's feature stage, as a training graph runs it for the step `key` (its patterns drawn
 // per ray of the whole batch: the graph's chunks key theirs from their first ray).
 ref::ZipFeatureSettings reference_zip_settings(const graph::GraphSpec& spec, size_t g, RngKey key) {
-  const ops::ZipFeatureOptions o = spec.zip_options(g);
-  ref::ZipFeatureSettings s;
-  s.features = o.features;
-  s.downweight = o.downweight;
-  s.append_scale = o.append_scale;
-  s.cylinder = o.cylinder;
-  s.randomized = o.randomized;
-  for (int a = 0; a < 3; ++a) s.box[a] = o.box_min[a];
-  s.box[3] = o.box_size;
-  s.scale_mult = o.scale_mult;
-  s.precondition = o.precondition;
-  s.seed = key.seed;
-  s.step = key.step;
-  s.first_ray = key.first_ray;
-  return s;
+  return test::zip_reference_settings(spec.zip_options(g), key);
 }
 
 ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std::vector<double>>& params,

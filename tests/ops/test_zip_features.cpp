@@ -15,6 +15,7 @@
 #include "ref/multisample.hpp"
 #include "ref/zip_features.hpp"
 #include "support/test_context.hpp"
+#include "support/zip_fixtures.hpp"
 
 using namespace mipnerf;
 using test::kUnitRoundoff;
@@ -83,20 +84,7 @@ ops::ZipFeatureOptions zip_options(bool randomized, bool cylinder, bool downweig
 }
 
 ref::ZipFeatureSettings ref_settings(const ops::ZipFeatureOptions& o, RngKey key) {
-  ref::ZipFeatureSettings s;
-  s.features = o.features;
-  s.downweight = o.downweight;
-  s.append_scale = o.append_scale;
-  s.cylinder = o.cylinder;
-  s.randomized = o.randomized;
-  for (int a = 0; a < 3; ++a) s.box[a] = o.box_min[a];
-  s.box[3] = o.box_size;
-  s.scale_mult = o.scale_mult;
-  s.precondition = o.precondition;
-  s.seed = key.seed;
-  s.step = key.step;
-  s.first_ray = key.first_ray;
-  return s;
+  return test::zip_reference_settings(o, key);
 }
 
 std::vector<float> zip_uniform(std::mt19937& rng, size_t n, float range) {
@@ -150,9 +138,10 @@ std::vector<double> zip_backward_position_budget(const ZipTestRays& r, const std
   std::vector<double> points, scales, budget(table_size, 0.0);
   ref::zip_multisamples(to_ref(r), s, points, scales);
   const size_t n_levels = levels.size() / 4, width = s.features + (s.append_scale ? 1 : 0);
-  const double mean = s.precondition / 6;
+  const size_t per_interval = ref::zip_points_per_interval(s);
+  const double mean = s.precondition / per_interval;
   for (size_t p = 0; p < scales.size(); ++p) {
-    const size_t sample = p / 6, ray = sample / r.n_intervals;
+    const size_t sample = p / per_interval, ray = sample / r.n_intervals;
     for (size_t l = 0; l < n_levels; ++l) {
       const uint32_t* level = &levels[4 * l];
       const double cell_coord[3] = {points[3 * p] * level[1], points[3 * p + 1] * level[1], points[3 * p + 2] * level[1]};
@@ -173,6 +162,66 @@ std::vector<double> zip_backward_position_budget(const ZipTestRays& r, const std
   return budget;
 }
 
+// Error budget of one feature: each multisample's point carries float32 roundings of o + a·ρcosθ + b·ρsinθ + d·t (t
+// from a dozen operations on values up to |t| ≈ 10; the angle up to 2π + π/6 before cos/sin): about 64 u of the
+// largest term's magnitude, which moves a corner weight by that times N / box_size on each of 3 axes; with |table| ≤ 1
+// and the level weight's own few-ulp error, times precondition (10) over the 6 averaged. The scale feature's error is
+// the weight's (a few ulp, plus its footprint's) times level_scale.
+// One configuration against the reference (the bounds above).
+void check_zip_against_reference(const ops::ZipFeatureOptions& options, const ZipTestRays& r,
+                                 const std::vector<float>& table, std::mt19937& rng) {
+  const auto layout = zip_test_levels();
+  const auto levels_flat = zip_flat_levels(layout);
+  const RngKey key{0x5eedULL, 17, 300};
+  const size_t width = options.level_width(), samples = r.n_rays * r.n_intervals;
+  const std::vector<float> d_features = zip_uniform(rng, samples * layout.size() * width, 1.0f);
+  const ZipDeviceRun device = run_zip_device(options, r, table, d_features, key);
+  const auto s = ref_settings(options, key);
+  const auto ref_rays = to_ref(r);
+  const auto table_d = test::to_double(table);
+  const auto level_scale = ref::zip_level_scale(levels_flat, table_d, kZipFeatures, options.maxval());
+  std::vector<double> expected, expected_d_table(table.size(), 0.0), abs_d_table(table.size(), 0.0);
+  std::vector<double> count(table.size(), 0.0);
+  ref::zip_features_fwd(ref_rays, levels_flat, table_d, level_scale, s, expected);
+  ref::zip_features_bwd(ref_rays, levels_flat, test::to_double(d_features), s, expected_d_table);
+  std::vector<double> abs_d(d_features.size()), ones(d_features.size(), 1.0);
+  for (size_t i = 0; i < d_features.size(); ++i) abs_d[i] = std::abs(d_features[i]);
+  ref::zip_features_bwd(ref_rays, levels_flat, abs_d, s, abs_d_table);
+  ref::zip_features_bwd(ref_rays, levels_flat, ones, s, count);
+  for (size_t l = 0; l < layout.size(); ++l) {
+    CHECK(std::abs(device.level_scale[l] - level_scale[l]) <= 4 * kUnitRoundoff * level_scale[l]);
+  }
+  REQUIRE(test::all_finite(device.features));
+  REQUIRE(test::all_finite(device.d_table));
+  double worst_forward = 0, worst_backward = 0, largest_feature = 0;
+  for (size_t sample = 0; sample < samples; ++sample) {
+    const size_t ray = sample / r.n_intervals;
+    for (size_t l = 0; l < layout.size(); ++l) {
+      const double position_error =
+          zip_position_error_cells(r, ray, options.cylinder, layout[l].grid_size, options.box_size);
+      for (size_t f = 0; f < width; ++f) {
+        const size_t i = (sample * layout.size() + l) * width + f;
+        const bool scale_feature = f == size_t(kZipFeatures);
+        const double bound = scale_feature ? options.precondition * 64 * kUnitRoundoff * level_scale[l] + 1e-12
+                                           : options.precondition * (24 * position_error + 64 * kUnitRoundoff);
+        worst_forward = std::max(worst_forward, std::abs(device.features[i] - expected[i]) / bound);
+        largest_feature = std::max(largest_feature, std::abs(expected[i]));
+      }
+    }
+  }
+  const auto position_budget = zip_backward_position_budget(r, levels_flat, d_features, s, table.size());
+  for (size_t e = 0; e < table.size(); ++e) {
+    // The scatter's order bound (grid_encoding.cl), each term's weight and level-weight roundings (a few ulp),
+    // and what the float32 positions move each corner weight by.
+    const double bound = (count[e] + 16) * kUnitRoundoff * abs_d_table[e] + position_budget[e] + 1e-9;
+    worst_backward = std::max(worst_backward, std::abs(device.d_table[e] - expected_d_table[e]) / bound);
+  }
+  INFO("worst forward error / bound " << worst_forward << ", backward " << worst_backward);
+  CHECK(largest_feature > 1.0);  // the comparison sees real features
+  CHECK(worst_forward <= 1.0);
+  CHECK(worst_backward <= 1.0);
+}
+
 }  // namespace
 
 // Error budget of one feature: each multisample's point carries float32 roundings of o + a·ρcosθ + b·ρsinθ + d·t (t
@@ -183,10 +232,8 @@ std::vector<double> zip_backward_position_budget(const ZipTestRays& r, const std
 TEST_CASE("zip features: forward and backward equal the double reference (patterns, shapes, downweighting)") {
   std::mt19937 rng(4646);
   const ZipTestRays r = zip_test_rays(rng);
-  const auto layout = zip_test_levels();
-  const auto levels_flat = zip_flat_levels(layout);
-  const std::vector<float> table = zip_uniform(rng, ops::grid_table_entries(layout) * kZipFeatures, 1.0f);
-  const RngKey key{0x5eedULL, 17, 300};
+  const std::vector<float> table =
+      zip_uniform(rng, ops::grid_table_entries(zip_test_levels()) * kZipFeatures, 1.0f);
   using Scatter = ops::ZipFeatureOptions::Scatter;
   for (bool randomized : {false, true}) {
     for (bool cylinder : {false, true}) {
@@ -197,57 +244,26 @@ TEST_CASE("zip features: forward and backward equal the double reference (patter
         CAPTURE(cylinder);
         CAPTURE(downweight);
         CAPTURE(static_cast<int>(scatter));
-        const auto options = zip_options(randomized, cylinder, downweight, scatter);
-        const size_t width = options.level_width(), samples = r.n_rays * r.n_intervals;
-        const std::vector<float> d_features = zip_uniform(rng, samples * layout.size() * width, 1.0f);
-        const ZipDeviceRun device = run_zip_device(options, r, table, d_features, key);
-        const auto s = ref_settings(options, key);
-        const auto ref_rays = to_ref(r);
-        const auto table_d = test::to_double(table);
-        const auto level_scale = ref::zip_level_scale(levels_flat, table_d, kZipFeatures, options.maxval());
-        std::vector<double> expected, expected_d_table(table.size(), 0.0), abs_d_table(table.size(), 0.0);
-        std::vector<double> count(table.size(), 0.0);
-        ref::zip_features_fwd(ref_rays, levels_flat, table_d, level_scale, s, expected);
-        ref::zip_features_bwd(ref_rays, levels_flat, test::to_double(d_features), s, expected_d_table);
-        std::vector<double> abs_d(d_features.size()), ones(d_features.size(), 1.0);
-        for (size_t i = 0; i < d_features.size(); ++i) abs_d[i] = std::abs(d_features[i]);
-        ref::zip_features_bwd(ref_rays, levels_flat, abs_d, s, abs_d_table);
-        ref::zip_features_bwd(ref_rays, levels_flat, ones, s, count);
-        for (size_t l = 0; l < layout.size(); ++l) {
-          CHECK(std::abs(device.level_scale[l] - level_scale[l]) <= 4 * kUnitRoundoff * level_scale[l]);
-        }
-        REQUIRE(test::all_finite(device.features));
-        REQUIRE(test::all_finite(device.d_table));
-        double worst_forward = 0, worst_backward = 0, largest_feature = 0;
-        for (size_t sample = 0; sample < samples; ++sample) {
-          const size_t ray = sample / r.n_intervals;
-          for (size_t l = 0; l < layout.size(); ++l) {
-            const double position_error =
-                zip_position_error_cells(r, ray, cylinder, layout[l].grid_size, options.box_size);
-            for (size_t f = 0; f < width; ++f) {
-              const size_t i = (sample * layout.size() + l) * width + f;
-              const bool scale_feature = f == size_t(kZipFeatures);
-              const double bound = scale_feature ? options.precondition * 64 * kUnitRoundoff * level_scale[l] + 1e-12
-                                                 : options.precondition * (24 * position_error + 64 * kUnitRoundoff);
-              worst_forward = std::max(worst_forward, std::abs(device.features[i] - expected[i]) / bound);
-              largest_feature = std::max(largest_feature, std::abs(expected[i]));
-            }
-          }
-        }
-        const auto position_budget = zip_backward_position_budget(r, levels_flat, d_features, s, table.size());
-        for (size_t e = 0; e < table.size(); ++e) {
-          // The scatter's order bound (grid_encoding.cl), each term's weight and level-weight roundings (a few ulp),
-          // and what the float32 positions move each corner weight by.
-          const double bound =
-              (count[e] + 16) * kUnitRoundoff * abs_d_table[e] + position_budget[e] + 1e-9;
-          worst_backward = std::max(worst_backward, std::abs(device.d_table[e] - expected_d_table[e]) / bound);
-        }
-        INFO("worst forward error / bound " << worst_forward << ", backward " << worst_backward);
-        CHECK(largest_feature > 1.0);  // the comparison sees real features
-        CHECK(worst_forward <= 1.0);
-        CHECK(worst_backward <= 1.0);
+        check_zip_against_reference(zip_options(randomized, cylinder, downweight, scatter), r, table, rng);
       }
     }
+  }
+}
+
+// The plain grid Zip-NeRF is measured against: one point per interval at the frustum's mean, no footprint weights,
+// no scale feature (both scatters; the training and rendering patterns are the same single point).
+TEST_CASE("zip features: the plain grid (one point at the frustum's mean) equals the double reference") {
+  std::mt19937 rng(4747);
+  const ZipTestRays r = zip_test_rays(rng);
+  const std::vector<float> table =
+      zip_uniform(rng, ops::grid_table_entries(zip_test_levels()) * kZipFeatures, 1.0f);
+  using Scatter = ops::ZipFeatureOptions::Scatter;
+  for (bool cylinder : {false, true}) {
+    CAPTURE(cylinder);
+    auto options = zip_options(true, cylinder, false, cylinder ? Scatter::by_level : Scatter::atomic);
+    options.multisample = false;
+    options.append_scale = false;
+    check_zip_against_reference(options, r, table, rng);
   }
 }
 
@@ -297,6 +313,33 @@ TEST_CASE("zip features: every pattern's multisamples have the frustum's mean") 
         CHECK(mean == doctest::Approx(fixed_mean).epsilon(1e-12));
       }
     }
+  }
+}
+
+// The plain grid's one point is the multisamples' mean along the ray (their offsets 2j/5 − 1 sum to 0), and off it the
+// hexagon's centre for cylinders (constant radius); a cone's hexagon is off-centre by its radius' growth along t.
+TEST_CASE("zip features: the plain grid's point is the frustum's mean") {
+  ref::ZipRays rays{{0.1, -0.2, 3.0}, {0.2, 0.1, -1.0}, {0.01}, {2.0, 2.5}, 1, 1};
+  for (bool cylinder : {false, true}) {
+    CAPTURE(cylinder);
+    ref::ZipFeatureSettings s;
+    s.cylinder = cylinder;
+    std::vector<double> six, six_scales, one, one_scales;
+    ref::zip_multisamples(rays, s, six, six_scales);
+    s.multisample = false;
+    ref::zip_multisamples(rays, s, one, one_scales);
+    REQUIRE(six.size() == 18);
+    REQUIRE(one.size() == 3);
+    CHECK(one_scales[0] == 0.0);
+    double along_six = 0, along_one = 0;
+    for (int a = 0; a < 3; ++a) {
+      double mean = 0;
+      for (int j = 0; j < 6; ++j) mean += six[3 * j + a] / 6;
+      along_six += mean * rays.directions[a];
+      along_one += one[a] * rays.directions[a];
+      if (cylinder) CHECK(one[a] == doctest::Approx(mean).epsilon(1e-12));
+    }
+    CHECK(along_one == doctest::Approx(along_six).epsilon(1e-12));
   }
 }
 
