@@ -9,6 +9,8 @@
 #   bench-quick       mipnerf-cl bench: GEMM GFLOP/s (CLBlast default and tuned), each kernel, the quick preset's steps
 #   bench-small       the small preset's training steps and stage profile
 #   bench-paper       the paper preset's at batch 4096 (--paper-batch)
+#   zipnerf           Zip-NeRF's s/step on the built-in scene, 20 steps of each candidate for a GPU preset: the CPU's
+#                     `fast` preset, then larger batches and the official hash size (the atomic scatter a GPU uses)
 #   python            the python that runs the official code: its JAX and devices; gin-config from the carried wheels
 #                     when it lacks it
 #   official-default  the official google/mipnerf training step at the paper's configuration, with JAX's default
@@ -53,8 +55,8 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 repo="$PWD"
 arguments="$*"
-all_steps="driver devices selftest tune bench-quick bench-small bench-paper python official-default official-float32 train render"
-opencl_steps=" devices selftest tune bench-quick bench-small bench-paper train render "
+all_steps="driver devices selftest tune bench-quick bench-small bench-paper zipnerf python official-default official-float32 train render"
+opencl_steps=" devices selftest tune bench-quick bench-small bench-paper zipnerf train render "
 
 carried=.device-check
 bundle="" official="" wheels=""
@@ -163,7 +165,8 @@ run_step() {
   if [ "$limit" -lt 10 ]; then record "$name" skipped - 0 "$limit" "no time left in the budget"; return 0; fi
   printf '\n===== %s (limit %s s): %s\n' "$name" "$limit" "$*" >> "$log"
   t0=$(date +%s.%N)
-  timeout --kill-after=10 "$limit" bash -c "$(declare -f "$1"); $(printf '%q ' "$@")" >> "$log" 2>&1
+  # Every function goes with it (a step's function may call a shared one, e.g. built_in_scene).
+  timeout --kill-after=10 "$limit" bash -c "$(declare -f); $(printf '%q ' "$@")" >> "$log" 2>&1
   rc=$?
   t1=$(date +%s.%N)
   case $rc in
@@ -269,13 +272,31 @@ bench() {
 # official PRECISION: the official step in the python given, on the built-in scene (else random images).
 official() {
   local scene=(--synthetic-scene "$WORK/synthetic-scene")
-  if [ -f "$WORK/scene/transforms_train.json" ] ||
-      timeout 60 "$BUNDLE/mipnerf-cl" make-scene "$WORK/scene" --scales 1 > /dev/null; then
+  if built_in_scene; then
     scene=(--data "$WORK/scene")
   fi
   "$PYTHON" "$REPO/bench/studies/official_step.py" --official "$OFFICIAL" "${scene[@]}" --precision "$1" \
     --steps "$OFFICIAL_STEPS" --batch "$PAPER_BATCH" --our-bench "$WORK/bench/paper/bench.json" \
     --out "$WORK/official/$1.json"
+}
+# built_in_scene: the procedural scene (one scale) in WORK/scene, made once (the official step uses it too).
+built_in_scene() {
+  [ -f "$WORK/scene/transforms_train.json" ] || timeout 60 "$BUNDLE/mipnerf-cl" make-scene "$WORK/scene" --scales 1 > /dev/null
+}
+# zipnerf: each candidate's 20 steps (one log row per step; device_check_summary.py takes the warm median).
+zipnerf() {
+  built_in_scene || return 1
+  local status=0 candidate name settings
+  for candidate in "fast:" "batch4096:--set batch_size=4096" \
+      "batch4096_hash19:--set batch_size=4096 --set grid_hash_log2=19 --set grid_max=8192" \
+      "batch16384_hash21:--set batch_size=16384 --set grid_hash_log2=21 --set grid_max=8192"; do
+    name="${candidate%%:*}"
+    settings="${candidate#*:}"
+    # shellcheck disable=SC2086  # the settings are words
+    "$BUNDLE/mipnerf-cl" train --model zipnerf --data "$WORK/scene" --out "$WORK/zipnerf/$name" --steps 20 \
+      --set log_every=1 --set val_views=1 --set checkpoint_every=1000 $settings || status=1
+  done
+  return $status
 }
 train() { "$BUNDLE/mipnerf-cl" train --preset quick --steps "$TRAIN_STEPS" --out "$WORK/train"; }
 render() {
@@ -317,7 +338,7 @@ summarise() {
   # Everything else small enough to bring back, in one file: bench.md files, the self-test's JUnit file, the tuning
   # file, the training run without its checkpoints, the orbit's frames.
   (cd "$work" && tar --exclude='*.mnck' --exclude='train/scene' -czf "$out/artifacts.tar.gz" artifacts bench \
-    $(ls -d train official 2>/dev/null) steps.tsv facts.tsv) >> "$log" 2>&1
+    $(ls -d train official zipnerf 2>/dev/null) steps.tsv facts.tsv) >> "$log" 2>&1
   rm -rf "$work"
 }
 
@@ -338,6 +359,7 @@ run_step bench-quick 60 $((deadline - reserve)) bench quick --sections gemm,kern
 run_step bench-small 40 $((deadline - reserve)) bench small --sections train --time-box 20
 run_step bench-paper 60 $((deadline - reserve)) bench paper --sections train --time-box 30 --paper-steps 5 \
   --set "batch_size=$paper_batch"
+run_step zipnerf 60 $((deadline - reserve)) zipnerf
 if [ ! -d "$official/internal" ]; then
   for name in python official-default official-float32; do
     record "$name" skipped - 0 - "no official code at $official (scripts/prepare-device-check.sh copies it)"

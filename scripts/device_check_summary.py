@@ -80,6 +80,30 @@ def selftest_figures(path):
     return counts
 
 
+def warm_seconds_per_step(run_dir):
+    """The median step time after the first (cold) step, from a run's train_log.csv (log_every 1), or None."""
+    try:
+        with open(os.path.join(run_dir, "train_log.csv")) as f:
+            header = f.readline().strip().split(",")
+            walls = [float(line.split(",")[header.index("wall_seconds")]) for line in f if line.strip()]
+    except (OSError, ValueError, IndexError):
+        return None
+    steps = sorted(b - a for a, b in zip(walls[1:], walls[2:]))
+    return steps[len(steps) // 2] if steps else None
+
+
+def zipnerf_figures(folder):
+    """Each Zip-NeRF candidate's warm s/step and batch (the zipnerf step's runs), in the order they ran."""
+    out = {}
+    for run_dir in sorted(glob.glob(os.path.join(folder, "*")), key=os.path.getmtime):
+        config = load_json(os.path.join(run_dir, "config.json")) or {}
+        seconds = warm_seconds_per_step(run_dir)
+        if seconds is not None:
+            batch = (config.get("settings") or config).get("batch_size")
+            out[os.path.basename(run_dir)] = {"s_per_step": seconds, "batch_size": batch}
+    return out
+
+
 def collect(work):
     figures = {}
     benches = {p: load_json(os.path.join(work, "bench", p, "bench.json")) for p in PRESETS}
@@ -105,6 +129,9 @@ def collect(work):
                             "val_psnr": val.get("mean_psnr"), "val_ssim": val.get("mean_ssim"),
                             "val_views": val.get("views"), "render_s_per_mp": val.get("render_seconds_per_megapixel"),
                             "device": run.get("device")}
+    zipnerf = zipnerf_figures(os.path.join(work, "zipnerf"))
+    if zipnerf:
+        figures["zipnerf"] = zipnerf
     frames = glob.glob(os.path.join(work, "train", "render_orbit", "*.png"))
     if frames:
         figures["render"] = {"frames": len(frames)}
@@ -138,6 +165,10 @@ def key_line(step, figures):
     if step == "train" and f:
         return (f"val PSNR {fmt(f['val_psnr'], 4)} dB over {f['val_views']} views after {f['steps']} steps in "
                 f"{fmt(f['train_seconds'])} s; render {fmt(f['render_s_per_mp'])} s/MP")
+    if step == "zipnerf" and f:
+        return "; ".join(f"{name} {fmt(v['s_per_step'])} s/step" + (f" ({fmt(v['batch_size'] / v['s_per_step'])} rays/s)"
+                                                                    if v.get("batch_size") else "")
+                         for name, v in f.items())
     if step == "render" and f:
         return f"{f['frames']} orbit frames"
     if step == "tune" and f:

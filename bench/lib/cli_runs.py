@@ -52,3 +52,16 @@ def read_val_log(run_dir):
     with open(path) as f:
         header = f.readline().strip().split(",")
         return [dict(zip(header, map(float, line.strip().split(",")))) for line in f if line.strip()]
+
+
+def read_train_log(run_dir):
+    """(step, wall_seconds) of each row of the run's train_log.csv."""
+    rows = []
+    with open(os.path.join(run_dir, "train_log.csv")) as f:
+        header = f.readline().strip().split(",")
+        step, wall = header.index("step"), header.index("wall_seconds")
+        for line in f:
+            fields = line.strip().split(",")
+            if len(fields) == len(header):
+                rows.append((int(fields[step]), float(fields[wall])))
+    return rows

@@ -50,7 +50,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import commit_of, read_json, run  # noqa: E402
+from lib.cli_runs import commit_of, read_json, read_train_log, run  # noqa: E402
 from lib.machine import load_average  # noqa: E402
 from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
@@ -82,19 +82,6 @@ def parse_extra(text):
 
 def slug(name):
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_")
-
-
-def read_train_log(run_dir):
-    """(step, wall_seconds) of each row of the run's train_log.csv."""
-    rows = []
-    with open(os.path.join(run_dir, "train_log.csv")) as f:
-        header = f.readline().strip().split(",")
-        step, wall = header.index("step"), header.index("wall_seconds")
-        for line in f:
-            fields = line.strip().split(",")
-            if len(fields) == len(header):
-                rows.append((int(fields[step]), float(fields[wall])))
-    return rows
 
 
 def base_command(exe, flower, factor, out, train_args):
