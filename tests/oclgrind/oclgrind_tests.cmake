@@ -104,6 +104,11 @@ mipnerf_add_oclgrind_test("grid encoding kernels" test_ops "grid encoding:*" ocl
 # Zip-NeRF's interval features (multisamples, every level's lookups, the scale feature, the scatter, the level scales
 # and the weight decay): the kernels --model zipnerf runs.
 mipnerf_add_oclgrind_test("zip feature kernels" test_ops "zip features:*" oclgrind ON)
+# The proposal losses of Zip-NeRF / mip-NeRF 360 (issues 45 and 46: not yet stages of the model): the spline
+# interlevel loss's three-list walk and the distortion loss's prefix and suffix sweeps, forward and backward. Their
+# comparisons with the reference and hard cases only; the finite-difference cases relaunch the same kernels ~100 times.
+mipnerf_add_oclgrind_test("proposal loss kernels" test_ops
+  "spline interlevel: forward*,spline interlevel: hard*,distortion: forward*" oclgrind ON)
 # The two program tests that make the OpenCL API fail on purpose (a build error, an unknown kernel) are left out:
 # --check-api reports exactly those failures.
 set(MIPNERF_OCLGRIND_EXCLUDE "program: a compile error*,program: an unknown kernel*")
