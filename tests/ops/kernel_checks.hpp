@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
@@ -119,6 +120,36 @@ inline bool all_finite(const std::vector<float>& v) {
 inline double log_uniform(std::mt19937& rng, double lo, double hi) {
   std::uniform_real_distribution<double> dist(std::log(lo), std::log(hi));
   return std::exp(dist(rng));
+}
+
+// The largest |central difference − analytic gradient| over every `stride`-th value of `values` (step h, each value
+// put back after), and the largest |gradient| seen, for a scalar objective of all the values.
+struct DifferenceCheck {
+  double worst = 0;
+  double largest_gradient = 0;
+};
+inline DifferenceCheck central_differences(std::vector<double>& values, const std::vector<double>& gradient,
+                                           const std::function<double(const std::vector<double>&)>& objective,
+                                           size_t stride = 1, double h = 1e-3) {
+  DifferenceCheck out;
+  for (size_t e = 0; e < values.size(); e += stride) {
+    const double kept = values[e];
+    values[e] = kept + h;
+    const double up = objective(values);
+    values[e] = kept - h;
+    const double down = objective(values);
+    values[e] = kept;
+    out.worst = std::max(out.worst, std::abs((up - down) / (2 * h) - gradient[e]));
+    out.largest_gradient = std::max(out.largest_gradient, std::abs(gradient[e]));
+  }
+  return out;
+}
+
+// Σ weights[i] · outputs[i]: the objective whose gradient a backward given `weights` as its upstream gradient computes.
+inline double weighted_sum(const std::vector<double>& weights, const std::vector<double>& outputs) {
+  double sum = 0;
+  for (size_t i = 0; i < outputs.size(); ++i) sum += weights[i] * outputs[i];
+  return sum;
 }
 
 }  // namespace mipnerf::test

@@ -166,25 +166,12 @@ TEST_CASE("grid encoding: the reference backward is the forward's gradient (fini
   std::vector<double> d_table(table.size(), 0.0);
   const auto coords = test::to_double(points.coords), scales = test::to_double(points.scales);
   ref::grid_encoding_bwd(levels_flat, coords, scales, d_features, kFeatures, true, d_table);
-  auto objective = [&](const std::vector<double>& t) {
+  const auto check = test::central_differences(table, d_table, [&](const std::vector<double>& t) {
     std::vector<double> out;
     ref::grid_encoding_fwd(levels_flat, coords, scales, t, kFeatures, true, out);
-    double sum = 0;
-    for (size_t i = 0; i < out.size(); ++i) sum += d_features[i] * out[i];
-    return sum;
-  };
-  double worst = 0, largest = 0;
-  for (size_t e = 0; e < table.size(); ++e) {
-    const double h = 1e-3, kept = table[e];
-    table[e] = kept + h;
-    const double up = objective(table);
-    table[e] = kept - h;
-    const double down = objective(table);
-    table[e] = kept;
-    worst = std::max(worst, std::abs((up - down) / (2 * h) - d_table[e]));
-    largest = std::max(largest, std::abs(d_table[e]));
-  }
-  INFO("worst difference " << worst << " of gradients up to " << largest);
-  CHECK(largest > 0.1);  // the check sees real gradients
-  CHECK(worst < 1e-9);
+    return test::weighted_sum(d_features, out);
+  }, 1);
+  INFO("worst difference " << check.worst << " of gradients up to " << check.largest_gradient);
+  CHECK(check.largest_gradient > 0.1);  // the check sees real gradients
+  CHECK(check.worst < 1e-9);
 }

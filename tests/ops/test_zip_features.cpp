@@ -372,34 +372,26 @@ TEST_CASE("zip features: the reference backward is the forward's gradient (finit
   ZipTestRays r = zip_test_rays(rng);
   const auto layout = zip_test_levels();
   const auto levels_flat = zip_flat_levels(layout);
-  const auto s = ref_settings(zip_options(true, false, true), {3, 4, 5});
   const auto rays = to_ref(r);
   std::vector<double> table = test::to_double(zip_uniform(rng, ops::grid_table_entries(layout) * kZipFeatures, 1.0f));
-  const size_t width = kZipFeatures + 1;
-  const std::vector<double> d_features =
-      test::to_double(zip_uniform(rng, r.n_rays * r.n_intervals * layout.size() * width, 1.0f));
-  std::vector<double> d_table(table.size(), 0.0);
-  ref::zip_features_bwd(rays, levels_flat, d_features, s, d_table);
-  const std::vector<double> level_scale(layout.size(), 0.25);  // a constant of the step (stop-gradient)
-  auto objective = [&](const std::vector<double>& t) {
-    std::vector<double> out;
-    ref::zip_features_fwd(rays, levels_flat, t, level_scale, s, out);
-    double sum = 0;
-    for (size_t i = 0; i < out.size(); ++i) sum += d_features[i] * out[i];
-    return sum;
-  };
-  double worst = 0, largest = 0;
-  for (size_t e = 0; e < table.size(); e += 3) {
-    const double h = 1e-3, kept = table[e];
-    table[e] = kept + h;
-    const double up = objective(table);
-    table[e] = kept - h;
-    const double down = objective(table);
-    table[e] = kept;
-    worst = std::max(worst, std::abs((up - down) / (2 * h) - d_table[e]));
-    largest = std::max(largest, std::abs(d_table[e]));
+  auto plain = zip_options(true, false, false);
+  plain.multisample = false;
+  plain.append_scale = false;
+  for (const auto& options : {zip_options(true, false, true), plain}) {
+    CAPTURE(options.multisample);
+    const auto s = ref_settings(options, {3, 4, 5});
+    const std::vector<double> d_features = test::to_double(
+        zip_uniform(rng, r.n_rays * r.n_intervals * layout.size() * options.level_width(), 1.0f));
+    std::vector<double> d_table(table.size(), 0.0);
+    ref::zip_features_bwd(rays, levels_flat, d_features, s, d_table);
+    const std::vector<double> level_scale(layout.size(), 0.25);  // a constant of the step (stop-gradient)
+    const auto check = test::central_differences(table, d_table, [&](const std::vector<double>& t) {
+      std::vector<double> out;
+      ref::zip_features_fwd(rays, levels_flat, t, level_scale, s, out);
+      return test::weighted_sum(d_features, out);
+    }, 3);
+    INFO("worst difference " << check.worst << " of gradients up to " << check.largest_gradient);
+    CHECK(check.largest_gradient > 0.1);
+    CHECK(check.worst < 1e-8);
   }
-  INFO("worst difference " << worst << " of gradients up to " << largest);
-  CHECK(largest > 0.1);
-  CHECK(worst < 1e-8);
 }
