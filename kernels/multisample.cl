@@ -20,8 +20,10 @@
 #define ZIP_MULTISAMPLE 1
 #endif
 
-// ZIP_MULTISAMPLE 0 is a plain grid's lookup, the comparison Zip-NeRF's anti-aliasing is measured against: one point,
-// the frustum's mean on the axis (mip-NeRF's t_μ), and no footprint.
+// ZIP_MULTISAMPLE 0 looks up one point per interval, the frustum's mean on the axis (mip-NeRF's t_μ), with the
+// footprint the hexagon's points would have there (√½·radius·t_μ, or √½·radius for cylinders): without
+// GRID_DOWNWEIGHT a plain grid's lookup, the comparison Zip-NeRF's anti-aliasing is measured against; with it, the
+// footprint-weighted levels at a sixth of the lookups.
 #if ZIP_MULTISAMPLE
 #define ZIP_MULTISAMPLES 6
 #else

@@ -41,8 +41,13 @@ inline void zip_multisamples(__global const float* origins, __global const float
     scales[j] = scale_mult * perp * inv_size;
   }
 #else
-  unit_points[0] = (origin + direction * frustum_t_at(t0, t1, 0.0f) - box.xyz) * inv_size;
-  scales[0] = 0.0f;
+  const float t_mean = frustum_t_at(t0, t1, 0.0f);
+  unit_points[0] = (origin + direction * t_mean - box.xyz) * inv_size;
+#if ZIP_CYLINDER
+  scales[0] = scale_mult * (0.7071067811865476f * radii[ray]) * inv_size;
+#else
+  scales[0] = scale_mult * (0.7071067811865476f * radii[ray] * t_mean) * inv_size;
+#endif
 #endif
 }
 

@@ -19,7 +19,7 @@ namespace mipnerf::ops {
 // What the stage compiles in and is called with (camp_zipnerf's names in brackets).
 struct ZipFeatureOptions {
   int features = 4;           // GRID_FEATURES per level [num_features]
-  bool multisample = true;    // ZIP_MULTISAMPLE: the frustum's 6 multisamples (off: one point at its mean, a plain grid)
+  bool multisample = true;    // ZIP_MULTISAMPLE: the frustum's 6 multisamples (off: one point at its mean)
   bool downweight = true;     // GRID_DOWNWEIGHT: each level faded by the footprint (Zip-NeRF; off: a plain grid)
   bool append_scale = true;   // GRID_APPEND_SCALE: (2w − 1) · level_scale per level [append_scale]
   bool cylinder = false;      // ZIP_CYLINDER: NDC rays' constant footprint

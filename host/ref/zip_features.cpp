@@ -28,12 +28,12 @@ void interval_pattern(const ZipFeatureSettings& s, uint32_t ray_number, uint32_t
 
 size_t level_count(const std::vector<uint32_t>& levels) { return levels.size() / 4; }
 
-// The plain grid's one point of [t0, t1]: the frustum's mean on the axis, t_μ = s + 2sd²/(3s² + d²) (mip-NeRF eq. 7).
-Vec3d frustum_mean_point(const Vec3d& origin, const Vec3d& direction, double t0, double t1) {
+// The one point of [t0, t1] without multisampling: the frustum's mean on the axis, t_μ = s + 2sd²/(3s² + d²)
+// (mip-NeRF eq. 7).
+double frustum_mean_t(double t0, double t1) {
   const double s = 0.5 * (t0 + t1), d = 0.5 * (t1 - t0);
   const double denominator = 3 * s * s + d * d;
-  const double t = denominator < 1.1754943508222875e-38 ? t0 : s + 2 * s * d * d / denominator;
-  return {origin[0] + direction[0] * t, origin[1] + direction[1] * t, origin[2] + direction[2] * t};
+  return denominator < 1.1754943508222875e-38 ? t0 : s + 2 * s * d * d / denominator;
 }
 
 }  // namespace
@@ -50,9 +50,11 @@ void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vec
       const double* edges = &rays.t_edges[ray * (rays.n_intervals + 1) + i];
       const size_t first = (ray * rays.n_intervals + i) * per_interval;
       if (!s.multisample) {
-        const Vec3d point = frustum_mean_point(origin, direction, edges[0], edges[1]);
-        for (int a = 0; a < 3; ++a) unit_points[3 * first + a] = (point[a] - s.box[a]) / s.box[3];
-        continue;  // no footprint: scales stay 0
+        // The hexagon's footprint at t_μ: √½·radius·t_μ (cone) or √½·radius (cylinder).
+        const double t = frustum_mean_t(edges[0], edges[1]);
+        for (int a = 0; a < 3; ++a) unit_points[3 * first + a] = (origin[a] + direction[a] * t - s.box[a]) / s.box[3];
+        scales[first] = s.scale_mult * std::sqrt(0.5) * rays.radii[ray] * (s.cylinder ? 1.0 : t) / s.box[3];
+        continue;
       }
       bool reversed = false;
       double turn = 0.0;

@@ -33,7 +33,7 @@ struct ZipRays {
   size_t n_intervals = 0;
 };
 
-// Points per interval: 6 multisamples, or the plain grid's one.
+// Points per interval: 6 multisamples, or one at the frustum's mean.
 inline int zip_points_per_interval(const ZipFeatureSettings& s) { return s.multisample ? 6 : 1; }
 
 // Each multisample of every interval in the unit cube ([R·N·P][3]) and its footprint there ([R·N·P]), P points per interval.

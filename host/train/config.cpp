@@ -105,7 +105,8 @@ const std::vector<Entry>& table() {
       {{"grid_bound", "zipnerf: the grid covers [-b, b]^3 (0 = from the scene: NDC 1, world rays 1.5)", "model"},
        &TrainConfig::grid_bound},
       {{"grid_multisample",
-        "zipnerf: look up each frustum's 6 multisamples (false: one point at its mean, as a plain hash grid does)",
+        "zipnerf: look up each frustum's 6 multisamples (false: one point at its mean with their mean footprint; with "
+        "grid_downweight=false, a plain hash grid)",
         "model"},
        &TrainConfig::grid_multisample},
       {{"grid_downweight",

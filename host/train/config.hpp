@@ -112,7 +112,7 @@ struct TrainConfig {
   int grid_hash_log2 = 21;
   int grid_features = 4;
   double grid_bound = 0.0;        // the grid covers [−b, b]³; 0 = from the scene (NDC: 1, world rays: 1.5)
-  bool grid_multisample = true;   // each frustum's 6 multisamples (false: one point at its mean, a plain hash grid)
+  bool grid_multisample = true;   // each frustum's 6 multisamples (false: one point at its mean, same footprint)
   bool grid_downweight = true;    // fade each level by the multisample's footprint (false: a plain hash grid)
   bool grid_append_scale = true;  // append each level's footprint weight as a feature (official append_scale)
   double grid_weight_decay = 0.1;  // mult of each grid level's ½·mean(value²) in the loss (official param_regularizers)
