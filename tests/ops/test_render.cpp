@@ -1,7 +1,8 @@
 // Volume rendering (kernels/render.cl): forward and backward against the double reference with derived float32
 // bounds, the backward against central finite differences, the hard cases (σ = 0, σ = 1e10, δ = 0, acc = 0, σ·δ
 // overflowing to +∞, t around 1e4), every background, the fused activation + render kernels against the
-// composition, and the fused kernels' density noise (its draws, its keys, its backward).
+// composition, the fused kernels' density noise (its draws, its keys, its backward), and the weights' backward
+// (render_raw_weights_bwd: ∂L/∂raw_density from ∂L/∂w) against the reference, finite differences and render_raw_bwd.
 #include <doctest/doctest.h>
 
 #include <algorithm>
