@@ -11,7 +11,7 @@
 // BACKGROUND_BLACK give the same composite (black adds 0·(1 − acc)); "none" is for premultiplied output,
 // where the caller composites over its own background with acc.
 // One work-item per ray, O(N), no atomics. Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
-// directions [R][3], comp_rgb [R][3], acc [R], distance [R], weights [R][N].
+// directions [R][3], comp_rgb [R][3], acc [R], distance [R], weights [R][N], d_weights [R][N].
 //
 // Density noise (DENSITY_NOISE, defined only when the noise is on; training only): the fused render_raw_* kernels
 // add DENSITY_NOISE·z_i to raw density i before its activation (official models.py: `raw_density += density_noise *
@@ -297,22 +297,29 @@ ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const floa
 #if SAMPLES_PER_VECTOR
 // The backward's reverse sweep over samples i .. i + 15 of ray `ray` (the per-vector walk, entered with the sums over
 // the samples after them): what render_ray_bwd's loop does for them, its suffix sums advanced from the last lane to the
-// first with the loop's own expressions.
+// first with the loop's own expressions. Without `with_colour` the weights' gradients g come from d_weights and rgb,
+// d_rgb are never touched.
 ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const float* density,
                                      __global const float* t_edges, __global const float* weights,
-                                     __global float* d_rgb, __global float* d_density, const uint ray, const uint i,
-                                     const uint n_samples, const float dir_norm, const RayNoiseKey noise,
-                                     const int from_raw, const float d_red, const float d_green, const float d_blue,
-                                     const float d_acc_total, const float trans_last, float* weight_after,
-                                     float* grad_weight_after) {
+                                     __global const float* d_weights, __global float* d_rgb,
+                                     __global float* d_density, const uint ray, const uint i, const uint n_samples,
+                                     const float dir_norm, const RayNoiseKey noise, const int from_raw,
+                                     const int with_colour, const float d_red, const float d_green,
+                                     const float d_blue, const float d_acc_total, const float trans_last,
+                                     float* weight_after, float* grad_weight_after) {
   const uint at = ray * n_samples + i, t_at = ray * (n_samples + 1) + i;
   const float16 w = vload16(0, weights + at);
-  float16 raw_red, raw_green, raw_blue;  // raw values when from_raw, else the colours
-  load_channels16(rgb, at, &raw_red, &raw_green, &raw_blue);
-  const float16 red = from_raw ? rgb_activation(raw_red) : raw_red;
-  const float16 green = from_raw ? rgb_activation(raw_green) : raw_green;
-  const float16 blue = from_raw ? rgb_activation(raw_blue) : raw_blue;
-  const float16 g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
+  float16 raw_red = (float16)(0.0f), raw_green = (float16)(0.0f), raw_blue = (float16)(0.0f);
+  float16 g;  // ∂L/∂w of each lane's sample
+  if (with_colour) {
+    load_channels16(rgb, at, &raw_red, &raw_green, &raw_blue);  // raw values when from_raw, else the colours
+    const float16 red = from_raw ? rgb_activation(raw_red) : raw_red;
+    const float16 green = from_raw ? rgb_activation(raw_green) : raw_green;
+    const float16 blue = from_raw ? rgb_activation(raw_blue) : raw_blue;
+    g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
+  } else {
+    g = vload16(0, d_weights + at);
+  }
   const float16 delta = (vload16(0, t_edges + t_at + 1) - vload16(0, t_edges + t_at)) * dir_norm;
   float16 w_after, gw_after;  // Σ_{k>i} w_k and Σ_{k>i} g_k·w_k of each lane's sample
 #define SUFFIX_STEP(k)                   \
@@ -324,14 +331,18 @@ ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const f
 #undef SUFFIX_STEP
   const float16 d_s = g * (trans_last + w_after) - gw_after;
   float16 d_sigma = delta > 0.0f ? delta * d_s : (float16)(0.0f);
-  float16 d_red_i = d_red * w, d_green_i = d_green * w, d_blue_i = d_blue * w;  // ∂L/∂c_i
   if (from_raw) {
     d_sigma *= density_activation_grad(noisy_raw_density(vload16(0, density + at), density_noise_vector(noise, i)));
-    d_red_i *= rgb_activation_grad(raw_red);
-    d_green_i *= rgb_activation_grad(raw_green);
-    d_blue_i *= rgb_activation_grad(raw_blue);
   }
-  store_channels16(d_rgb, at, d_red_i, d_green_i, d_blue_i);
+  if (with_colour) {
+    float16 d_red_i = d_red * w, d_green_i = d_green * w, d_blue_i = d_blue * w;  // ∂L/∂c_i
+    if (from_raw) {
+      d_red_i *= rgb_activation_grad(raw_red);
+      d_green_i *= rgb_activation_grad(raw_green);
+      d_blue_i *= rgb_activation_grad(raw_blue);
+    }
+    store_channels16(d_rgb, at, d_red_i, d_green_i, d_blue_i);
+  }
   vstore16(d_sigma, 0, d_density + at);
 }
 #endif
@@ -344,21 +355,29 @@ ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const f
 // Evaluated in one reverse sweep with T_{i+1} = T_N + Σ_{k>i} w_k and the suffix sums accumulated as they
 // go: every term is a sum of like-signed values, so the error stays relative to T_{i+1} (no exp(+s) that
 // overflows, no total − prefix that cancels behind an opaque surface). T_N comes from a forward sweep of s.
+// With `with_colour` (a constant at each call site) g_i comes from the composite as above; without it g_i = d_weights
+// [ray][i], given (the interlevel loss's gradient on a proposal level's weights), and rgb, d_comp_rgb, d_acc, d_rgb
+// are never touched (may be null): then no colour and no background enters, as none enters the weights.
 // Stores nothing unless `live`.
 ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const float* density,
                                   __global const float* t_edges, __global const float* directions,
                                   __global const float* weights, __global const float* d_comp_rgb,
                                   __global const float* d_acc, const uint has_d_acc,
-                                  __global float* d_rgb, __global float* d_density,
+                                  __global const float* d_weights, __global float* d_rgb, __global float* d_density,
                                   const uint ray, const int live, const uint n_samples, const RayNoiseKey noise,
-                                  const int from_raw) {
+                                  const int from_raw, const int with_colour) {
   const float dir_norm = direction_norm(directions, ray);
   const uint t_first_at = ray * (n_samples + 1);  // t_edges index of t_0
-  const float d_red = d_comp_rgb[3 * ray], d_green = d_comp_rgb[3 * ray + 1], d_blue = d_comp_rgb[3 * ray + 2];
-  float d_acc_total = has_d_acc ? d_acc[ray] : 0.0f;
+  float d_red = 0.0f, d_green = 0.0f, d_blue = 0.0f, d_acc_total = 0.0f;
+  if (with_colour) {
+    d_red = d_comp_rgb[3 * ray];
+    d_green = d_comp_rgb[3 * ray + 1];
+    d_blue = d_comp_rgb[3 * ray + 2];
+    d_acc_total = has_d_acc ? d_acc[ray] : 0.0f;
 #if BACKGROUND == BACKGROUND_WHITE
-  d_acc_total -= d_red + d_green + d_blue;
+    d_acc_total -= d_red + d_green + d_blue;
 #endif
+  }
   float optical_depth = 0.0f;
   const uint vector_end = SAMPLES_PER_VECTOR ? n_samples / VECTOR_WIDTH * VECTOR_WIDTH : 0;  // by vectors before it
 #if SAMPLES_PER_VECTOR
@@ -393,24 +412,31 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
     // Backwards: samples i, i − 1, .. to the start of i's group, drawn again on entering it.
     if (from_raw && (r == 0 || i % 4 == 3)) draws = density_noise_group_reversed(noise, i);
     const float w = weights[at];
-    const float red = render_channel(rgb, at, 0, from_raw), green = render_channel(rgb, at, 1, from_raw);
-    const float blue = render_channel(rgb, at, 2, from_raw);
-    const float g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
+    float g;  // ∂L/∂w_i
+    if (with_colour) {
+      const float red = render_channel(rgb, at, 0, from_raw), green = render_channel(rgb, at, 1, from_raw);
+      const float blue = render_channel(rgb, at, 2, from_raw);
+      g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
+    } else {
+      g = d_weights[at];
+    }
     const float delta = (t_edges[t_first_at + i + 1] - t_edges[t_first_at + i]) * dir_norm;
     const float d_s = g * (trans_last + weight_after) - grad_weight_after;
     float d_sigma = delta > 0.0f ? delta * d_s : 0.0f;
-    float d_red_i = d_red * w, d_green_i = d_green * w, d_blue_i = d_blue * w;  // ∂L/∂c_i
-    if (from_raw) {
-      d_sigma *= density_activation_grad(noisy_raw_density(density[at], draws.x));
-      d_red_i *= rgb_activation_grad(rgb[3 * at]);
-      d_green_i *= rgb_activation_grad(rgb[3 * at + 1]);
-      d_blue_i *= rgb_activation_grad(rgb[3 * at + 2]);
-    }
-    if (live) {
-      d_rgb[3 * at] = d_red_i;
-      d_rgb[3 * at + 1] = d_green_i;
-      d_rgb[3 * at + 2] = d_blue_i;
-      d_density[at] = d_sigma;
+    if (from_raw) d_sigma *= density_activation_grad(noisy_raw_density(density[at], draws.x));
+    if (live) d_density[at] = d_sigma;
+    if (with_colour) {
+      float d_red_i = d_red * w, d_green_i = d_green * w, d_blue_i = d_blue * w;  // ∂L/∂c_i
+      if (from_raw) {
+        d_red_i *= rgb_activation_grad(rgb[3 * at]);
+        d_green_i *= rgb_activation_grad(rgb[3 * at + 1]);
+        d_blue_i *= rgb_activation_grad(rgb[3 * at + 2]);
+      }
+      if (live) {
+        d_rgb[3 * at] = d_red_i;
+        d_rgb[3 * at + 1] = d_green_i;
+        d_rgb[3 * at + 2] = d_blue_i;
+      }
     }
     weight_after += w;
     grad_weight_after += g * w;
@@ -419,9 +445,9 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
   }
 #if SAMPLES_PER_VECTOR
   for (uint i = vector_end; i > 0; i -= VECTOR_WIDTH) {
-    render_vector_bwd(rgb, density, t_edges, weights, d_rgb, d_density, ray, i - VECTOR_WIDTH, n_samples, dir_norm,
-                      noise, from_raw, d_red, d_green, d_blue, d_acc_total, trans_last, &weight_after,
-                      &grad_weight_after);
+    render_vector_bwd(rgb, density, t_edges, weights, d_weights, d_rgb, d_density, ray, i - VECTOR_WIDTH, n_samples,
+                      dir_norm, noise, from_raw, with_colour, d_red, d_green, d_blue, d_acc_total, trans_last,
+                      &weight_after, &grad_weight_after);
   }
 #endif
 }
@@ -449,8 +475,8 @@ __kernel void render_bwd(__global const float* rgb, __global const float* densit
                          __global const float* d_comp_rgb, __global const float* d_acc, const uint has_d_acc,
                          __global float* d_rgb, __global float* d_density, const uint n_rays, const uint n_samples) {
   RAY_OF_WORK_ITEM(n_rays);
-  render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_rgb, d_density, ray,
-                 live, n_samples, ray_noise_key(0, 0, 0, 0), 0);
+  render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, 0, d_rgb, d_density, ray,
+                 live, n_samples, ray_noise_key(0, 0, 0, 0), 0, 1);
 }
 
 // Fused activations + rendering: the same as activations_fwd then render_fwd, reading the MLP's raw outputs
@@ -488,8 +514,28 @@ __kernel void render_raw_bwd(__global const float* raw_rgb, __global const float
                              __global float* d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
                              const uint step, const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
-  render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_raw_rgb,
-                 d_raw_density, ray, live, n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1);
+  render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, 0, d_raw_rgb,
+                 d_raw_density, ray, live, n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1, 1);
+}
+
+// The backward of render_raw_weights_fwd's weights: from d_weights [R][N] = ∂L/∂w (what a proposal level receives
+// from the interlevel loss: mip-NeRF 360's L_prop, Zip-NeRF's spline version) to d_raw_density [R][N] (overwritten),
+// through the fused density activation and, with DENSITY_NOISE, at the forward's noisy value (the key must be the
+// forward's). `weights` are render_raw_weights_fwd's (or render_raw_fwd's) for these inputs. Per ray, with s_i = σ_i·δ_i,
+// w_i = (1 − e^{−s_i})·T_i and T_i = exp(−Σ_{j<i} s_j):
+//   ∂w_i/∂s_k = T_{k+1} for i = k (T_k·e^{−s_k}), −w_i for i > k, 0 for i < k, so
+//   ∂L/∂σ_k = δ_k·(g_k·T_{k+1} − Σ_{i>k} g_i·w_i),   ∂L/∂raw_k = ∂L/∂σ_k·activation'(raw_k + noise + DENSITY_BIAS)
+// render_raw_bwd's sweep with g = d_weights (render_ray_bwd): O(N), T_{k+1} = T_N + Σ_{i>k} w_i with no exp(+s), so
+// σ → ∞ (α = 1, T underflowing to 0 behind it; σ·δ may overflow to +∞) gives exactly 0 at and behind the opaque
+// sample, all σ = 0 gives δ_k·g_k (T = 1, w = 0), and an empty interval (δ = 0) gives 0 whatever σ.
+__kernel void render_raw_weights_bwd(__global const float* raw_density, __global const float* t_edges,
+                                     __global const float* directions, __global const float* weights,
+                                     __global const float* d_weights, __global float* d_raw_density,
+                                     const uint n_rays, const uint n_samples, const ulong seed, const uint step,
+                                     const uint first_ray, const uint level) {
+  RAY_OF_WORK_ITEM(n_rays);
+  render_ray_bwd(0, raw_density, t_edges, directions, weights, 0, 0, 0, d_weights, 0, d_raw_density, ray, live,
+                 n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1, 0);
 }
 
 #endif

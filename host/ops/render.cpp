@@ -69,6 +69,7 @@ Render::Render(ocl::Context& ctx, const RenderOptions& options, const Activation
   raw_fwd_ = &program.kernel("render_raw_fwd");
   raw_bwd_ = &program.kernel("render_raw_bwd");
   raw_weights_fwd_ = &program.kernel("render_raw_weights_fwd");
+  raw_weights_bwd_ = &program.kernel("render_raw_weights_bwd");
 }
 
 void Render::launch_fwd(::cl::Kernel& kernel, const std::string& where, const RenderInputs& in,
@@ -144,6 +145,25 @@ void Render::raw_weights_fwd(const RenderDensityInputs& raw, const RenderWeights
                 static_cast<cl_uint>(noise.rng.step), static_cast<cl_uint>(noise.rng.first_ray),
                 static_cast<cl_uint>(noise.level));
   ocl::launch_1d(*ctx_, *raw_weights_fwd_, raw.n_rays, where);
+}
+
+void Render::raw_weights_bwd(const RenderDensityInputs& raw, const ocl::DeviceArray<float>& weights,
+                             const ocl::DeviceArray<float>& d_weights, ocl::DeviceArray<float>& d_raw_density,
+                             const DensityNoiseKey& noise) {
+  const std::string where = "render_raw_weights_bwd";
+  check_density_inputs(raw, where);
+  const size_t rows = raw.n_rays * raw.n_samples;
+  detail::require(weights, rows, where);
+  detail::require(d_weights, rows, where);
+  detail::require(d_raw_density, rows, where);
+  check_noise_key(noise, raw.n_samples, where);
+  const cl_uint n_rays = detail::to_uint(raw.n_rays, where, "rays"),
+                n_samples = detail::to_uint(raw.n_samples, where, "samples");
+  ocl::set_args(*raw_weights_bwd_, where, raw.density, raw.t_edges, raw.rays.directions, weights, d_weights,
+                d_raw_density, n_rays, n_samples, static_cast<cl_ulong>(noise.rng.seed),
+                static_cast<cl_uint>(noise.rng.step), static_cast<cl_uint>(noise.rng.first_ray),
+                static_cast<cl_uint>(noise.level));
+  ocl::launch_1d(*ctx_, *raw_weights_bwd_, raw.n_rays, where);
 }
 
 void Render::raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,

@@ -91,6 +91,13 @@ class Render {
   // forward's: the backward draws the same noise again.
   void raw_bwd(const RenderInputs& raw, const ocl::DeviceArray<float>& weights, const RenderGradients& grads,
                const RenderInputGradients& out, const DensityNoiseKey& noise = {});
+  // The backward of raw_weights_fwd's weights (render_raw_weights_bwd): d_raw_density [R][N] (overwritten) from
+  // d_weights [R][N] = ∂L/∂w, what a proposal level trains through (the interlevel loss's gradient arrives on its
+  // weights). `weights` [R][N] are raw_weights_fwd's (or raw_fwd's) for these inputs; `noise` must be the forward's.
+  // No colour and no background enters (the weights have none).
+  void raw_weights_bwd(const RenderDensityInputs& raw, const ocl::DeviceArray<float>& weights,
+                       const ocl::DeviceArray<float>& d_weights, ocl::DeviceArray<float>& d_raw_density,
+                       const DensityNoiseKey& noise = {});
 
  private:
   // `noise`: the fused kernels' key (their last four arguments); nullptr for render_fwd/bwd, which have none.
@@ -107,6 +114,7 @@ class Render {
   ::cl::Kernel* raw_fwd_;
   ::cl::Kernel* raw_bwd_;
   ::cl::Kernel* raw_weights_fwd_;
+  ::cl::Kernel* raw_weights_bwd_;
 };
 
 }  // namespace mipnerf::ops

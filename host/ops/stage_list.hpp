@@ -93,6 +93,10 @@ struct StageDescription {
 // (tests/ops/test_concat_pe.cpp checks it, with and without that option). render_raw_weights_fwd (rendering's coarse
 // level: render_raw_fwd's code without the colour) is left out as well: tests/ops/test_render.cpp holds it bit for bit
 // to render_raw_fwd on every background, with and without density noise, and renders time it in their "render" stage.
+// So is its backward render_raw_weights_bwd (a proposal level's ∂L/∂raw_density from the interlevel loss's ∂L/∂w;
+// issues 45, 46: not yet a stage of the model): render_raw_bwd's sweep fed by d_weights, which test_render.cpp checks
+// against the reference for every density activation and bias and every sample walk, with and without density noise,
+// and bit for bit against render_raw_bwd's density gradient.
 // gaussian_ipe_axis_fwd is Encode's fused kernel per (row, axis), in a program of its own with the degrees compiled
 // in: on CPUs with fp64 the "gaussian_ipe_fwd (fused)" row times it, as Encode::gaussian_ipe runs it there in place of
 // gaussian_ipe_fwd (test_encode.cpp checks it against the reference and its sin/cos against long double).

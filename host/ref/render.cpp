@@ -29,6 +29,42 @@ double thickness(double density, double t0, double t1, double dir_norm) {
   return delta > 0 ? density * delta : 0.0;
 }
 
+// One ray's ∂L/∂σ from the gradients g [N] = ∂L/∂w on its weights w [N] (the forward's), densities σ [N] and edges
+// t [N+1]: ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − Σ_{k>i} g_k·w_k), since ∂w_i/∂s_i = e^{−s_i}·T_i = T_{i+1} and
+// ∂w_k/∂s_i = −w_k for k > i (w_k = α_k·T_k, T_k = exp(−Σ_{j<k} s_j)); T_{i+1} = exp(−Σ_{j≤i} s_j) directly, the
+// suffix sum from the back; 0 on an empty interval (δ = 0: s_i does not depend on σ_i). Writes d_density [N].
+void density_grad_of_ray(const double* g, const double* weights, const double* density, const double* t,
+                         double dir_norm, size_t n_samples, double* d_density) {
+  std::vector<double> trans_next(n_samples), delta(n_samples);
+  double optical_depth = 0.0;
+  for (size_t i = 0; i < n_samples; ++i) {
+    delta[i] = (t[i + 1] - t[i]) * dir_norm;
+    optical_depth += thickness(density[i], t[i], t[i + 1], dir_norm);
+    trans_next[i] = std::exp(-optical_depth);  // T_{i+1}
+  }
+  double suffix = 0.0;  // Σ_{k>i} g_k·w_k
+  for (size_t r = 0; r < n_samples; ++r) {
+    const size_t i = n_samples - 1 - r;
+    d_density[i] = delta[i] > 0 ? delta[i] * (g[i] * trans_next[i] - suffix) : 0.0;
+    suffix += g[i] * weights[i];
+  }
+}
+
+// d_density [R][N] = ∂L/∂σ from d_weights [R][N] = ∂L/∂w on activated densities: render_raw_weights_bwd before the
+// activation (density_grad_of_ray per ray, with g = d_weights).
+void render_weights_bwd(const std::vector<double>& density, const std::vector<double>& t_edges,
+                        const std::vector<double>& directions, const std::vector<double>& weights,
+                        const std::vector<double>& d_weights, std::vector<double>& d_density, size_t n_rays,
+                        size_t n_samples) {
+  d_density.assign(n_rays * n_samples, 0.0);
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    const size_t first = ray * n_samples;
+    density_grad_of_ray(d_weights.data() + first, weights.data() + first, density.data() + first,
+                        t_edges.data() + ray * (n_samples + 1), norm3(directions.data() + 3 * ray), n_samples,
+                        d_density.data() + first);
+  }
+}
+
 }  // namespace
 
 std::vector<double> density_noise_draws(const DensityNoiseKey& noise, size_t n_rays, size_t n_samples) {
@@ -82,31 +118,22 @@ void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, co
                 size_t n_rays, size_t n_samples) {
   d_rgb.assign(3 * n_rays * n_samples, 0.0);
   d_density.assign(n_rays * n_samples, 0.0);
-  std::vector<double> g(n_samples), trans_next(n_samples), delta(n_samples);
+  std::vector<double> g(n_samples);
   for (size_t ray = 0; ray < n_rays; ++ray) {
-    const double* t = t_edges.data() + ray * (n_samples + 1);
     const double* d_comp = d_comp_rgb.data() + 3 * ray;
-    const double dir_norm = norm3(directions.data() + 3 * ray);
     double d_acc_total = d_acc ? (*d_acc)[ray] : 0.0;
     if (options.background == Background::white) d_acc_total -= d_comp[0] + d_comp[1] + d_comp[2];
-    double optical_depth = 0.0;
     for (size_t i = 0; i < n_samples; ++i) {
       const size_t at = ray * n_samples + i;
-      delta[i] = (t[i + 1] - t[i]) * dir_norm;
-      optical_depth += thickness(density[at], t[i], t[i + 1], dir_norm);
-      trans_next[i] = std::exp(-optical_depth);  // T_{i+1}
       g[i] = d_acc_total;
       for (int c = 0; c < 3; ++c) {
         g[i] += d_comp[c] * rgb[3 * at + c];
         d_rgb[3 * at + c] = d_comp[c] * weights[at];
       }
     }
-    double suffix = 0.0;  // Σ_{k>i} g_k·w_k
-    for (size_t r = 0; r < n_samples; ++r) {
-      const size_t i = n_samples - 1 - r, at = ray * n_samples + i;
-      d_density[at] = delta[i] > 0 ? delta[i] * (g[i] * trans_next[i] - suffix) : 0.0;
-      suffix += g[i] * weights[at];
-    }
+    density_grad_of_ray(g.data(), weights.data() + ray * n_samples, density.data() + ray * n_samples,
+                        t_edges.data() + ray * (n_samples + 1), norm3(directions.data() + 3 * ray), n_samples,
+                        d_density.data() + ray * n_samples);
   }
 }
 
@@ -145,6 +172,20 @@ void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activ
   render_bwd(options, rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, d_rgb, d_density, n_rays,
              n_samples);
   activations_bwd(activation, noisy, raw_rgb, d_density, d_rgb, d_raw_density, d_raw_rgb, rows);
+}
+
+void render_raw_weights_bwd(const RenderOptions& options, const ActivationOptions& activation,
+                            const std::vector<double>& raw_density, const std::vector<double>& t_edges,
+                            const std::vector<double>& directions, const std::vector<double>& weights,
+                            const std::vector<double>& d_weights, std::vector<double>& d_raw_density, size_t n_rays,
+                            size_t n_samples, const DensityNoiseKey& noise) {
+  const size_t rows = n_rays * n_samples;
+  const auto noisy = noisy_raw_density(options, raw_density, n_rays, n_samples, noise);
+  const std::vector<double> no_colour(3 * rows, 0.0);  // activations_* take colours too; none enters the weights
+  std::vector<double> density, unused_rgb, d_density, unused_d_raw_rgb;
+  activations_fwd(activation, noisy, no_colour, density, unused_rgb, rows);
+  render_weights_bwd(density, t_edges, directions, weights, d_weights, d_density, n_rays, n_samples);
+  activations_bwd(activation, noisy, no_colour, d_density, no_colour, d_raw_density, unused_d_raw_rgb, rows);
 }
 
 }  // namespace mipnerf::ref

@@ -47,6 +47,15 @@ void render_raw_weights_fwd(const RenderOptions& options, const ActivationOption
                             const std::vector<double>& directions, std::vector<double>& acc,
                             std::vector<double>& distance, std::vector<double>& weights, size_t n_rays,
                             size_t n_samples, const DensityNoiseKey& noise = {});
+// Mirror of render_raw_weights_bwd: d_raw_density [R][N] from d_weights [R][N] = ∂L/∂w, as render_bwd's
+// ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − Σ_{k>i} g_k·w_k) with g = d_weights, then through the density activation, at the
+// noisy raw value when options.density_noise > 0 (keyed by `noise`, the forward's). `weights` are
+// render_raw_weights_fwd's; the background does not enter.
+void render_raw_weights_bwd(const RenderOptions& options, const ActivationOptions& activation,
+                            const std::vector<double>& raw_density, const std::vector<double>& t_edges,
+                            const std::vector<double>& directions, const std::vector<double>& weights,
+                            const std::vector<double>& d_weights, std::vector<double>& d_raw_density, size_t n_rays,
+                            size_t n_samples, const DensityNoiseKey& noise = {});
 void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activation,
                     const std::vector<double>& raw_rgb, const std::vector<double>& raw_density,
                     const std::vector<double>& t_edges, const std::vector<double>& directions,

@@ -1,7 +1,8 @@
 // Volume rendering (kernels/render.cl): forward and backward against the double reference with derived float32
 // bounds, the backward against central finite differences, the hard cases (σ = 0, σ = 1e10, δ = 0, acc = 0, σ·δ
 // overflowing to +∞, t around 1e4), every background, the fused activation + render kernels against the
-// composition, and the fused kernels' density noise (its draws, its keys, its backward).
+// composition, the fused kernels' density noise (its draws, its keys, its backward), and the weights' backward
+// (render_raw_weights_bwd: ∂L/∂raw_density from ∂L/∂w) against the reference, finite differences and render_raw_bwd.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include "kernel_checks.hpp"
 #include "ops/activations.hpp"
 #include "ops/render.hpp"
+#include "ref/activations.hpp"
 #include "ref/render.hpp"
 #include "support/test_context.hpp"
 
@@ -895,4 +897,445 @@ TEST_CASE("render: density noise - the reference backward is the derivative of i
   MIPNERF_CHECK_CLOSE("device d_raw_rgb with noise vs finite differences", dev.d_rgb, fd_rgb, scaled(fd_rgb));
   MIPNERF_CHECK_CLOSE("device weights with noise vs the reference", dev.weights, weights, scaled(weights));
   MIPNERF_CHECK_CLOSE("device comp_rgb with noise vs the reference", dev.comp_rgb, comp, scaled(comp));
+}
+
+// ---- The weights' backward (render_raw_weights_bwd): ∂L/∂raw_density from ∂L/∂w, what a proposal level trains by ----
+
+namespace {
+
+// The three density activations the render program can be built with, as the stage list's (mip-NeRF softplus with
+// bias −1, NeRF relu with bias 0) and the two with the other bias, so the bias is not only ever the default's.
+std::vector<std::pair<const char*, ActivationOptions>> weights_bwd_activations() {
+  ActivationOptions softplus_no_bias;
+  softplus_no_bias.density_bias = 0.0f;
+  ActivationOptions relu;
+  relu.density = DensityActivation::relu;
+  relu.density_bias = 0.0f;
+  ActivationOptions relu_biased = relu;
+  relu_biased.density_bias = -1.0f;
+  return {{"softplus, bias -1", ActivationOptions{}},
+          {"softplus, bias 0", softplus_no_bias},
+          {"relu, bias 0", relu},
+          {"relu, bias -1", relu_biased}};
+}
+
+// Random ∂L/∂w in [−1, 1] (the interlevel loss's gradient has either sign), [R][N].
+std::vector<float> random_d_weights(size_t count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> signed_unit(-1.0f, 1.0f);
+  std::vector<float> d(count);
+  for (auto& x : d) x = signed_unit(rng);
+  return d;
+}
+
+struct WeightsRun {
+  std::vector<float> weights, d_raw_density;
+};
+
+// render_raw_weights_fwd then render_raw_weights_bwd on the raw densities of `raw` with d_weights [R][N]; the
+// backward reads `given_weights` instead of the forward's when not null.
+WeightsRun run_weights_device(const RenderOptions& options, const ActivationOptions& activation, const Batch& raw,
+                              const std::vector<float>& d_weights, const DensityNoiseKey& noise = {},
+                              ops::RenderSampleLoop loop = ops::RenderSampleLoop::device_default,
+                              const std::vector<float>* given_weights = nullptr) {
+  auto& ctx = test::test_context();
+  const size_t rows = raw.n_rays * raw.n_samples;
+  auto raw_density = test::upload(ctx, raw.density, "raw_density"), t_edges = test::upload(ctx, raw.t_edges, "t");
+  auto d_w = test::upload(ctx, d_weights, "d_weights");
+  ops::RayBundle rays(ctx, raw.n_rays);  // only the directions are read
+  rays.directions.upload(ctx, raw.directions);
+  ocl::DeviceArray<float> acc(ctx, raw.n_rays, "acc"), distance(ctx, raw.n_rays, "distance");
+  ocl::DeviceArray<float> weights(ctx, rows, "weights"), d_raw_density(ctx, rows, "d_raw_density");
+  ops::Render render(ctx, options, activation, loop);
+  const ops::RenderDensityInputs in{raw_density, t_edges, rays, raw.n_rays, raw.n_samples};
+  render.raw_weights_fwd(in, {acc, distance, weights}, noise);
+  if (given_weights) {
+    auto given = test::upload(ctx, *given_weights, "given weights");
+    render.raw_weights_bwd(in, given, d_w, d_raw_density, noise);
+  } else {
+    render.raw_weights_bwd(in, weights, d_w, d_raw_density, noise);
+  }
+  return {weights.download(ctx), d_raw_density.download(ctx)};
+}
+
+// The reference's weights and d_raw_density for the same inputs (its own double weights).
+struct WeightsRef {
+  std::vector<double> weights, d_raw_density;
+};
+
+WeightsRef run_weights_ref(const RenderOptions& options, const ActivationOptions& activation, const Batch& raw,
+                           const std::vector<float>& d_weights, const DensityNoiseKey& noise = {}) {
+  WeightsRef r;
+  std::vector<double> acc, distance;
+  const auto density = test::to_double(raw.density), t = test::to_double(raw.t_edges);
+  const auto dirs = test::to_double(raw.directions);
+  ref::render_raw_weights_fwd(options, activation, density, t, dirs, acc, distance, r.weights, raw.n_rays,
+                              raw.n_samples, noise);
+  ref::render_raw_weights_bwd(options, activation, density, t, dirs, r.weights, test::to_double(d_weights),
+                              r.d_raw_density, raw.n_rays, raw.n_samples, noise);
+  return r;
+}
+
+// Float32 bounds of the device's weights and d_raw_density against the reference (no density noise), per element:
+// float_bounds' derivation with the density activation in front and g = d_weights exact (floats, read as they are).
+//  - x = raw + bias is rounded once (|Δx| ≤ u·|x|); the activation adds ≤ 16u of σ (test_activations.cpp's bound):
+//    |Δσ| ≤ 16u·σ + u·|x|·act'(x), act' = sigmoid (softplus) or 0/1 (relu, whose σ = 0 side is exact).
+//  - s = σ·δ: relative error rel_s = 16u (δ and the product, as float_bounds) + |Δσ|/σ.
+//  - S_i = Σ_{j<i} s_j in order: absolute error Σ_{j<i} (rel_s_j + N·u)·s_j; w_i = α_i·T_i relative
+//    e_w,i = 30u + rel_s_i + that (α's condition number s·e^−s/α ≤ 1, exp and expm1 within 3 ulp, a product).
+//  - the reverse sweep as float_bounds' with g exact: T_{i+1} = T_N + A_i, A_i = Σ_{k>i} w_k, B_i = Σ_{k>i} g_k·w_k,
+//    ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − B_i) with 16u of δ and the product.
+//  - ∂L/∂raw_i = ∂L/∂σ_i·act'(x_i): act' within 16u of itself plus its slope under |Δx|, u·|x|·sigmoid'(x) (relu's is
+//    exact), and one rounding.
+// Every tolerance is twice the bound, plus a few float denormal ulps.
+struct WeightsBounds {
+  std::vector<double> weights, d_raw_density;
+};
+
+WeightsBounds weights_bwd_bounds(const ActivationOptions& activation, const Batch& raw,
+                                 const std::vector<float>& d_weights, const WeightsRef& r) {
+  const size_t n = raw.n_samples;
+  const double u = kUnitRoundoff, tiny = 1e-43;
+  const bool relu = activation.density == DensityActivation::relu;
+  WeightsBounds out;
+  out.weights.resize(raw.n_rays * n);
+  out.d_raw_density.resize(raw.n_rays * n);
+  std::vector<double> x(n), sigma(n), delta(n), s(n), rel_s(n), e_w(n);
+  for (size_t ray = 0; ray < raw.n_rays; ++ray) {
+    const float* dir = raw.directions.data() + 3 * ray;
+    const double dir_norm = std::sqrt(double(dir[0]) * dir[0] + double(dir[1]) * dir[1] + double(dir[2]) * dir[2]);
+    const float* t = raw.t_edges.data() + ray * (n + 1);
+    double depth = 0.0, depth_err = 0.0;  // S_i and its bound
+    for (size_t i = 0; i < n; ++i) {
+      const size_t at = ray * n + i;
+      x[i] = double(raw.density[at]) + activation.density_bias;
+      sigma[i] = ref::density_activation(activation, raw.density[at]);
+      const double slope = ref::density_activation_grad(activation, raw.density[at]);
+      const double sigma_err = 16 * u * sigma[i] + u * std::abs(x[i]) * slope;
+      delta[i] = (double(t[i + 1]) - t[i]) * dir_norm;
+      s[i] = delta[i] > 0 ? sigma[i] * delta[i] : 0.0;
+      rel_s[i] = 16 * u + (sigma[i] > 0 ? sigma_err / sigma[i] : 0.0);
+      e_w[i] = 30 * u + rel_s[i] + depth_err;
+      out.weights[at] = 2 * e_w[i] * r.weights[at] + tiny;
+      depth += s[i];
+      depth_err += (rel_s[i] + n * u) * s[i];
+    }
+    const double trans_last = std::exp(-depth);
+    const double trans_last_err = (depth_err + 6 * u) * trans_last;
+    double a = 0.0, a_err = 0.0, bsum = 0.0, b_err = 0.0;
+    for (size_t rr = 0; rr < n; ++rr) {
+      const size_t i = n - 1 - rr, at = ray * n + i;
+      const double g = d_weights[at];
+      const double trans_next = trans_last + a;
+      const double trans_next_err = trans_last_err + a_err + n * u * a + u * trans_next;
+      const double d_s = g * trans_next - bsum;
+      const double d_s_err = std::abs(g) * trans_next_err + b_err + n * u * std::abs(bsum) +
+                             u * (std::abs(g) * trans_next + std::abs(bsum));
+      const double d_sigma = delta[i] > 0 ? delta[i] * d_s : 0.0;
+      const double d_sigma_err = delta[i] > 0 ? delta[i] * d_s_err + 16 * u * std::abs(d_sigma) : 0.0;
+      const double act_grad = ref::density_activation_grad(activation, raw.density[at]);
+      const double act_grad_err = relu ? 0.0 : 16 * u * act_grad + u * std::abs(x[i]) * act_grad * (1 - act_grad);
+      out.d_raw_density[at] =
+          2 * (d_sigma_err * act_grad + std::abs(d_sigma) * act_grad_err + u * std::abs(d_sigma) * act_grad) + tiny;
+      const double w = r.weights[at];
+      a += w;
+      a_err += e_w[i] * w;
+      bsum += g * w;
+      b_err += std::abs(g) * e_w[i] * w;
+    }
+  }
+  return out;
+}
+
+// The device (each way of walking the samples) against the reference within weights_bwd_bounds; the backward also run
+// on one set of weights (the per-ray forward's) for every walk, which must then agree bit for bit (render.cl: the
+// backward keeps the per-ray loop's order in every walk).
+void check_weights_bwd_against_reference(const RenderOptions& options, const ActivationOptions& activation,
+                                         const Batch& raw, const std::vector<float>& d_weights) {
+  const auto r = run_weights_ref(options, activation, raw, d_weights);
+  const auto bounds = weights_bwd_bounds(activation, raw, d_weights, r);
+  const auto per_ray = run_weights_device(options, activation, raw, d_weights, {}, ops::RenderSampleLoop::per_ray);
+  for (const auto loop : kSampleLoops) {
+    INFO(loop_name(loop));
+    const auto dev = run_weights_device(options, activation, raw, d_weights, {}, loop);
+    MIPNERF_CHECK_CLOSE("weights", dev.weights, r.weights, from(bounds.weights));
+    MIPNERF_CHECK_CLOSE("d_raw_density", dev.d_raw_density, r.d_raw_density, from(bounds.d_raw_density));
+    CHECK(test::all_finite(dev.d_raw_density));
+    const auto on_same_weights = run_weights_device(options, activation, raw, d_weights, {}, loop, &per_ray.weights);
+    CHECK(on_same_weights.d_raw_density == per_ray.d_raw_density);
+  }
+}
+
+// L = Σ_i g_i·w_i(raw) over every ray through the reference forward, and its central differences in each raw density
+// (draws held fixed by the key). Step h = 1e-6·max(|x|, 1): truncation h²/6·|L'''| and rounding 1e-16/h, both below
+// 1e-9 for raw values of size ≤ ~20 (the activations' derivatives are bounded, the weights as in the plain test).
+// Relu's kink at x = 0 is not differentiable: samples with |raw + bias| < 10h get NaN (skipped by the caller).
+std::vector<double> weights_loss_differences(const RenderOptions& options, const ActivationOptions& activation,
+                                             const Batch& raw, const std::vector<float>& d_weights,
+                                             const DensityNoiseKey& noise) {
+  const size_t n = raw.n_samples;
+  std::vector<double> fd(raw.n_rays * n);
+  for (size_t ray = 0; ray < raw.n_rays; ++ray) {
+    std::vector<double> density(raw.density.begin() + ray * n, raw.density.begin() + (ray + 1) * n);
+    const std::vector<double> t(raw.t_edges.begin() + ray * (n + 1), raw.t_edges.begin() + (ray + 1) * (n + 1));
+    const std::vector<double> dir(raw.directions.begin() + 3 * ray, raw.directions.begin() + 3 * ray + 3);
+    DensityNoiseKey ray_key = noise;
+    ray_key.rng.first_ray = noise.rng.first_ray + static_cast<uint32_t>(ray);  // this ray's draws, as in the batch
+    const auto loss = [&] {
+      std::vector<double> acc, distance, w;
+      ref::render_raw_weights_fwd(options, activation, density, t, dir, acc, distance, w, 1, n, ray_key);
+      double sum = 0.0;
+      for (size_t i = 0; i < n; ++i) sum += double(d_weights[ray * n + i]) * w[i];
+      return sum;
+    };
+    for (size_t i = 0; i < n; ++i) {
+      const double x0 = density[i], h = 1e-6 * std::max(std::abs(x0), 1.0);
+      const bool at_kink =
+          activation.density == DensityActivation::relu && std::abs(x0 + activation.density_bias) < 10 * h;
+      density[i] = x0 + h;
+      const double up = loss();
+      density[i] = x0 - h;
+      const double down = loss();
+      density[i] = x0;
+      fd[ray * n + i] = at_kink ? std::nan("") : (up - down) / (2 * h);
+    }
+  }
+  return fd;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "render: weights backward - the kernel matches the CPU reference within float32 bounds, every activation "
+    "and bias, every sample walk") {
+  // 40 samples: two vectors of 16 and 8 by the scalar loop in the per-vector walk. N(0, 4²) raw densities (opaque and
+  // clear samples, both sides of relu's kink), 5 % empty intervals (random_batch). No background enters the weights:
+  // every background's program must give the same gradients.
+  const Batch raw = raw_batch(test::batch_for_device(2000), 40, 811);
+  const auto d_weights = random_d_weights(raw.n_rays * raw.n_samples, 812);
+  for (const auto& variant : weights_bwd_activations()) {
+    const ActivationOptions& activation = variant.second;
+    INFO(variant.first);
+    check_weights_bwd_against_reference({Background::white}, activation, raw, d_weights);
+    const auto white = run_weights_device({Background::white}, activation, raw, d_weights);
+    for (const auto background : {Background::none, Background::black}) {
+      CHECK(run_weights_device({background}, activation, raw, d_weights).d_raw_density == white.d_raw_density);
+    }
+  }
+}
+
+TEST_CASE("render: weights backward - the reference and the kernel match central finite differences of the forward") {
+  const Batch raw = raw_batch(200, 16, 821);
+  const auto d_weights = random_d_weights(raw.n_rays * raw.n_samples, 822);
+  for (const auto& variant : weights_bwd_activations()) {
+    const ActivationOptions& activation = variant.second;
+    INFO(variant.first);
+    const RenderOptions options{Background::black};
+    const auto fd = weights_loss_differences(options, activation, raw, d_weights, {});
+    const auto r = run_weights_ref(options, activation, raw, d_weights);
+    const auto bounds = weights_bwd_bounds(activation, raw, d_weights, r);
+    const auto dev = run_weights_device(options, activation, raw, d_weights);
+    // The reference within 1e-8 + 1e-7 relative (the differences' error is below 1e-9, see weights_loss_differences);
+    // the device within its float32 bound plus that. Samples at relu's kink (NaN differences) are skipped; there
+    // are few (|raw| < 1e-5 of N(0, 4²)), and the count checks the skip does not hide the test.
+    size_t compared = 0, outside_ref = 0, outside_dev = 0;
+    for (size_t k = 0; k < fd.size(); ++k) {
+      if (std::isnan(fd[k])) continue;
+      ++compared;
+      const double tol = 1e-8 + 1e-7 * std::abs(fd[k]);
+      if (!(std::abs(r.d_raw_density[k] - fd[k]) <= tol)) ++outside_ref;
+      if (!(std::abs(dev.d_raw_density[k] - fd[k]) <= tol + bounds.d_raw_density[k])) ++outside_dev;
+    }
+    CHECK(compared >= fd.size() - 2);
+    CHECK(outside_ref == 0);
+    CHECK(outside_dev == 0);
+    // The gradients are not trivially small: most samples have one of size > 1e-3 (else the comparison says little).
+    CHECK(std::count_if(fd.begin(), fd.end(), [](double v) { return std::abs(v) > 1e-3; }) > fd.size() / 4);
+  }
+}
+
+TEST_CASE(
+    "render: weights backward - hard cases: opaque samples, overflowing sigma delta, sigma near 0, empty "
+    "intervals, far and wide intervals") {
+  const size_t n = 20, kinds = 8;
+  const size_t n_rays = kinds * 8;
+  Batch raw = raw_batch(n_rays, n, 831);
+  const auto d_weights = random_d_weights(n_rays * n, 832);
+  constexpr float kHuge = std::numeric_limits<float>::max();
+  // By kind (ray % 8), in raw values (softplus with bias −1, or the relu of the same raw values):
+  //  0: raw = 1e10 everywhere: the first non-empty interval takes all the weight (one-hot).
+  //  1: clear space (raw −30: σ ≈ 1e-13 under softplus, 0 under relu), then raw 1e10 at sample 7.
+  //  2: raw = FLT_MAX at sample 7 (σ·δ overflows to +∞ for δ > 1: edges 2.5 apart), 0.5 elsewhere.
+  //  3: raw −30 everywhere: σ → 0, T ≈ 1.
+  //  4: every interval empty (t constant), raw N(0, 4²): no weight, zero gradients whatever σ.
+  //  5: every interval empty with raw = FLT_MAX: σ·0 must not become NaN.
+  //  6: far: t from 1e4 with gaps of 1e4 (δ = 1e4·|d|), raw −12 (σ ≈ 2.3e-6 under softplus): s ≈ 0.01..0.05 a
+  //     sample, the ray's weights spread along it.
+  //  7: far and wide with N(0, 4²) raw: s in the thousands, opaque at once.
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    float* density = raw.density.data() + ray * n;
+    float* t = raw.t_edges.data() + ray * (n + 1);
+    const size_t kind = ray % kinds;
+    for (size_t i = 0; i < n; ++i) {
+      if (kind == 0) density[i] = 1e10f;
+      if (kind == 1) density[i] = i == 7 ? 1e10f : -30.0f;
+      if (kind == 2) density[i] = i == 7 ? kHuge : 0.5f;
+      if (kind == 3) density[i] = -30.0f;
+      if (kind == 5) density[i] = kHuge;
+      if (kind == 6) density[i] = -12.0f;
+    }
+    for (size_t k = 0; k <= n; ++k) {
+      if (kind == 1 || kind == 2) t[k] = 2.0f + 2.5f * k;  // no empty interval; δ = 2.5·|d| ≥ 1.25
+      if (kind == 4 || kind == 5) t[k] = 4.0f;
+      if (kind == 6 || kind == 7) t[k] = 1e4f * (1 + k);
+    }
+  }
+  const auto at = [&](size_t ray, size_t i) { return ray * n + i; };
+  for (const auto& variant : weights_bwd_activations()) {
+    const ActivationOptions& activation = variant.second;
+    INFO(variant.first);
+    const bool relu = activation.density == DensityActivation::relu;
+    const RenderOptions options{Background::black};
+    check_weights_bwd_against_reference(options, activation, raw, d_weights);
+    for (const auto loop : kSampleLoops) {
+      INFO(loop_name(loop));
+      const auto dev = run_weights_device(options, activation, raw, d_weights, {}, loop);
+      CHECK(test::all_finite(dev.weights));
+      CHECK(test::all_finite(dev.d_raw_density));
+      for (size_t ray = 0; ray < n_rays; ++ray) {
+        const size_t kind = ray % kinds;
+        const float* t = raw.t_edges.data() + ray * (n + 1);
+        // The opaque sample: all the weight that reaches it; at it and behind it nothing moves any weight
+        // (∂w_k/∂σ_k = δ·e^{−s}·T_k = 0 and T = 0 behind), so the gradients are exactly 0.
+        if (kind == 0 || kind == 1 || kind == 2) {
+          size_t hit = kind == 0 ? 0 : 7;
+          while (kind == 0 && t[hit + 1] == t[hit]) ++hit;
+          if (kind == 0) CHECK(dev.weights[at(ray, hit)] == 1.0f);
+          if (kind == 1 && relu) CHECK(dev.weights[at(ray, hit)] == 1.0f);  // relu's clear space has σ = 0
+          for (size_t i = hit; i < n; ++i) CHECK(dev.d_raw_density[at(ray, i)] == 0.0f);
+          for (size_t i = hit + 1; i < n; ++i) CHECK(dev.weights[at(ray, i)] == 0.0f);
+        }
+        // Empty intervals: no weight and no gradient, whatever σ (even raw FLT_MAX).
+        if (kind == 4 || kind == 5) {
+          for (size_t i = 0; i < n; ++i) {
+            CHECK(dev.weights[at(ray, i)] == 0.0f);
+            CHECK(dev.d_raw_density[at(ray, i)] == 0.0f);
+          }
+        }
+      }
+    }
+  }
+  // σ → 0 (kind 3, softplus: σ = softplus(−31) ≈ 3.4e-14): T ≈ 1 and w ≈ 0, so ∂L/∂raw_k → δ_k·g_k·sigmoid(x_k).
+  // The terms dropped, g_k·(T_{k+1} − 1) and −Σ_{i>k} g_i·w_i, are at most |g|·S_N and Σ w_i ≤ S_N (|g| ≤ 1, S_N the
+  // ray's optical depth, ~1e-12): the reference must match the closed form within δ_k·sigmoid(x_k)·2·S_N, plus
+  // 1e-14 relative for its double rounding (the device is held to the reference above).
+  const ActivationOptions softplus;
+  const auto r = run_weights_ref({Background::black}, softplus, raw, d_weights);
+  const double sigma = ref::density_activation(softplus, -30.0), slope = ref::density_activation_grad(softplus, -30.0);
+  for (size_t ray = 3; ray < n_rays; ray += kinds) {
+    const float* dir = raw.directions.data() + 3 * ray;
+    const double dir_norm = std::sqrt(double(dir[0]) * dir[0] + double(dir[1]) * dir[1] + double(dir[2]) * dir[2]);
+    const auto delta = [&](size_t i) {
+      return (double(raw.t_edges[ray * (n + 1) + i + 1]) - raw.t_edges[ray * (n + 1) + i]) * dir_norm;
+    };
+    double depth = 0.0;  // S_N
+    for (size_t i = 0; i < n; ++i) depth += sigma * delta(i);
+    REQUIRE(depth < 1e-11);
+    for (size_t i = 0; i < n; ++i) {
+      const double expected = delta(i) * d_weights[at(ray, i)] * slope;
+      CHECK(std::abs(r.d_raw_density[at(ray, i)] - expected) <=
+            delta(i) * slope * 2 * depth + 1e-14 * std::abs(expected));
+    }
+  }
+}
+
+TEST_CASE("render: weights backward - with d_weights = d_acc it is render_raw_bwd's density gradient, bit for bit") {
+  // ∂acc/∂w_i = 1: render_raw_bwd with d_comp_rgb = 0 and d_acc = a (black background) has g_i = 0·c + a = a exactly,
+  // so its d_raw_density must equal render_raw_weights_bwd's with d_weights = a on every sample of the ray: the same
+  // sweep (render_ray_bwd) fed from either side. An independent check that the weights-only path reads g where the
+  // composite's path computes it, in every walk.
+  const Batch raw = raw_batch(test::batch_for_device(1000), 40, 841);
+  Batch acc_only = raw;
+  std::fill(acc_only.d_comp_rgb.begin(), acc_only.d_comp_rgb.end(), 0.0f);
+  std::vector<float> d_weights(raw.n_rays * raw.n_samples);
+  for (size_t k = 0; k < d_weights.size(); ++k) d_weights[k] = raw.d_acc[k / raw.n_samples];
+  for (const auto loop : kSampleLoops) {
+    INFO(loop_name(loop));
+    const RenderOptions options{Background::black};
+    const auto full = run_device(options, acc_only, true, true, {}, {}, loop);
+    const auto weights_only = run_weights_device(options, {}, raw, d_weights, {}, loop, &full.weights);
+    CHECK(weights_only.d_raw_density == full.d_density);
+  }
+}
+
+TEST_CASE("render: weights backward - density noise: the forward's draws again, keyed by ray, step and level") {
+  // As the fused kernels' noise test: with DENSITY_NOISE = σ a power of two, the noisy kernels equal the noiseless
+  // ones on raw + σ·z (the device's draws), bit for bit, forward and backward; a chunk of rays keyed by its first ray
+  // gives the whole launch's values; another key gives other gradients.
+  auto& ctx = test::test_context();
+  const Batch raw = raw_batch(test::batch_for_device(1500), 23, 851);  // 23: a last group of three draws
+  const auto d_weights = random_d_weights(raw.n_rays * raw.n_samples, 852);
+  for (const float sigma : {1.0f, 0.5f}) {
+    INFO("sigma " << sigma);
+    const DensityNoiseKey key{{20200823, 11, 0}, 1};
+    const auto noisy = run_weights_device({Background::black, sigma}, {}, raw, d_weights, key);
+    const auto z = device_noise_draws(ctx, key, raw.n_rays, raw.n_samples);
+    Batch shifted = raw;
+    for (size_t k = 0; k < shifted.density.size(); ++k) shifted.density[k] = raw.density[k] + sigma * z[k];
+    const auto plain = run_weights_device({Background::black}, {}, shifted, d_weights);
+    CHECK(noisy.weights == plain.weights);
+    CHECK(noisy.d_raw_density == plain.d_raw_density);
+    const auto other_level =
+        run_weights_device({Background::black, sigma}, {}, raw, d_weights, {{20200823, 11, 0}, 0}, {}, &noisy.weights);
+    CHECK(other_level.d_raw_density != noisy.d_raw_density);
+  }
+  const RenderOptions noisy_options{Background::black, 1.0f};
+  const auto whole = run_weights_device(noisy_options, {}, raw, d_weights, {{7, 3, 0}, 0});
+  const uint32_t first = static_cast<uint32_t>(raw.n_rays / 2);
+  const size_t n = raw.n_samples;
+  const auto chunk =
+      run_weights_device(noisy_options, {}, tail_of(raw, first), tail_of(d_weights, first * n), {{7, 3, first}, 0});
+  CHECK(chunk.weights == tail_of(whole.weights, first * n));
+  CHECK(chunk.d_raw_density == tail_of(whole.d_raw_density, first * n));
+}
+
+TEST_CASE("render: weights backward - with density noise the reference is the derivative of its noisy forward") {
+  // The reference's finite differences with the noise's draws held fixed by the key (step and tolerance as
+  // weights_loss_differences says); the device with the same key within 1e-4 of the largest gradient, as the fused
+  // kernels' noise test (its draws within 36u·|z| of the reference's, then float32 rendering). Without the noise the
+  // derivative is another one for most samples, so a backward that missed it fails.
+  const Batch raw = raw_batch(100, 16, 861);
+  const auto d_weights = random_d_weights(raw.n_rays * raw.n_samples, 862);
+  const RenderOptions options{Background::black, 1.0f};
+  const DensityNoiseKey key{{99, 5, 0}, 1};
+  const auto fd = weights_loss_differences(options, {}, raw, d_weights, key);
+  const auto r = run_weights_ref(options, {}, raw, d_weights, key);
+  const auto fd_tol = std::function<double(size_t)>([&fd](size_t i) { return 1e-8 + 1e-7 * std::abs(fd[i]); });
+  CHECK(count_outside(r.d_raw_density, fd, fd_tol) == 0);
+  const auto plain = run_weights_ref({Background::black}, {}, raw, d_weights);
+  CHECK(count_outside(plain.d_raw_density, fd, fd_tol) > fd.size() / 4);
+  const auto dev = run_weights_device(options, {}, raw, d_weights, key);
+  double scale = 1e-30;
+  for (double v : fd) scale = std::max(scale, std::abs(v));
+  MIPNERF_CHECK_CLOSE("device d_raw_density with noise vs finite differences", dev.d_raw_density, fd,
+                      [scale](size_t) { return 1e-4 * scale; });
+}
+
+TEST_CASE("render: weights backward - sizes that do not fit are refused before the launch, naming the kernel") {
+  auto& ctx = test::test_context();
+  const size_t n_rays = 4, n = 8, rows = n_rays * n;
+  auto raw_density = test::filled(ctx, rows, 0.0f, "raw_density");
+  auto t_edges = test::filled(ctx, n_rays * (n + 1), 1.0f, "t_edges");
+  const auto rays = test::filled_rays(ctx, n_rays, 1.0f);
+  auto weights = test::filled(ctx, rows, 0.0f, "weights"), d_weights = test::filled(ctx, rows, 0.0f, "d_weights");
+  auto d_raw = test::filled(ctx, rows, 0.0f, "d_raw_density"), small = test::filled(ctx, rows - 1, 0.0f, "small");
+  ops::Render render(ctx, RenderOptions{});
+  const ops::RenderDensityInputs in{raw_density, t_edges, rays, n_rays, n};
+  CHECK_THROWS_WITH(render.raw_weights_bwd(in, small, d_weights, d_raw), doctest::Contains("render_raw_weights_bwd"));
+  CHECK_THROWS_WITH(render.raw_weights_bwd(in, weights, small, d_raw), doctest::Contains("render_raw_weights_bwd"));
+  CHECK_THROWS_WITH(render.raw_weights_bwd(in, weights, d_weights, small), doctest::Contains("render_raw_weights_bwd"));
+  CHECK_THROWS_WITH(render.raw_weights_bwd(in, weights, d_weights, d_raw, {{1, 2, 3}, 256}),
+                    doctest::Contains("256 levels"));
+  render.raw_weights_bwd(in, weights, d_weights, d_raw);  // the right sizes launch
+  CHECK(test::all_finite(d_raw.download(ctx)));
 }
