@@ -11,7 +11,7 @@ namespace mipnerf {
 // RNG streams: one per purpose, so no two uses share numbers (same values as RNG_STREAM_* in common.cl).
 enum RngStream : uint32_t { rng_stream_stratified = 0, rng_stream_resample = 1, rng_stream_batch = 2,
                             rng_stream_subpixel = 3, rng_stream_density_noise = 4,
-                            rng_stream_multisample = 5 };
+                            rng_stream_multisample = 5, rng_stream_proposal = 6 };
 
 inline std::array<uint32_t, 4> philox4x32_10(std::array<uint32_t, 4> counter, std::array<uint32_t, 2> key) {
   for (int round = 0; round < 10; ++round) {

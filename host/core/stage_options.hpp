@@ -72,6 +72,17 @@ struct ResampleOptions {
   bool randomized = true;  // stratified u (training) or linspace u (evaluation)
 };
 
+// Proposal sampling's sampler (kernels/sample_intervals.cl; official stepfun.sample_intervals with models.py's
+// resampling logits), in the normalised s-space.
+struct SampleIntervalsOptions {
+  float anneal = 1.0f;            // exponent on the weights: proposal_anneal(train_frac, anneal_slope) (official bias)
+  float resample_padding = 0.0f;  // added to every weight before the log (official Model.resample_padding, default 0)
+  float domain_near = 0.0f;       // the edges are clipped to [domain_near, domain_far] (official init_s_near,
+  float domain_far = 1.0f;        //   init_s_far: 0 and 1 without near annealing)
+  bool randomized = true;         // jittered u (training) or the deterministic centred linspace (rendering)
+  bool single_jitter = true;      // one jitter per ray instead of one per sample (official default True)
+};
+
 struct GaussianOptions {
   RayShape ray_shape = RayShape::cone;  // RAY_SHAPE
 };

@@ -1,0 +1,16 @@
+// The anneal exponent of proposal sampling: Schlick's bias function of the training fraction (a per-step scalar).
+#pragma once
+
+namespace mipnerf {
+
+// Zip-NeRF's weight annealing (official camp_zipnerf models.py Model.__call__, Schlick's bias, arXiv 2010.09714):
+// anneal = bias(train_frac, s) = s·x / ((s − 1)·x + 1) with x = train_frac in [0, 1], for anneal_slope s > 0, and 1
+// when s ≤ 0 (the official turns annealing off). It rises from 0 at x = 0 (uniform sampling over the non-empty
+// intervals) to 1 at x = 1 (the weights as they are); s = 10 (official default) reaches 0.5 at x = 1/11.
+// The result is SampleIntervalsOptions::anneal.
+inline double proposal_anneal(double train_frac, double anneal_slope) {
+  if (!(anneal_slope > 0.0)) return 1.0;
+  return (anneal_slope * train_frac) / ((anneal_slope - 1.0) * train_frac + 1.0);
+}
+
+}  // namespace mipnerf

@@ -1,0 +1,111 @@
+// Proposal sampling's sampler (Zip-NeRF / mip-NeRF 360; official camp_zipnerf 8e6d57e stepfun.sample_intervals with
+// the resampling logits of models.py Model.__call__): new sorted interval edges s_new [R][M+1] drawn from a previous
+// level's weights, in the normalised s-space. M = n_new ≥ 2 intervals (the official refuses fewer).
+//
+// Per ray, with edges s [N+1] (sorted) and weights w [N]:
+//  1. logits l_i = anneal · log(clip(w_i + padding, FLT_MIN, FLT_MAX)) where s_{i+1} > s_i, else −∞ (official
+//     where(sdist[1:] > sdist[:-1], anneal * safe_log(weights + resample_padding), -inf): an empty interval gets no
+//     mass, whatever its weight; all-zero weights give equal logits log(FLT_MIN)·anneal, so a uniform histogram);
+//  2. p = softmax(l) = exp(l − max l) / Σ exp(l − max l) (jax.nn.softmax), cdf_0 = 0, cdf_k = min(1, Σ_{i<k} p_i),
+//     cdf_N = 1 (integrate_weights);
+//  3. M sorted u_j: deterministic (rendering) u_j = linspace(1/(2M), 1 − 1/(2M) − ε, M) (sample's
+//     deterministic_center); randomised (training) u_j = j·(1 − u_max)/(M − 1) + ξ_j·max_jitter with
+//     u_max = ε + (1 − ε)/M, max_jitter = (1 − u_max)/(M − 1) − ε, ξ in [0, 1) from
+//     rng_uniform4(seed, first_ray + ray, step, j / 4, RNG_STREAM_PROPOSAL)[j mod 4], or ξ_0 for every j
+//     (single_jitter); ε = 2^−23;
+//  4. centres c_j = the inverse CDF at u_j (math.sorted_interp): k = the last index with cdf_k ≤ u_j and
+//     c_j = s_k + clip((u_j − cdf_k)/max(ε², cdf_{k+1} − cdf_k), 0, 1)·(s_{k+1} − s_k);
+//  5. edges: the midpoints (c_{j−1} + c_j)/2, the first and last edges the reflections 2c_0 − mid_0 and
+//     2c_{M−1} − mid_{M−2} (so the end intervals are as wide as their neighbours' halves), each clipped to
+//     [domain_near, domain_far] (official domain = (init_s_near, init_s_far)).
+// A ray with no non-empty interval (every s equal) has only −∞ logits: the official softmax gives NaN there; we give
+// every edge clip(s_0), the only point the ray has (tests/official/README.md lists the difference).
+// Sampling is a constant for the gradient (the official stop_level_grad): there is no backward.
+
+#ifndef MIPNERF_SAMPLE_INTERVALS_CL
+#define MIPNERF_SAMPLE_INTERVALS_CL
+
+#define RNG_STREAM_PROPOSAL 6u /* jitter of proposal sampling's u (rng_stream_proposal in host/core/rng.hpp) */
+
+// Step 1 for interval i: the official's resampling logit.
+inline float proposal_logit(__global const float* s, __global const float* w, uint i, const float anneal,
+                            const float padding) {
+  if (!(s[i + 1] > s[i])) return -INFINITY;
+  // safe_log's clip: log(0) would be −∞, which must stay for the empty intervals only.
+  return anneal * log(clamp(w[i] + padding, FLT_MIN, FLT_MAX));
+}
+
+// Step 3: u_j of M = n_new, given the uniform ξ of this j (ignored when deterministic).
+inline float proposal_u(uint j, uint n_new, const uint randomized, float xi) {
+  const float eps = FLT_EPSILON;
+  const float m = (float)n_new;
+  if (!randomized) {
+    const float pad = 1.0f / (2.0f * m);
+    return pad + (float)j * ((1.0f - pad - eps - pad) / (m - 1.0f));
+  }
+  const float u_max = eps + (1.0f - eps) / m;
+  const float max_jitter = (1.0f - u_max) / (m - 1.0f) - eps;
+  return (float)j * ((1.0f - u_max) / (m - 1.0f)) + xi * max_jitter;
+}
+
+inline float proposal_clip(float s, float domain_near, float domain_far) {
+  return fmin(fmax(s, domain_near), domain_far);  // jnp.clip: minimum(maximum(x, lo), hi)
+}
+
+// One item per ray. s_edges [R][N+1], weights [R][N] → s_new [R][M+1] (N = n_intervals ≥ 1, M = n_new ≥ 2).
+__kernel void sample_intervals_fwd(__global const float* s_edges, __global const float* weights,
+                                   __global float* s_new, const uint n_rays, const uint n_intervals,
+                                   const uint n_new, const float anneal, const float padding,
+                                   const float domain_near, const float domain_far, const uint randomized,
+                                   const uint single_jitter, const ulong seed, const uint step, const uint first_ray) {
+  const size_t ray = get_global_id(0);
+  if (ray >= n_rays || n_intervals == 0 || n_new < 2) return;
+  const uint n = n_intervals, n_out = n_new + 1;
+  __global const float* s = s_edges + ray * (n + 1);
+  __global const float* w = weights + ray * n;
+  __global float* out = s_new + ray * n_out;
+
+  float max_logit = -INFINITY;
+  for (uint i = 0; i < n; ++i) max_logit = fmax(max_logit, proposal_logit(s, w, i, anneal, padding));
+  if (max_logit == -INFINITY) {  // no non-empty interval (see the header)
+    for (uint j = 0; j < n_out; ++j) out[j] = proposal_clip(s[0], domain_near, domain_far);
+    return;
+  }
+  float sum = 0.0f;
+  for (uint i = 0; i < n; ++i) sum += exp(proposal_logit(s, w, i, anneal, padding) - max_logit);
+
+  // The walk over the CDF (u and cdf both non-decreasing): interval k spans [cdf_lo, cdf_hi]; partial = Σ_{i≤k} p_i.
+  uint k = 0;
+  float partial = exp(proposal_logit(s, w, 0, anneal, padding) - max_logit) / sum;
+  float cdf_lo = 0.0f;
+  float cdf_hi = n == 1 ? 1.0f : fmin(partial, 1.0f);
+  const float eps_sq = FLT_EPSILON * FLT_EPSILON;  // sorted_interp's guard against a zero-width CDF step
+  float xi[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  float centre_prev = 0.0f, mid_prev = 0.0f;
+  for (uint j = 0; j < n_new; ++j) {
+    if (randomized && (j == 0 || (!single_jitter && j % 4 == 0))) {
+      vstore4(rng_uniform4(seed, first_ray + (uint)ray, step, j / 4, RNG_STREAM_PROPOSAL), 0, xi);
+    }
+    const float u = proposal_u(j, n_new, randomized, single_jitter ? xi[0] : xi[j % 4]);
+    while (k + 1 < n && cdf_hi <= u) {
+      ++k;
+      cdf_lo = cdf_hi;
+      partial += exp(proposal_logit(s, w, k, anneal, padding) - max_logit) / sum;
+      cdf_hi = k + 1 == n ? 1.0f : fmin(partial, 1.0f);
+    }
+    const float s_lo = s[k], s_hi = s[k + 1];
+    const float frac = clamp((u - cdf_lo) / fmax(eps_sq, cdf_hi - cdf_lo), 0.0f, 1.0f);
+    // Clamped to the interval so that rounding cannot put a centre before the previous interval's last one.
+    const float centre = clamp(s_lo + frac * (s_hi - s_lo), s_lo, s_hi);
+    if (j > 0) {
+      const float mid = (centre + centre_prev) / 2.0f;
+      if (j == 1) out[0] = proposal_clip(2.0f * centre_prev - mid, domain_near, domain_far);
+      out[j] = proposal_clip(mid, domain_near, domain_far);
+      mid_prev = mid;
+    }
+    centre_prev = centre;
+  }
+  out[n_new] = proposal_clip(2.0f * centre_prev - mid_prev, domain_near, domain_far);
+}
+
+#endif
