@@ -10,7 +10,8 @@
 #   bench-small       the small preset's training steps and stage profile
 #   bench-paper       the paper preset's at batch 4096 (--paper-batch)
 #   zipnerf           Zip-NeRF's s/step on the built-in scene, 20 steps of each candidate for a GPU preset: the CPU's
-#                     `fast` preset, then larger batches and the official hash size (the atomic scatter a GPU uses)
+#                     `fast` preset (one point per interval), with the 6 multisamples, then larger batches and the
+#                     official hash size (the atomic scatter a GPU uses)
 #   python            the python that runs the official code: its JAX and devices; gin-config from the carried wheels
 #                     when it lacks it
 #   official-default  the official google/mipnerf training step at the paper's configuration, with JAX's default
@@ -287,7 +288,7 @@ built_in_scene() {
 zipnerf() {
   built_in_scene || return 1
   local status=0 candidate name settings
-  for candidate in "fast:" "batch4096:--set batch_size=4096" \
+  for candidate in "fast:" "fast_multisampled:--set grid_multisample=true" "batch4096:--set batch_size=4096" \
       "batch4096_hash19:--set batch_size=4096 --set grid_hash_log2=19 --set grid_max=8192" \
       "batch16384_hash21:--set batch_size=16384 --set grid_hash_log2=21 --set grid_max=8192"; do
     name="${candidate%%:*}"

@@ -685,3 +685,9 @@ TEST_CASE("graph: density noise changes a training step and never a render") {
 TEST_CASE("graph: a Zip-NeRF training step (multisampled grid, tiny MLP) equals the reference") {
   check_step_against_reference("zipnerf", test::small_scene(), {{"grid_max", "64"}, {"grid_hash_log2", "12"}});
 }
+
+// The fast preset's lookup: one footprint-weighted point per interval.
+TEST_CASE("graph: a Zip-NeRF training step with one point per interval equals the reference") {
+  check_step_against_reference("zipnerf", test::small_scene(),
+                               {{"grid_max", "64"}, {"grid_hash_log2", "12"}, {"grid_multisample", "false"}});
+}
