@@ -265,7 +265,9 @@ std::vector<double> stage_bounds(const io::Json& sens, const mlp::MlpConfig& con
     constants.push_back({"dense/Dense_" + std::to_string(k), static_cast<double>(layers[k]->in) + 2});
   }
   std::vector<double> bound(n, 0.0);
-  for (const auto& [stage, c] : constants) {
+  for (const auto& entry : constants) {
+    const auto& stage = entry.first;  // not a structured binding: clang cannot capture one in doctest's CAPTURE
+    const auto c = entry.second;
     CAPTURE(stage);
     REQUIRE(sens.contains(stage));
     const auto s = flat(sens.at(stage));

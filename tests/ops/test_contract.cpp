@@ -411,8 +411,9 @@ TEST_CASE("contract gaussians: backward against finite differences, reference an
 TEST_CASE("ray warp: kernels against the reference, far = inf included, and the endpoints") {
   auto& ctx = test::test_context();
   const float inf = std::numeric_limits<float>::infinity();
-  for (auto [near, far] : {std::pair{0.2f, 1e6f}, std::pair{0.2f, inf}, std::pair{1.0f, inf}, std::pair{2.0f, 6.0f},
-                           std::pair{0.5f, 0.51f}}) {
+  for (const auto& bounds : {std::pair{0.2f, 1e6f}, std::pair{0.2f, inf}, std::pair{1.0f, inf}, std::pair{2.0f, 6.0f},
+                             std::pair{0.5f, 0.51f}}) {
+    const float near = bounds.first, far = bounds.second;  // not a structured binding: clang's lambdas cannot take one
     CAPTURE(near);
     CAPTURE(far);
     ops::RayWarp warp(ctx, near, far);
@@ -456,8 +457,9 @@ TEST_CASE("ray warp: kernels against the reference, far = inf included, and the 
 }
 
 TEST_CASE("ray warp: the reference is the official formula, inverts itself, and its derivative") {
-  for (auto [near, far] :
+  for (const auto& bounds :
        {std::pair{0.2, 1e6}, std::pair{0.2, std::numeric_limits<double>::infinity()}, std::pair{2.0, 6.0}}) {
+    const double near = bounds.first, far = bounds.second;  // not a structured binding (clang, doctest's lambdas)
     CAPTURE(near);
     CAPTURE(far);
     const double inv_near = 1 / near, inv_far = 1 / far;
