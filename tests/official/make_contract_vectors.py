@@ -26,25 +26,15 @@ jax_enable_x64 on float64 arrays holding them, so the fixture is the official ma
 Non-finite outputs (s_to_t(1) = inf for far = inf, the NaNs of near = 0) are written as the strings "inf" and "nan"
 (JSON has no such numbers).
 """
-import argparse
-import importlib
 import json
 import math
 import os
 import sys
-import types
 
 import numpy as np
 
-
-def load_package_module(multinerf, name):
-    """A module of multinerf/internal that imports its siblings (coord: `from internal import math`), without the
-    package's __init__: a bare package named `internal` whose path is that folder."""
-    if "internal" not in sys.modules:
-        package = types.ModuleType("internal")
-        package.__path__ = [os.path.join(multinerf, "internal")]
-        sys.modules["internal"] = package
-    return importlib.import_module("internal." + name)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from official_modules import multinerf_module, official_arguments  # noqa: E402
 
 
 def f32(a):
@@ -109,15 +99,11 @@ def covariance_for(rng, mean, kind):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--multinerf", required=True, help="a checkout of multinerf (its files are read)")
-    parser.add_argument("--multinerf-commit", required=True)
-    parser.add_argument("--out", required=True)
-    args = parser.parse_args()
+    args = official_arguments(__doc__, "multinerf")
     import jax
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
-    coord = load_package_module(args.multinerf, "coord")
+    coord = multinerf_module(args.multinerf, "coord")
     rng = np.random.default_rng(20261128)
 
     kinds = ("random", "diagonal", "rank1 radial", "rank1 across")

@@ -22,15 +22,16 @@ Official commit: 8e6d57e3aee34235faf3ef99decca0994efe66c9 (github:jonbarron/camp
 Inputs come from numpy.random.default_rng(20261127) and are float32 values; the official functions run under
 jax_enable_x64 on float64 arrays holding them, so the fixture is the official math without float32 rounding.
 """
-import argparse
 import importlib
 import importlib.util
 import json
 import os
 import sys
-import types
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from official_modules import official_arguments, zipnerf_module  # noqa: E402
 
 
 def load(zipnerf, name):
@@ -40,16 +41,6 @@ def load(zipnerf, name):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
-
-
-def load_package_module(zipnerf, name):
-    """A module of camp_zipnerf/internal that imports its siblings (coord: geopoly, math), without the package's
-    __init__ (which imports every module, flax and gin included): a bare package object whose path is that folder."""
-    if "zipnerf_internal" not in sys.modules:
-        package = types.ModuleType("zipnerf_internal")
-        package.__path__ = [os.path.join(zipnerf, "camp_zipnerf", "internal")]
-        sys.modules["zipnerf_internal"] = package
-    return importlib.import_module("zipnerf_internal." + name)
 
 
 def level_sizes(min_size, max_size, supersample):
@@ -62,11 +53,7 @@ def level_sizes(min_size, max_size, supersample):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--zipnerf", required=True, help="a checkout of camp_zipnerf (its files are read)")
-    parser.add_argument("--zipnerf-commit", required=True)
-    parser.add_argument("--out", required=True)
-    args = parser.parse_args()
+    args = official_arguments(__doc__, "zipnerf")
     import jax
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
@@ -103,7 +90,7 @@ def main():
 
     # The deterministic multisamples (coord.hexify with rng=None): 5 rays, 4 intervals each; one ray along +z, where
     # construct_perp_basis takes its other cross product.
-    coord = load_package_module(args.zipnerf, "coord")
+    coord = zipnerf_module(args.zipnerf, "coord")
     origins = f32(rng.uniform(-1, 1, size=(5, 3)))
     directions = f32(rng.uniform(-1, 1, size=(5, 3)))
     directions[4] = [0.0, 0.0, 1.0]

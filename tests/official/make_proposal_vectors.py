@@ -23,25 +23,14 @@ Official commit: 8e6d57e3aee34235faf3ef99decca0994efe66c9 (github:jonbarron/camp
 Inputs come from numpy.random.default_rng(20261128) and are float32 values; the official functions run under
 jax_enable_x64 on float64 arrays holding them, so the fixture is the official math without float32 rounding.
 """
-import argparse
-import importlib
 import json
 import os
 import sys
-import types
 
 import numpy as np
 
-
-def load_package_module(zipnerf, name):
-    """A module of camp_zipnerf/internal that imports its siblings (stepfun: linspline, math, utils; loss_utils:
-    ref_utils), without the package's __init__ (which imports every module, gin included): a bare package object
-    whose path is that folder."""
-    if "zipnerf_internal" not in sys.modules:
-        package = types.ModuleType("zipnerf_internal")
-        package.__path__ = [os.path.join(zipnerf, "camp_zipnerf", "internal")]
-        sys.modules["zipnerf_internal"] = package
-    return importlib.import_module("zipnerf_internal." + name)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from official_modules import official_arguments, zipnerf_module  # noqa: E402
 
 
 def f32(a):
@@ -61,16 +50,12 @@ def normalised(rng, rays, n, total=1.0):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--zipnerf", required=True, help="a checkout of camp_zipnerf (its files are read)")
-    parser.add_argument("--zipnerf-commit", required=True)
-    parser.add_argument("--out", required=True)
-    args = parser.parse_args()
+    args = official_arguments(__doc__, "zipnerf")
     import jax
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
-    stepfun = load_package_module(args.zipnerf, "stepfun")
-    loss_utils = load_package_module(args.zipnerf, "loss_utils")
+    stepfun = zipnerf_module(args.zipnerf, "stepfun")
+    loss_utils = zipnerf_module(args.zipnerf, "loss_utils")
     rng = np.random.default_rng(20261128)
 
     # blur_and_resample_weights: each case one batch of rays sharing a half-width.

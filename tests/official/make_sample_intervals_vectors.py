@@ -29,30 +29,19 @@ jax_enable_x64 on float64 arrays holding them, so the fixture is the official ma
 constants stay float32: eps = finfo(float32).eps, safe_log's clip to float32 tiny, and the numpy-scalar arithmetic on
 eps in sample's u_max and linspace stop, which rounds to float32 — the test allows for that).
 """
-import argparse
-import importlib
 import json
 import os
 import re
 import sys
-import types
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from official_modules import official_arguments, zipnerf_module  # noqa: E402
+
 import make_vectors  # noqa: E402  (rng_uniform4: our Philox draws)
 
 RNG_STREAM_PROPOSAL = 6  # host/core/rng.hpp rng_stream_proposal
-
-
-def load_package_module(zipnerf, name):
-    """A module of camp_zipnerf/internal that imports its siblings (stepfun: linspline, math, utils), without the
-    package's __init__ (which imports every module): a bare package object whose path is that folder."""
-    if "zipnerf_internal" not in sys.modules:
-        package = types.ModuleType("zipnerf_internal")
-        package.__path__ = [os.path.join(zipnerf, "camp_zipnerf", "internal")]
-        sys.modules["zipnerf_internal"] = package
-    return importlib.import_module("zipnerf_internal." + name)
 
 
 def official_bias(zipnerf):
@@ -85,16 +74,12 @@ def rays(rng):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--zipnerf", required=True, help="a checkout of camp_zipnerf (its files are read)")
-    parser.add_argument("--zipnerf-commit", required=True)
-    parser.add_argument("--out", required=True)
-    args = parser.parse_args()
+    args = official_arguments(__doc__, "zipnerf")
     import jax
     jax.config.update("jax_enable_x64", True)
     import jax.numpy as jnp
-    stepfun = load_package_module(args.zipnerf, "stepfun")
-    zmath = load_package_module(args.zipnerf, "math")
+    stepfun = zipnerf_module(args.zipnerf, "stepfun")
+    zmath = zipnerf_module(args.zipnerf, "math")
     bias = official_bias(args.zipnerf)
     rng = np.random.default_rng(20261129)
     s_all, w_all = rays(rng)
