@@ -120,21 +120,8 @@ std::vector<float> zip_table(const io::Json& fx, const std::vector<ops::GridLeve
 // The official MLP's Dense_0 … Dense_4 (trunk, density, bottleneck, view, rgb: flax's creation order in models.MLP)
 // in our flat buffer, which has the same order and [in][out] kernels (host/mlp/mlp_config.hpp).
 std::vector<float> zip_mlp_params(const io::Json& fx, const mlp::MlpConfig& config) {
-  const auto layout = mlp::parameter_layout(config);  // held: all() points into it
-  const auto layers = layout.all();
-  const auto& dense = fx.at("params").at("mlp");
-  REQUIRE(dense.size() == layers.size());
-  std::vector<float> params(layout.total);
-  for (size_t k = 0; k < layers.size(); ++k) {
-    const auto& layer = *layers[k];
-    CAPTURE(layer.name);
-    REQUIRE(dense.at(k).at("name").get<std::string>() == "Dense_" + std::to_string(k));
-    const auto kernel = flat(dense.at(k).at("kernel"), {layer.in, layer.out});
-    const auto bias = flat(dense.at(k).at("bias"), {layer.out});
-    for (size_t i = 0; i < kernel.size(); ++i) params[layer.weight_offset + i] = static_cast<float>(kernel[i]);
-    for (size_t i = 0; i < bias.size(); ++i) params[layer.bias_offset + i] = static_cast<float>(bias[i]);
-  }
-  return params;
+  const io::Json mlp_fixture = {{"params", fx.at("params").at("mlp")}};  // model_params reads fx["params"]
+  return official::model_params(mlp_fixture, config);
 }
 
 // What we compute on the fixture: the features [R·N][L][F + 1], raw outputs [R][N][density, rgb 0..2] and per-ray
