@@ -3,6 +3,7 @@
 
 import json
 import os
+import statistics
 
 from lib.provenance import commit_of  # noqa: F401  (the studies import it from here)
 from lib.run import run  # noqa: F401  (the studies import it from here)
@@ -65,3 +66,9 @@ def read_train_log(run_dir):
             if len(fields) == len(header):
                 rows.append((int(fields[step]), float(fields[wall])))
     return rows
+
+
+def warm_seconds_per_step(run_dir):
+    """The median step time of a run logged every step, from its second step on (the first is cold)."""
+    rows = read_train_log(run_dir)
+    return statistics.median(b[1] - a[1] for a, b in zip(rows[1:], rows[2:]))

@@ -50,7 +50,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import commit_of, read_json, read_train_log, run  # noqa: E402
+from lib.cli_runs import commit_of, read_json, read_train_log, run, warm_seconds_per_step  # noqa: E402
 from lib.machine import load_average  # noqa: E402
 from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
@@ -98,9 +98,7 @@ def probe_seconds_per_step(exe, flower, factor, work, name, train_args, log):
         run(["rm", "-rf", out], log)
         run(base_command(exe, flower, factor, out, train_args) +
             ["--set", f"steps={PROBE_STEPS}", "--set", "log_every=1", "--set", "val_views=1"], log)
-    rows = read_train_log(out)
-    warm = [b[1] - a[1] for a, b in zip(rows[1:], rows[2:])]  # from step 2 on: the first step is cold
-    return statistics.median(warm)
+    return warm_seconds_per_step(out)
 
 
 def checkpoint_every(seconds_per_step, budgets_s, max_checkpoints):

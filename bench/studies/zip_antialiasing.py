@@ -20,13 +20,12 @@ beside its budget. Every run goes through the command-line tool; finished runs a
 
 import os
 import shlex
-import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import commit_of, device_line, read_json, read_train_log, run  # noqa: E402
+from lib.cli_runs import commit_of, device_line, read_json, run, warm_seconds_per_step  # noqa: E402
 from lib.machine import load_average  # noqa: E402
 
 RESULTS = report_md.results_folder("zip_antialiasing")
@@ -71,8 +70,7 @@ def probe(args, key, model_args, round_index, log):
         run(["rm", "-rf", out], log)
         run(train_base(args, out, model_args) + ["--set", f"steps={PROBE_STEPS}", "--set", "log_every=1",
                                                  "--set", "val_views=1", "--set", "val_every=0"], log)
-    rows = read_train_log(out)
-    return statistics.median(b[1] - a[1] for a, b in zip(rows[1:], rows[2:]))  # the first step is cold
+    return warm_seconds_per_step(out)
 
 
 def train(args, key, model_args, steps, log):
