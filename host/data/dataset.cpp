@@ -126,12 +126,23 @@ class LensCheck {
   std::set<std::vector<double>> checked_;
 };
 
+// "1 row", "3 rows", "0 rows".
+std::string count_of(uint32_t n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
   Split split;
   split.name = spec.name;
   split.source = spec.source;
   detail::SizeCheck sizes;
   LensCheck lenses;
+  // A size the factor does not divide is cropped at its right and bottom edges to the largest size it divides, then
+  // box-downsampled: pixel k still covers source pixels [f·k, f·k + f), so the intrinsics (focal, principal point, lens)
+  // stay exact. The official LLFF loader reads ImageMagick's minified copies instead (`mogrify -resize 25%`: 800x533 →
+  // 200x133, sizes rounded, the whole image rescaled by 200/800 and 133/533 while the intrinsics are divided by 4);
+  // both give floor(W/f) x floor(H/f) when the remainder is under f/2, ours without the small scale error.
+  bool cropped_note_given = false;
   for (const auto& frame : spec.frames) {
     RgbaImage image = load_rgba_image(frame.image_path);
     if (spec.uniform_size) sizes.check(image.width, image.height, frame.image_path);
@@ -142,8 +153,25 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
     const uint32_t factor = std::max<uint32_t>(1, options.factor / frame.stored_factor);
     if (factor > 1) {
       if (image.width % factor != 0 || image.height % factor != 0) {
-        throw Error(frame.image_path + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                    " is not divisible by factor " + std::to_string(factor) + "; use a factor that divides it");
+        const uint32_t cropped_width = image.width - image.width % factor;
+        const uint32_t cropped_height = image.height - image.height % factor;
+        if (cropped_width == 0 || cropped_height == 0) {
+          throw Error(frame.image_path + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                      " is smaller than factor " + std::to_string(factor) + "; use a smaller factor");
+        }
+        if (!cropped_note_given && options.log) {
+          options.log(LogLevel::warning,
+                      frame.image_path + ": " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                          " is not divisible by factor " + std::to_string(factor) + ": its last " +
+                          count_of(image.width - cropped_width, "column") + " and " +
+                          count_of(image.height - cropped_height, "row") + " are dropped, and it trains at " +
+                          std::to_string(cropped_width / factor) + "x" + std::to_string(cropped_height / factor) +
+                          " (so are the split's other images of this size)");
+          cropped_note_given = true;
+        }
+        image = crop_top_left(image, cropped_width, cropped_height);
+        camera.width_px = cropped_width;
+        camera.height_px = cropped_height;
       }
       for (uint32_t f = 1; f < factor; f *= 2) image = downsample2(image);
       camera = scale_camera(camera, factor);

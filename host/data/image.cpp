@@ -76,6 +76,21 @@ RgbaImage downsample2(const RgbaImage& image) {
   return out;
 }
 
+RgbaImage crop_top_left(const RgbaImage& image, uint32_t width, uint32_t height) {
+  if (width > image.width || height > image.height) {
+    throw Error("crop: " + std::to_string(width) + "x" + std::to_string(height) + " does not fit in a " +
+                std::to_string(image.width) + "x" + std::to_string(image.height) + " image");
+  }
+  RgbaImage out{width, height, {}, image.has_alpha, image.bit_depth};
+  out.rgba.resize(static_cast<size_t>(width) * height * 4);
+  const size_t row = static_cast<size_t>(width) * 4;
+  for (uint32_t y = 0; y < height; ++y) {
+    const float* src = image.rgba.data() + static_cast<size_t>(y) * image.width * 4;
+    std::copy(src, src + row, out.rgba.data() + y * row);
+  }
+  return out;
+}
+
 void composite(const RgbaImage& image, Background background, float* rgb_out) {
   const size_t pixels = static_cast<size_t>(image.width) * image.height;
   const float bg = background == Background::white ? 1.0f : 0.0f;

@@ -41,6 +41,10 @@ ImageSize read_image_size(const std::string& path);
 // alpha included (not premultiplied). Width and height must be even.
 RgbaImage downsample2(const RgbaImage& image);
 
+// The top-left width x height pixels of `image` (width ≤ image.width, height ≤ image.height): a crop that keeps
+// every kept pixel where it was, so a camera's intrinsics in pixels stay valid for it.
+RgbaImage crop_top_left(const RgbaImage& image, uint32_t width, uint32_t height);
+
 // rgb_out [height][width][3] = rgb · α + background · (1 − α), in the stored (sRGB-encoded) values, as the
 // official code does (the paper composites Blender scenes onto white); Background::none drops alpha and keeps rgb
 // as stored. Background is the renderer's (core/stage_options.hpp): the same choice made once for both.

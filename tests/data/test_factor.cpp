@@ -12,17 +12,17 @@ using namespace mipnerf;
 
 namespace {
 
-// An opaque 8x8 Blender split (alpha 255 everywhere, so compositing changes nothing and the expected
-// half-resolution pixel is exactly the mean of its 2x2 block).
-void write_opaque_split(const std::string& dir) {
+// An opaque width x height Blender split (alpha 255 everywhere, so compositing changes nothing and the expected
+// downsampled pixel is exactly the mean of its block).
+void write_opaque_split(const std::string& dir, uint32_t width = 8, uint32_t height = 8) {
   io::Json frames = io::Json::array();
   for (int k = 0; k < 2; ++k) {
-    std::vector<uint8_t> rgba(8 * 8 * 4);
-    for (size_t i = 0; i < 64; ++i) {
+    std::vector<uint8_t> rgba(static_cast<size_t>(width) * height * 4);
+    for (size_t i = 0; i < static_cast<size_t>(width) * height; ++i) {
       for (int c = 0; c < 3; ++c) rgba[4 * i + c] = static_cast<uint8_t>((37 * i + 91 * c + 13 * k) % 256);
       rgba[4 * i + 3] = 255;
     }
-    io::write_png8(dir + "/train/r_" + std::to_string(k) + ".png", 8, 8, 4, rgba.data());
+    io::write_png8(dir + "/train/r_" + std::to_string(k) + ".png", width, height, 4, rgba.data());
     frames.push_back({{"file_path", "./train/r_" + std::to_string(k)},
                       {"transform_matrix", data::pose_to_json(test::test_pose(k))}});
   }
@@ -65,7 +65,49 @@ TEST_CASE("factor: images are box-downsampled and the camera follows, lossmult s
   bad.factor = 3;
   CHECK_THROWS_WITH_AS(data::load_dataset(dir.path(), bad), doctest::Contains("power of two"), Error);
   bad.factor = 16;
-  CHECK_THROWS_WITH_AS(data::load_dataset(dir.path(), bad), doctest::Contains("not divisible by factor 16"), Error);
+  CHECK_THROWS_WITH_AS(data::load_dataset(dir.path(), bad), doctest::Contains("smaller than factor 16"), Error);
+}
+
+// Issue 45: 800x533 photos at factor 4 were refused ("not divisible by factor 4"). Now the right and bottom edges the
+// factor does not divide are dropped first, so every kept pixel is still the mean of its own f x f block and the
+// intrinsics are the full image's divided by f, exactly; the loader says what it dropped.
+TEST_CASE("factor: a size the factor does not divide is cropped at its right and bottom edges, the camera exact") {
+  test::TempDir dir;
+  write_opaque_split(dir.path(), 11, 7);  // factor 4: 8x4 kept, 2x1 trained
+  const auto full = data::load_dataset(dir.path(), {}).split("train");
+  data::LoadOptions quarter_options;
+  quarter_options.factor = 4;
+  std::vector<std::string> warnings;
+  quarter_options.log = [&](LogLevel level, const std::string& message) {
+    if (level == LogLevel::warning) warnings.push_back(message);
+  };
+  const auto quarter = data::load_dataset(dir.path(), quarter_options).split("train");
+  REQUIRE(warnings.size() == 1);  // once per split, not once per image
+  CHECK(warnings[0].find("11x7 is not divisible by factor 4: its last 3 columns and 3 rows are dropped") !=
+        std::string::npos);
+  CHECK(warnings[0].find("trains at 2x1") != std::string::npos);
+  REQUIRE(quarter.num_images() == full.num_images());
+  for (size_t c = 0; c < full.num_images(); ++c) {
+    const auto& a = full.cameras[c];
+    const auto& b = quarter.cameras[c];
+    CHECK(b.width_px == 2);
+    CHECK(b.height_px == 1);
+    // The principal point and focal length of the full image, in quarter-size pixels: unchanged by the crop.
+    CHECK(b.focal_x_px == doctest::Approx(a.focal_x_px / 4).epsilon(1e-12));
+    CHECK(b.focal_y_px == doctest::Approx(a.focal_y_px / 4).epsilon(1e-12));
+    CHECK(b.center_x_px == doctest::Approx(a.center_x_px / 4).epsilon(1e-12));
+    CHECK(b.center_y_px == doctest::Approx(a.center_y_px / 4).epsilon(1e-12));
+    const float* big = full.image_rgb(c);
+    const float* small = quarter.image_rgb(c);
+    for (uint32_t x = 0; x < 2; ++x) {
+      for (int ch = 0; ch < 3; ++ch) {
+        double mean = 0;
+        for (int dy = 0; dy < 4; ++dy)
+          for (int dx = 0; dx < 4; ++dx) mean += big[3 * (dy * 11 + 4 * x + dx) + ch] / 16.0;
+        CHECK(std::abs(mean - small[3 * x + ch]) < 1e-6);
+      }
+    }
+  }
 }
 
 TEST_CASE("factor: the training setting reaches the loader, with the multiscale pyramid on top") {
