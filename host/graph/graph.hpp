@@ -118,7 +118,8 @@ class Graph {
   // Only the last level's colour is shown, so by default the levels before it run for their weights alone (what
   // the next level's resampling reads): the MLP skips its colour head (view branch and rgb layer) and the render
   // writes no composite, so their comp_rgb stays unwritten while acc, distance and weights are the full forward's
-  // values. With every_level_colour each level's colour is computed too (comparisons of the levels, tests).
+  // values. With every_level_colour each level's colour is computed too (comparisons of the levels, tests), but a
+  // proposal round's never (it has no colour: its comp_rgb stays unwritten).
   void render_chunk(const RaySource& source, ChunkRange chunk, StepKey key = {}, uint32_t first_ray_number = 0);
   void set_every_level_colour(bool every_level) { every_level_colour_ = every_level; }
   const LevelOutputs& level_outputs(size_t level) const { return levels_.at(level).outputs; }

@@ -769,3 +769,69 @@ TEST_CASE("graph: a Zip-NeRF training step with proposal sampling equals the ref
                                {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_grid_max", "64"},
                                 {"grid_max", "64"}, {"grid_hash_log2", "12"}});
 }
+
+// A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at
+// anneal 1 (the official eval: train_frac 1, no rng): what a training graph's forward gives at train fraction 1 with
+// randomization off (its rounds' forwards also feed their colour heads, which the weights never read). Every level's
+// weights, acc and distance, and the shown colour, agree to float32 rounding on every GEMM backend.
+TEST_CASE("graph: a proposal model renders its rounds for weights alone, as training at anneal 1 without jitter") {
+  auto& ctx = test::test_context();
+  const auto config = train::resolve_config("tiny", "zipnerf",
+                                            {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"num_samples", "8"},
+                                             {"proposal_grid_max", "64"}, {"grid_max", "64"}, {"grid_hash_log2", "12"},
+                                             {"randomized", "false"}});
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.levels.size() == 3);
+  const auto dataset = data::load_dataset(test::small_scene(), {});
+  data::DeviceDataset device_data(ctx, dataset.split("train"));
+  const size_t rays = 48;
+  ops::BatchArrays batch(ctx, rays);
+  ops::batch_sample(ctx, device_data, {config.seed, ops::Batching::all_images}, 5, batch);
+  const graph::RaySource source{device_data.cameras(), batch.camera_ids, batch.pixel_ids};
+  auto grids = train::make_grids(ctx, spec);
+  for (size_t g = 0; g < grids.size(); ++g) {
+    std::mt19937 rng(7100 + g);
+    std::uniform_real_distribution<float> value(-0.5f, 0.5f);
+    std::vector<float> table(grids[g]->parameter_count());
+    for (float& v : table) v = value(rng);
+    grids[g]->upload_params(table);
+  }
+  for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+    INFO("gemm_backend = " << enum_name(backend));
+    auto networks = train::make_networks(ctx, spec, backend);
+    const auto outputs = [&](graph::Graph& graph) {
+      std::vector<std::vector<float>> out;
+      for (size_t l = 0; l < spec.levels.size(); ++l) {
+        out.push_back(graph.level_outputs(l).acc.download(ctx));
+        out.push_back(graph.level_outputs(l).distance.download(ctx));
+      }
+      out.push_back(graph.level_outputs(spec.levels.size() - 1).comp_rgb.download(ctx));
+      return out;
+    };
+    graph::Graph training(ctx, spec, mlp::network_pointers(networks), mlp::grid_pointers(grids),
+                          graph::GraphMode::training, rays, rays);
+    training.set_train_fraction(1.0);
+    training.begin_step(rays, static_cast<double>(rays));
+    training.train_chunk(source, {0, rays}, {batch.target_rgb, nullptr}, {config.seed, 5});
+    const auto trained = outputs(training);
+    const auto losses = training.end_step();
+    REQUIRE(losses.size() == 3);
+    CHECK(losses[0].proposal);
+    CHECK(losses[1].proposal);
+    CHECK(!losses[2].proposal);
+    for (const auto& loss : losses) CHECK(std::isfinite(loss.loss()));
+    graph::Graph rendering(ctx, spec, mlp::network_pointers(networks), mlp::grid_pointers(grids),
+                           graph::GraphMode::inference, rays);
+    rendering.render_chunk(source, {0, rays});
+    const auto rendered = outputs(rendering);
+    REQUIRE(rendered.size() == trained.size());
+    for (size_t k = 0; k < rendered.size(); ++k) {
+      INFO("output " << k);
+      REQUIRE(rendered[k].size() == trained[k].size());
+      for (size_t i = 0; i < rendered[k].size(); ++i) {
+        REQUIRE(std::isfinite(rendered[k][i]));
+        CHECK(std::abs(rendered[k][i] - trained[k][i]) <= 1e-5f * std::max(1.0f, std::abs(trained[k][i])));
+      }
+    }
+  }
+}
