@@ -108,4 +108,17 @@ __kernel void sample_intervals_fwd(__global const float* s_edges, __global const
   out[n_new] = proposal_clip(2.0f * centre_prev - mid_prev, domain_near, domain_far);
 }
 
+// Normalised s → metric t for bounded scenes (official coord.construct_ray_warps with raydist_fn = None, Blender and
+// LLFF-in-NDC: the identity warp): t = clip(s·far + (1 − s)·near, near, far) per ray, s [R][K] → t [R][K] with the
+// ray's near [R] and far [R]. The official form (not near + s·(far − near)): s = 0 and s = 1 give near and far
+// exactly, and the clip keeps rounding inside [near, far].
+__kernel void sample_intervals_s_to_t(__global const float* s, __global const float* near, __global const float* far,
+                                      __global float* t, const uint n_rays, const uint n_per_ray) {
+  const size_t i = get_global_id(0);
+  if (i >= (size_t)n_rays * n_per_ray) return;
+  const size_t ray = i / n_per_ray;
+  const float n = near[ray], f = far[ray];
+  t[i] = clamp(s[i] * f + (1.0f - s[i]) * n, n, f);
+}
+
 #endif

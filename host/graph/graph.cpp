@@ -2,6 +2,7 @@
 #include "graph/graph.hpp"
 
 #include "core/error.hpp"
+#include "core/proposal_anneal.hpp"
 #include "graph/stage_traffic.hpp"
 #include "parallel/world.hpp"
 
@@ -18,7 +19,12 @@ struct BufferPlan {
   bool grid_gradients = false;  // training a grid level: d_features [S][F]
   size_t drawn_edges = 0;     // union levels: R · (new + 1)
   std::vector<size_t> level_intervals;
-  size_t partial_slots = 0;  // per level (training)
+  std::vector<bool> level_s_edges;     // per level: proposal-sampled (its [R][N+1] s-edges)
+  std::vector<size_t> level_own;       // per level: a training proposal round's own features width (0: none)
+  bool unit_histogram = false;         // the first level samples by proposal: [R][2] + [R]
+  size_t proposal_intervals = 0;       // training: the proposal rounds' most intervals (their shared backward)
+  size_t batch_rays = 0;
+  size_t partial_slots = 0;  // per colour level (training)
   bool training = false;
 
   // Floats of every buffer but the ray bundle (RayBundle::bytes_for).
@@ -27,9 +33,14 @@ struct BufferPlan {
     if (needs_points) n += 2 * 3 * samples;
     if (training) n += rays * 3 + samples * 4;
     if (grid_gradients) n += samples * feature_width;
-    for (size_t intervals : level_intervals) {
-      n += rays * (2 * intervals + 1) + rays * 5 + (training ? 2 * partial_slots : 0);
+    for (size_t l = 0; l < level_intervals.size(); ++l) {
+      const size_t intervals = level_intervals[l];
+      n += rays * (2 * intervals + 1) + rays * 5 + (training && !level_own[l] ? 2 * partial_slots : 0);
+      if (level_s_edges[l]) n += rays * (intervals + 1);
+      if (level_own[l]) n += rays * intervals * (level_own[l] + 1) + batch_rays;
     }
+    if (unit_histogram) n += 3 * rays;
+    n += rays * proposal_intervals * (2 + 3) + (proposal_intervals ? rays : 0);
     return n;
   }
 };
@@ -42,7 +53,13 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
   plan.view_width = spec.rays.view_dependence ? static_cast<size_t>(spec.view_encoding.pe_width()) : 0;
   plan.level_intervals = spec.intervals_per_level();
   plan.training = mode == GraphMode::training;
+  plan.batch_rays = max_batch_rays;
+  plan.unit_histogram = spec.levels.front().sampling == Sampling::proposal;
   for (const auto& level : spec.levels) {
+    plan.level_s_edges.push_back(level.sampling == Sampling::proposal);
+    const bool own = plan.training && level.role == LevelRole::proposal;
+    plan.level_own.push_back(own ? spec.feature_width(level) : 0);
+    if (own) plan.proposal_intervals = std::max(plan.proposal_intervals, level.new_samples);
     plan.feature_width = std::max(plan.feature_width, spec.feature_width(level));
     // The fused kernels (IPE, concatenated PE, grid features) compute their Gaussians or multisamples inline; the PE
     // paths stage means first.
@@ -125,6 +142,11 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   sample_options.randomized = training && spec_.sample.randomized;
   resample_options_ = spec_.resample;
   resample_options_.randomized = training && spec_.resample.randomized;
+  // Proposal sampling: rendering is the official eval (rng None: deterministic; train_frac 1: anneal 1); training
+  // starts at anneal 1 until set_train_fraction.
+  sample_intervals_options_ = spec_.sample_intervals;
+  sample_intervals_options_.randomized = training && spec_.sample_intervals.randomized;
+  sample_intervals_options_.anneal = 1.0f;
   RaysOptions rays_options = spec_.rays;
   // Supersampling jitter while rendering is the renderer's choice (inference_jittered), whatever training did.
   if (!training) rays_options.jitter_subpixel = mode_ == GraphMode::inference_jittered;
@@ -141,6 +163,10 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   if (!training) render_options.density_noise = 0.0f;
   render_ = std::make_unique<ops::Render>(ctx, render_options, spec_.activation);
   if (training) loss_ = std::make_unique<ops::Loss>(ctx, spec_.loss);
+  bool proposal_sampling = false;
+  for (const auto& level : spec_.levels) proposal_sampling |= level.sampling == Sampling::proposal;
+  if (proposal_sampling) sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx);
+  if (training && spec_.has_proposal_levels()) interlevel_ = std::make_unique<ops::SplineInterlevel>(ctx);
   for (size_t g = 0; g < spec_.grids.size(); ++g) {
     ops::ZipFeatureOptions zip_options = spec_.zip_options(g);
     zip_options.randomized = training && spec_.zip.randomized;  // rendering: the fixed pattern
@@ -173,16 +199,41 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     d_raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * S, "d_raw_rgb [samples][3]");
   }
   if (plan.grid_gradients) d_features_ = ocl::DeviceArray<float>(ctx, S * plan.feature_width, "d_features [samples][F]");
+  if (plan.unit_histogram) {
+    std::vector<float> unit_edges(2 * R);
+    for (size_t r = 0; r < R; ++r) unit_edges[2 * r + 1] = 1.0f;
+    unit_s_edges_ = ocl::DeviceArray<float>(ctx, 2 * R, "unit s_edges [R][2]");
+    unit_s_edges_.upload(ctx, unit_edges);
+    unit_weights_ = ocl::DeviceArray<float>(ctx, R, "unit weights [R]");
+    unit_weights_.fill(ctx, 1.0f);
+  }
+  if (const size_t M = plan.proposal_intervals) {
+    w_blur_ = ocl::DeviceArray<float>(ctx, R * M, "interlevel w_blur [R][M]");
+    d_wp_ = ocl::DeviceArray<float>(ctx, R * M, "interlevel d_wp [R][M]");
+    chunk_ray_loss_ = ocl::DeviceArray<float>(ctx, R, "interlevel ray_loss [R]");
+    zero_d_raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * R * M, "proposal d_raw_rgb [R·M][3] (zeros)");
+    zero_d_raw_rgb_.fill(ctx, 0.0f);
+  }
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     LevelBuffers level;
     level.intervals = plan.level_intervals[l];
     const std::string tag = "level " + std::to_string(l) + " ";
     level.t_edges = ocl::DeviceArray<float>(ctx, R * (level.intervals + 1), tag + "t_edges [R][N+1]");
+    if (plan.level_s_edges[l]) {
+      level.s_edges = ocl::DeviceArray<float>(ctx, R * (level.intervals + 1), tag + "s_edges [R][N+1]");
+    }
+    if (const size_t width = plan.level_own[l]) {
+      level.features = ocl::DeviceArray<float>(ctx, R * level.intervals * width, tag + "features [R·N][F]");
+      level.raw_density = ocl::DeviceArray<float>(ctx, R * level.intervals, tag + "raw_density [R·N]");
+      level.ray_loss = ocl::DeviceArray<float>(ctx, max_batch_rays_, tag + "interlevel ray_loss [B]");
+    }
     level.weights = ocl::DeviceArray<float>(ctx, R * level.intervals, tag + "weights [R][N]");
     level.outputs.comp_rgb = ocl::DeviceArray<float>(ctx, 3 * R, tag + "comp_rgb [R][3]");
     level.outputs.acc = ocl::DeviceArray<float>(ctx, R, tag + "acc [R]");
     level.outputs.distance = ocl::DeviceArray<float>(ctx, R, tag + "distance [R]");
-    if (training) level.partials = ocl::DeviceArray<float>(ctx, 2 * plan.partial_slots, tag + "loss partials");
+    if (training && !plan.level_own[l]) {
+      level.partials = ocl::DeviceArray<float>(ctx, 2 * plan.partial_slots, tag + "loss partials");
+    }
     levels_.push_back(std::move(level));
   }
   for (size_t i = 0; i < networks_.size(); ++i) {
@@ -225,7 +276,9 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
   const LevelSpec& level = spec_.levels[l];
   LevelBuffers& out = levels_[l];
   const RngKey rng{key.seed, key.step, first_ray};
-  ocl::StageScope stage(*ctx_, level.sampling == Sampling::stratified ? "sampling" : "resampling");
+  ocl::StageScope stage(*ctx_, level.sampling == Sampling::stratified ? "sampling"
+                               : level.sampling == Sampling::proposal ? "proposal sampling"
+                                                                      : "resampling");
   switch (level.sampling) {
     case Sampling::stratified:
       ocl::add_stage_bytes(*ctx_, traffic::stratified_sampling(n_rays, out.intervals));
@@ -249,7 +302,39 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
                      out.t_edges);
       break;
     }
+    case Sampling::proposal: {
+      // Each round draws its own jitter (official: a fresh random_split key per level): the step's seed offset by the
+      // level (the kernel's counter holds ray, step and sample; the seed is the one free part).
+      const RngKey round_rng{key.seed + 0x9E3779B97F4A7C15ull * l, key.step, first_ray};
+      if (l == 0) {
+        sample_intervals_->fwd(sample_intervals_options_, {unit_s_edges_, unit_weights_, n_rays, 1, level.new_samples},
+                               out.s_edges, round_rng);
+      } else {
+        const LevelBuffers& previous = levels_[l - 1];
+        sample_intervals_->fwd(sample_intervals_options_,
+                               {previous.s_edges, previous.weights, n_rays, previous.intervals, level.new_samples},
+                               out.s_edges, round_rng);
+      }
+      sample_intervals_->s_to_t(out.s_edges, chunk_rays_, n_rays, out.intervals + 1, out.t_edges);
+      break;
+    }
   }
+}
+
+ocl::DeviceArray<float>& Graph::level_features(size_t l) {
+  return levels_[l].features.size() ? levels_[l].features : features_;
+}
+
+ocl::DeviceArray<float>& Graph::level_raw_density(size_t l) {
+  return levels_[l].raw_density.size() ? levels_[l].raw_density : raw_density_;
+}
+
+void Graph::set_train_fraction(double train_frac) {
+  if (mode_ != GraphMode::training) throw Error("graph: set_train_fraction on a rendering graph (it uses anneal 1)");
+  if (!(train_frac >= 0.0 && train_frac <= 1.0)) {
+    throw Error("graph: the train fraction must be in [0, 1], got " + std::to_string(train_frac));
+  }
+  sample_intervals_options_.anneal = static_cast<float>(proposal_anneal(train_frac, spec_.anneal_slope));
 }
 
 void Graph::grid_level_scales() {
@@ -270,7 +355,7 @@ void Graph::encode_level(size_t l, size_t n_rays, const RngKey& key) {
       mlp::GridTable& grid = *grids_[level.grid_index];
       zip_[level.grid_index]->fwd({chunk_rays_, buffers.t_edges, n_rays, buffers.intervals},
                                   {grid.levels(), grid.layout()}, grid.params(), level_scales_[level.grid_index],
-                                  features_, key);
+                                  level_features(l), key);
       break;
     }
     case Encoding::integrated:
@@ -296,20 +381,27 @@ void Graph::forward_level(size_t l, size_t n_rays, mlp::Workspace& ws, const Den
   LevelBuffers& buffers = levels_[l];
   mlp::Network& network = *networks_[level.mlp_index];
   const size_t feature_width = network.config().input_width;
+  ocl::DeviceArray<float>& raw_density = level_raw_density(l);
   mlp::MlpInputs in;
-  in.features = mlp::view(features_, feature_width);
-  if (spec_.rays.view_dependence) in.view_encoding = mlp::view(view_features_, network.config().view_width);
+  in.features = mlp::view(level_features(l), feature_width);
+  if (network.config().view_dependence) in.view_encoding = mlp::view(view_features_, network.config().view_width);
   in.n_rays = n_rays;
   in.samples_per_ray = buffers.intervals;
+  // A proposal round has no colour (official disable_rgb). Training, a network's forward must still give every
+  // output its backward differentiates (mlp::Network): the round's colour head writes the shared raw_rgb, which
+  // nothing reads (the last level's forward overwrites it), and gets a zero gradient (backward_proposal).
+  const bool proposal = level.role == LevelRole::proposal;
+  if (proposal) with_colour = false;
+  const bool rgb_output = with_colour || (proposal && mode_ == GraphMode::training);
   {
     ocl::StageScope mlp_stage(*ctx_, "mlp bias + ReLU");
-    network.forward(in, {mlp::view(raw_density_, 1), with_colour ? mlp::view(raw_rgb_, 3) : mlp::MatrixView{}}, ws);
+    network.forward(in, {mlp::view(raw_density, 1), rgb_output ? mlp::view(raw_rgb_, 3) : mlp::MatrixView{}}, ws);
   }
   // The activations are fused into rendering: raw MLP outputs in, composited colour out.
   ocl::StageScope stage(*ctx_, "render");
   ocl::add_stage_bytes(*ctx_, traffic::render_forward(n_rays, buffers.intervals, with_colour));
   if (!with_colour) {
-    render_->raw_weights_fwd({raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
+    render_->raw_weights_fwd({raw_density, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals},
                              {buffers.outputs.acc, buffers.outputs.distance, buffers.weights}, noise);
     return;
   }
@@ -346,6 +438,37 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
                               {grid.levels(), grid.layout()}, d_features_, grid.grads(), key);
 }
 
+void Graph::backward_proposal(size_t l, ChunkRange chunk, const DensityNoiseKey& noise, const RngKey& key) {
+  const LevelSpec& level = spec_.levels[l];
+  LevelBuffers& round = levels_[l];
+  const LevelBuffers& last = levels_.back();
+  const size_t n_rays = chunk.count;
+  // The last level's histogram takes no gradient (official stop_gradient on w): only the round's weights do.
+  const ops::InterlevelInputs in{last.s_edges, last.weights, round.s_edges, round.weights,
+                                 n_rays,       last.intervals, round.intervals};
+  {
+    ocl::StageScope stage(*ctx_, "interlevel loss");
+    interlevel_->fwd(in, level.interlevel.blur_halfwidth, w_blur_, chunk_ray_loss_);
+    ocl::copy(*ctx_, chunk_ray_loss_, 0, round.ray_loss, chunk.first, n_rays);
+    interlevel_->bwd(in, w_blur_, level.interlevel.mult, step_batch_rays_, d_wp_);
+  }
+  {
+    ocl::StageScope stage(*ctx_, "render backward");
+    render_->raw_weights_bwd({round.raw_density, round.t_edges, chunk_rays_, n_rays, round.intervals}, round.weights,
+                             d_wp_, d_raw_density_, noise);
+  }
+  mlp::Network& network = *networks_[level.mlp_index];
+  {
+    ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
+    network.backward(workspaces_[level.mlp_index], {mlp::view(d_raw_density_, 1), mlp::view(zero_d_raw_rgb_, 3)},
+                     mlp::view(d_features_, network.config().input_width));
+  }
+  ocl::StageScope grid_stage(*ctx_, "grid backward");
+  mlp::GridTable& grid = *grids_[level.grid_index];
+  zip_[level.grid_index]->bwd({chunk_rays_, round.t_edges, n_rays, round.intervals}, {grid.levels(), grid.layout()},
+                              d_features_, grid.grads(), key);
+}
+
 void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
   if (mode_ != GraphMode::training) throw Error("graph: begin_step on a rendering graph");
   if (batch_rays == 0 || batch_rays > max_batch_rays_) {
@@ -356,6 +479,10 @@ void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
   step_batch_rays_ = batch_rays;
   step_lossmult_sum_ = lossmult_sum;
   step_groups_ = 0;
+  // A rank fills only its share of the batch's per-ray interlevel losses; end_step sums them all.
+  for (auto& level : levels_) {
+    if (level.ray_loss.size()) level.ray_loss.fill(*ctx_, 0.0f);
+  }
   ocl::StageScope stage(*ctx_, "adam");  // zeroing the gradients is part of the optimiser's work
   for (auto* network : networks_) network->zero_grad();
   for (size_t g = 0; g < grids_.size(); ++g) {
@@ -381,7 +508,13 @@ void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTa
     sample_level(l, chunk.count, key, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count, rng);
     forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], noise);
-    backward_level(l, chunk.count, targets, chunk, noise, rng);
+    // A proposal round's loss needs the last level's weights: its backward waits (below).
+    if (spec_.levels[l].role == LevelRole::nerf) backward_level(l, chunk.count, targets, chunk, noise, rng);
+  }
+  for (size_t l = 0; l < spec_.levels.size(); ++l) {
+    if (spec_.levels[l].role != LevelRole::proposal) continue;
+    const DensityNoiseKey noise{{key.seed, key.step, static_cast<uint32_t>(chunk.first)}, static_cast<uint32_t>(l)};
+    backward_proposal(l, chunk, noise, {key.seed, key.step, static_cast<uint32_t>(chunk.first)});
   }
   step_groups_ += loss_->groups_for(chunk.count);
 }
@@ -389,7 +522,20 @@ void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTa
 std::vector<ops::LevelLoss> Graph::end_step() {
   std::vector<ops::LevelLoss> losses;
   ocl::StageScope stage(*ctx_, "loss");
-  for (auto& level : levels_) {
+  for (size_t l = 0; l < levels_.size(); ++l) {
+    auto& level = levels_[l];
+    if (spec_.levels[l].role == LevelRole::proposal) {
+      ops::LevelLoss round;
+      round.proposal = true;
+      round.n_rays = step_batch_rays_;
+      round.lossmult_sum = step_lossmult_sum_;
+      std::vector<float> ray_loss(step_batch_rays_);
+      level.ray_loss.download(*ctx_, ray_loss.data(), ray_loss.size());  // blocking: waits for the step
+      round.interlevel =
+          ops::interlevel_loss_value(ray_loss, step_batch_rays_, level.intervals, spec_.levels[l].interlevel.mult);
+      losses.push_back(round);
+      continue;
+    }
     std::vector<float> partials(2 * step_groups_);
     level.partials.download(*ctx_, partials.data(), partials.size());  // blocking: waits for the step
     losses.push_back(ops::sum_loss_partials(partials, step_groups_, step_lossmult_sum_, step_batch_rays_));
@@ -403,9 +549,9 @@ void Graph::render_chunk(const RaySource& source, ChunkRange chunk, StepKey key,
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count, RngKey{});
-    const bool shown = l + 1 == spec_.levels.size();  // only the last level's colour is shown
+    // Only the last level's colour is shown (a proposal round has none: forward_level).
     forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], DensityNoiseKey{},  // no noise compiled in
-                  shown || every_level_colour_);
+                  l + 1 == spec_.levels.size() || every_level_colour_);
   }
 }
 

@@ -8,6 +8,11 @@
 // network's one buffer).
 // A level's backward runs before the next level's forward: stop-gradient means no gradient crosses levels,
 // so one MLP workspace per network is enough, whatever the number of levels.
+// Zip-NeRF's proposal rounds (LevelRole::proposal) are the exception: their loss compares their histograms with the
+// last level's, so per chunk every proposal round runs its forward first (keeping its own features, raw density,
+// edges and weights), then the last level its forward and backward as above, then each round its interlevel loss →
+// weights backward → network backward (density only) → grid backward. Each round has a network of its own
+// (GraphSpec::validate), so its workspace holds its forward until then.
 #pragma once
 
 #include <memory>
@@ -21,12 +26,14 @@
 #include "mlp/network.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
+#include "ops/interlevel.hpp"
 #include "ops/loss.hpp"
 #include "ops/ray_bundle.hpp"
 #include "ops/rays.hpp"
 #include "ops/render.hpp"
 #include "ops/resample.hpp"
 #include "ops/sample.hpp"
+#include "ops/sample_intervals.hpp"
 #include "ops/zip_features.hpp"
 
 namespace mipnerf::graph {
@@ -95,8 +102,13 @@ class Graph {
   // known before any chunk runs). Zeroes every network's and grid's gradients, adds the grids' weight decay
   // gradient, and takes each grid's level scales (the step's constant).
   void begin_step(size_t batch_rays, double lossmult_sum);
+  // Proposal sampling's anneal for the coming steps: proposal_anneal(train_frac, spec.anneal_slope), train_frac in
+  // [0, 1] the fraction of training done (official train.py: (step − 1)/(max_steps − 1), clipped). Training graphs
+  // only (rendering uses 1); without proposal levels nothing reads it. Starts at 1 until set.
+  void set_train_fraction(double train_frac);
   void train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key);
-  // Waits for the step's work and returns each level's loss sums over the batch.
+  // Waits for the step's work and returns each level's loss sums over the batch (a proposal round's: its interlevel
+  // loss, LevelLoss::proposal).
   std::vector<ops::LevelLoss> end_step();
 
   // ---- rendering ----
@@ -106,7 +118,8 @@ class Graph {
   // Only the last level's colour is shown, so by default the levels before it run for their weights alone (what
   // the next level's resampling reads): the MLP skips its colour head (view branch and rgb layer) and the render
   // writes no composite, so their comp_rgb stays unwritten while acc, distance and weights are the full forward's
-  // values. With every_level_colour each level's colour is computed too (comparisons of the levels, tests).
+  // values. With every_level_colour each level's colour is computed too (comparisons of the levels, tests), but a
+  // proposal round's never (it has no colour: its comp_rgb stays unwritten).
   void render_chunk(const RaySource& source, ChunkRange chunk, StepKey key = {}, uint32_t first_ray_number = 0);
   void set_every_level_colour(bool every_level) { every_level_colour_ = every_level; }
   const LevelOutputs& level_outputs(size_t level) const { return levels_.at(level).outputs; }
@@ -115,8 +128,14 @@ class Graph {
   struct LevelBuffers {
     size_t intervals = 0;
     ocl::DeviceArray<float> t_edges;   // [R][N+1]
+    ocl::DeviceArray<float> s_edges;   // [R][N+1] normalised (proposal-sampled levels only)
     ocl::DeviceArray<float> weights;   // [R][N]
-    ocl::DeviceArray<float> partials;  // [slots][2] loss sums per work-group (training)
+    ocl::DeviceArray<float> partials;  // [slots][2] loss sums per work-group (training, colour levels)
+    // A proposal round's own, kept from its forward to its backward after the last level (training only; rendering
+    // uses the shared chunk buffers).
+    ocl::DeviceArray<float> features;     // [R·N][its grid's width]
+    ocl::DeviceArray<float> raw_density;  // [R·N]
+    ocl::DeviceArray<float> ray_loss;     // [B] its interlevel loss per ray of the batch, Σ over its intervals
     LevelOutputs outputs;
   };
 
@@ -132,6 +151,12 @@ class Graph {
                      bool with_colour = true);
   void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
                       const DensityNoiseKey& noise, const RngKey& key);
+  // A proposal round's backward (after the last level's): interlevel loss and ∂loss/∂weights → raw density →
+  // network (density only) → grid.
+  void backward_proposal(size_t level, ChunkRange chunk, const DensityNoiseKey& noise, const RngKey& key);
+  // The features and raw density a level's forward writes: a training proposal round's own, else the shared ones.
+  ocl::DeviceArray<float>& level_features(size_t level);
+  ocl::DeviceArray<float>& level_raw_density(size_t level);
 
   ocl::Context* ctx_;
   GraphSpec spec_;
@@ -153,7 +178,10 @@ class Graph {
   std::unique_ptr<ops::Render> render_;
   std::unique_ptr<ops::Loss> loss_;
   std::vector<std::unique_ptr<ops::ZipFeatures>> zip_;  // one per grid (its features are compiled in)
+  std::unique_ptr<ops::SampleIntervals> sample_intervals_;  // proposal sampling (when a level samples so)
+  std::unique_ptr<ops::SplineInterlevel> interlevel_;       // proposal rounds' loss (training)
   ResampleOptions resample_options_;
+  SampleIntervalsOptions sample_intervals_options_;  // anneal: the step's (training) or 1 (rendering)
 
   // Chunk buffers, R = max_chunk_rays, S = R · max intervals.
   ocl::DeviceArray<uint32_t> camera_ids_, pixel_ids_;  // [R]
@@ -167,6 +195,12 @@ class Graph {
   ocl::DeviceArray<float> d_raw_density_, d_raw_rgb_;  // [S], [S][3] (training)
   ocl::DeviceArray<float> d_features_;                 // [S][F] (training with a grid level)
   std::vector<ocl::DeviceArray<float>> level_scales_;  // per grid: [its levels]
+  // Proposal sampling: the first round's histogram, the whole ray [0, 1] with weight 1 (official initial sdist).
+  ocl::DeviceArray<float> unit_s_edges_, unit_weights_;  // [R][2], [R]
+  // The proposal rounds' backward, shared (one round at a time), M = the rounds' most intervals.
+  ocl::DeviceArray<float> w_blur_, d_wp_;      // [R][M]
+  ocl::DeviceArray<float> chunk_ray_loss_;     // [R]
+  ocl::DeviceArray<float> zero_d_raw_rgb_;     // [R·M][3] zeros: a round's colour head gets no gradient
   std::vector<LevelBuffers> levels_;
   std::vector<mlp::Workspace> workspaces_;  // one per network
 

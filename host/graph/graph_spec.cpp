@@ -54,13 +54,54 @@ size_t GraphSpec::max_intervals() const {
   return all.empty() ? 0 : *std::max_element(all.begin(), all.end());
 }
 
+bool GraphSpec::has_proposal_levels() const {
+  return std::any_of(levels.begin(), levels.end(), [](const LevelSpec& l) { return l.role == LevelRole::proposal; });
+}
+
+namespace {
+
+// The rules of proposal sampling: s-edges exist only on levels that sample by `proposal`, so a proposal-sampled level
+// reads a proposal-sampled (or no) previous level; a proposal round needs the last level's s-histogram, its own
+// network (its forward waits in its workspace for the backward after the last level's) and a grid.
+void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string& where) {
+  const auto& level = spec.levels[l];
+  if (level.sampling == Sampling::proposal) {
+    if (l > 0 && spec.levels[l - 1].sampling != Sampling::proposal) {
+      throw Error(where + ": proposal sampling reads the previous level's s-edges, so that level must sample by "
+                          "proposal too");
+    }
+    if (level.new_samples < 2) throw Error(where + ": proposal sampling draws at least 2 intervals");
+  }
+  if (level.role != LevelRole::proposal) return;
+  if (l + 1 == spec.levels.size()) throw Error(where + ": the last level is shown, it cannot be a proposal round");
+  if (level.sampling != Sampling::proposal || spec.levels.back().sampling != Sampling::proposal) {
+    throw Error(where + ": a proposal round and the last level must sample by proposal (the interlevel loss compares "
+                        "their s-histograms)");
+  }
+  if (level.encoding != Encoding::zip_grid) throw Error(where + ": a proposal round reads a grid (zip_grid encoding)");
+  for (size_t k = 0; k < spec.levels.size(); ++k) {
+    if (k != l && spec.levels[k].mlp_index == level.mlp_index) {
+      throw Error(where + ": a proposal round needs a network of its own, but level " + std::to_string(k) +
+                  " uses network " + std::to_string(level.mlp_index) + " too");
+    }
+  }
+  if (!(level.interlevel.blur_halfwidth > 0.0f) || !(level.interlevel.mult >= 0.0f)) {
+    throw Error(where + ": the interlevel blur half-width must be > 0 and its mult ≥ 0");
+  }
+}
+
+}  // namespace
+
 void GraphSpec::validate() const {
   if (levels.empty()) throw Error("graph: at least one level is needed");
-  if (levels.front().sampling != Sampling::stratified) throw Error("graph: the first level must sample stratified");
+  if (levels.front().sampling != Sampling::stratified && levels.front().sampling != Sampling::proposal) {
+    throw Error("graph: the first level must sample stratified or by proposal (from the whole ray)");
+  }
   for (size_t l = 0; l < levels.size(); ++l) {
     const auto& level = levels[l];
     const std::string where = "graph level " + std::to_string(l);
     if (level.new_samples < 1) throw Error(where + ": needs at least one sample");
+    validate_proposal_level(*this, l, where);
     if (level.mlp_index >= mlps.size())
       throw Error(where + ": names network " + std::to_string(level.mlp_index) + " but there are " +
                   std::to_string(mlps.size()));
@@ -83,6 +124,8 @@ void GraphSpec::validate() const {
                   ": covariance degrees (cov_max_deg = " + std::to_string(position_encoding.covariance_degrees) +
                   ") go with the concatenated PE and only with it");
     }
+    // A proposal round's network has no colour to condition (official disable_rgb): no view branch.
+    if (level.role == LevelRole::proposal) continue;
     if (mlp.view_dependence != rays.view_dependence) {
       throw Error(where + ": the network's view dependence does not match the rays'");
     }
@@ -100,6 +143,7 @@ std::string GraphSpec::describe() const {
     const auto& level = levels[l];
     const char* sampling = level.sampling == Sampling::stratified ? "stratified"
                            : level.sampling == Sampling::resample ? "resampled"
+                           : level.sampling == Sampling::proposal ? "proposal-sampled"
                                                                   : "resampled + previous";
     const char* encoding = level.encoding == Encoding::integrated        ? "IPE"
                            : level.encoding == Encoding::frustum_mean_pe ? "PE of frustum means"
@@ -114,7 +158,13 @@ std::string GraphSpec::describe() const {
     } else {
       out << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1;
     }
-    out << ", network " << level.mlp_index << ", loss weight " << level.loss_weight;
+    out << ", network " << level.mlp_index;
+    if (level.role == LevelRole::proposal) {
+      out << ", proposal round (density only; interlevel loss, blur " << level.interlevel.blur_halfwidth << ", mult "
+          << level.interlevel.mult << ")";
+    } else {
+      out << ", loss weight " << level.loss_weight;
+    }
   }
   return out.str();
 }

@@ -9,6 +9,7 @@
 #include "core/stage_options.hpp"
 #include "mlp/grid_table.hpp"
 #include "mlp/mlp_config.hpp"
+#include "ops/interlevel.hpp"
 #include "ops/loss.hpp"
 #include "ops/zip_features.hpp"
 
@@ -19,6 +20,18 @@ enum class Sampling {
   stratified,      // N + 1 edges between near and far (the first level)
   resample,        // N + 1 edges drawn from the previous level's weights (mip-NeRF's fine level)
   resample_union,  // N_new + 1 drawn edges merged with the previous level's edges (NeRF's fine level)
+  // Zip-NeRF's proposal sampling: N + 1 edges in normalised s = (t − near)/(far − near) drawn by sample_intervals
+  // (the step's anneal) from the previous level's s-edges and weights, or at the first level from the whole ray [0, 1]
+  // with weight 1 (official Model.__call__'s initial sdist); then t per ray (bounded scenes: raydist_fn = None).
+  proposal,
+};
+
+// What a level's output is for.
+enum class LevelRole {
+  nerf,      // colour: its loss is the photometric one (mip-NeRF's coarse and fine levels, Zip-NeRF's last)
+  // Zip-NeRF's proposal round: density only, its weights pick where the next level samples; its loss is the spline
+  // interlevel loss of its histogram against the last level's (stop-gradient), through its own network and grid.
+  proposal,
 };
 
 // How an interval becomes the MLP's input features.
@@ -36,7 +49,9 @@ struct LevelSpec {
   Encoding encoding = Encoding::integrated;
   size_t mlp_index = 0;      // which network evaluates this level (mip-NeRF: one shared; NeRF: one each)
   size_t grid_index = 0;     // which grid a zip_grid level reads (GraphSpec::grids)
-  float loss_weight = 1.0f;  // λ = 0.1 on coarse levels, 1 on the last
+  float loss_weight = 1.0f;  // λ = 0.1 on coarse levels, 1 on the last (nerf levels)
+  LevelRole role = LevelRole::nerf;
+  ops::InterlevelRound interlevel;  // a proposal level's loss: its blur half-width (in s) and mult
   // Intervals this level renders: new_samples, or previous + new_samples + 1 for a union of edge sets.
   size_t intervals(size_t previous_intervals) const {
     return sampling == Sampling::resample_union ? previous_intervals + new_samples + 1 : new_samples;
@@ -54,6 +69,11 @@ struct GraphSpec {
   RaysOptions rays;
   SampleOptions sample;      // `randomized` is set per call (training vs rendering)
   ResampleOptions resample;  // idem
+  // Proposal sampling (Sampling::proposal): `anneal` and `randomized` are set per graph and step (training: the
+  // step's proposal_anneal(train_frac, anneal_slope); rendering: 1 and deterministic, the official at train_frac 1
+  // with no rng).
+  SampleIntervalsOptions sample_intervals;
+  float anneal_slope = 10.0f;  // Schlick's bias slope of the anneal (official Model.anneal_slope)
   GaussianOptions gaussian;
   EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
   EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)
@@ -70,6 +90,8 @@ struct GraphSpec {
   // Intervals of each level, in order.
   std::vector<size_t> intervals_per_level() const;
   size_t max_intervals() const;
+  // True when some level is a proposal round (Zip-NeRF's proposal sampling).
+  bool has_proposal_levels() const;
   // Throws mipnerf::Error when levels, networks and encodings do not fit together.
   void validate() const;
   // One line per level, for logs: "level 0: stratified 128, IPE 0..15 (96), MLP 0, weight 0.1".

@@ -1,6 +1,6 @@
 // Host wrapper of kernels/interlevel.cl: Zip-NeRF's anti-aliased ("spline") interlevel loss of one proposal round
-// against the NeRF's final histogram (camp_zipnerf loss_utils.spline_interlevel_loss), forward and backward. Not yet
-// a stage of the training graph (issues 45 and 46: proposal sampling).
+// against the NeRF's final histogram (camp_zipnerf loss_utils.spline_interlevel_loss), forward and backward: the loss
+// of the training graph's proposal rounds (graph.hpp, LevelRole::proposal).
 //
 //   w_blur = (c, w) as a pdf, blurred by a box of half-width r, integrated over each proposal interval of cp
 //   loss   = mult · mean_{rays, j} max(0, w_blur_j − wp_j)² / (wp_j + ε)

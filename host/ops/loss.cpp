@@ -44,7 +44,9 @@ float loss_level_weight(size_t level, size_t n_levels, float coarse_weight) {
 
 double LevelLoss::psnr() const { return -10.0 * std::log10(mse()); }
 
-bool LevelLoss::finite() const { return std::isfinite(weighted_sse) && std::isfinite(plain_sse); }
+bool LevelLoss::finite() const {
+  return std::isfinite(weighted_sse) && std::isfinite(plain_sse) && std::isfinite(interlevel);
+}
 
 LevelLoss sum_loss_partials(const std::vector<float>& partials, size_t n_groups, double lossmult_sum,
                             size_t n_rays) {
@@ -65,7 +67,8 @@ LevelLoss sum_loss_partials(const std::vector<float>& partials, size_t n_groups,
 double total_loss(const std::vector<LevelLoss>& levels, float coarse_weight) {
   double total = 0.0;
   for (size_t l = 0; l < levels.size(); ++l) {
-    total += static_cast<double>(loss_level_weight(l, levels.size(), coarse_weight)) * levels[l].loss();
+    const double weight = levels[l].proposal ? 1.0 : loss_level_weight(l, levels.size(), coarse_weight);
+    total += weight * levels[l].loss();
   }
   return total;
 }

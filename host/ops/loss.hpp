@@ -51,9 +51,14 @@ struct LevelLoss {
   double plain_sse = 0.0;     // Σ_r Σ_c residual² (unweighted)
   double lossmult_sum = 0.0;  // Σ_r lossmult_r over the batch
   size_t n_rays = 0;          // rays in the batch
+  // A proposal round (Zip-NeRF) has no colour: its loss is the spline interlevel loss, mult already applied
+  // (ops::interlevel_loss_value); the photometric sums above stay 0.
+  bool proposal = false;
+  double interlevel = 0.0;
 
-  // The official per-level loss: weighted_sse / lossmult_sum (= 3 × per-channel MSE when lossmult = 1).
-  double loss() const { return weighted_sse / lossmult_sum; }
+  // The official per-level loss: weighted_sse / lossmult_sum (= 3 × per-channel MSE when lossmult = 1), or a proposal
+  // round's interlevel loss.
+  double loss() const { return proposal ? interlevel : weighted_sse / lossmult_sum; }
   // The true per-channel MSE over the batch's pixels, unweighted: plain_sse / (3 · n_rays).
   double mse() const { return plain_sse / (3.0 * static_cast<double>(n_rays)); }
   // PSNR of mse() for values in [0, 1]: −10 · log10(mse). (train.py logs −10·log10(loss), which reads
@@ -67,7 +72,8 @@ struct LevelLoss {
 LevelLoss sum_loss_partials(const std::vector<float>& partials, size_t n_groups, double lossmult_sum,
                             size_t n_rays);
 
-// Σ_levels loss_level_weight(l) · levels[l].loss(), with coarse_weight = λ.
+// Σ_levels loss_level_weight(l) · levels[l].loss(), with coarse_weight = λ; a proposal round's loss counts once (its
+// mult is inside it), and the last colour level is the one loss_level_weight weighs 1.
 double total_loss(const std::vector<LevelLoss>& levels, float coarse_weight = 0.1f);
 
 // The loss stage on one device, one specialisation. Arguments of each kernel are set in one place.

@@ -10,7 +10,9 @@
 namespace mipnerf::ops {
 
 SampleIntervals::SampleIntervals(ocl::Context& ctx) : ctx_(&ctx) {
-  fwd_ = &ctx.program({"common.cl", "sample_intervals.cl"}).kernel("sample_intervals_fwd");
+  auto& program = ctx.program({"common.cl", "sample_intervals.cl"});
+  fwd_ = &program.kernel("sample_intervals_fwd");
+  s_to_t_ = &program.kernel("sample_intervals_s_to_t");
 }
 
 namespace {
@@ -54,6 +56,19 @@ void SampleIntervals::fwd(const SampleIntervalsOptions& options, const SampleInt
                 static_cast<cl_uint>(options.single_jitter ? 1 : 0), static_cast<cl_ulong>(key.seed),
                 static_cast<cl_uint>(key.step), static_cast<cl_uint>(key.first_ray));
   ocl::launch_1d(*ctx_, *fwd_, in.n_rays, where);
+}
+
+void SampleIntervals::s_to_t(const ocl::DeviceArray<float>& s, const RayBundle& rays, size_t n_rays, size_t n_per_ray,
+                             ocl::DeviceArray<float>& t) {
+  const std::string where = "sample_intervals_s_to_t";
+  if (n_per_ray == 0) throw Error(where + ": n_per_ray must be at least 1 (the edges of each ray)");
+  detail::require(s, n_rays * n_per_ray, where);
+  detail::require(t, n_rays * n_per_ray, where);
+  detail::require(rays.near, n_rays, where);
+  detail::require(rays.far, n_rays, where);
+  ocl::set_args(*s_to_t_, where, s, rays.near, rays.far, t, detail::to_uint(n_rays, where, "rays"),
+                detail::to_uint(n_per_ray, where, "values per ray"));
+  ocl::launch_1d(*ctx_, *s_to_t_, n_rays * n_per_ray, where);
 }
 
 }  // namespace mipnerf::ops

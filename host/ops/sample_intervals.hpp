@@ -1,5 +1,6 @@
 // Host wrapper of kernels/sample_intervals.cl: proposal sampling's sampler (official stepfun.sample_intervals with
-// the annealed, padded resampling logits of models.py). Not yet a stage of the training graph (issues 45 and 46).
+// the annealed, padded resampling logits of models.py), and the linear s → t of bounded scenes. The training graph's
+// proposal sampling (graph.hpp, Sampling::proposal) runs both.
 #pragma once
 
 #include <cstddef>
@@ -7,6 +8,7 @@
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
 #include "core/stage_options.hpp"
+#include "ops/ray_bundle.hpp"
 
 namespace mipnerf::ops {
 
@@ -27,9 +29,15 @@ class SampleIntervals {
   void fwd(const SampleIntervalsOptions& options, const SampleIntervalsInputs& in, ocl::DeviceArray<float>& s_new,
            const RngKey& key = {});
 
+  // Enqueues sample_intervals_s_to_t: t [R][K] = clip(s·far + (1 − s)·near, near, far) with each ray's near and far
+  // from `rays` (the official identity ray warp, bounded scenes). K = n_per_ray ≥ 1.
+  void s_to_t(const ocl::DeviceArray<float>& s, const RayBundle& rays, size_t n_rays, size_t n_per_ray,
+              ocl::DeviceArray<float>& t);
+
  private:
   ocl::Context* ctx_;
   ::cl::Kernel* fwd_;
+  ::cl::Kernel* s_to_t_;
 };
 
 }  // namespace mipnerf::ops

@@ -94,7 +94,7 @@ struct StageDescription {
 // level: render_raw_fwd's code without the colour) is left out as well: tests/ops/test_render.cpp holds it bit for bit
 // to render_raw_fwd on every background, with and without density noise, and renders time it in their "render" stage.
 // So is its backward render_raw_weights_bwd (a proposal level's ∂L/∂raw_density from the interlevel loss's ∂L/∂w;
-// issues 45, 46: not yet a stage of the model): render_raw_bwd's sweep fed by d_weights, which test_render.cpp checks
+// the training graph's proposal rounds, sampler = proposal): render_raw_bwd's sweep fed by d_weights, which test_render.cpp checks
 // against the reference for every density activation and bias and every sample walk, with and without density noise,
 // and bit for bit against render_raw_bwd's density gradient.
 // gaussian_ipe_axis_fwd is Encode's fused kernel per (row, axis), in a program of its own with the degrees compiled

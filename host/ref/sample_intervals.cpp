@@ -125,6 +125,15 @@ void sample_intervals_fwd(const SampleIntervalsOptions& options, const std::vect
   }
 }
 
+void sample_intervals_s_to_t(const std::vector<double>& s, const std::vector<double>& near,
+                             const std::vector<double>& far, std::vector<double>& t, size_t n_rays, size_t n_per_ray) {
+  t.assign(n_rays * n_per_ray, 0.0);
+  for (size_t i = 0; i < n_rays * n_per_ray; ++i) {
+    const size_t ray = i / n_per_ray;
+    t[i] = std::clamp(s[i] * far[ray] + (1.0 - s[i]) * near[ray], near[ray], far[ray]);
+  }
+}
+
 SampleIntervalsEnvelope sample_intervals_envelope(const SampleIntervalsOptions& options, const double* s,
                                                   const double* w, size_t n, const std::vector<double>& u, double eps,
                                                   double u_slack) {

@@ -39,6 +39,11 @@ void sample_intervals_fwd(const SampleIntervalsOptions& options, const std::vect
                           const std::vector<double>& weights, std::vector<double>& s_new, size_t n_rays,
                           size_t n_intervals, size_t n_new, const RngKey& key);
 
+// Mirror of sample_intervals_s_to_t: t [R][K] = clip(s·far + (1 − s)·near, near, far) per ray (the official identity
+// ray warp of bounded scenes, coord.construct_ray_warps with fn = None).
+void sample_intervals_s_to_t(const std::vector<double>& s, const std::vector<double>& near,
+                             const std::vector<double>& far, std::vector<double>& t, size_t n_rays, size_t n_per_ray);
+
 // Where an implementation whose operations are each within one ulp-relative `eps` (the machine epsilon: 2^-23 for the
 // float32 kernel, 2^-52 for the float64 official) may put one ray's edges, given the exact u [M]: lo [M+1] ≤ edge ≤ hi
 // [M+1]. Derivation (per ray, p = softmax(l), S = max|s|):

@@ -21,7 +21,7 @@ namespace {
 using Member = std::variant<bool TrainConfig::*, int TrainConfig::*, int64_t TrainConfig::*, uint64_t TrainConfig::*,
                             double TrainConfig::*, Background TrainConfig::*, RayShape TrainConfig::*,
                             ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*,
-                            gemm::GemmBackend TrainConfig::*>;
+                            gemm::GemmBackend TrainConfig::*, Sampler TrainConfig::*>;
 
 // One row of the table. An enum setting's `help` says what it does; its allowed values are prepended from the
 // enum's name table (with_full_help), so they are written once.
@@ -117,6 +117,28 @@ const std::vector<Entry>& table() {
        &TrainConfig::grid_append_scale},
       {{"grid_weight_decay", "zipnerf: weight of each grid level's mean squared value in the loss", "optimisation"},
        &TrainConfig::grid_weight_decay},
+      {{"sampler",
+        "how later levels choose their intervals: resampling the previous level's weights (mip-NeRF), or Zip-NeRF's "
+        "proposal rounds (zipnerf only: density-only networks on their own grids, trained by the interlevel loss)",
+        "model"},
+       &TrainConfig::sampler},
+      {{"proposal_rounds", "sampler=proposal: density-only proposal rounds before the NeRF level (official 2)", "model"},
+       &TrainConfig::proposal_rounds},
+      {{"proposal_samples", "sampler=proposal: intervals each proposal round draws (official 64)", "model"},
+       &TrainConfig::proposal_samples},
+      {{"proposal_grid_max",
+        "sampler=proposal: cells a side of the last round's finest grid level; each earlier round's is 4x coarser "
+        "(official 2048, 512)",
+        "model"},
+       &TrainConfig::proposal_grid_max},
+      {{"anneal_slope",
+        "sampler=proposal: slope of Schlick's bias annealing the proposal weights over training (<= 0: off; official "
+        "10)",
+        "model"},
+       &TrainConfig::anneal_slope},
+      {{"interlevel_mult", "sampler=proposal: weight of each proposal round's interlevel loss (official 0.01)",
+        "optimisation"},
+       &TrainConfig::interlevel_mult},
       {{"batch_size", "rays per optimisation step", "optimisation"}, &TrainConfig::batch_size},
       {{"steps", "optimisation steps of the run", "optimisation"}, &TrainConfig::steps},
       {{"lr_init", "initial learning rate", "optimisation"}, &TrainConfig::lr_init},
@@ -457,6 +479,28 @@ void validate(const TrainConfig& c) {
       grid.validate();
     } catch (const Error& e) {
       require(false, e.what());
+    }
+  }
+  if (c.sampler == Sampler::proposal) {
+    require(c.variant == ModelFamily::zipnerf,
+            "sampler=proposal is Zip-NeRF's (density-only proposal networks on grids of their own): train with --model "
+            "zipnerf, or keep sampler=resample for the " + std::string(enum_name(c.variant)) + " model family");
+    require(c.proposal_rounds >= 1 && c.proposal_rounds <= 4, "proposal_rounds must be in 1..4 (official 2)");
+    require(c.proposal_samples >= 2, "proposal_samples must be at least 2 (proposal sampling draws >= 2 intervals)");
+    require(c.interlevel_mult >= 0, "interlevel_mult must be >= 0");
+    mlp::GridConfig grid;
+    grid.min_grid_size = c.grid_min;
+    grid.scale_supersample = c.grid_supersample;
+    grid.features = 1;
+    for (int round = 0; round < c.proposal_rounds; ++round) {
+      grid.max_grid_size = c.proposal_grid_max >> (2 * (c.proposal_rounds - 1 - round));
+      try {
+        grid.validate();
+      } catch (const Error& e) {
+        require(false, "proposal_grid_max = " + std::to_string(c.proposal_grid_max) + " gives proposal round " +
+                           std::to_string(round) + " a finest grid of " + std::to_string(grid.max_grid_size) +
+                           " cells (each earlier round 4x coarser): " + e.what());
+      }
     }
   }
   require(c.grid_bound >= 0, "grid_bound must be >= 0 (0 = from the scene)");

@@ -28,6 +28,17 @@ constexpr std::array<EnumName<ModelFamily>, 3> enum_names(ModelFamily) {
   return {{{ModelFamily::mipnerf, "mipnerf"}, {ModelFamily::nerf, "nerf"}, {ModelFamily::zipnerf, "zipnerf"}}};
 }
 
+// The `sampler` setting: how the levels after the first choose their intervals.
+enum class Sampler {
+  resample,  // mip-NeRF's: the next level resamples the previous one's weights, every level through the one network
+  // Zip-NeRF's proposal rounds (zipnerf only): density-only networks on grids of their own, trained by the interlevel
+  // loss, pick where the last level samples (proposal_* settings)
+  proposal,
+};
+constexpr std::array<EnumName<Sampler>, 2> enum_names(Sampler) {
+  return {{{Sampler::resample, "resample"}, {Sampler::proposal, "proposal"}}};
+}
+
 // The --variant bundles: rows of the paper's tables, each a set of settings (variants()).
 enum class Variant {
   mipnerf,
@@ -116,6 +127,20 @@ struct TrainConfig {
   bool grid_downweight = true;    // fade each level by the multisample's footprint (false: a plain hash grid)
   bool grid_append_scale = true;  // append each level's footprint weight as a feature (official append_scale)
   double grid_weight_decay = 0.1;  // mult of each grid level's ½·mean(value²) in the loss (official param_regularizers)
+  // Zip-NeRF's proposal sampling (sampler = proposal; camp_zipnerf configs/zipnerf/360.gin): proposal_rounds
+  // density-only rounds of proposal_samples intervals each, then the NeRF level's num_samples (official
+  // sampling_strategy ((0,0,64),(1,1,64),(2,2,32))). Each round has its own tiny MLP (mlp_depth × mlp_width, no colour
+  // head: official disable_rgb) and its own grid of 1 feature a level (official num_features 1), the last round's
+  // finest level proposal_grid_max cells a side and each earlier round's 4× coarser (official max_grid_size 512,
+  // 2048); their loss is the spline interlevel loss, interlevel_mult per round (official mults 0.01), blurred by the
+  // official half-widths (graph/proposal blur table in train/model.cpp), with weights annealed by Schlick's bias of
+  // slope anneal_slope (official 10).
+  Sampler sampler = Sampler::resample;
+  int proposal_rounds = 2;
+  int proposal_samples = 64;
+  int proposal_grid_max = 2048;
+  double anneal_slope = 10.0;
+  double interlevel_mult = 0.01;
 
   // --- optimisation ---
   int batch_size = 4096;            // rays per step

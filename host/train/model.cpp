@@ -53,6 +53,53 @@ void set_grid_box(const TrainConfig& c, ops::ZipFeatureOptions& zip) {
   zip.box_size = static_cast<float>(2 * bound);
 }
 
+// The blur half-width (normalised s) of proposal round `round` of `rounds`: the official's (0.03, 0.003) for its two
+// rounds (camp_zipnerf configs/zipnerf/360.gin spline_interlevel_params blurs), the finer one for the round before the
+// NeRF level and the coarser one for every earlier round.
+float proposal_blur_halfwidth(int round, int rounds) { return round + 1 == rounds ? 0.003f : 0.03f; }
+
+// Zip-NeRF's proposal pipeline (sampler = proposal; official Model.__call__ with 360.gin's sampling_strategy):
+// levels 0 .. K−1 are the proposal rounds, each with grid i (1 feature a level, finest proposal_grid_max / 4^(K−1−i))
+// and a density-only network i; level K is the NeRF level with grid K (the grid_* settings) and network K. Every level
+// samples by proposal, the first from the whole ray.
+void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
+  const int rounds = c.proposal_rounds;
+  spec.grids.clear();
+  for (int round = 0; round < rounds; ++round) {
+    mlp::GridConfig grid = grid_config(c);
+    grid.features = 1;  // official: "no need for >1 features in the proposal NGPs, the output is 1d"
+    grid.max_grid_size = c.proposal_grid_max >> (2 * (rounds - 1 - round));
+    grid.seed = grid.seed + 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(round + 1);
+    spec.grids.push_back(grid);
+  }
+  spec.grids.push_back(grid_config(c));
+  for (int l = 0; l <= rounds; ++l) {
+    graph::LevelSpec level;
+    level.sampling = graph::Sampling::proposal;
+    level.encoding = graph::Encoding::zip_grid;
+    level.grid_index = static_cast<size_t>(l);
+    level.mlp_index = static_cast<size_t>(l);
+    if (l < rounds) {
+      level.role = graph::LevelRole::proposal;
+      level.new_samples = static_cast<size_t>(c.proposal_samples);
+      level.interlevel.blur_halfwidth = proposal_blur_halfwidth(l, rounds);
+      level.interlevel.mult = static_cast<float>(c.interlevel_mult);
+    } else {
+      level.new_samples = static_cast<size_t>(c.num_samples);
+    }
+    spec.levels.push_back(level);
+    mlp::MlpConfig m = network(c, spec.feature_width(level), static_cast<size_t>(l));
+    // A proposal round's network: the tiny trunk and its density, no colour to condition (official disable_rgb).
+    if (l < rounds) m.view_dependence = false;
+    spec.mlps.push_back(m);
+  }
+  // Official Model defaults: resample_padding 0, single_jitter, the domain [init_s_near, init_s_far] = [0, 1].
+  spec.sample_intervals.resample_padding = 0.0f;
+  spec.sample_intervals.single_jitter = true;
+  spec.sample_intervals.randomized = c.randomized;
+  spec.anneal_slope = static_cast<float>(c.anneal_slope);
+}
+
 }  // namespace
 
 graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
@@ -82,7 +129,9 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   graph::LevelSpec encoded;
   encoded.encoding = encoding;
   const size_t input_width = spec.feature_width(encoded);
-  for (int l = 0; l < c.num_levels; ++l) {
+  const bool proposal = zipnerf && c.sampler == Sampler::proposal;
+  if (proposal) add_proposal_levels(c, spec);
+  for (int l = 0; l < (proposal ? 0 : c.num_levels); ++l) {
     graph::LevelSpec level;
     const bool first = l == 0, last = l == c.num_levels - 1;
     if (nerf) {
@@ -98,7 +147,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
     level.loss_weight = last ? 1.0f : static_cast<float>(c.coarse_loss_mult);
     spec.levels.push_back(level);
   }
-  const size_t n_networks = c.single_mlp ? 1 : static_cast<size_t>(c.num_levels);
+  const size_t n_networks = proposal ? 0 : c.single_mlp ? 1 : static_cast<size_t>(c.num_levels);
   for (size_t i = 0; i < n_networks; ++i) spec.mlps.push_back(network(c, input_width, i));
 
   spec.rays.ray_shape = c.ray_shape;

@@ -32,6 +32,13 @@ double draw_batch(StepParts& p, int64_t step) {
   return sum;
 }
 
+// The fraction of training done at `step` (1-based) of `steps`, for proposal sampling's anneal: the official train.py's
+// clip((step − 1)/(max_steps − 1), 0, 1); a one-step run is done at its step.
+double train_fraction(int64_t step, int64_t steps) {
+  if (steps <= 1) return 1.0;
+  return std::clamp(static_cast<double>(step - 1) / static_cast<double>(steps - 1), 0.0, 1.0);
+}
+
 // This rank's contiguous share of the batch's ray indices, in chunks of up to chunk_rays: every rank draws the
 // whole batch (cheap), so Σ lossmult stays global, and when the share is a multiple of the chunk each chunk is a
 // single-process chunk bit for bit.
@@ -40,6 +47,7 @@ std::vector<ops::LevelLoss> forward_backward(StepParts& p, int64_t step, double 
   const graph::RaySource source{p.data.cameras(), p.batch.camera_ids, p.batch.pixel_ids};
   const graph::TrainTargets targets{p.batch.target_rgb, p.spec.loss.multiscale ? &p.batch.lossmult : nullptr};
   const RayShare share = this_rank_rays(batch_rays);
+  p.graph.set_train_fraction(train_fraction(step, p.config.steps));
   p.graph.begin_step(batch_rays, lossmult_sum);
   for (size_t first = share.first; first < share.end; first += p.chunk_rays) {
     p.graph.train_chunk(source, {first, std::min(p.chunk_rays, share.end - first)}, targets,

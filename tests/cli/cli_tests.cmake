@@ -215,7 +215,7 @@ mipnerf_add_cli_error_test("train: unknown value of an enum setting" PATTERN "se
   ARGS train --ray_shape sphere --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: unknown variant" PATTERN "unknown variant 'nosuch'; the variants are: mipnerf, mipnerf-concat-pe, mipnerf-no-area-loss, mipnerf-no-ipe, mipnerf-no-misc, mipnerf-two-mlps, nerf, nerf-area, nerf-area-center, nerf-area-center-misc"
   ARGS train --variant nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
-mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'. did you mean 'num_samples'\\? \\(mipnerf-cl train --help lists every setting\\)$"
+mipnerf_add_cli_error_test("train: unknown --set name" PATTERN "unknown setting 'sampels'. did you mean 'num_samples', 'sampler' or 'proposal_samples'\\? \\(mipnerf-cl train --help lists every setting\\)$"
   ARGS train --set sampels=3 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: a mistyped setting names the one meant" PATTERN "unknown setting 'stpes'. did you mean 'steps'\\? \\(mipnerf-cl train --help lists every setting\\)$"
   ARGS train --set stpes=10 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
@@ -236,6 +236,8 @@ mipnerf_add_checked_test("cli: dataset import-colmap --help names the seven came
   COMMAND mipnerf-cl dataset import-colmap --help)
 mipnerf_add_cli_error_test("train: invalid combination" PATTERN "invalid configuration: lr_warmup_mult must be in"
   ARGS train --lr_warmup_mult 2 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: sampler=proposal for mip-NeRF says it is Zip-NeRF's" PATTERN "invalid configuration: sampler=proposal is Zip-NeRF's \\(density-only proposal networks on grids of their own\\): train with --model zipnerf, or keep sampler=resample for the mipnerf model family$"
+  ARGS train --set sampler=proposal --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: missing data" PATTERN "nowhere: no such file or folder"
   ARGS train --data "${MIPNERF_DATA_FIXTURES}/nowhere" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 # An output folder that cannot be made: one line naming it, before anything runs (a file sits where a folder must be).
@@ -350,6 +352,22 @@ mipnerf_add_checked_test("cli: eval scores every scale of multiscale data" EXPEC
   COMMAND mipnerf-cl eval --checkpoint "${MIPNERF_RENDER_RUN}"
   --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene/multiscale")
 set_tests_properties("cli: eval scores every scale of multiscale data" PROPERTIES FIXTURES_REQUIRED cli_render_model)
+# Zip-NeRF with proposal sampling (density-only proposal rounds, their own grids and networks): trained a few steps
+# through the executable, then evaluated and rendered from its checkpoint (the renderer runs the rounds for weights).
+set(MIPNERF_PROPOSAL_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-proposal-run")
+add_test(NAME "cli: proposal: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_PROPOSAL_RUN}")
+mipnerf_add_checked_test("cli: proposal: train --model zipnerf --set sampler=proposal" EXPECT "trained 4 steps"
+  COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${MIPNERF_PROPOSAL_RUN}"
+  --model zipnerf --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml" --set sampler=proposal
+  --set proposal_samples=16 --set num_samples=16 --set proposal_grid_max=128 --set grid_max=128 --set grid_hash_log2=14)
+set_tests_properties("cli: proposal: clear the run folder" PROPERTIES FIXTURES_SETUP cli_proposal_clean)
+set_tests_properties("cli: proposal: train --model zipnerf --set sampler=proposal" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_proposal_clean" FIXTURES_SETUP cli_proposal_model)
+mipnerf_add_checked_test("cli: proposal: eval a proposal-sampled model" EXPECT "mean PSNR [0-9.]+ dB"
+  COMMAND mipnerf-cl eval --checkpoint "${MIPNERF_PROPOSAL_RUN}" --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene")
+set_tests_properties("cli: proposal: eval a proposal-sampled model" PROPERTIES FIXTURES_REQUIRED cli_proposal_model)
+mipnerf_add_checked_test("cli: proposal: render an orbit of a proposal-sampled model" EXPECT "rendered 2 frames of an orbit \\(16x16\\) from step 4"
+  COMMAND mipnerf-cl render --checkpoint "${MIPNERF_PROPOSAL_RUN}" --path orbit --frames 2 --size 16x16)
+set_tests_properties("cli: proposal: render an orbit of a proposal-sampled model" PROPERTIES FIXTURES_REQUIRED cli_proposal_model)
 # The errors. Those that need a model use the run above.
 mipnerf_add_cli_error_test("render: missing checkpoint" PATTERN "nowhere: no checkpoint found \\(expected a .mnck file"
   ARGS render --checkpoint "${MIPNERF_RENDER_FIXTURES}/nowhere")

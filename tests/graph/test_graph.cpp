@@ -13,8 +13,11 @@
 #include "data/synthetic/forward_facing.hpp"
 #include "graph/graph.hpp"
 #include "ops/batch.hpp"
+#include "core/proposal_anneal.hpp"
 #include "ref/encode.hpp"
 #include "ref/gaussian.hpp"
+#include "ref/interlevel.hpp"
+#include "ref/sample_intervals.hpp"
 #include "ref/loss.hpp"
 #include "ref/mlp.hpp"
 #include "ref/zip_features.hpp"
@@ -138,6 +141,16 @@ ref::ZipFeatureSettings reference_zip_settings(const graph::GraphSpec& spec, siz
   return test::zip_reference_settings(spec.zip_options(g), key);
 }
 
+// What a proposal round keeps from its forward for its backward after the last level (Graph::backward_proposal).
+struct ReferenceRound {
+  size_t level = 0, n = 0;
+  std::vector<double> s, t, raw_density, weights;
+  ref::MlpTape tape;
+};
+
+// The anneal the proposal-sampling tests set on the graph (Graph::set_train_fraction), and the reference's copy.
+constexpr double kProposalTrainFraction = 0.3;
+
 ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std::vector<double>>& params,
                              const ReferenceGrids& grids, const std::vector<double>& cameras, const std::vector<uint32_t>& camera_ids,
                              const std::vector<uint32_t>& pixel_ids, const std::vector<double>& target,
@@ -162,13 +175,28 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     ref::grid_weight_decay(grids.levels[g], grids.tables[g], options.features, spec.grid_weight_decay,
                            out.grid_grads[g]);
   }
-  std::vector<double> t_prev, weights_prev;
+  std::vector<double> t_prev, weights_prev, s_prev;
   size_t n_prev = 0;
+  std::vector<ReferenceRound> rounds;
   for (size_t l = 0; l < spec.levels.size(); ++l) {
     const auto& level = spec.levels[l];
-    std::vector<double> t;
+    std::vector<double> t, s;
     const size_t n = level.intervals(n_prev);
-    if (fixed_t_edges && l > 0) {
+    if (level.sampling == graph::Sampling::proposal) {
+      // Proposal sampling in s (the first round from the whole ray, weight 1), each round with its own seed, then t.
+      SampleIntervalsOptions options = spec.sample_intervals;
+      options.anneal = static_cast<float>(proposal_anneal(kProposalTrainFraction, spec.anneal_slope));
+      const RngKey round_key{key.seed + 0x9E3779B97F4A7C15ull * l, key.step, key.first_ray};
+      if (l == 0) {
+        std::vector<double> unit_edges, unit_weights(R, 1.0);
+        for (size_t ray = 0; ray < R; ++ray) unit_edges.insert(unit_edges.end(), {0.0, 1.0});
+        ref::sample_intervals_fwd(options, unit_edges, unit_weights, s, R, 1, n, round_key);
+      } else {
+        ref::sample_intervals_fwd(options, s_prev, weights_prev, s, R, n_prev, n, round_key);
+      }
+      ref::sample_intervals_s_to_t(s, near, far, t, R, n + 1);
+      if (fixed_t_edges && l > 0) t = (*fixed_t_edges)[l];
+    } else if (fixed_t_edges && l > 0) {
       // The stop-gradient between levels, for finite differences: later levels keep the edges the unperturbed
       // step drew, as the analytic gradient treats them (no gradient flows through resampling).
       t = (*fixed_t_edges)[l];
@@ -218,6 +246,20 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     ref::mlp_forward(mlp_config, params[level.mlp_index], features, view_features, R, n, raw_density, raw_rgb, &tape);
     // The level's density noise (training; when the spec has it), keyed as the graph keys it.
     const DensityNoiseKey noise{key, static_cast<uint32_t>(l)};
+    if (level.role == graph::LevelRole::proposal) {
+      // A proposal round: its weights alone now, its backward after the last level's.
+      ReferenceRound round{l, n, s, t, raw_density, {}, std::move(tape)};
+      ref::render_raw_weights_fwd(spec.render, spec.activation, raw_density, t, directions, acc, distance,
+                                  round.weights, R, n, noise);
+      out.level_loss.push_back(0.0);  // filled in below
+      out.t_edges.push_back(t);
+      t_prev = t;
+      weights_prev = round.weights;
+      s_prev = s;
+      n_prev = n;
+      rounds.push_back(std::move(round));
+      continue;
+    }
     ref::render_raw_fwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, comp, acc, distance, weights,
                         R, n, noise);
     std::vector<double> d_comp(3 * R), partials(2), d_raw_rgb, d_raw_density;
@@ -240,7 +282,32 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     }
     t_prev = t;
     weights_prev = weights;
+    s_prev = s;
     n_prev = n;
+  }
+  // The proposal rounds' backward: the interlevel loss against the last level's histogram (a constant) → ∂/∂weights →
+  // raw density → network (no colour gradient) → grid.
+  for (const auto& round : rounds) {
+    const auto& level = spec.levels[round.level];
+    const auto& mlp_config = spec.mlps[level.mlp_index];
+    const size_t M = round.n;
+    std::vector<double> w_blur(R * M), ray_loss(R), d_wp(R * M), d_raw_density, d_features;
+    ref::spline_interlevel_fwd(s_prev.data(), weights_prev.data(), round.s.data(), round.weights.data(),
+                               level.interlevel.blur_halfwidth, w_blur.data(), ray_loss.data(), R, n_prev, M);
+    const double loss = ref::spline_interlevel_loss(ray_loss, M, level.interlevel.mult);
+    out.level_loss[round.level] = loss;
+    out.weighted_loss += loss;
+    ref::spline_interlevel_bwd(w_blur.data(), round.weights.data(),
+                               static_cast<double>(level.interlevel.mult) / static_cast<double>(R * M), d_wp.data(),
+                               R * M);
+    const DensityNoiseKey noise{key, static_cast<uint32_t>(round.level)};
+    ref::render_raw_weights_bwd(spec.render, spec.activation, round.raw_density, round.t, directions, round.weights,
+                                d_wp, d_raw_density, R, M, noise);
+    const std::vector<double> d_raw_rgb(3 * R * M, 0.0);
+    ref::mlp_backward(mlp_config, params[level.mlp_index], round.tape, d_raw_density, d_raw_rgb,
+                      out.grads[level.mlp_index], &d_features);
+    ref::zip_features_bwd({origins, directions, radii, round.t, R, M}, grids.levels[level.grid_index], d_features,
+                          reference_zip_settings(spec, level.grid_index, key), out.grid_grads[level.grid_index]);
   }
   return out;
 }
@@ -297,6 +364,7 @@ void check_step_against_reference_on(gemm::GemmBackend backend, const std::strin
     ref_grids.tables.push_back(to_double(table));
   }
   graph::Graph graph(ctx, spec, pointers, mlp::grid_pointers(grids), graph::GraphMode::training, chunk, batch_rays);
+  graph.set_train_fraction(kProposalTrainFraction);  // proposal sampling's anneal (other variants ignore it)
   graph.begin_step(batch_rays, spec.loss.multiscale ? lossmult_sum : static_cast<double>(batch_rays));
   const graph::RaySource source{device_data.cameras(), batch.camera_ids, batch.pixel_ids};
   for (size_t first = 0; first < batch_rays; first += chunk) {
@@ -690,4 +758,80 @@ TEST_CASE("graph: a Zip-NeRF training step (multisampled grid, tiny MLP) equals 
 TEST_CASE("graph: a Zip-NeRF training step with one point per interval equals the reference") {
   check_step_against_reference("zipnerf", test::small_scene(),
                                {{"grid_max", "64"}, {"grid_hash_log2", "12"}, {"grid_multisample", "false"}});
+}
+
+// Zip-NeRF's proposal sampling: two density-only rounds (their own 1-feature grids and tiny networks, their edges drawn
+// by sample_intervals in s with the step's anneal), then the NeRF level drawn from the second round; the rounds'
+// losses are the spline interlevel losses against the NeRF's histogram, trained after the NeRF's backward. Losses,
+// every network's and every grid's gradient against the reference composed of the stage references.
+TEST_CASE("graph: a Zip-NeRF training step with proposal sampling equals the reference") {
+  check_step_against_reference("zipnerf", test::small_scene(),
+                               {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_grid_max", "64"},
+                                {"grid_max", "64"}, {"grid_hash_log2", "12"}});
+}
+
+// A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at
+// anneal 1 (the official eval: train_frac 1, no rng): what a training graph's forward gives at train fraction 1 with
+// randomization off (its rounds' forwards also feed their colour heads, which the weights never read). Every level's
+// weights, acc and distance, and the shown colour, agree to float32 rounding on every GEMM backend.
+TEST_CASE("graph: a proposal model renders its rounds for weights alone, as training at anneal 1 without jitter") {
+  auto& ctx = test::test_context();
+  const auto config = train::resolve_config("tiny", "zipnerf",
+                                            {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"num_samples", "8"},
+                                             {"proposal_grid_max", "64"}, {"grid_max", "64"}, {"grid_hash_log2", "12"},
+                                             {"randomized", "false"}});
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.levels.size() == 3);
+  const auto dataset = data::load_dataset(test::small_scene(), {});
+  data::DeviceDataset device_data(ctx, dataset.split("train"));
+  const size_t rays = 48;
+  ops::BatchArrays batch(ctx, rays);
+  ops::batch_sample(ctx, device_data, {config.seed, ops::Batching::all_images}, 5, batch);
+  const graph::RaySource source{device_data.cameras(), batch.camera_ids, batch.pixel_ids};
+  auto grids = train::make_grids(ctx, spec);
+  for (size_t g = 0; g < grids.size(); ++g) {
+    std::mt19937 rng(7100 + g);
+    std::uniform_real_distribution<float> value(-0.5f, 0.5f);
+    std::vector<float> table(grids[g]->parameter_count());
+    for (float& v : table) v = value(rng);
+    grids[g]->upload_params(table);
+  }
+  for (const gemm::GemmBackend backend : test::supported_gemm_backends(ctx)) {
+    INFO("gemm_backend = " << enum_name(backend));
+    auto networks = train::make_networks(ctx, spec, backend);
+    const auto outputs = [&](graph::Graph& graph) {
+      std::vector<std::vector<float>> out;
+      for (size_t l = 0; l < spec.levels.size(); ++l) {
+        out.push_back(graph.level_outputs(l).acc.download(ctx));
+        out.push_back(graph.level_outputs(l).distance.download(ctx));
+      }
+      out.push_back(graph.level_outputs(spec.levels.size() - 1).comp_rgb.download(ctx));
+      return out;
+    };
+    graph::Graph training(ctx, spec, mlp::network_pointers(networks), mlp::grid_pointers(grids),
+                          graph::GraphMode::training, rays, rays);
+    training.set_train_fraction(1.0);
+    training.begin_step(rays, static_cast<double>(rays));
+    training.train_chunk(source, {0, rays}, {batch.target_rgb, nullptr}, {config.seed, 5});
+    const auto trained = outputs(training);
+    const auto losses = training.end_step();
+    REQUIRE(losses.size() == 3);
+    CHECK(losses[0].proposal);
+    CHECK(losses[1].proposal);
+    CHECK(!losses[2].proposal);
+    for (const auto& loss : losses) CHECK(std::isfinite(loss.loss()));
+    graph::Graph rendering(ctx, spec, mlp::network_pointers(networks), mlp::grid_pointers(grids),
+                           graph::GraphMode::inference, rays);
+    rendering.render_chunk(source, {0, rays});
+    const auto rendered = outputs(rendering);
+    REQUIRE(rendered.size() == trained.size());
+    for (size_t k = 0; k < rendered.size(); ++k) {
+      INFO("output " << k);
+      REQUIRE(rendered[k].size() == trained[k].size());
+      for (size_t i = 0; i < rendered[k].size(); ++i) {
+        REQUIRE(std::isfinite(rendered[k][i]));
+        CHECK(std::abs(rendered[k][i] - trained[k][i]) <= 1e-5f * std::max(1.0f, std::abs(trained[k][i])));
+      }
+    }
+  }
 }

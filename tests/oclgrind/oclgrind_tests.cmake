@@ -115,10 +115,10 @@ mipnerf_add_oclgrind_test("proposal loss kernels" test_ops
 # finite-difference case relaunches the forward ~150 times and is left out.
 mipnerf_add_oclgrind_test("contraction kernels" test_ops
   "contract gaussians: forward*,contract gaussians: backward kernel*,ray warp: kernels*" oclgrind ON)
-# Zip-NeRF's proposal sampler (issues 45 and 46: not yet a stage of the model): its one-ray closed-form cases, the
-# clipped domain and the ray with no non-empty interval (small launches; the 500-ray envelope test stays on PoCL).
+# Zip-NeRF's proposal sampler (the graph's Sampling::proposal): its one-ray closed-form cases, the clipped domain, the
+# ray with no non-empty interval and the s → t warp (small launches; the 500-ray envelope test stays on PoCL).
 mipnerf_add_oclgrind_test("proposal sampler" test_ops
-  "sample_intervals: closed-form*,sample_intervals: edges are clipped*" oclgrind ON)
+  "sample_intervals: closed-form*,sample_intervals: edges are clipped*,sample_intervals: s to t*" oclgrind ON)
 # The two program tests that make the OpenCL API fail on purpose (a build error, an unknown kernel) are left out:
 # --check-api reports exactly those failures.
 set(MIPNERF_OCLGRIND_EXCLUDE "program: a compile error*,program: an unknown kernel*")

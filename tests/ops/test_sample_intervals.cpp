@@ -258,6 +258,41 @@ TEST_CASE("sample_intervals: edges are clipped to the domain, and a ray with no 
   for (float e : outside.device) CHECK(e == 0.05f);
 }
 
+// The linear s → t of bounded scenes (official construct_ray_warps with fn = None): against the reference, exact at s = 0
+// and 1 (near and far themselves), within a float32 rounding of the lerp elsewhere, and clipped into [near, far].
+TEST_CASE("sample_intervals: s to t is the official linear warp per ray, exact at the ends, inside [near, far]") {
+  auto& ctx = test::test_context();
+  const size_t n_rays = 5, per_ray = 7;
+  const std::vector<float> near = {2.0f, 0.0f, 0.5f, 1e-3f, 3.0f}, far = {6.0f, 1.0f, 100.0f, 1e3f, 3.0f};
+  std::vector<float> s;
+  for (size_t ray = 0; ray < n_rays; ++ray) {
+    for (size_t k = 0; k < per_ray; ++k) s.push_back(static_cast<float>(k) / static_cast<float>(per_ray - 1));
+  }
+  s[3] = 0.3333333f;
+  ops::RayBundle rays(ctx, n_rays);
+  rays.near.upload(ctx, near);
+  rays.far.upload(ctx, far);
+  auto s_device = test::upload(ctx, s, "s");
+  auto t_device = test::filled(ctx, n_rays * per_ray, -1.0f, "t");
+  ops::SampleIntervals(ctx).s_to_t(s_device, rays, n_rays, per_ray, t_device);
+  const auto t = t_device.download(ctx);
+  std::vector<double> expected;
+  ref::sample_intervals_s_to_t(test::to_double(s), test::to_double(near), test::to_double(far), expected, n_rays,
+                               per_ray);
+  for (size_t i = 0; i < t.size(); ++i) {
+    const size_t ray = i / per_ray, k = i % per_ray;
+    INFO("ray " << ray << " value " << k);
+    CHECK(t[i] >= near[ray]);
+    CHECK(t[i] <= far[ray]);
+    if (k == 0) CHECK(t[i] == near[ray]);
+    if (k + 1 == per_ray) CHECK(t[i] == far[ray]);
+    // Two products and a sum of values ≤ max(|near|, |far|): within 3 ulp of it.
+    CHECK(std::abs(t[i] - expected[i]) <= 3 * kFloatEpsilon * std::max(std::abs(near[ray]), std::abs(far[ray])));
+  }
+  CHECK_THROWS_WITH_AS(ops::SampleIntervals(ctx).s_to_t(s_device, rays, n_rays, 0, t_device),
+                       doctest::Contains("n_per_ray must be at least 1"), Error);
+}
+
 TEST_CASE("sample_intervals: sorted, finite and inside the domain on extreme weights, whatever the chunking") {
   const RngKey key{77, 3, 100};
   auto h = random_proposal_histograms(300, 24, 4242);

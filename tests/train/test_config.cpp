@@ -168,7 +168,7 @@ void check_names_round_trip() {
 const std::vector<std::pair<std::string, std::string>> kEnumSettings = {
     {"background", "white | black | none"},    {"ray_shape", "cone | cylinder"},
     {"batching", "all_images | single_image"}, {"variant", "mipnerf | nerf | zipnerf"},
-    {"density_activation", "softplus | relu"},
+    {"density_activation", "softplus | relu"}, {"sampler", "resample | proposal"},
 };
 
 }  // namespace
@@ -180,6 +180,7 @@ TEST_CASE("config: each enum's names round-trip, by type and through the setting
   check_names_round_trip<ops::Batching>();
   check_names_round_trip<train::ModelFamily>();
   check_names_round_trip<train::Variant>();
+  check_names_round_trip<train::Sampler>();
   for (const auto& [setting_name, choices] : kEnumSettings) {
     const std::string name = setting_name, allowed = choices;  // INFO cannot capture a structured binding (C++17)
     for (size_t start = 0; start < allowed.size();) {
@@ -217,9 +218,10 @@ TEST_CASE("config: an unknown setting names the closest, not all of them, and wh
   CHECK_THROWS_WITH_AS(train::resolve_config("paper", "mipnerf", {{"stpes", "10"}}),
                        "unknown setting 'stpes'; did you mean 'steps'? (mipnerf-cl train --help lists every setting)",
                        Error);
+  // Since proposal sampling's settings, three names are as near to this slip.
   CHECK_THROWS_WITH_AS(train::find_setting("sampels"),
-                       "unknown setting 'sampels'; did you mean 'num_samples'? (mipnerf-cl train --help lists every "
-                       "setting)",
+                       "unknown setting 'sampels'; did you mean 'num_samples', 'sampler' or 'proposal_samples'? "
+                       "(mipnerf-cl train --help lists every setting)",
                        Error);
   CHECK_THROWS_WITH_AS(train::find_setting("xyzzy"),
                        "unknown setting 'xyzzy' (mipnerf-cl train --help lists every setting)", Error);
@@ -372,7 +374,79 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   }
   CHECK(old.adam_beta2 == 0.999);
   CHECK(old.adam_epsilon == 1e-8);
+  // Zip-NeRF's proposal sampling too; without it a configuration loads with sampler = resample, what every earlier run
+  // trained with (the proposal_* settings play no part then).
+  CHECK(written.at("sampler") == "resample");
+  CHECK(old.sampler == train::Sampler::resample);
+  for (const char* name :
+       {"sampler", "proposal_rounds", "proposal_samples", "proposal_grid_max", "anneal_slope", "interlevel_mult"}) {
+    CHECK(written.contains(name));
+    written.erase(name);
+  }
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
+}
+
+// Zip-NeRF's proposal sampling (camp_zipnerf configs/zipnerf/360.gin): only for the zipnerf family, refused for the
+// others with the setting and what to do; its settings checked; the spec it builds is the official pipeline's shape.
+TEST_CASE("config: sampler=proposal is Zip-NeRF's: refused elsewhere with what to do, its settings checked") {
+  for (const char* family : {"mipnerf", "nerf"}) {
+    INFO("variant " << family);
+    CHECK_THROWS_WITH_AS(train::resolve_config("tiny", family, {{"sampler", "proposal"}}),
+                         doctest::Contains("sampler=proposal is Zip-NeRF's"), Error);
+    CHECK_THROWS_WITH_AS(train::resolve_config("tiny", family, {{"sampler", "proposal"}}),
+                         doctest::Contains("--model zipnerf, or keep sampler=resample"), Error);
+  }
+  const auto config = train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}});
+  CHECK(config.proposal_rounds == 2);
+  CHECK(config.proposal_samples == 64);
+  CHECK(config.proposal_grid_max == 2048);
+  CHECK(config.anneal_slope == 10.0);
+  CHECK(config.interlevel_mult == 0.01);
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"proposal_rounds", "0"}, {"proposal_samples", "1"}, {"interlevel_mult", "-1"}, {"proposal_grid_max", "1000"}};
+  for (const auto& entry : refused) {
+    const std::string name = entry.first, value = entry.second;  // INFO cannot capture a structured binding
+    INFO(name << " = " << value);
+    CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}, {name, value}}),
+                         doctest::Contains(name.c_str()), Error);
+  }
+
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.levels.size() == 3);
+  REQUIRE(spec.grids.size() == 3);
+  REQUIRE(spec.mlps.size() == 3);
+  const int grid_max[3] = {512, 2048, config.grid_max};
+  const float blur[2] = {0.03f, 0.003f};
+  for (size_t l = 0; l < 3; ++l) {
+    INFO("level " << l);
+    const auto& level = spec.levels[l];
+    CHECK(level.sampling == graph::Sampling::proposal);
+    CHECK(level.grid_index == l);
+    CHECK(level.mlp_index == l);
+    CHECK(spec.grids[l].max_grid_size == grid_max[l]);
+    CHECK(spec.grids[l].hash_table_size == spec.grids[2].hash_table_size);
+    CHECK(spec.grids[l].features == (l < 2 ? 1 : config.grid_features));
+    CHECK(spec.mlps[l].view_dependence == (l == 2));
+    CHECK(spec.mlps[l].depth == static_cast<size_t>(config.mlp_depth));
+    CHECK(spec.mlps[l].width == static_cast<size_t>(config.mlp_width));
+    if (l < 2) {
+      CHECK(level.role == graph::LevelRole::proposal);
+      CHECK(level.new_samples == 64u);
+      CHECK(level.interlevel.blur_halfwidth == blur[l]);
+      CHECK(level.interlevel.mult == 0.01f);
+    } else {
+      CHECK(level.role == graph::LevelRole::nerf);
+      CHECK(level.new_samples == static_cast<size_t>(config.num_samples));
+    }
+  }
+  CHECK(spec.sample_intervals.resample_padding == 0.0f);
+  CHECK(spec.anneal_slope == 10.0f);
+  // The resampled Zip-NeRF is unchanged: two levels through one network and one grid.
+  const auto resampled = train::make_graph_spec(train::resolve_config("tiny", "zipnerf", {}), false);
+  CHECK(resampled.levels.size() == 2);
+  CHECK(resampled.grids.size() == 1);
+  CHECK(resampled.mlps.size() == 1);
+  CHECK(!resampled.has_proposal_levels());
 }
