@@ -11,7 +11,7 @@
 #   bench-paper       the paper preset's at batch 4096 (--paper-batch)
 #   zipnerf           Zip-NeRF's s/step on the built-in scene, 20 steps of each candidate for a GPU preset: the CPU's
 #                     `fast` preset (one point per interval), with the 6 multisamples, then larger batches and the
-#                     official hash size (the atomic scatter a GPU uses)
+#                     official hash size (the atomic scatter a GPU uses), and Zip-NeRF's proposal pipeline
 #   python            the python that runs the official code: its JAX and devices; gin-config from the carried wheels
 #                     when it lacks it
 #   official-default  the official google/mipnerf training step at the paper's configuration, with JAX's default
@@ -290,7 +290,8 @@ zipnerf() {
   local status=0 candidate name settings
   for candidate in "fast:" "fast_multisampled:--set grid_multisample=true" "batch4096:--set batch_size=4096" \
       "batch4096_hash19:--set batch_size=4096 --set grid_hash_log2=19 --set grid_max=8192" \
-      "batch16384_hash21:--set batch_size=16384 --set grid_hash_log2=21 --set grid_max=8192"; do
+      "batch16384_hash21:--set batch_size=16384 --set grid_hash_log2=21 --set grid_max=8192" \
+      "batch4096_proposal:--set batch_size=4096 --set sampler=proposal --set grid_multisample=true"; do
     name="${candidate%%:*}"
     settings="${candidate#*:}"
     # shellcheck disable=SC2086  # the settings are words
