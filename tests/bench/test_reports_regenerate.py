@@ -36,6 +36,7 @@ REGENERATIONS = [
     ("vs_official_llff", ["--report-only", "bench/results/vs_official_llff/vs_official_llff_pocl_cpu.json"],
      ["vs_official_llff_pocl_cpu.md"]),
     ("time_to_quality", ["--quick", "--report-only"], ["time_to_quality_quick.md"]),
+    ("zip_antialiasing", ["--name", "zip_antialiasing_15min", "--report-only"], ["zip_antialiasing_15min.md"]),
 ] + [("before_after", ["--report-only", f"bench/results/before_after/{os.path.basename(p)}"],
       [os.path.basename(p)[:-5] + ".md"])
      for p in sorted(glob.glob(os.path.join(bench, "results", "before_after", "renovation*_before_after*.json")))]
