@@ -119,6 +119,21 @@ std::function<void(const std::string&)> counter(Progress& progress, const std::r
   };
 }
 
+// Makes `model` (a folder sparse/K) sparse/0, swapping it with the model there, and returns its new path: the model
+// imported is always OUT/colmap/sparse/0, the one a user re-importing it with `dataset import-colmap` reaches for first.
+// COLMAP numbers its models in the order it started them, and a later one can be the largest: a model started from
+// photos the first left out may grow to register those the first has as well.
+std::string renumber_as_first(const fs::path& model) {
+  const fs::path first = model.parent_path() / "0";
+  if (model == first) return model.string();
+  const fs::path aside = model.parent_path() / "renumbering";
+  const bool occupied = fs::exists(first);
+  if (occupied) fs::rename(first, aside);
+  fs::rename(model, first);
+  if (occupied) fs::rename(aside, model);
+  return first.string();
+}
+
 // The model of sparse/ with the most registered images ("" when there is none), and its count.
 std::string largest_model(const fs::path& sparse, size_t& registered) {
   std::string best;
@@ -360,8 +375,9 @@ void run_from_photos(const FromPhotosArgs& args) {
   const Mapping mapping = map_photos({colmap, database, args.photos, args.matcher, work, photos},
                                      args.mapper_attempts, log);
   size_t registered = 0;
-  const std::string model = largest_model(sparse, registered);
+  std::string model = largest_model(sparse, registered);
   if (model.empty()) throw Error(no_model_message(mapping, photos, work / "colmap.log"));
+  model = renumber_as_first(model);
   if (registered < 3 || 2 * registered < photos) {
     throw Error("COLMAP registered only " + std::to_string(registered) + " of " + std::to_string(photos) +
                 " photos (" + model + "): take more overlapping photos, or try --matcher exhaustive");

@@ -708,6 +708,22 @@ mipnerf_add_checked_test("cli: dataset from-photos says when no photos match"
   EXIT nonzero EXPECT "error: COLMAP found no model: no two of the 3 photos share enough matching features"
   COMMAND mipnerf-cl dataset from-photos "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_FAKE_COLMAP_OUT}-no-matches"
   --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh")
+# COLMAP numbers its models in the order it starts them, and a later one can be the largest: the largest is imported
+# and renumbered sparse/0 (the one `dataset import-colmap OUT/colmap/sparse/0` then reads), the other takes its number.
+mipnerf_add_checked_test("cli: dataset from-photos imports the largest of COLMAP's models, renumbered sparse/0"
+  EXPECT "imported 3 images [^\n]*cli-fake-colmap-two-models/colmap/sparse/0 \\(text\\)"
+  COMMAND mipnerf-cl dataset from-photos "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_FAKE_COLMAP_OUT}-two-models"
+  --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh")
+set_tests_properties("cli: dataset from-photos imports the largest of COLMAP's models, renumbered sparse/0"
+  PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_SCENARIO=two-models")
+mipnerf_add_checked_test("cli: import-colmap of the model from-photos renumbered sparse/1 has the smaller model"
+  EXPECT "imported 2 images [^\n]*cli-fake-colmap-two-models/colmap/sparse/1"
+  COMMAND mipnerf-cl dataset import-colmap "${MIPNERF_FAKE_COLMAP_OUT}-two-models/colmap/sparse/1"
+  "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_FAKE_COLMAP_OUT}-two-models-other" --layout transforms)
+set_tests_properties("cli: dataset from-photos imports the largest of COLMAP's models, renumbered sparse/0"
+  PROPERTIES FIXTURES_SETUP cli_fake_two_models)
+set_tests_properties("cli: import-colmap of the model from-photos renumbered sparse/1 has the smaller model"
+  PROPERTIES FIXTURES_REQUIRED cli_fake_two_models)
 set_tests_properties("cli: dataset from-photos maps again with settings for small baselines when no pair can start a model"
   PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_SCENARIO=forward-facing")
 set_tests_properties("cli: dataset from-photos says when no pair of photos can start a model, even for small baselines"

@@ -9,6 +9,8 @@
 #                    tool must map the same matches again with the settings for small baselines.
 #   no-initial-pair  it never finds an initial pair; matching again fails the run.
 #   no-matches       it finds no matched images, as COLMAP says it.
+#   two-models       two models, as COLMAP writes them when its first stops early: 0 with the first 2 views, then 1
+#                    with all 3 (a later model may register photos an earlier one has too).
 # FAKE_COLMAP_EXPECT_PHOTOS: the photos feature extraction must be given (--image_list_path), space-separated.
 step=$1
 shift
@@ -71,6 +73,14 @@ model="$(cd "$(dirname "$0")/../data/fixtures/colmap/sparse" && pwd)"
 mkdir -p "$out/0"
 cp "$model/cameras.txt" "$out/0/"
 echo "Initializing with image pair #1 and #2"
+if [ "$FAKE_COLMAP_SCENARIO" = "two-models" ]; then
+  head -n 7 "$model/images.txt" > "$out/0/images.txt"
+  sed 's/ 3 [0-9]*$//' "$model/points3D.txt" > "$out/0/points3D.txt"
+  mkdir -p "$out/1"
+  cp "$model/cameras.txt" "$model/images.txt" "$model/points3D.txt" "$out/1/"
+  echo "Registering image #3 (3)"
+  exit 0
+fi
 case "$out" in
   *mapper_attempt_1)
     # Views 1 and 2 (two lines each after the 3 comment lines); the points' tracks without view 3 (the pair "3 k").
