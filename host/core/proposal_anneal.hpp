@@ -1,5 +1,10 @@
-// The anneal exponent of proposal sampling: Schlick's bias function of the training fraction (a per-step scalar).
+// The per-step constants of proposal sampling: the anneal exponent (Schlick's bias function of the training fraction)
+// and each round's random key.
 #pragma once
+
+#include <cstddef>
+
+#include "core/stage_options.hpp"
 
 namespace mipnerf {
 
@@ -11,6 +16,13 @@ namespace mipnerf {
 inline double proposal_anneal(double train_frac, double anneal_slope) {
   if (!(anneal_slope > 0.0)) return 1.0;
   return (anneal_slope * train_frac) / ((anneal_slope - 1.0) * train_frac + 1.0);
+}
+
+// The key proposal-sampled level `level` draws its jitter with (official: a fresh random_split key per level): the
+// step's key with its seed offset by the level (the kernel's counter holds ray, step and sample; the seed is the one
+// free part).
+inline RngKey proposal_round_key(const RngKey& step_key, size_t level) {
+  return {step_key.seed + 0x9E3779B97F4A7C15ull * level, step_key.step, step_key.first_ray};
 }
 
 }  // namespace mipnerf

@@ -163,9 +163,11 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   if (!training) render_options.density_noise = 0.0f;
   render_ = std::make_unique<ops::Render>(ctx, render_options, spec_.activation);
   if (training) loss_ = std::make_unique<ops::Loss>(ctx, spec_.loss);
-  bool proposal_sampling = false;
-  for (const auto& level : spec_.levels) proposal_sampling |= level.sampling == Sampling::proposal;
-  if (proposal_sampling) sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx);
+  // A proposal-sampled level reads a proposal-sampled previous level (GraphSpec::validate), so some level samples by
+  // proposal exactly when the first does.
+  if (spec_.levels.front().sampling == Sampling::proposal) {
+    sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx);
+  }
   if (training && spec_.has_proposal_levels()) interlevel_ = std::make_unique<ops::SplineInterlevel>(ctx);
   for (size_t g = 0; g < spec_.grids.size(); ++g) {
     ops::ZipFeatureOptions zip_options = spec_.zip_options(g);
@@ -303,9 +305,7 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
       break;
     }
     case Sampling::proposal: {
-      // Each round draws its own jitter (official: a fresh random_split key per level): the step's seed offset by the
-      // level (the kernel's counter holds ray, step and sample; the seed is the one free part).
-      const RngKey round_rng{key.seed + 0x9E3779B97F4A7C15ull * l, key.step, first_ray};
+      const RngKey round_rng = proposal_round_key(rng, l);  // each round its own jitter
       if (l == 0) {
         sample_intervals_->fwd(sample_intervals_options_, {unit_s_edges_, unit_weights_, n_rays, 1, level.new_samples},
                                out.s_edges, round_rng);
@@ -500,21 +500,20 @@ void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
 void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTargets& targets, StepKey key) {
   if (mode_ != GraphMode::training) throw Error("graph: train_chunk on a rendering graph");
   if (chunk.first + chunk.count > step_batch_rays_) throw Error("graph: chunk outside the step's batch");
-  generate_rays(source, chunk, key, static_cast<uint32_t>(chunk.first));
+  const uint32_t first_ray = static_cast<uint32_t>(chunk.first);
+  generate_rays(source, chunk, key, first_ray);
+  const RngKey rng{key.seed, key.step, first_ray};
+  // A level's density noise (when the spec has it): the same key for its forward and its backward.
+  const auto noise_of = [&rng](size_t l) { return DensityNoiseKey{rng, static_cast<uint32_t>(l)}; };
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
-    // The level's density noise (when the spec has it): the same key for its forward and its backward.
-    const DensityNoiseKey noise{{key.seed, key.step, static_cast<uint32_t>(chunk.first)}, static_cast<uint32_t>(l)};
-    const RngKey rng{key.seed, key.step, static_cast<uint32_t>(chunk.first)};
-    sample_level(l, chunk.count, key, static_cast<uint32_t>(chunk.first));
+    sample_level(l, chunk.count, key, first_ray);
     encode_level(l, chunk.count, rng);
-    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], noise);
+    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], noise_of(l));
     // A proposal round's loss needs the last level's weights: its backward waits (below).
-    if (spec_.levels[l].role == LevelRole::nerf) backward_level(l, chunk.count, targets, chunk, noise, rng);
+    if (spec_.levels[l].role == LevelRole::nerf) backward_level(l, chunk.count, targets, chunk, noise_of(l), rng);
   }
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
-    if (spec_.levels[l].role != LevelRole::proposal) continue;
-    const DensityNoiseKey noise{{key.seed, key.step, static_cast<uint32_t>(chunk.first)}, static_cast<uint32_t>(l)};
-    backward_proposal(l, chunk, noise, {key.seed, key.step, static_cast<uint32_t>(chunk.first)});
+    if (spec_.levels[l].role == LevelRole::proposal) backward_proposal(l, chunk, noise_of(l), rng);
   }
   step_groups_ += loss_->groups_for(chunk.count);
 }

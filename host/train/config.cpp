@@ -351,7 +351,8 @@ const std::map<std::string, Bundle>& presets() {
       // weighted point per interval instead of 6 multisamples (bench/results/time_to_quality: +1.2 to +2.4 dB on
       // flower at every budget; zip_antialiasing: the multisamples' 5.9x dearer steps lose at equal time).
       {"fast",
-       {{"num_samples", "32"}, {"grid_multisample", "false"}, {"grid_max", "2048"}, {"grid_hash_log2", "17"}, {"batch_size", "1024"},
+       {{"num_samples", "32"}, {"grid_multisample", "false"}, {"grid_max", "2048"}, {"grid_hash_log2", "17"},
+        {"batch_size", "1024"},
         {"steps", "3000"}, {"lr_init", "1e-2"}, {"lr_final", "5e-4"}, {"lr_warmup_steps", "100"},
         {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "4"}}},
   };
@@ -416,6 +417,10 @@ const std::map<std::string, Bundle>& variants() {
 }
 
 std::string preset_variant(const std::string& preset) { return preset == "fast" ? "zipnerf" : "mipnerf"; }
+
+int proposal_round_grid_max(const TrainConfig& c, int round) {
+  return c.proposal_grid_max >> (2 * (c.proposal_rounds - 1 - round));
+}
 
 std::string describe_bundles() {
   std::string out = "presets:";
@@ -493,7 +498,7 @@ void validate(const TrainConfig& c) {
     grid.scale_supersample = c.grid_supersample;
     grid.features = 1;
     for (int round = 0; round < c.proposal_rounds; ++round) {
-      grid.max_grid_size = c.proposal_grid_max >> (2 * (c.proposal_rounds - 1 - round));
+      grid.max_grid_size = proposal_round_grid_max(c, round);
       try {
         grid.validate();
       } catch (const Error& e) {

@@ -208,6 +208,10 @@ const std::map<std::string, Bundle>& presets();
 const std::map<std::string, Bundle>& variants();
 // The variant bundle a preset is made for: "zipnerf" for fast (Zip-NeRF's), "mipnerf" for the others.
 std::string preset_variant(const std::string& preset);
+
+// Cells a side of proposal round `round`'s finest grid level (0 ≤ round < proposal_rounds): proposal_grid_max for the
+// round before the NeRF level, each earlier round's 4× coarser (official max_grid_size 512, 2048).
+int proposal_round_grid_max(const TrainConfig& c, int round);
 // A one-line description of each preset and variant, for --help.
 std::string describe_bundles();
 

@@ -68,7 +68,7 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
   for (int round = 0; round < rounds; ++round) {
     mlp::GridConfig grid = grid_config(c);
     grid.features = 1;  // official: "no need for >1 features in the proposal NGPs, the output is 1d"
-    grid.max_grid_size = c.proposal_grid_max >> (2 * (rounds - 1 - round));
+    grid.max_grid_size = proposal_round_grid_max(c, round);
     grid.seed = grid.seed + 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(round + 1);
     spec.grids.push_back(grid);
   }

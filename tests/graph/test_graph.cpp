@@ -186,7 +186,7 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
       // Proposal sampling in s (the first round from the whole ray, weight 1), each round with its own seed, then t.
       SampleIntervalsOptions options = spec.sample_intervals;
       options.anneal = static_cast<float>(proposal_anneal(kProposalTrainFraction, spec.anneal_slope));
-      const RngKey round_key{key.seed + 0x9E3779B97F4A7C15ull * l, key.step, key.first_ray};
+      const RngKey round_key = proposal_round_key(key, l);
       if (l == 0) {
         std::vector<double> unit_edges, unit_weights(R, 1.0);
         for (size_t ray = 0; ray < R; ++ray) unit_edges.insert(unit_edges.end(), {0.0, 1.0});
