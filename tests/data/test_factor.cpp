@@ -29,6 +29,23 @@ void write_opaque_split(const std::string& dir, uint32_t width = 8, uint32_t hei
   io::write_json(dir + "/transforms_train.json", {{"camera_angle_x", 0.69}, {"frames", frames}});
 }
 
+// Every pixel of `small` (width x height, RGB) is the mean of its factor x factor block of `big` (big_width wide, RGB):
+// float32 averages of k/255 values, within a few float ulps of the double mean.
+void check_block_means(const float* big, uint32_t big_width, const float* small, uint32_t width, uint32_t height,
+                       uint32_t factor) {
+  for (uint32_t y = 0; y < height; ++y) {
+    for (uint32_t x = 0; x < width; ++x) {
+      for (int ch = 0; ch < 3; ++ch) {
+        double mean = 0;
+        for (uint32_t dy = 0; dy < factor; ++dy)
+          for (uint32_t dx = 0; dx < factor; ++dx)
+            mean += big[3 * ((factor * y + dy) * big_width + factor * x + dx) + ch] / double(factor * factor);
+        CHECK(std::abs(mean - small[3 * (y * width + x) + ch]) < 1e-6);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 TEST_CASE("factor: images are box-downsampled and the camera follows, lossmult stays") {
@@ -47,19 +64,7 @@ TEST_CASE("factor: images are box-downsampled and the camera follows, lossmult s
     CHECK(b.focal_x_px == doctest::Approx(a.focal_x_px / 2).epsilon(1e-12));
     CHECK(b.center_x_px == doctest::Approx(a.center_x_px / 2).epsilon(1e-12));
     CHECK(b.lossmult == a.lossmult);
-    const float* big = full.image_rgb(c);
-    const float* small = half.image_rgb(c);
-    for (uint32_t y = 0; y < 4; ++y) {
-      for (uint32_t x = 0; x < 4; ++x) {
-        for (int ch = 0; ch < 3; ++ch) {
-          double mean = 0;
-          for (int dy = 0; dy < 2; ++dy)
-            for (int dx = 0; dx < 2; ++dx) mean += big[3 * ((2 * y + dy) * 8 + 2 * x + dx) + ch] / 4.0;
-          // Float32 averages of four k/255 values: within a few float ulps of the double mean.
-          CHECK(std::abs(mean - small[3 * (y * 4 + x) + ch]) < 1e-6);
-        }
-      }
-    }
+    check_block_means(full.image_rgb(c), 8, half.image_rgb(c), 4, 4, 2);
   }
   data::LoadOptions bad;
   bad.factor = 3;
@@ -97,16 +102,7 @@ TEST_CASE("factor: a size the factor does not divide is cropped at its right and
     CHECK(b.focal_y_px == doctest::Approx(a.focal_y_px / 4).epsilon(1e-12));
     CHECK(b.center_x_px == doctest::Approx(a.center_x_px / 4).epsilon(1e-12));
     CHECK(b.center_y_px == doctest::Approx(a.center_y_px / 4).epsilon(1e-12));
-    const float* big = full.image_rgb(c);
-    const float* small = quarter.image_rgb(c);
-    for (uint32_t x = 0; x < 2; ++x) {
-      for (int ch = 0; ch < 3; ++ch) {
-        double mean = 0;
-        for (int dy = 0; dy < 4; ++dy)
-          for (int dx = 0; dx < 4; ++dx) mean += big[3 * (dy * 11 + 4 * x + dx) + ch] / 16.0;
-        CHECK(std::abs(mean - small[3 * x + ch]) < 1e-6);
-      }
-    }
+    check_block_means(full.image_rgb(c), 11, quarter.image_rgb(c), 2, 1, 4);
   }
 }
 
