@@ -109,12 +109,16 @@ def measure_or_reload(results_dir, name, script, report_only, measure, write_mar
 
 def study_main(doc, results_dir, name, script, add_arguments, measure, write_markdown):
     """A study script's main(): its arguments (`add_arguments(parser)`, plus --report-only; the description is the
-    first line of `doc`), then measure_or_reload with `measure(args)`."""
+    first line of `doc`), then measure_or_reload with `measure(args)`. A study that adds a `--name` argument keeps one
+    record per name (NAME.json, NAME.md): `name` is then its default, and the regeneration command names any other."""
     parser = argparse.ArgumentParser(description=doc.split("\n")[0])
     add_arguments(parser)
     parser.add_argument("--report-only", action="store_true", help="rewrite the .md from the .json")
     args = parser.parse_args()
-    return measure_or_reload(results_dir, name, script, args.report_only, lambda: measure(args), write_markdown)
+    record_name = getattr(args, "name", None) or name
+    if record_name != name:
+        script = f"{script} --name {record_name}"
+    return measure_or_reload(results_dir, record_name, script, args.report_only, lambda: measure(args), write_markdown)
 
 
 def repo_commit(repo_dir):

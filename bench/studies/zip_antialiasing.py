@@ -20,7 +20,6 @@ beside its budget. Every run goes through the command-line tool; finished runs a
   python3 bench/studies/zip_antialiasing.py --report-only [--name NAME]   (the .md again from the .json)
 """
 
-import argparse
 import os
 import shlex
 import sys
@@ -196,15 +195,5 @@ def write_markdown(record):
     return "\n".join(lines) + "\n"
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    add_arguments(parser)
-    parser.add_argument("--report-only", action="store_true", help="rewrite NAME.md from NAME.json")
-    args = parser.parse_args()
-    report_md.measure_or_reload(RESULTS, args.name, SCRIPT + (f" --name {args.name}" if args.name != "zip_antialiasing"
-                                                             else ""),
-                                args.report_only, lambda: measure(args), write_markdown)
-
-
 if __name__ == "__main__":
-    main()
+    report_md.study_main(__doc__, RESULTS, "zip_antialiasing", SCRIPT, add_arguments, measure, write_markdown)
