@@ -134,19 +134,39 @@ std::string renumber_as_first(const fs::path& model) {
   return first.string();
 }
 
-// The model of sparse/ with the most registered images ("" when there is none), and its count.
-std::string largest_model(const fs::path& sparse, size_t& registered) {
-  std::string best;
-  registered = 0;
+// A model COLMAP wrote, as from-photos judges it: the photos it registered, and those of them whose pose no sparse
+// point checks (fewer than data::kMinPointsInFront points in front of them; see data::points_in_front_counts).
+struct ModelCount {
+  std::string dir;                  // "" when there is none
+  size_t registered = 0;            // its images
+  size_t placed = 0;                // registered and seeing enough points: what runs are ranked by
+  std::vector<std::string> unseen;  // registered, but seeing fewer points
+};
+
+ModelCount count_model(const data::ColmapModel& model, const std::string& dir) {
+  ModelCount count;
+  count.dir = dir;
+  count.registered = model.images.size();
+  const std::vector<size_t> in_front = data::points_in_front_counts(model);
+  for (size_t i = 0; i < model.images.size(); ++i) {
+    if (in_front[i] >= data::kMinPointsInFront) {
+      ++count.placed;
+    } else {
+      count.unseen.push_back(model.images[i].name);
+    }
+  }
+  return count;
+}
+
+// The model of sparse/ with the most placed photos (dir "" when there is none).
+ModelCount largest_model(const fs::path& sparse) {
+  ModelCount best;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(sparse, ec)) {
     if (!entry.is_directory()) continue;
     try {
-      const data::ColmapModel model = data::read_colmap_model(entry.path().string());
-      if (model.images.size() > registered) {
-        registered = model.images.size();
-        best = entry.path().string();
-      }
+      const ModelCount count = count_model(data::read_colmap_model(entry.path().string()), entry.path().string());
+      if (best.dir.empty() || count.placed > best.placed) best = count;
     } catch (const Error&) {
       // an unfinished model folder: not a candidate
     }
@@ -207,7 +227,8 @@ std::vector<std::string> mapper_options(const MapperSettings& settings) {
 // What one mapper run found, from its models and its log.
 struct MapperRun {
   fs::path out;               // its output folder
-  size_t registered = 0;      // photos in its largest model (0: none)
+  size_t registered = 0;      // photos in its largest model (0: none; see ModelCount)
+  size_t placed = 0;          // those with enough sparse points in front of them
   bool no_matches = false;    // "No images with matches found in the database": no pair of photos matched
   bool initialized = false;   // "Initializing with image pair": a pair started a model (which may have been dropped)
   bool no_initial_pair = false;  // "No good initial image pair found"
@@ -239,13 +260,20 @@ MapperRun run_mapper(const MappingJob& job, const fs::path& out, const MapperSet
       if (line.find("No good initial image pair found") != std::string::npos) run.no_initial_pair = true;
     });
   } catch (const Error&) {
-    size_t none = 0;
-    if (!largest_model(out, none).empty()) throw;
+    if (!largest_model(out).dir.empty()) throw;
     // COLMAP's mapper fails ("failed to create sparse model") when it kept no model.
   }
   progress.finish();
-  largest_model(out, run.registered);
+  const ModelCount largest = largest_model(out);
+  run.registered = largest.registered;
+  run.placed = largest.placed;
   return run;
+}
+
+// ", 11 of them with sparse points in front" when some registered photo has too few, else "".
+std::string seen_clause(const MapperRun& run) {
+  if (run.placed == run.registered) return "";
+  return ", " + std::to_string(run.placed) + " of them with sparse points in front";
 }
 
 // Why a run of COLMAP's default settings kept no model (photos did match), in a few words.
@@ -284,7 +312,7 @@ Mapping map_photos(const MappingJob& job, int attempts, std::ofstream& log) {
   MapperSettings settings;
   const auto keep_best = [&mapping](const MapperRun& run) {
     std::error_code ec;
-    if (mapping.best.out.empty() || run.registered > mapping.best.registered) {
+    if (mapping.best.out.empty() || run.placed > mapping.best.placed) {
       if (!mapping.best.out.empty()) fs::remove_all(mapping.best.out, ec);
       mapping.best = run;
     } else {
@@ -305,10 +333,10 @@ Mapping map_photos(const MappingJob& job, int attempts, std::ofstream& log) {
       mapping.last = run_mapper(job, job.work / (name + "_small_baseline"), settings, log);
     }
     keep_best(mapping.last);
-    if (mapping.best.registered == job.n_photos || attempt == attempts) break;
+    if (mapping.best.placed == job.n_photos || attempt == attempts) break;
     if (mapping.best.registered == 0 && (mapping.last.no_matches || lacked_initial_pair(mapping.last))) break;
     std::cerr << "mipnerf-cl: COLMAP's mapper registered " << mapping.best.registered << " of " << job.n_photos
-              << " photos; matching and mapping again (attempt " << attempt + 1 << " of " << attempts
+              << " photos" << seen_clause(mapping.best) << "; matching and mapping again (attempt " << attempt + 1 << " of " << attempts
               << ": COLMAP's result varies from run to run)\n";
   }
   fs::rename(mapping.best.out, job.work / "sparse");
@@ -374,10 +402,14 @@ void run_from_photos(const FromPhotosArgs& args) {
   }
   const Mapping mapping = map_photos({colmap, database, args.photos, args.matcher, work, photos},
                                      args.mapper_attempts, log);
-  size_t registered = 0;
-  std::string model = largest_model(sparse, registered);
-  if (model.empty()) throw Error(no_model_message(mapping, photos, work / "colmap.log"));
-  model = renumber_as_first(model);
+  const ModelCount found = largest_model(sparse);
+  if (found.dir.empty()) throw Error(no_model_message(mapping, photos, work / "colmap.log"));
+  const std::string model = renumber_as_first(found.dir);
+  const size_t registered = found.placed;  // what is imported
+  for (const auto& name : found.unseen) {
+    std::cerr << "mipnerf-cl: warning: COLMAP registered " << name << " but fewer than " << data::kMinPointsInFront
+              << " of its sparse points lie in front of it: no point checks its pose; it is left out\n";
+  }
   if (registered < 3 || 2 * registered < photos) {
     throw Error("COLMAP registered only " + std::to_string(registered) + " of " + std::to_string(photos) +
                 " photos (" + model + "): take more overlapping photos, or try --matcher exhaustive");
@@ -392,6 +424,7 @@ void run_from_photos(const FromPhotosArgs& args) {
   }
   data::ColmapImportOptions options;
   options.layout = layout;
+  options.leave_out = found.unseen;
   print_import(data::import_colmap(model, args.photos, args.out, options), model);
 }
 

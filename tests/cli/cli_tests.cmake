@@ -692,6 +692,20 @@ mipnerf_add_checked_test("cli: dataset from-photos with one mapper attempt repor
   EXPECT "error: COLMAP registered only 2 of 3 photos \\([^\n]*cli-fake-colmap-once/colmap/sparse/0\\)"
   COMMAND mipnerf-cl dataset from-photos "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_FAKE_COLMAP_OUT}-once"
   --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh" --mapper-attempts 1)
+# A photo COLMAP registered without a sparse point in front of it (its pose unchecked; an LLFF capture cannot take its
+# depth bounds): the run counts as incomplete and maps again; with one attempt the photo is left out, named.
+mipnerf_add_checked_test("cli: dataset from-photos maps again when a registered photo sees no points"
+  EXPECT "COLMAP's mapper registered 3 of 3 photos, 2 of them with sparse points in front; matching and mapping again \\(attempt 2 of 3[^\n]*\n.*imported 3 images"
+  COMMAND mipnerf-cl dataset from-photos "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_FAKE_COLMAP_OUT}-unseen"
+  --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh")
+mipnerf_add_checked_test("cli: dataset from-photos leaves out a registered photo that sees no points, naming it"
+  EXIT nonzero
+  EXPECT "warning: COLMAP registered view_2.png but fewer than 2 of its sparse points lie in front of it: [^\n]*left out\n.*error: COLMAP registered only 2 of 3 photos"
+  COMMAND mipnerf-cl dataset from-photos "${MIPNERF_COLMAP_FIXTURES}/images" "${MIPNERF_FAKE_COLMAP_OUT}-unseen-once"
+  --colmap "${CMAKE_CURRENT_SOURCE_DIR}/cli/fake_colmap.sh" --mapper-attempts 1)
+set_tests_properties("cli: dataset from-photos maps again when a registered photo sees no points"
+  "cli: dataset from-photos leaves out a registered photo that sees no points, naming it"
+  PROPERTIES ENVIRONMENT "${MIPNERF_TEST_ENV};FAKE_COLMAP_SCENARIO=unseen-view")
 # A mapper that finds no pair of photos to start from (as COLMAP's defaults on a forward-facing capture of small
 # parallax): the same matches are mapped again with the settings for small baselines (--Mapper.init_min_tri_angle),
 # without matching again (the stand-in fails the run if it does); when even those find no pair, the error says so.

@@ -11,6 +11,8 @@
 #   no-matches       it finds no matched images, as COLMAP says it.
 #   two-models       two models, as COLMAP writes them when its first stops early: 0 with the first 2 views, then 1
 #                    with all 3 (a later model may register photos an earlier one has too).
+#   unseen-view      mapper_attempt_1 registers all 3 views, but the third sees none of the points (they are left
+#                    out of its tracks), as COLMAP's small-baseline mapping once left a photo; later runs are whole.
 # FAKE_COLMAP_EXPECT_PHOTOS: the photos feature extraction must be given (--image_list_path), space-separated.
 step=$1
 shift
@@ -81,8 +83,12 @@ if [ "$FAKE_COLMAP_SCENARIO" = "two-models" ]; then
   echo "Registering image #3 (3)"
   exit 0
 fi
-case "$out" in
-  *mapper_attempt_1)
+case "$FAKE_COLMAP_SCENARIO:$out" in
+  unseen-view:*mapper_attempt_1)
+    cp "$model/images.txt" "$out/0/"
+    sed 's/ 3 [0-9]*$//' "$model/points3D.txt" > "$out/0/points3D.txt"
+    echo "Registering image #3 (3)" ;;
+  *:*mapper_attempt_1)
     # Views 1 and 2 (two lines each after the 3 comment lines); the points' tracks without view 3 (the pair "3 k").
     head -n 7 "$model/images.txt" > "$out/0/images.txt"
     sed 's/ 3 [0-9]*$//' "$model/points3D.txt" > "$out/0/points3D.txt"

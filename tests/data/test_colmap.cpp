@@ -314,6 +314,50 @@ TEST_CASE("colmap: a forward-facing capture is centred on the median of its poin
   CHECK(given.centre[1] == 10.0);
 }
 
+TEST_CASE("colmap: an image whose points all lie behind it is counted, and an import can leave it out") {
+  test::TempDir dir;
+  KnownCapture capture({0, 0, 0}, 1.0, 0);
+  // Three cameras 10 units before a wall of points (as above), and a fourth beside them looking away from it: the
+  // pose COLMAP once gave a photo, registered with every one of its points behind it.
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 eye{-1.5 + k, 10.0, 0.0};
+    const Vec3 target = k < 3 ? Vec3{eye[0], 0.0, 0.0} : Vec3{eye[0], 20.0, 0.0};
+    capture.poses.push_back(data::look_at_pose(eye, target, {0, 0, 1}));
+    capture.model.images.push_back(test::colmap_image(k + 1, 1, "img_" + std::to_string(k) + ".png", capture.poses[k]));
+  }
+  for (auto& point : capture.model.points) {
+    point.xyz = {point.xyz[0] * 4, point.xyz[1] - 2.0, point.xyz[2] * 2};
+    point.image_ids = {1, 2, 3, 4};
+  }
+  const size_t n_points = capture.model.points.size();
+  capture.model.points[0].image_ids = {1, 2, 3};  // one point the first three see and the fourth does not
+  capture.write_images(dir / "images");
+  test::write_colmap_model(dir / "sparse", capture.model, true);
+  const data::ColmapModel model = data::read_colmap_model(dir / "sparse");
+  CHECK(data::points_in_front_counts(model) == std::vector<size_t>{n_points, n_points, n_points, 0});
+
+  data::ColmapImportOptions options;
+  options.leave_out = {"img_3.png"};
+  const auto imported = data::import_colmap(dir / "sparse", dir / "images", dir / "out", options);
+  CHECK(imported.images == 3);
+  const auto frames = io::read_json(dir / "out/transforms.json")["frames"];
+  REQUIRE(frames.size() == 3);
+  for (const auto& frame : frames) CHECK_FALSE(contains(frame["file_path"].get<std::string>(), "img_3"));
+  // The near/far rule sees only the images imported: the same as a model without the fourth image.
+  capture.model.images.pop_back();
+  for (auto& point : capture.model.points) {
+    if (point.image_ids.size() == 4) point.image_ids.pop_back();
+  }
+  test::write_colmap_model(dir / "three", capture.model, true);
+  const auto three = data::import_colmap(dir / "three", dir / "images", dir / "out_three");
+  CHECK(imported.near == three.near);
+  CHECK(imported.far == three.far);
+
+  options.leave_out = {"img_0.png", "img_1.png", "img_2.png", "img_3.png"};
+  CHECK(contains(error_of([&] { data::import_colmap(dir / "sparse", dir / "images", dir / "out4", options); }),
+                 "every image is left out"));
+}
+
 TEST_CASE("colmap: lens cameras import with their model, and unknown, non-finite and folding lenses are refused") {
   test::TempDir dir;
   KnownCapture capture({0, 0, 0}, 4.0, 2);

@@ -176,10 +176,13 @@ namespace {
 
 // ---- The import's steps, in order ----
 
-// The model's images in name order (the loader holds out every 8th of them as test).
-std::vector<const ColmapImage*> images_by_name(const ColmapModel& model) {
+// The model's images in name order (the loader holds out every 8th of them as test), without those left out.
+std::vector<const ColmapImage*> images_by_name(const ColmapModel& model, const std::vector<std::string>& leave_out) {
   std::vector<const ColmapImage*> images;
-  for (const auto& image : model.images) images.push_back(&image);
+  for (const auto& image : model.images) {
+    if (std::find(leave_out.begin(), leave_out.end(), image.name) == leave_out.end()) images.push_back(&image);
+  }
+  if (images.empty()) throw Error(model.file("images") + ": every image is left out; nothing to import");
   std::sort(images.begin(), images.end(), [](const auto* a, const auto* b) { return a->name < b->name; });
   return images;
 }
@@ -259,13 +262,27 @@ std::vector<std::vector<double>> point_depths(const ColmapModel& model, const st
   std::vector<std::vector<double>> depths(images.size());
   for (const auto& point : model.points) {
     for (uint32_t image_id : point.image_ids) {
-      const size_t i = index_of.at(image_id);
+      const auto found = index_of.find(image_id);
+      if (found == index_of.end()) continue;  // an image left out
+      const size_t i = found->second;
       const double depth = colmap_depth(*images[i], point.xyz);
       if (depth > 0.0) depths[i].push_back(depth);
     }
   }
   return depths;
 }
+
+}  // namespace
+
+std::vector<size_t> points_in_front_counts(const ColmapModel& model) {
+  std::vector<const ColmapImage*> images;
+  for (const auto& image : model.images) images.push_back(&image);
+  std::vector<size_t> counts;
+  for (const auto& depths : point_depths(model, images)) counts.push_back(depths.size());
+  return counts;
+}
+
+namespace {
 
 // The near/far range of the points' depths (near_far_from_depths), in COLMAP units; refused when there is none and
 // the options do not give both.
@@ -523,7 +540,7 @@ void choose_layout(const ColmapImportOptions& options, const std::vector<Matrix3
 ColmapImport import_colmap(const std::string& sparse_dir, const std::string& images_dir, const std::string& out_dir,
                            const ColmapImportOptions& options) {
   const ColmapModel model = read_colmap_model(sparse_dir);
-  const std::vector<const ColmapImage*> images = images_by_name(model);
+  const std::vector<const ColmapImage*> images = images_by_name(model, options.leave_out);
   const std::map<uint32_t, Intrinsics> intrinsics = used_intrinsics(model, images);
   const std::vector<fs::path> image_paths = image_files(model, images, images_dir, intrinsics);
   const std::vector<Matrix34> poses = camera_poses(images);

@@ -48,6 +48,13 @@ struct DepthRange {
 };
 std::optional<DepthRange> near_far_from_depths(std::vector<std::vector<double>>& depths_per_image);
 
+// Per image of model.images (same order), how many of the sparse points it sees lie in front of it (depth > 0).
+// COLMAP can register an image whose points all end up behind it or filtered away (its mapper with the settings for
+// small baselines did, 1 photo of 12 in one run of the test suite): no point checks such a pose, and an LLFF
+// capture cannot take that image's depth bounds from its points. An image needs kMinPointsInFront of them.
+std::vector<size_t> points_in_front_counts(const ColmapModel& model);
+constexpr size_t kMinPointsInFront = 2;
+
 // The layout an import writes: chosen from the cameras (automatic), or forced.
 enum class ImportLayout { automatic, llff, transforms_json };
 
@@ -56,6 +63,8 @@ struct ColmapImportOptions {
   // transforms.json only: an LLFF capture's bounds are per image, and its loader rescales them itself.
   std::optional<double> near, far;
   ImportLayout layout = ImportLayout::automatic;
+  // Images of the model not imported, by name (from-photos: those that see fewer than kMinPointsInFront points).
+  std::vector<std::string> leave_out;
 };
 
 // What import_colmap wrote.
