@@ -305,8 +305,8 @@ ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const f
                                      __global float* d_density, const uint ray, const uint i, const uint n_samples,
                                      const float dir_norm, const RayNoiseKey noise, const int from_raw,
                                      const int with_colour, const float d_red, const float d_green,
-                                     const float d_blue, const float d_acc_total, const float trans_last,
-                                     float* weight_after, float* grad_weight_after) {
+                                     const float d_blue, const float d_acc_total, const uint has_d_weights,
+                                     const float trans_last, float* weight_after, float* grad_weight_after) {
   const uint at = ray * n_samples + i, t_at = ray * (n_samples + 1) + i;
   const float16 w = vload16(0, weights + at);
   float16 raw_red = (float16)(0.0f), raw_green = (float16)(0.0f), raw_blue = (float16)(0.0f);
@@ -317,6 +317,7 @@ ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const f
     const float16 green = from_raw ? rgb_activation(raw_green) : raw_green;
     const float16 blue = from_raw ? rgb_activation(raw_blue) : raw_blue;
     g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
+    if (has_d_weights) g += vload16(0, d_weights + at);
   } else {
     g = vload16(0, d_weights + at);
   }
@@ -355,15 +356,17 @@ ALWAYS_INLINE void render_vector_bwd(__global const float* rgb, __global const f
 // Evaluated in one reverse sweep with T_{i+1} = T_N + Σ_{k>i} w_k and the suffix sums accumulated as they
 // go: every term is a sum of like-signed values, so the error stays relative to T_{i+1} (no exp(+s) that
 // overflows, no total − prefix that cancels behind an opaque surface). T_N comes from a forward sweep of s.
-// With `with_colour` (a constant at each call site) g_i comes from the composite as above; without it g_i = d_weights
-// [ray][i], given (the interlevel loss's gradient on a proposal level's weights), and rgb, d_comp_rgb, d_acc, d_rgb
-// are never touched (may be null): then no colour and no background enters, as none enters the weights.
+// With `with_colour` (a constant at each call site) g_i comes from the composite as above, plus d_weights[ray][i] when
+// has_d_weights (a loss on the weights themselves: mip-NeRF 360's distortion loss on the last level); without it
+// g_i = d_weights [ray][i], given (the interlevel loss's gradient on a proposal level's weights), and rgb, d_comp_rgb,
+// d_acc, d_rgb are never touched (may be null): then no colour and no background enters, as none enters the weights.
 // Stores nothing unless `live`.
 ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const float* density,
                                   __global const float* t_edges, __global const float* directions,
                                   __global const float* weights, __global const float* d_comp_rgb,
                                   __global const float* d_acc, const uint has_d_acc,
-                                  __global const float* d_weights, __global float* d_rgb, __global float* d_density,
+                                  __global const float* d_weights, const uint has_d_weights, __global float* d_rgb,
+                                  __global float* d_density,
                                   const uint ray, const int live, const uint n_samples, const RayNoiseKey noise,
                                   const int from_raw, const int with_colour) {
   const float dir_norm = direction_norm(directions, ray);
@@ -417,6 +420,7 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
       const float red = render_channel(rgb, at, 0, from_raw), green = render_channel(rgb, at, 1, from_raw);
       const float blue = render_channel(rgb, at, 2, from_raw);
       g = d_red * red + d_green * green + d_blue * blue + d_acc_total;
+      if (has_d_weights) g += d_weights[at];
     } else {
       g = d_weights[at];
     }
@@ -446,8 +450,8 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
 #if SAMPLES_PER_VECTOR
   for (uint i = vector_end; i > 0; i -= VECTOR_WIDTH) {
     render_vector_bwd(rgb, density, t_edges, weights, d_weights, d_rgb, d_density, ray, i - VECTOR_WIDTH, n_samples,
-                      dir_norm, noise, from_raw, with_colour, d_red, d_green, d_blue, d_acc_total, trans_last,
-                      &weight_after, &grad_weight_after);
+                      dir_norm, noise, from_raw, with_colour, d_red, d_green, d_blue, d_acc_total, has_d_weights,
+                      trans_last, &weight_after, &grad_weight_after);
   }
 #endif
 }
@@ -468,15 +472,17 @@ __kernel void render_fwd(__global const float* rgb, __global const float* densit
                  n_samples, ray_noise_key(0, 0, 0, 0), 0, 1);
 }
 
-// d_acc [R] is read only when has_d_acc != 0 (otherwise any buffer may be passed).
+// d_acc [R] is read only when has_d_acc != 0, d_weights [R][N] (∂L/∂w of a loss on the weights themselves, added to
+// the composite's) only when has_d_weights != 0 (otherwise any buffer may be passed).
 // Outputs d_rgb [R][N][3] and d_density [R][N] (overwritten, not accumulated).
 __kernel void render_bwd(__global const float* rgb, __global const float* density, __global const float* t_edges,
                          __global const float* directions, __global const float* weights,
                          __global const float* d_comp_rgb, __global const float* d_acc, const uint has_d_acc,
-                         __global float* d_rgb, __global float* d_density, const uint n_rays, const uint n_samples) {
+                         __global const float* d_weights, const uint has_d_weights, __global float* d_rgb,
+                         __global float* d_density, const uint n_rays, const uint n_samples) {
   RAY_OF_WORK_ITEM(n_rays);
-  render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, 0, d_rgb, d_density, ray,
-                 live, n_samples, ray_noise_key(0, 0, 0, 0), 0, 1);
+  render_ray_bwd(rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_weights, has_d_weights,
+                 d_rgb, d_density, ray, live, n_samples, ray_noise_key(0, 0, 0, 0), 0, 1);
 }
 
 // Fused activations + rendering: the same as activations_fwd then render_fwd, reading the MLP's raw outputs
@@ -510,12 +516,14 @@ __kernel void render_raw_weights_fwd(__global const float* raw_density, __global
 __kernel void render_raw_bwd(__global const float* raw_rgb, __global const float* raw_density,
                              __global const float* t_edges, __global const float* directions,
                              __global const float* weights, __global const float* d_comp_rgb,
-                             __global const float* d_acc, const uint has_d_acc, __global float* d_raw_rgb,
-                             __global float* d_raw_density, const uint n_rays, const uint n_samples, const ulong seed,
-                             const uint step, const uint first_ray, const uint level) {
+                             __global const float* d_acc, const uint has_d_acc, __global const float* d_weights,
+                             const uint has_d_weights, __global float* d_raw_rgb, __global float* d_raw_density,
+                             const uint n_rays, const uint n_samples, const ulong seed, const uint step,
+                             const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
-  render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, 0, d_raw_rgb,
-                 d_raw_density, ray, live, n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1, 1);
+  render_ray_bwd(raw_rgb, raw_density, t_edges, directions, weights, d_comp_rgb, d_acc, has_d_acc, d_weights,
+                 has_d_weights, d_raw_rgb, d_raw_density, ray, live, n_samples,
+                 ray_noise_key(seed, first_ray + ray, step, level), 1, 1);
 }
 
 // The backward of render_raw_weights_fwd's weights: from d_weights [R][N] = ∂L/∂w (what a proposal level receives
@@ -534,7 +542,7 @@ __kernel void render_raw_weights_bwd(__global const float* raw_density, __global
                                      const uint n_rays, const uint n_samples, const ulong seed, const uint step,
                                      const uint first_ray, const uint level) {
   RAY_OF_WORK_ITEM(n_rays);
-  render_ray_bwd(0, raw_density, t_edges, directions, weights, 0, 0, 0, d_weights, 0, d_raw_density, ray, live,
+  render_ray_bwd(0, raw_density, t_edges, directions, weights, 0, 0, 0, d_weights, 0, 0, d_raw_density, ray, live,
                  n_samples, ray_noise_key(seed, first_ray + ray, step, level), 1, 0);
 }
 

@@ -101,20 +101,23 @@ void Render::launch_bwd(::cl::Kernel& kernel, const std::string& where, const Re
   if (grads.d_acc) detail::require(*grads.d_acc, in.n_rays, where);
   detail::require(out.d_rgb, 3 * in.n_rays * in.n_samples, where);
   detail::require(out.d_density, in.n_rays * in.n_samples, where);
-  // Without d_acc the kernel never reads that argument; any valid buffer stands in for it.
+  // Without d_acc (d_weights) the kernel never reads that argument; any valid buffer stands in for it.
   const ocl::DeviceArray<float>& d_acc = grads.d_acc ? *grads.d_acc : grads.d_comp_rgb;
   const cl_uint has_d_acc = grads.d_acc ? 1 : 0;
+  if (grads.d_weights) detail::require(*grads.d_weights, in.n_rays * in.n_samples, where);
+  const ocl::DeviceArray<float>& d_weights = grads.d_weights ? *grads.d_weights : grads.d_comp_rgb;
+  const cl_uint has_d_weights = grads.d_weights ? 1 : 0;
   const cl_uint n_rays = detail::to_uint(in.n_rays, where, "rays"),
                 n_samples = detail::to_uint(in.n_samples, where, "samples");
   if (noise) {
     check_noise_key(*noise, in.n_samples, where);
     ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, weights, grads.d_comp_rgb, d_acc,
-                  has_d_acc, out.d_rgb, out.d_density, n_rays, n_samples, static_cast<cl_ulong>(noise->rng.seed),
+                  has_d_acc, d_weights, has_d_weights, out.d_rgb, out.d_density, n_rays, n_samples, static_cast<cl_ulong>(noise->rng.seed),
                   static_cast<cl_uint>(noise->rng.step), static_cast<cl_uint>(noise->rng.first_ray),
                   static_cast<cl_uint>(noise->level));
   } else {
     ocl::set_args(kernel, where, in.rgb, in.density, in.t_edges, in.rays.directions, weights, grads.d_comp_rgb, d_acc,
-                  has_d_acc, out.d_rgb, out.d_density, n_rays, n_samples);
+                  has_d_acc, d_weights, has_d_weights, out.d_rgb, out.d_density, n_rays, n_samples);
   }
   ocl::launch_1d(*ctx_, kernel, in.n_rays, where);
 }

@@ -49,6 +49,8 @@ struct RenderWeightsOutputs {
 struct RenderGradients {
   const ocl::DeviceArray<float>& d_comp_rgb;  // [R][3] ∂L/∂comp_rgb
   const ocl::DeviceArray<float>* d_acc;       // [R] ∂L/∂acc, or nullptr when the loss does not use acc
+  // [R][N] ∂L/∂w of a loss on the weights themselves (the distortion loss), added to the composite's; or nullptr.
+  const ocl::DeviceArray<float>* d_weights = nullptr;
 };
 
 struct RenderInputGradients {

@@ -115,7 +115,7 @@ void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, co
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
                 const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                 const std::vector<double>* d_acc, std::vector<double>& d_rgb, std::vector<double>& d_density,
-                size_t n_rays, size_t n_samples) {
+                size_t n_rays, size_t n_samples, const std::vector<double>* d_weights) {
   d_rgb.assign(3 * n_rays * n_samples, 0.0);
   d_density.assign(n_rays * n_samples, 0.0);
   std::vector<double> g(n_samples);
@@ -125,7 +125,7 @@ void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, co
     if (options.background == Background::white) d_acc_total -= d_comp[0] + d_comp[1] + d_comp[2];
     for (size_t i = 0; i < n_samples; ++i) {
       const size_t at = ray * n_samples + i;
-      g[i] = d_acc_total;
+      g[i] = d_acc_total + (d_weights ? (*d_weights)[at] : 0.0);
       for (int c = 0; c < 3; ++c) {
         g[i] += d_comp[c] * rgb[3 * at + c];
         d_rgb[3 * at + c] = d_comp[c] * weights[at];
@@ -164,13 +164,14 @@ void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activ
                     const std::vector<double>& t_edges, const std::vector<double>& directions,
                     const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                     const std::vector<double>* d_acc, std::vector<double>& d_raw_rgb,
-                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples, const DensityNoiseKey& noise) {
+                    std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples, const DensityNoiseKey& noise,
+                    const std::vector<double>* d_weights) {
   const size_t rows = n_rays * n_samples;
   const auto noisy = noisy_raw_density(options, raw_density, n_rays, n_samples, noise);
   std::vector<double> density, rgb, d_rgb, d_density;
   activations_fwd(activation, noisy, raw_rgb, density, rgb, rows);
   render_bwd(options, rgb, density, t_edges, directions, weights, d_comp_rgb, d_acc, d_rgb, d_density, n_rays,
-             n_samples);
+             n_samples, d_weights);
   activations_bwd(activation, noisy, raw_rgb, d_density, d_rgb, d_raw_density, d_raw_rgb, rows);
 }
 

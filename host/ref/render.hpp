@@ -18,13 +18,13 @@ void render_fwd(const RenderOptions& options, const std::vector<double>& rgb, co
                 std::vector<double>& weights, size_t n_rays, size_t n_samples);
 
 // Mirror of render_bwd: d_rgb [R][N][3], d_density [R][N] from d_comp_rgb [R][3] and, when d_acc is not null,
-// d_acc [R]. Computed directly from the chain rule, ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − Σ_{k>i} g_k·w_k) with
+// d_acc [R], and when d_weights is not null, d_weights [R][N] (∂L/∂w of a loss on the weights, added to g). Computed directly from the chain rule, ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − Σ_{k>i} g_k·w_k) with
 // g_i = ∂L/∂w_i, T_{i+1} = exp(−Σ_{j≤i} s_j); `weights` are the forward's.
 void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, const std::vector<double>& density,
                 const std::vector<double>& t_edges, const std::vector<double>& directions,
                 const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                 const std::vector<double>* d_acc, std::vector<double>& d_rgb, std::vector<double>& d_density,
-                size_t n_rays, size_t n_samples);
+                size_t n_rays, size_t n_samples, const std::vector<double>* d_weights = nullptr);
 
 // The N(0, 1) draws of the density noise, z [R][N]: sample i of ray r takes draw i % 4 of rng_normal4(seed,
 // first_ray + r, step, level·2^24 + i/4, RNG_STREAM_DENSITY_NOISE) (kernels/render.cl), in double.
@@ -62,6 +62,6 @@ void render_raw_bwd(const RenderOptions& options, const ActivationOptions& activ
                     const std::vector<double>& weights, const std::vector<double>& d_comp_rgb,
                     const std::vector<double>* d_acc, std::vector<double>& d_raw_rgb,
                     std::vector<double>& d_raw_density, size_t n_rays, size_t n_samples,
-                    const DensityNoiseKey& noise = {});
+                    const DensityNoiseKey& noise = {}, const std::vector<double>* d_weights = nullptr);
 
 }  // namespace mipnerf::ref

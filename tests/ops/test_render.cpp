@@ -1339,3 +1339,93 @@ TEST_CASE("render: weights backward - sizes that do not fit are refused before t
   render.raw_weights_bwd(in, weights, d_weights, d_raw);  // the right sizes launch
   CHECK(test::all_finite(d_raw.download(ctx)));
 }
+
+// The fused backward with a loss on the weights as well (RenderGradients::d_weights: the distortion loss on the last
+// level, added to the composite's ∂L/∂w): the reference is the derivative of L = Σ d_comp·comp + d_acc·acc + Σ d_w·w
+// (central differences, as the noise test above), and the device, per ray and per vector (whose 16-sample blocks
+// read d_weights their own way; 37 samples: two blocks and a tail), within 1e-4 of the largest gradient. Without
+// d_weights, or with d_weights = 0, the kernel gives what it gave before, bit for bit.
+TEST_CASE("render: the fused backward adds a loss on the weights (d_weights) to the composite's, both sample loops") {
+  auto& ctx = test::test_context();
+  const Batch b = raw_batch(150, 37, 1313);
+  const size_t n = b.n_samples, rows = b.n_rays * n;
+  const RenderOptions options{Background::white};
+  const ActivationOptions activation;
+  const auto d_weights = random_d_weights(rows, 1314);
+  const auto rgb = test::to_double(b.rgb), density = test::to_double(b.density);
+  const auto t_edges = test::to_double(b.t_edges), directions = test::to_double(b.directions);
+  const auto d_comp = test::to_double(b.d_comp_rgb), d_acc = test::to_double(b.d_acc);
+  const auto d_w = test::to_double(d_weights);
+  std::vector<double> comp, acc, distance, weights, d_rgb, d_density;
+  ref::render_raw_fwd(options, activation, rgb, density, t_edges, directions, comp, acc, distance, weights, b.n_rays, n);
+  ref::render_raw_bwd(options, activation, rgb, density, t_edges, directions, weights, d_comp, &d_acc, d_rgb, d_density,
+                      b.n_rays, n, {}, &d_w);
+  std::vector<double> fd_density(rows);
+  for (size_t ray = 0; ray < b.n_rays; ++ray) {
+    const std::vector<double> ray_rgb(rgb.begin() + 3 * ray * n, rgb.begin() + 3 * (ray + 1) * n);
+    std::vector<double> ray_density(density.begin() + ray * n, density.begin() + (ray + 1) * n);
+    const std::vector<double> ray_t(t_edges.begin() + ray * (n + 1), t_edges.begin() + (ray + 1) * (n + 1));
+    const std::vector<double> ray_dir(directions.begin() + 3 * ray, directions.begin() + 3 * ray + 3);
+    const auto loss = [&] {
+      std::vector<double> c, a, dist, w;
+      ref::render_raw_fwd(options, activation, ray_rgb, ray_density, ray_t, ray_dir, c, a, dist, w, 1, n);
+      double l = d_acc[ray] * a[0] + d_comp[3 * ray] * c[0] + d_comp[3 * ray + 1] * c[1] + d_comp[3 * ray + 2] * c[2];
+      for (size_t i = 0; i < n; ++i) l += d_w[ray * n + i] * w[i];
+      return l;
+    };
+    for (size_t i = 0; i < n; ++i) {
+      double& x = ray_density[i];
+      const double x0 = x, h = 1e-6 * std::max(std::abs(x0), 1.0);
+      x = x0 + h;
+      const double up = loss();
+      x = x0 - h;
+      const double down = loss();
+      x = x0;
+      fd_density[ray * n + i] = (up - down) / (2 * h);
+    }
+  }
+  size_t outside = 0;
+  for (size_t k = 0; k < rows; ++k) outside += !(std::abs(d_density[k] - fd_density[k]) <= 1e-8 + 1e-7 * std::abs(fd_density[k]));
+  CHECK(outside == 0);
+  // The weights' loss matters: without it the reference is another derivative for most samples.
+  std::vector<double> d_rgb_colour_only, d_density_colour_only;
+  ref::render_raw_bwd(options, activation, rgb, density, t_edges, directions, weights, d_comp, &d_acc,
+                      d_rgb_colour_only, d_density_colour_only, b.n_rays, n);
+  size_t moved = 0;
+  for (size_t k = 0; k < rows; ++k) moved += std::abs(d_density_colour_only[k] - fd_density[k]) > 1e-3;
+  CHECK(moved > rows / 4);
+  CHECK(d_rgb_colour_only == d_rgb);  // the colours' gradients do not involve ∂L/∂w
+
+  double scale = 1e-30;
+  for (double v : fd_density) scale = std::max(scale, std::abs(v));
+  auto raw_rgb = test::upload(ctx, b.rgb, "raw_rgb"), raw_density = test::upload(ctx, b.density, "raw_density");
+  auto t_dev = test::upload(ctx, b.t_edges, "t_edges");
+  ops::RayBundle rays(ctx, b.n_rays);
+  rays.directions.upload(ctx, b.directions);
+  auto d_comp_dev = test::upload(ctx, b.d_comp_rgb, "d_comp_rgb"), d_acc_dev = test::upload(ctx, b.d_acc, "d_acc");
+  auto d_w_dev = test::upload(ctx, d_weights, "d_weights");
+  auto zero_d_w = test::upload(ctx, std::vector<float>(rows, 0.0f), "zero d_weights");
+  for (const auto loop : {ops::RenderSampleLoop::per_ray, ops::RenderSampleLoop::per_vector}) {
+    INFO("loop " << static_cast<int>(loop));
+    ops::Render render(ctx, options, activation, loop);
+    ocl::DeviceArray<float> comp_dev(ctx, 3 * b.n_rays, "comp"), acc_dev(ctx, b.n_rays, "acc");
+    ocl::DeviceArray<float> distance_dev(ctx, b.n_rays, "distance"), weights_dev(ctx, rows, "weights");
+    ocl::DeviceArray<float> d_rgb_dev(ctx, 3 * rows, "d_rgb"), d_density_dev(ctx, rows, "d_density");
+    const ops::RenderInputs in{raw_rgb, raw_density, t_dev, rays, b.n_rays, n};
+    render.raw_fwd(in, {comp_dev, acc_dev, distance_dev, weights_dev});
+    const auto backward = [&](const ocl::DeviceArray<float>* with) {
+      ops::RenderGradients grads{d_comp_dev, &d_acc_dev};
+      grads.d_weights = with;
+      render.raw_bwd(in, weights_dev, grads, {d_rgb_dev, d_density_dev});
+      return std::make_pair(d_rgb_dev.download(ctx), d_density_dev.download(ctx));
+    };
+    const auto with_loss = backward(&d_w_dev);
+    MIPNERF_CHECK_CLOSE("device d_raw_density with d_weights vs finite differences", with_loss.second, fd_density,
+                        [scale](size_t) { return 1e-4 * scale; });
+    const auto without = backward(nullptr);
+    const auto with_zero = backward(&zero_d_w);
+    CHECK(with_zero.first == without.first);
+    CHECK(with_zero.second == without.second);
+    CHECK(with_loss.first == without.first);
+  }
+}
