@@ -23,6 +23,7 @@ struct BufferPlan {
   std::vector<size_t> level_own;       // per level: a training proposal round's own features width (0: none)
   bool unit_histogram = false;         // the first level samples by proposal: [R][2] + [R]
   size_t proposal_intervals = 0;       // training: the proposal rounds' most intervals (their shared backward)
+  size_t distortion_intervals = 0;     // training with a distortion loss: the last level's intervals
   size_t batch_rays = 0;
   size_t partial_slots = 0;  // per colour level (training)
   bool training = false;
@@ -41,6 +42,7 @@ struct BufferPlan {
     }
     if (unit_histogram) n += 3 * rays;
     n += rays * proposal_intervals * (2 + 3) + (proposal_intervals ? rays : 0);
+    if (distortion_intervals) n += rays * (2 * distortion_intervals + 1) + rays + batch_rays;
     return n;
   }
 };
@@ -70,6 +72,7 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
       plan.drawn_edges = std::max(plan.drawn_edges, max_chunk_rays * (level.new_samples + 1));
     }
   }
+  if (plan.training && spec.levels.back().distortion_mult > 0.0f) plan.distortion_intervals = plan.level_intervals.back();
   // Each chunk of n rays writes ceil(n / group) slots: at most batch/group + one partial group per chunk.
   const size_t chunks = max_chunk_rays ? (max_batch_rays + max_chunk_rays - 1) / max_chunk_rays : 0;
   plan.partial_slots = max_batch_rays / loss_group_size + chunks + 1;
@@ -169,6 +172,7 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx);
   }
   if (training && spec_.has_proposal_levels()) interlevel_ = std::make_unique<ops::SplineInterlevel>(ctx);
+  if (training && spec_.levels.back().distortion_mult > 0.0f) distortion_ = std::make_unique<ops::Distortion>(ctx);
   for (size_t g = 0; g < spec_.grids.size(); ++g) {
     ops::ZipFeatureOptions zip_options = spec_.zip_options(g);
     zip_options.randomized = training && spec_.zip.randomized;  // rendering: the fixed pattern
@@ -215,6 +219,12 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     chunk_ray_loss_ = ocl::DeviceArray<float>(ctx, R, "interlevel ray_loss [R]");
     zero_d_raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * R * M, "proposal d_raw_rgb [R·M][3] (zeros)");
     zero_d_raw_rgb_.fill(ctx, 0.0f);
+  }
+  if (const size_t N = plan.distortion_intervals) {
+    d_w_distortion_ = ocl::DeviceArray<float>(ctx, R * N, "distortion d_w [R][N]");
+    d_t_distortion_ = ocl::DeviceArray<float>(ctx, R * (N + 1), "distortion d_t [R][N+1] (unused)");
+    distortion_chunk_loss_ = ocl::DeviceArray<float>(ctx, R, "distortion ray_loss [R]");
+    distortion_ray_loss_ = ocl::DeviceArray<float>(ctx, max_batch_rays_, "distortion ray_loss [B]");
   }
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     LevelBuffers level;
@@ -420,10 +430,15 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
     loss_->fwd_bwd(buffers.outputs.comp_rgb, targets.target_rgb, targets.lossmult,
                    {level.loss_weight, step_lossmult_sum_}, d_comp_rgb_, buffers.partials, loss_chunk);
   }
+  ops::RenderGradients grads{d_comp_rgb_, nullptr};
+  if (level.distortion_mult > 0.0f) {
+    distortion_backward(l, chunk);
+    grads.d_weights = &d_w_distortion_;
+  }
   ocl::StageScope stage(*ctx_, "render backward");
   ocl::add_stage_bytes(*ctx_, traffic::render_backward(n_rays, buffers.intervals));
   render_->raw_bwd({raw_rgb_, raw_density_, buffers.t_edges, chunk_rays_, n_rays, buffers.intervals}, buffers.weights,
-                   {d_comp_rgb_, nullptr}, {d_raw_rgb_, d_raw_density_}, noise);
+                   grads, {d_raw_rgb_, d_raw_density_}, noise);
   const bool grid_level = level.encoding == Encoding::zip_grid;
   mlp::Network& network = *networks_[level.mlp_index];
   {
@@ -436,6 +451,15 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   mlp::GridTable& grid = *grids_[level.grid_index];
   zip_[level.grid_index]->bwd({chunk_rays_, buffers.t_edges, n_rays, buffers.intervals},
                               {grid.levels(), grid.layout()}, d_features_, grid.grads(), key);
+}
+
+void Graph::distortion_backward(size_t l, ChunkRange chunk) {
+  const LevelBuffers& buffers = levels_[l];
+  const ops::DistortionInputs in{buffers.s_edges, buffers.weights, chunk.count, buffers.intervals};
+  ocl::StageScope stage(*ctx_, "distortion loss");
+  distortion_->fwd(in, distortion_chunk_loss_);
+  ocl::copy(*ctx_, distortion_chunk_loss_, 0, distortion_ray_loss_, chunk.first, chunk.count);
+  distortion_->bwd(in, spec_.levels[l].distortion_mult, step_batch_rays_, d_w_distortion_, d_t_distortion_);
 }
 
 void Graph::backward_proposal(size_t l, ChunkRange chunk, const DensityNoiseKey& noise, const RngKey& key) {
@@ -483,6 +507,7 @@ void Graph::begin_step(size_t batch_rays, double lossmult_sum) {
   for (auto& level : levels_) {
     if (level.ray_loss.size()) level.ray_loss.fill(*ctx_, 0.0f);
   }
+  if (distortion_ray_loss_.size()) distortion_ray_loss_.fill(*ctx_, 0.0f);
   ocl::StageScope stage(*ctx_, "adam");  // zeroing the gradients is part of the optimiser's work
   for (auto* network : networks_) network->zero_grad();
   for (size_t g = 0; g < grids_.size(); ++g) {
@@ -538,6 +563,12 @@ std::vector<ops::LevelLoss> Graph::end_step() {
     std::vector<float> partials(2 * step_groups_);
     level.partials.download(*ctx_, partials.data(), partials.size());  // blocking: waits for the step
     losses.push_back(ops::sum_loss_partials(partials, step_groups_, step_lossmult_sum_, step_batch_rays_));
+    if (spec_.levels[l].distortion_mult > 0.0f) {
+      std::vector<float> ray_loss(step_batch_rays_);
+      distortion_ray_loss_.download(*ctx_, ray_loss.data(), ray_loss.size());
+      losses.back().distortion =
+          ops::distortion_loss_value(ray_loss, step_batch_rays_, spec_.levels[l].distortion_mult);
+    }
   }
   return losses;
 }

@@ -24,6 +24,7 @@
 #include "graph/graph_spec.hpp"
 #include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
+#include "ops/distortion.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
 #include "ops/interlevel.hpp"
@@ -151,6 +152,9 @@ class Graph {
                      bool with_colour = true);
   void backward_level(size_t level, size_t n_rays, const TrainTargets& targets, ChunkRange chunk,
                       const DensityNoiseKey& noise, const RngKey& key);
+  // The last level's distortion loss over its s-edges (edges held: stop-gradient): the chunk's share of the batch's
+  // per-ray losses, and ∂loss/∂weights into d_w_distortion_ for the render backward.
+  void distortion_backward(size_t level, ChunkRange chunk);
   // A proposal round's backward (after the last level's): interlevel loss and ∂loss/∂weights → raw density →
   // network (density only) → grid.
   void backward_proposal(size_t level, ChunkRange chunk, const DensityNoiseKey& noise, const RngKey& key);
@@ -180,6 +184,7 @@ class Graph {
   std::vector<std::unique_ptr<ops::ZipFeatures>> zip_;  // one per grid (its features are compiled in)
   std::unique_ptr<ops::SampleIntervals> sample_intervals_;  // proposal sampling (when a level samples so)
   std::unique_ptr<ops::SplineInterlevel> interlevel_;       // proposal rounds' loss (training)
+  std::unique_ptr<ops::Distortion> distortion_;             // the last level's distortion loss (training, when asked)
   ResampleOptions resample_options_;
   SampleIntervalsOptions sample_intervals_options_;  // anneal: the step's (training) or 1 (rendering)
 
@@ -195,6 +200,9 @@ class Graph {
   ocl::DeviceArray<float> d_raw_density_, d_raw_rgb_;  // [S], [S][3] (training)
   ocl::DeviceArray<float> d_features_;                 // [S][F] (training with a grid level)
   std::vector<ocl::DeviceArray<float>> level_scales_;  // per grid: [its levels]
+  // The distortion loss (training, when the last level has one): ∂/∂w [R][N], ∂/∂edges [R][N+1] (unused: the edges
+  // take no gradient), the chunk's per-ray losses [R] and the batch's [B].
+  ocl::DeviceArray<float> d_w_distortion_, d_t_distortion_, distortion_chunk_loss_, distortion_ray_loss_;
   // Proposal sampling: the first round's histogram, the whole ray [0, 1] with weight 1 (official initial sdist).
   ocl::DeviceArray<float> unit_s_edges_, unit_weights_;  // [R][2], [R]
   // The proposal rounds' backward, shared (one round at a time), M = the rounds' most intervals.

@@ -72,6 +72,13 @@ void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string&
     }
     if (level.new_samples < 2) throw Error(where + ": proposal sampling draws at least 2 intervals");
   }
+  if (level.distortion_mult != 0.0f) {
+    if (!(level.distortion_mult > 0.0f)) throw Error(where + ": the distortion loss weight must be ≥ 0");
+    if (l + 1 != spec.levels.size() || level.sampling != Sampling::proposal) {
+      throw Error(where + ": only the last level takes the distortion loss, and only when it samples by proposal (the "
+                          "loss is over its s-edges)");
+    }
+  }
   if (level.role != LevelRole::proposal) return;
   if (l + 1 == spec.levels.size()) throw Error(where + ": the last level is shown, it cannot be a proposal round");
   if (level.sampling != Sampling::proposal || spec.levels.back().sampling != Sampling::proposal) {
@@ -164,6 +171,7 @@ std::string GraphSpec::describe() const {
           << level.interlevel.mult << ")";
     } else {
       out << ", loss weight " << level.loss_weight;
+      if (level.distortion_mult > 0.0f) out << ", distortion loss mult " << level.distortion_mult;
     }
   }
   return out.str();

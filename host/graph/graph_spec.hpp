@@ -52,6 +52,8 @@ struct LevelSpec {
   float loss_weight = 1.0f;  // λ = 0.1 on coarse levels, 1 on the last (nerf levels)
   LevelRole role = LevelRole::nerf;
   ops::InterlevelRound interlevel;  // a proposal level's loss: its blur half-width (in s) and mult
+  // The last level's distortion loss weight (mip-NeRF 360 eq. 15 over its s edges, so proposal-sampled only; 0: none).
+  float distortion_mult = 0.0f;
   // Intervals this level renders: new_samples, or previous + new_samples + 1 for a union of edge sets.
   size_t intervals(size_t previous_intervals) const {
     return sampling == Sampling::resample_union ? previous_intervals + new_samples + 1 : new_samples;

@@ -68,7 +68,7 @@ double total_loss(const std::vector<LevelLoss>& levels, float coarse_weight) {
   double total = 0.0;
   for (size_t l = 0; l < levels.size(); ++l) {
     const double weight = levels[l].proposal ? 1.0 : loss_level_weight(l, levels.size(), coarse_weight);
-    total += weight * levels[l].loss();
+    total += weight * levels[l].loss() + levels[l].distortion;
   }
   return total;
 }

@@ -55,6 +55,9 @@ struct LevelLoss {
   // (ops::interlevel_loss_value); the photometric sums above stay 0.
   bool proposal = false;
   double interlevel = 0.0;
+  // The last level's distortion loss (mip-NeRF 360 eq. 15), mult already applied (ops::distortion_loss_value); 0
+  // without one. Not in loss(): total_loss adds it.
+  double distortion = 0.0;
 
   // The official per-level loss: weighted_sse / lossmult_sum (= 3 × per-channel MSE when lossmult = 1), or a proposal
   // round's interlevel loss.

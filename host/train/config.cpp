@@ -139,6 +139,11 @@ const std::vector<Entry>& table() {
       {{"interlevel_mult", "sampler=proposal: weight of each proposal round's interlevel loss (official 0.01)",
         "optimisation"},
        &TrainConfig::interlevel_mult},
+      {{"distortion_mult",
+        "sampler=proposal: weight of mip-NeRF 360's distortion loss on the NeRF level's weights over normalised "
+        "distance (against floaters; 0 = off; official Zip-NeRF 360° scenes 0.01)",
+        "optimisation"},
+       &TrainConfig::distortion_mult},
       {{"batch_size", "rays per optimisation step", "optimisation"}, &TrainConfig::batch_size},
       {{"steps", "optimisation steps of the run", "optimisation"}, &TrainConfig::steps},
       {{"lr_init", "initial learning rate", "optimisation"}, &TrainConfig::lr_init},
@@ -486,6 +491,10 @@ void validate(const TrainConfig& c) {
       require(false, e.what());
     }
   }
+  require(c.distortion_mult >= 0, "distortion_mult must be >= 0 (0 = off)");
+  require(c.distortion_mult == 0 || c.sampler == Sampler::proposal,
+          "distortion_mult needs sampler=proposal (the distortion loss is taken over the normalised distances its "
+          "levels are drawn in): add --set sampler=proposal (zipnerf), or leave distortion_mult at 0");
   if (c.sampler == Sampler::proposal) {
     require(c.variant == ModelFamily::zipnerf,
             "sampler=proposal is Zip-NeRF's (density-only proposal networks on grids of their own): train with --model "

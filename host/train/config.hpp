@@ -141,6 +141,9 @@ struct TrainConfig {
   int proposal_grid_max = 2048;
   double anneal_slope = 10.0;
   double interlevel_mult = 0.01;
+  // mip-NeRF 360's distortion loss (eq. 15) on the NeRF level's weights over normalised distance s, this weight (0 =
+  // off; sampler = proposal only: its levels are drawn in s). Official camp_zipnerf 360.gin: 0.01 (on a curve of t).
+  double distortion_mult = 0.0;
 
   // --- optimisation ---
   int batch_size = 4096;            // rays per step

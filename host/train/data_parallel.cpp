@@ -72,12 +72,14 @@ void sum_over_ranks(ocl::Context& ctx, std::vector<std::unique_ptr<mlp::Network>
     sums.push_back(l.weighted_sse);
     sums.push_back(l.plain_sse);
     sums.push_back(l.interlevel);  // a proposal round's: each rank's share of the batch-normalised loss
+    sums.push_back(l.distortion);  // likewise
   }
   parallel::world().sum_in_place(sums.data(), sums.size());
   for (size_t i = 0; i < losses.size(); ++i) {
-    losses[i].weighted_sse = sums[3 * i];
-    losses[i].plain_sse = sums[3 * i + 1];
-    losses[i].interlevel = sums[3 * i + 2];
+    losses[i].weighted_sse = sums[4 * i];
+    losses[i].plain_sse = sums[4 * i + 1];
+    losses[i].interlevel = sums[4 * i + 2];
+    losses[i].distortion = sums[4 * i + 3];
   }
 }
 

@@ -86,6 +86,7 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
       level.interlevel.mult = static_cast<float>(c.interlevel_mult);
     } else {
       level.new_samples = static_cast<size_t>(c.num_samples);
+      level.distortion_mult = static_cast<float>(c.distortion_mult);
     }
     spec.levels.push_back(level);
     mlp::MlpConfig m = network(c, spec.feature_width(level), static_cast<size_t>(l));

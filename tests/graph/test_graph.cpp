@@ -14,6 +14,7 @@
 #include "graph/graph.hpp"
 #include "ops/batch.hpp"
 #include "core/proposal_anneal.hpp"
+#include "ref/distortion.hpp"
 #include "ref/encode.hpp"
 #include "ref/gaussian.hpp"
 #include "ref/interlevel.hpp"
@@ -125,7 +126,8 @@ struct ReferenceStep {
   std::vector<std::vector<double>> grads;    // per network
   std::vector<std::vector<double>> grid_grads;  // per grid (Zip-NeRF)
   std::vector<std::vector<double>> t_edges;  // per level
-  double weighted_loss = 0;                  // Σ_l loss_weight_l · level_loss_l: what the gradients differentiate
+  double distortion = 0;                     // the last level's distortion loss (mult applied; 0 without)
+  double weighted_loss = 0;                  // Σ_l loss_weight_l · level_loss_l + distortion: what the gradients differentiate
 };
 
 // The graph's training step for one batch, written out with the reference functions (no chunks).
@@ -268,8 +270,20 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     out.level_loss.push_back(partials[ref::loss_sum_weighted] / lossmult_sum);
     out.weighted_loss += level.loss_weight * out.level_loss.back();
     out.t_edges.push_back(t);
+    // The distortion loss over the level's s-edges (held: no gradient reaches them), its ∂/∂w added to the
+    // composite's.
+    std::vector<double> d_w_distortion;
+    if (level.distortion_mult > 0.0f) {
+      std::vector<double> ray_loss(R), d_t((n + 1) * R);
+      d_w_distortion.resize(R * n);
+      ref::distortion_fwd(s.data(), weights.data(), ray_loss.data(), R, n);
+      out.distortion = ref::distortion_loss(ray_loss, level.distortion_mult);
+      out.weighted_loss += out.distortion;
+      ref::distortion_bwd(s.data(), weights.data(), static_cast<double>(level.distortion_mult) / static_cast<double>(R),
+                          d_w_distortion.data(), d_t.data(), R, n);
+    }
     ref::render_raw_bwd(spec.render, spec.activation, raw_rgb, raw_density, t, directions, weights, d_comp, nullptr,
-                        d_raw_rgb, d_raw_density, R, n, noise);
+                        d_raw_rgb, d_raw_density, R, n, noise, d_w_distortion.empty() ? nullptr : &d_w_distortion);
     if (level.encoding == graph::Encoding::zip_grid) {
       std::vector<double> d_features;
       ref::mlp_backward(mlp_config, params[level.mlp_index], tape, d_raw_density, d_raw_rgb,
@@ -426,6 +440,10 @@ void check_step_against_reference_on(gemm::GemmBackend backend, const std::strin
     }
     CHECK(std::abs(losses[l].loss() - expected.level_loss[l]) <= loss_tolerance);
   }
+  // The last level's distortion loss, when the spec has one (and only then), as the level losses are held.
+  INFO("distortion: device " << losses.back().distortion << ", reference " << expected.distortion);
+  CHECK((expected.distortion > 0.0) == (spec.levels.back().distortion_mult > 0.0f));
+  CHECK(std::abs(losses.back().distortion - expected.distortion) <= 1e-4 * std::abs(expected.distortion));
   for (size_t i = 0; i < networks.size(); ++i) {
     const auto device = to_double(networks[i]->download_grads());
     double diff = 0, norm = 0;
@@ -768,6 +786,16 @@ TEST_CASE("graph: a Zip-NeRF training step with proposal sampling equals the ref
   check_step_against_reference("zipnerf", test::small_scene(),
                                {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_grid_max", "64"},
                                 {"grid_max", "64"}, {"grid_hash_log2", "12"}});
+}
+
+// The distortion loss on the NeRF level's weights over its s-edges (mip-NeRF 360 eq. 15; held: no gradient reaches the
+// edges), its gradient added to the composite's in the render backward: the loss and every gradient against the
+// reference. A large mult (the official's 0.01 moves the gradients by less than the tolerance) makes a render backward
+// that dropped it fail here.
+TEST_CASE("graph: a Zip-NeRF proposal step with the distortion loss equals the reference") {
+  check_step_against_reference("zipnerf", test::small_scene(),
+                               {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_grid_max", "64"},
+                                {"grid_max", "64"}, {"grid_hash_log2", "12"}, {"distortion_mult", "1"}});
 }
 
 // A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at

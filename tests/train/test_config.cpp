@@ -379,7 +379,8 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("sampler") == "resample");
   CHECK(old.sampler == train::Sampler::resample);
   for (const char* name :
-       {"sampler", "proposal_rounds", "proposal_samples", "proposal_grid_max", "anneal_slope", "interlevel_mult"}) {
+       {"sampler", "proposal_rounds", "proposal_samples", "proposal_grid_max", "anneal_slope", "interlevel_mult",
+        "distortion_mult"}) {
     CHECK(written.contains(name));
     written.erase(name);
   }
@@ -404,8 +405,10 @@ TEST_CASE("config: sampler=proposal is Zip-NeRF's: refused elsewhere with what t
   CHECK(config.proposal_grid_max == 2048);
   CHECK(config.anneal_slope == 10.0);
   CHECK(config.interlevel_mult == 0.01);
+  CHECK(config.distortion_mult == 0.0);  // off unless asked: the default runs are unchanged
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {"proposal_rounds", "0"}, {"proposal_samples", "1"}, {"interlevel_mult", "-1"}, {"proposal_grid_max", "1000"}};
+      {"proposal_rounds", "0"},       {"proposal_samples", "1"},   {"interlevel_mult", "-1"},
+      {"proposal_grid_max", "1000"}, {"distortion_mult", "-0.1"}};
   for (const auto& entry : refused) {
     const std::string name = entry.first, value = entry.second;  // INFO cannot capture a structured binding
     INFO(name << " = " << value);
@@ -449,4 +452,26 @@ TEST_CASE("config: sampler=proposal is Zip-NeRF's: refused elsewhere with what t
   CHECK(resampled.grids.size() == 1);
   CHECK(resampled.mlps.size() == 1);
   CHECK(!resampled.has_proposal_levels());
+  for (const auto& level : spec.levels) CHECK(level.distortion_mult == 0.0f);
+}
+
+// The distortion loss (mip-NeRF 360 eq. 15) is taken over the s-edges proposal sampling draws: asked for without it
+// (any family, or Zip-NeRF's coarse/fine), one line says what to add; with it, only the NeRF level carries the weight.
+TEST_CASE("config: distortion_mult needs sampler=proposal, and weights the NeRF level alone") {
+  for (const char* family : {"mipnerf", "nerf", "zipnerf"}) {
+    INFO("variant " << family);
+    CHECK_THROWS_WITH_AS(train::resolve_config("tiny", family, {{"distortion_mult", "0.01"}}),
+                         doctest::Contains("distortion_mult needs sampler=proposal"), Error);
+  }
+  const auto config = train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}, {"distortion_mult", "0.01"}});
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.levels.size() == 3);
+  CHECK(spec.levels[0].distortion_mult == 0.0f);
+  CHECK(spec.levels[1].distortion_mult == 0.0f);
+  CHECK(spec.levels[2].distortion_mult == 0.01f);
+  CHECK(spec.describe().find("distortion loss mult 0.01") != std::string::npos);
+  // The graph's own rule, for specs built by hand: a proposal round, or a resampled last level, is refused.
+  graph::GraphSpec on_round = spec;
+  on_round.levels[0].distortion_mult = 0.01f;
+  CHECK_THROWS_WITH_AS(on_round.validate(), doctest::Contains("only the last level takes the distortion loss"), Error);
 }
