@@ -1,6 +1,7 @@
 // Host wrapper of kernels/distortion.cl: mip-NeRF 360's distortion loss (eq. 15; camp_zipnerf
-// loss_utils.distortion_loss), forward and backward w.r.t. the weights and the interval edges. Not yet a stage of the
-// training graph (issues 45 and 46).
+// loss_utils.distortion_loss), forward and backward w.r.t. the weights and the interval edges. The training graph runs
+// it on the last level of a proposal-sampled spec when LevelSpec::distortion_mult > 0 (its s-edges; their gradient
+// unused).
 //   loss = mult · mean over rays of Σ_{i,j} w_i w_j |u_i − u_j| + (1/3) Σ_i w_i² (t_{i+1} − t_i)
 #pragma once
 
