@@ -15,7 +15,33 @@
 #ifndef GRID_APPEND_SCALE
 #define GRID_APPEND_SCALE 1
 #endif
+#ifndef ZIP_CONTRACT
+#define ZIP_CONTRACT 0
+#endif
 #define ZIP_LEVEL_WIDTH (GRID_FEATURES + GRID_APPEND_SCALE)
+
+// A multisample (world units) in the grid's unit cube, with its footprint there. With ZIP_CONTRACT (unbounded scenes:
+// the program then includes contract.cl) the point first goes through mip-NeRF 360's contraction (eq. 10: all of
+// space into the ball of radius 2, the cube then [−2, 2]³) and its footprint is multiplied by the cube root of the
+// contraction's Jacobian determinant there, the official's isotropic linearisation (camp_zipnerf
+// coord.contract3_isoscale): with r = |x| > 1 and a = 2 − 1/r (so contract(x) = a·x/r),
+//   ∛det J = ((2r − 1)²)^(1/3) / r² = ∛(a²/r) / r,
+// formed from 1/r (contract_direction: |x|² is never formed, so no overflow at any finite |x|); 1 inside the ball.
+inline void zip_to_unit_cube(float3 point_world, float scale_world, float4 box, float3* unit_point, float* scale) {
+#if ZIP_CONTRACT
+  if (contract_is_outside(point_world)) {
+    float3 u;
+    float inv_r;
+    contract_direction(point_world, &u, &inv_r);
+    const float a = 2.0f - inv_r;
+    point_world = a * u;
+    scale_world *= cbrt(a * a * inv_r) * inv_r;
+  }
+#endif
+  const float inv_size = 1.0f / box.w;
+  *unit_point = (point_world - box.xyz) * inv_size;
+  *scale = scale_world * inv_size;
+}
 
 // The multisamples of interval `sample` (ray · N + i) in the grid's unit cube, with their footprints in its units.
 inline void zip_multisamples(__global const float* origins, __global const float* directions,
@@ -26,7 +52,6 @@ inline void zip_multisamples(__global const float* origins, __global const float
   const float3 origin = vload3(ray, origins), direction = vload3(ray, directions);
   const size_t edge = (size_t)ray * (n_intervals + 1) + interval;
   const float t0 = t_edges[edge], t1 = t_edges[edge + 1];
-  const float inv_size = 1.0f / box.w;
 #if ZIP_MULTISAMPLE
   const float radius = radii[ray];
   float3 axis1, axis2;
@@ -37,17 +62,16 @@ inline void zip_multisamples(__global const float* origins, __global const float
   for (int j = 0; j < ZIP_MULTISAMPLES; ++j) {
     float perp;
     const float3 point = multisample_point(origin, direction, axis1, axis2, radius, t0, t1, j, reversed, turn, &perp);
-    unit_points[j] = (point - box.xyz) * inv_size;
-    scales[j] = scale_mult * perp * inv_size;
+    zip_to_unit_cube(point, scale_mult * perp, box, &unit_points[j], &scales[j]);
   }
 #else
   const float t_mean = frustum_t_at(t0, t1, 0.0f);
-  unit_points[0] = (origin + direction * t_mean - box.xyz) * inv_size;
 #if ZIP_CYLINDER
-  scales[0] = scale_mult * (0.7071067811865476f * radii[ray]) * inv_size;
+  const float perp = 0.7071067811865476f * radii[ray];
 #else
-  scales[0] = scale_mult * (0.7071067811865476f * radii[ray] * t_mean) * inv_size;
+  const float perp = 0.7071067811865476f * radii[ray] * t_mean;
 #endif
+  zip_to_unit_cube(origin + direction * t_mean, scale_mult * perp, box, &unit_points[0], &scales[0]);
 #endif
 }
 

@@ -14,7 +14,8 @@ ocl::BuildOptions zip_features_build_options(const ZipFeatureOptions& options) {
       .define("GRID_APPEND_SCALE", options.append_scale ? 1 : 0)
       .define("ZIP_MULTISAMPLE", options.multisample ? 1 : 0)
       .define("ZIP_CYLINDER", options.cylinder ? 1 : 0)
-      .define("ZIP_RANDOMIZED", options.randomized ? 1 : 0);
+      .define("ZIP_RANDOMIZED", options.randomized ? 1 : 0)
+      .define("ZIP_CONTRACT", options.contract ? 1 : 0);
 }
 
 ZipFeatures::ZipFeatures(ocl::Context& ctx, const ZipFeatureOptions& options) : ctx_(&ctx), options_(options) {
@@ -22,8 +23,14 @@ ZipFeatures::ZipFeatures(ocl::Context& ctx, const ZipFeatureOptions& options) : 
     throw Error("zip features: " + std::to_string(options_.features) + " features per level (1 to 16)");
   }
   if (!(options_.box_size > 0.0f)) throw Error("zip features: the grid's cube needs a positive size");
-  auto& program = ctx.program({"common.cl", "grid_encoding.cl", "multisample.cl", "zip_features.cl"},
-                              zip_features_build_options(options_));
+  if (options_.contract && options_.cylinder) {
+    throw Error("zip features: contraction is for world rays (cones); NDC's cylinders are bounded already");
+  }
+  // contract.cl only when contracting: it turns floating-point contraction off for what follows it.
+  std::vector<std::string> sources = {"common.cl", "grid_encoding.cl", "multisample.cl"};
+  if (options_.contract) sources.push_back("contract.cl");
+  sources.push_back("zip_features.cl");
+  auto& program = ctx.program(sources, zip_features_build_options(options_));
   fwd_ = &program.kernel("zip_features_fwd");
   bwd_ = &program.kernel("zip_features_bwd");
   bwd_by_level_ = &program.kernel("zip_features_bwd_by_level");

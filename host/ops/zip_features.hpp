@@ -24,6 +24,10 @@ struct ZipFeatureOptions {
   bool append_scale = true;   // GRID_APPEND_SCALE: (2w − 1) · level_scale per level [append_scale]
   bool cylinder = false;      // ZIP_CYLINDER: NDC rays' constant footprint
   bool randomized = false;    // ZIP_RANDOMIZED: a random turn and reversal per interval (training)
+  // ZIP_CONTRACT: unbounded scenes: each point through mip-NeRF 360's contraction before the cube (then [−2, 2]³), its
+  // footprint times ∛det of the contraction's Jacobian [warp_fn = coord.contract, coord.contract3_isoscale]. World
+  // rays only (NDC's cylinders are bounded already).
+  bool contract = false;
   float box_min[3] = {-1.0f, -1.0f, -1.0f};  // the grid's cube [bbox_scaling]
   float box_size = 2.0f;
   float scale_mult = 0.5f;    // footprint = scale_mult · the multisample's distance from the axis [unscented_scale_mult]

@@ -2,6 +2,7 @@
 // reference on them, then the mean over each interval's multisamples.
 #include "ref/zip_features.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/rng.hpp"
@@ -36,7 +37,31 @@ double frustum_mean_t(double t0, double t1) {
   return denominator < 1.1754943508222875e-38 ? t0 : s + 2 * s * d * d / denominator;
 }
 
+// A world point and its footprint into the grid's unit cube (the kernel's zip_to_unit_cube), contracted first when
+// the settings say so.
+void to_unit_cube(const ZipFeatureSettings& s, const double point_world[3], double scale_world, double* unit_point,
+                  double& scale) {
+  double point[3] = {point_world[0], point_world[1], point_world[2]};
+  if (s.contract) {
+    zip_contract(point_world, point);
+    scale_world *= zip_contract_isoscale(point_world);
+  }
+  for (int a = 0; a < 3; ++a) unit_point[a] = (point[a] - s.box[a]) / s.box[3];
+  scale = scale_world / s.box[3];
+}
+
 }  // namespace
+
+void zip_contract(const double x[3], double out[3]) {
+  const double m = std::max(1.0, x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  const double scale = (2 * std::sqrt(m) - 1) / m;
+  for (int a = 0; a < 3; ++a) out[a] = scale * x[a];
+}
+
+double zip_contract_isoscale(const double x[3]) {
+  const double m = std::max(1.0, x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  return std::exp(2.0 / 3.0 * std::log(2 * std::sqrt(m) - 1) - std::log(m));
+}
 
 void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vector<double>& unit_points,
                       std::vector<double>& scales) {
@@ -52,8 +77,10 @@ void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vec
       if (!s.multisample) {
         // The hexagon's footprint at t_μ: √½·radius·t_μ (cone) or √½·radius (cylinder).
         const double t = frustum_mean_t(edges[0], edges[1]);
-        for (int a = 0; a < 3; ++a) unit_points[3 * first + a] = (origin[a] + direction[a] * t - s.box[a]) / s.box[3];
-        scales[first] = s.scale_mult * std::sqrt(0.5) * rays.radii[ray] * (s.cylinder ? 1.0 : t) / s.box[3];
+        const double point[3] = {origin[0] + direction[0] * t, origin[1] + direction[1] * t,
+                                 origin[2] + direction[2] * t};
+        to_unit_cube(s, point, s.scale_mult * std::sqrt(0.5) * rays.radii[ray] * (s.cylinder ? 1.0 : t),
+                     &unit_points[3 * first], scales[first]);
         continue;
       }
       bool reversed = false;
@@ -63,8 +90,8 @@ void zip_multisamples(const ZipRays& rays, const ZipFeatureSettings& s, std::vec
           hexify_multisamples(origin, direction, rays.radii[ray], edges[0], edges[1], reversed, turn, s.cylinder);
       for (size_t j = 0; j < per_interval; ++j) {
         const size_t p = first + j;
-        for (int a = 0; a < 3; ++a) unit_points[3 * p + a] = (m.points_world[j][a] - s.box[a]) / s.box[3];
-        scales[p] = s.scale_mult * m.perp_radius[j] / s.box[3];
+        const double point[3] = {m.points_world[j][0], m.points_world[j][1], m.points_world[j][2]};
+        to_unit_cube(s, point, s.scale_mult * m.perp_radius[j], &unit_points[3 * p], scales[p]);
       }
     }
   }

@@ -18,6 +18,7 @@ struct ZipFeatureSettings {
   bool append_scale = true;       // GRID_APPEND_SCALE
   bool cylinder = false;          // ZIP_CYLINDER
   bool randomized = false;        // ZIP_RANDOMIZED: patterns from (seed, step, first_ray + ray, interval)
+  bool contract = false;          // ZIP_CONTRACT: points through contract(), footprints × zip_contract_isoscale
   double box[4] = {0, 0, 0, 1};   // min corner and size of the grid's cube
   double scale_mult = 0.5;
   double precondition = 10.0;
@@ -32,6 +33,12 @@ struct ZipRays {
   size_t n_rays = 0;
   size_t n_intervals = 0;
 };
+
+// mip-NeRF 360's contraction of a point (eq. 10) and the cube root of its Jacobian's determinant there, written as the
+// official writes them (camp_zipnerf coord.contract: m = max(1, |x|²), x·(2√m − 1)/m; coord.contract3_isoscale:
+// exp(⅔ log(2√m − 1) − log m)), in double: the independent form the kernel's is checked against.
+void zip_contract(const double x[3], double out[3]);
+double zip_contract_isoscale(const double x[3]);
 
 // Points per interval: 6 multisamples, or one at the frustum's mean.
 inline int zip_points_per_interval(const ZipFeatureSettings& s) { return s.multisample ? 6 : 1; }

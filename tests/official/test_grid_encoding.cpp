@@ -12,6 +12,7 @@
 #include "official_fixtures.hpp"
 #include "ref/grid_encoding.hpp"
 #include "ref/multisample.hpp"
+#include "ref/zip_features.hpp"
 
 using namespace mipnerf;
 
@@ -119,4 +120,39 @@ TEST_CASE("zipnerf multisamples: the deterministic hexagons are coord.hexify's, 
   INFO("worst point difference " << worst_point << ", off-axis radius " << worst_perp);
   CHECK(worst_point < 1e-12);
   CHECK(worst_perp < 1e-12);
+}
+
+// Unbounded scenes: each multisample through coord.contract and its footprint times coord.contract3_isoscale (models.py
+// predict_density with warp_fn = contract), from fixtures/zipnerf_contract.json (make_zip_contract_vectors.py): points
+// inside the unit ball, on the sphere and one float32 ulp either side, at the origin, and out to |x| ≈ 2e15. The
+// reference writes the official's formulas in double: roundoff agreement. track_isotropic, the general form, agrees
+// with the fast one (to its own float64 determinant's digits) wherever its clamp (float32 tiny) is not reached.
+TEST_CASE("zipnerf contraction: a multisample's point and footprint scale are coord.contract's and contract3_isoscale's") {
+  const auto path = official::fixture_dir() / "zipnerf_contract.json";
+  INFO("fixture " << path.string());
+  REQUIRE(std::filesystem::is_regular_file(path));
+  const io::Json fixture = io::read_json(path.string());
+  REQUIRE(fixture.at("zipnerf_commit").get<std::string>() == kZipnerfCommit);
+  const auto points = official::flat(fixture.at("points"));
+  const auto contracted = official::flat(fixture.at("contract"));
+  const auto isoscale = official::flat(fixture.at("contract3_isoscale"));
+  const auto scales = official::flat(fixture.at("scales"));
+  const auto tracked = official::flat(fixture.at("track_isotropic_scale"));
+  const size_t n = points.size() / 3;
+  REQUIRE(n >= 30);
+  size_t clamped = 0;
+  for (size_t i = 0; i < n; ++i) {
+    INFO("point " << i << ": " << points[3 * i] << ", " << points[3 * i + 1] << ", " << points[3 * i + 2]);
+    double ours[3];
+    ref::zip_contract(&points[3 * i], ours);
+    for (int a = 0; a < 3; ++a) CHECK(std::abs(ours[a] - contracted[3 * i + a]) <= 1e-14 * 2.0);
+    const double scale = ref::zip_contract_isoscale(&points[3 * i]);
+    CHECK(std::abs(scale - isoscale[i]) <= 1e-13 * isoscale[i]);
+    // The general form's determinant of J (radial 1/r² against tangential ≈ 2/r) loses digits as r grows: 2e-10
+    // relative at |x| = 8e5 in float64.
+    if (std::abs(tracked[i] - scales[i] * isoscale[i]) <= 1e-9 * tracked[i]) continue;
+    ++clamped;  // the general form's clamp: only far out, where det J < float32 tiny
+    CHECK(isoscale[i] * isoscale[i] * isoscale[i] < 1.2e-38);
+  }
+  CHECK(clamped <= 2);
 }

@@ -123,10 +123,38 @@ ZipDeviceRun run_zip_device(const ops::ZipFeatureOptions& options, const ZipTest
   return {features.download(ctx), d_table.download(ctx), level_scale.download(ctx)};
 }
 
-// Each multisample's position error in cells at `level` (the forward's budget below).
-double zip_position_error_cells(const ZipTestRays& r, size_t ray, bool cylinder, uint32_t grid_size, float box_size) {
+// With contraction (ZIP_CONTRACT), per ray: the largest Lipschitz constant of contract() over its points, (2r − 1)/r²
+// at the nearest point outside the unit ball (1 inside): what a world position error becomes in the contracted
+// cube. Empty without contraction.
+std::vector<double> zip_contract_factors(const ZipTestRays& r, const ref::ZipFeatureSettings& s) {
+  if (!s.contract) return {};
+  ref::ZipFeatureSettings world = s;
+  world.contract = false;
+  std::vector<double> points, scales, factors(r.n_rays, 0.0);
+  ref::zip_multisamples(to_ref(r), world, points, scales);
+  const size_t per_ray = r.n_intervals * ref::zip_points_per_interval(s);
+  for (size_t p = 0; p < scales.size(); ++p) {
+    double x[3], norm_sq = 0;
+    for (int a = 0; a < 3; ++a) {
+      x[a] = points[3 * p + a] * s.box[3] + s.box[a];
+      norm_sq += x[a] * x[a];
+    }
+    const double radius = std::sqrt(norm_sq);
+    const double factor = radius <= 1.0 ? 1.0 : (2 * radius - 1) / (radius * radius);
+    factors[p / per_ray] = std::max(factors[p / per_ray], factor);
+  }
+  return factors;
+}
+
+// Each multisample's position error in cells at `level` (the forward's budget below). With contraction the world
+// error times the ray's factor (zip_contract_factors), plus the contraction's own roundings (a few dozen of |x'| ≤ 2).
+double zip_position_error_cells(const ZipTestRays& r, size_t ray, bool cylinder, uint32_t grid_size, float box_size,
+                                const std::vector<double>& contract_factors = {}) {
   const double t_max = std::abs(r.t_edges[(ray + 1) * (r.n_intervals + 1) - 1]);
   const double magnitude = 4.0 + t_max * 1.5 + std::sqrt(0.5) * r.radii[ray] * (cylinder ? 1.0 : t_max);
+  if (!contract_factors.empty()) {
+    return (64 * kUnitRoundoff * magnitude * contract_factors[ray] + 64 * kUnitRoundoff * 2.0) * grid_size / box_size;
+  }
   return 64 * kUnitRoundoff * magnitude * grid_size / box_size;
 }
 
@@ -137,6 +165,7 @@ std::vector<double> zip_backward_position_budget(const ZipTestRays& r, const std
                                                  const ref::ZipFeatureSettings& s, size_t table_size) {
   std::vector<double> points, scales, budget(table_size, 0.0);
   ref::zip_multisamples(to_ref(r), s, points, scales);
+  const std::vector<double> contract_factors = zip_contract_factors(r, s);
   const size_t n_levels = levels.size() / 4, width = s.features + (s.append_scale ? 1 : 0);
   const size_t per_interval = ref::zip_points_per_interval(s);
   const double mean = s.precondition / per_interval;
@@ -149,7 +178,8 @@ std::vector<double> zip_backward_position_budget(const ZipTestRays& r, const std
       double weight[8];
       ref::level_corners(level, cell_coord, entry, weight);
       const double level_weight = s.downweight ? ref::level_feature_weight(scales[p] * level[1]) : 1.0;
-      const double error = 3 * zip_position_error_cells(r, ray, s.cylinder, level[1], static_cast<float>(s.box[3]));
+      const double error =
+          3 * zip_position_error_cells(r, ray, s.cylinder, level[1], static_cast<float>(s.box[3]), contract_factors);
       for (int corner = 0; corner < 8; ++corner) {
         if (entry[corner] < 0) continue;
         for (int f = 0; f < s.features; ++f) {
@@ -193,12 +223,13 @@ void check_zip_against_reference(const ops::ZipFeatureOptions& options, const Zi
   }
   REQUIRE(test::all_finite(device.features));
   REQUIRE(test::all_finite(device.d_table));
+  const std::vector<double> contract_factors = zip_contract_factors(r, s);
   double worst_forward = 0, worst_backward = 0, largest_feature = 0;
   for (size_t sample = 0; sample < samples; ++sample) {
     const size_t ray = sample / r.n_intervals;
     for (size_t l = 0; l < layout.size(); ++l) {
-      const double position_error =
-          zip_position_error_cells(r, ray, options.cylinder, layout[l].grid_size, options.box_size);
+      const double position_error = zip_position_error_cells(r, ray, options.cylinder, layout[l].grid_size,
+                                                             options.box_size, contract_factors);
       for (size_t f = 0; f < width; ++f) {
         const size_t i = (sample * layout.size() + l) * width + f;
         const bool scale_feature = f == size_t(kZipFeatures);
@@ -269,6 +300,53 @@ TEST_CASE("zip features: one point at the frustum's mean (plain or footprint-wei
       check_zip_against_reference(options, r, table, rng);
     }
   }
+}
+
+// Unbounded scenes (ZIP_CONTRACT): every point through mip-NeRF 360's contraction into the cube [−2, 2]³, its
+// footprint times ∛det J. Rays from around (0, 0, 4) with intervals out to t = 1e6 (points from inside the unit ball
+// to |x| ≈ 1e6; radii from a line to 1e3): multisampled and single points, both patterns, both scatters, against the
+// reference (which contracts by the official's own formulas, pinned in tests/official). The bounds take the world
+// positions' float32 error through the contraction's Lipschitz constant (zip_contract_factors).
+TEST_CASE("zip features: contracted points (unbounded scenes) equal the double reference out to t = 1e6") {
+  std::mt19937 rng(4848);
+  ZipTestRays r = zip_test_rays(rng);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (size_t ray = 0; ray < r.n_rays; ++ray) {
+    // Log-spaced edges from t ≈ 0.5 to 1e6, each ray's own.
+    const double first = std::log(0.5), last = std::log(1e6);
+    for (size_t e = 0; e <= r.n_intervals; ++e) {
+      const double frac = (e + 0.3 * unit(rng)) / (r.n_intervals + 0.3);
+      r.t_edges[ray * (r.n_intervals + 1) + e] = static_cast<float>(std::exp(first + frac * (last - first)));
+    }
+  }
+  const std::vector<float> table =
+      zip_uniform(rng, ops::grid_table_entries(zip_test_levels()) * kZipFeatures, 1.0f);
+  using Scatter = ops::ZipFeatureOptions::Scatter;
+  for (bool multisample : {true, false}) {
+    for (bool randomized : {false, true}) {
+      CAPTURE(multisample);
+      CAPTURE(randomized);
+      auto options = zip_options(randomized, false, true, randomized ? Scatter::atomic : Scatter::by_level);
+      options.multisample = multisample;
+      options.contract = true;
+      options.box_min[0] = options.box_min[1] = options.box_min[2] = -2.0f;
+      options.box_size = 4.0f;
+      check_zip_against_reference(options, r, table, rng);
+    }
+  }
+  // Contraction matters here: without it the same rays give other features (most points lie outside the cube).
+  auto plain = zip_options(false, false, true);
+  plain.box_min[0] = plain.box_min[1] = plain.box_min[2] = -2.0f;
+  plain.box_size = 4.0f;
+  auto contracted = plain;
+  contracted.contract = true;
+  const std::vector<float> d_features(r.n_rays * r.n_intervals * zip_test_levels().size() * plain.level_width(), 1.0f);
+  CHECK(run_zip_device(plain, r, table, d_features, {}).features !=
+        run_zip_device(contracted, r, table, d_features, {}).features);
+  // Cylinders (NDC) are bounded already: refused.
+  auto cylinder = contracted;
+  cylinder.cylinder = true;
+  CHECK_THROWS_WITH_AS(ops::ZipFeatures(test::test_context(), cylinder), doctest::Contains("cylinders"), Error);
 }
 
 TEST_CASE("zip features: the training pattern is keyed by (seed, step, ray) and rendering's is fixed") {

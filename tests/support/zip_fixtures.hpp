@@ -16,6 +16,7 @@ inline ref::ZipFeatureSettings zip_reference_settings(const ops::ZipFeatureOptio
   s.append_scale = o.append_scale;
   s.cylinder = o.cylinder;
   s.randomized = o.randomized;
+  s.contract = o.contract;
   for (int a = 0; a < 3; ++a) s.box[a] = o.box_min[a];
   s.box[3] = o.box_size;
   s.scale_mult = o.scale_mult;
