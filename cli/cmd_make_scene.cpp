@@ -1,5 +1,5 @@
 // `mipnerf-cl make-scene OUT`: writes the built-in procedural scene (Blender format, plus OUT/multiscale), or with
-// --forward-facing its forward-facing capture in the LLFF layout.
+// --forward-facing its forward-facing capture, or with --unbounded its 360° capture outdoors, in the LLFF layout.
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -11,6 +11,7 @@
 #include "core/lens_models.hpp"
 #include "data/synthetic/forward_facing.hpp"
 #include "data/synthetic/procedural.hpp"
+#include "data/synthetic/unbounded.hpp"
 
 namespace mipnerf::cli {
 
@@ -94,14 +95,42 @@ void register_make_scene(CLI::App& app) {
                   "--forward-facing: the camera grid's width in scene units (height: half), 4 from the scene; "
                   "narrower: less parallax")
       ->capture_default_str();
-  cmd->add_option("--factor", forward->factor, "--forward-facing: also write images_<factor>/ (1: none)")
+  cmd->add_option("--factor", forward->factor,
+                  "--forward-facing, --unbounded: also write images_<factor>/ (1: none)")
       ->capture_default_str();
-  cmd->add_flag("--jpeg", forward->jpeg, "--forward-facing: write the images as JPEG, as a phone capture holds them");
-  cmd->callback([out, options, forward, forward_facing, grid, cmd, lens, fov] {
+  cmd->add_flag("--jpeg", forward->jpeg,
+                "--forward-facing, --unbounded: write the images as JPEG, as a phone capture holds them");
+  auto unbounded = std::make_shared<bool>(false);
+  cmd->add_flag("--unbounded", *unbounded,
+                "Instead: a 360-degree capture of the scene outdoors (an endless ground, distant pillars, a sky), from "
+                "a full orbit of cameras (--views, default 40), in the LLFF layout; --size is the image width (4:3), "
+                "default 256");
+  cmd->callback([out, options, forward, forward_facing, unbounded, grid, cmd, lens, fov] {
     if (!lens->empty()) options->lens = parse_lens(*lens);
     if (cmd->count("--fov") > 0) {
       if (!(*fov > 0.0 && *fov < 170.0)) throw Error("--fov must be between 0 and 170 degrees");
       options->camera_angle_x = *fov * M_PI / 180.0;
+    }
+    if (*unbounded) {
+      if (*forward_facing) throw Error("--unbounded and --forward-facing are two different scenes: give one");
+      for (const char* blender_only : {"--val-views", "--test-views", "--scales", "--lens", "--grid", "--grid-width"}) {
+        if (cmd->count(blender_only) > 0) throw Error(std::string(blender_only) + " does not apply to --unbounded");
+      }
+      data::UnboundedOptions scene;
+      if (cmd->count("--size") > 0) scene.width_px = options->size_px;
+      if (cmd->count("--views") > 0) scene.views = options->train_views;
+      if (cmd->count("--samples") > 0) scene.samples_per_axis = options->samples_per_axis;
+      if (cmd->count("--fov") > 0) scene.camera_angle_x = options->camera_angle_x;
+      scene.factor = forward->factor;
+      scene.jpeg = forward->jpeg;
+      scene.seed = options->seed;
+      scene.threads = options->threads;
+      data::write_unbounded_scene(*out, scene, print_log);
+      std::cout << "wrote " << *out << ": a 360-degree LLFF capture of " << scene.views << " views at "
+                << scene.width_px << "x" << scene.width_px * 3 / 4 << " (images/"
+                << (scene.factor > 1 ? ", images_" + std::to_string(scene.factor) + "/" : "") << ", poses_bounds.npy"
+                << (scene.jpeg ? "; JPEG" : "") << ")\n";
+      return;
     }
     if (*forward_facing) {
       for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales", "--lens", "--fov"}) {
@@ -123,7 +152,11 @@ void register_make_scene(CLI::App& app) {
       return;
     }
     for (const char* forward_only : {"--grid", "--grid-width", "--factor", "--jpeg"}) {
-      if (cmd->count(forward_only) > 0) throw Error(std::string(forward_only) + " applies to --forward-facing");
+      if (cmd->count(forward_only) > 0) {
+        throw Error(std::string(forward_only) + " applies to --forward-facing" +
+                    (std::string(forward_only) == "--factor" || std::string(forward_only) == "--jpeg" ? " and --unbounded"
+                                                                                                       : ""));
+      }
     }
     data::write_procedural_scene(*out, *options, print_log);
     std::cout << "wrote " << *out << ": " << options->train_views << " train, " << options->val_views << " val, "

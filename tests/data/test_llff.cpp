@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "data/dataset.hpp"
 #include "data/synthetic/forward_facing.hpp"
+#include "data/synthetic/unbounded.hpp"
 #include "data/formats/llff_capture.hpp"
 #include "data/formats/formats.hpp"
 #include "io/npy.hpp"
@@ -271,6 +272,63 @@ TEST_CASE("llff: a capture looking inward from all around is 360 degrees, spheri
     const double radius = std::hypot(camera.camera_to_world[3], camera.camera_to_world[7], camera.camera_to_world[11]);
     CHECK(radius == doctest::Approx(1.0).epsilon(0.05));
   }
+}
+
+// make-scene --unbounded: the procedural scene outdoors from a full orbit, in the LLFF layout. The loader and train
+// take it for a 360° capture (spherified, world rays, cones) with no flag; every pixel is opaque (the ground and the sky
+// fill what the scene does not); each view's bounds come from the finite depths it sees while the sky (t = +∞) and the
+// far ground lie beyond them, as for a real capture outdoors; the forward-facing capture is unchanged by the shared
+// writer (its bounds, checked in the test above, and its images below).
+TEST_CASE("llff: the built-in unbounded scene is a 360-degree capture whose sky and far ground lie beyond its bounds") {
+  const auto dir = test::fresh_temp_dir("llff-unbounded");
+  data::UnboundedOptions options;
+  options.width_px = 64;  // 64x48, images_4/ 16x12
+  options.views = 16;
+  options.samples_per_axis = 1;
+  options.threads = 2;
+  data::write_unbounded_scene(dir.string(), options);
+  const auto traits = data::scene_traits(dir.string(), data::LoadOptions{});
+  CHECK(traits.llff_360);
+  const train::SceneEffects effects = train::scene_effects(dir.string(), 1);
+  CHECK(effects.settings.at("spherify") == "true");
+  CHECK(effects.settings.at("ray_shape") == "cone");
+  const auto cameras = data::unbounded_cameras(options);
+  REQUIRE(cameras.size() == 16);
+  size_t sky = 0, beyond_far = 0, rays = 0;
+  for (const Camera& camera : cameras) {
+    CHECK(camera.near > 1.0);  // the nearest surface, about 3 away (the scene within 1.5 of the centre, 4 out)
+    CHECK(camera.far > camera.near);
+    CHECK(std::isfinite(camera.far));
+    for (int j = 0; j < 12; ++j) {
+      for (int i = 0; i < 16; ++i) {
+        const auto hit = data::trace_unbounded(camera_ray(camera, 4.0 * i + 2.0, 4.0 * j + 2.0));
+        CHECK(hit.hit);
+        ++rays;
+        sky += !std::isfinite(hit.t);
+        beyond_far += hit.t > camera.far;
+      }
+    }
+  }
+  CHECK(sky > rays / 20);          // the sky is seen (upper part of the views)
+  CHECK(beyond_far > sky);         // and the far ground beyond the bounds too
+  CHECK(beyond_far < rays / 2);    // while most of each view lies within them
+  // Every view from outside the scene, all around it: azimuths cover the circle.
+  double spread = 0;
+  for (const Camera& a : cameras) {
+    for (const Camera& b : cameras) {
+      const double dot = a.camera_to_world[2] * b.camera_to_world[2] + a.camera_to_world[6] * b.camera_to_world[6] +
+                         a.camera_to_world[10] * b.camera_to_world[10];
+      spread = std::max(spread, std::acos(std::clamp(dot, -1.0, 1.0)));
+    }
+  }
+  CHECK(spread > 0.9 * M_PI);
+  // Opaque everywhere: every supersampled ray of a view hits something.
+  data::SceneOptions render;
+  render.samples_per_axis = 2;
+  const auto image = data::render_traced(cameras[5], render, 0, data::trace_unbounded);
+  for (size_t p = 0; p < image.rgba.size() / 4; ++p) REQUIRE(image.rgba[4 * p + 3] == 1.0f);
+  CHECK(data::load_dataset(dir.string(), data::LoadOptions{}).split("train").num_images() == 14);  // every 8th held out
+  CHECK(data::unbounded_cameras(options)[3].camera_to_world == cameras[3].camera_to_world);  // deterministic
 }
 
 TEST_CASE("llff: malformed captures give one line naming the file") {

@@ -2,18 +2,12 @@
 #include "data/synthetic/forward_facing.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <thread>
 
 #include "core/error.hpp"
-#include "data/image.hpp"
 #include "data/pose.hpp"
+#include "data/synthetic/llff_writer.hpp"
 #include "data/synthetic/procedural.hpp"
-#include "io/file.hpp"
-#include "io/npy.hpp"
-#include "io/jpeg.hpp"
-#include "io/png.hpp"
 
 namespace mipnerf::data {
 namespace {
@@ -44,24 +38,6 @@ SceneHit trace_with_backdrop(const Ray& ray) {
   if (d[1] > 0) consider((kWallY - o[1]) / d[1], true);
   if (d[2] < 0) consider((kFloorZ - o[2]) / d[2], false);
   return hit;
-}
-
-std::string image_name(size_t k, bool jpeg) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "image%03zu.%s", k, jpeg ? "jpg" : "png");
-  return name;
-}
-
-void write_rgb(const std::string& path, const RgbaImage& image, bool jpeg) {
-  std::vector<float> rgb(static_cast<size_t>(image.width) * image.height * 3);
-  for (size_t p = 0; p < rgb.size() / 3; ++p) {
-    for (int c = 0; c < 3; ++c) rgb[3 * p + c] = image.rgba[4 * p + c];
-  }
-  if (jpeg) {
-    io::write_jpeg(path, image.width, image.height, rgb.data(), 95);
-  } else {
-    io::write_png(path, image.width, image.height, 3, rgb.data(), 8);
-  }
 }
 
 // Nearest and farthest depth the camera sees, over a 32 × 24 grid of rays (depth = t: the camera-frame direction
@@ -129,39 +105,14 @@ std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) 
 
 void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log) {
   const auto cameras = forward_facing_cameras(options);
-  const std::string full = out_dir + "/images", reduced = out_dir + "/images_" + std::to_string(options.factor);
-  io::make_directories(full);
-  if (options.factor > 1) io::make_directories(reduced);
-  SceneOptions render;
-  render.seed = options.seed;
-  render.samples_per_axis = options.samples_per_axis;
-  const unsigned threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (size_t k = next++; k < cameras.size(); k = next++) {
-      RgbaImage image = render_traced(cameras[k], render, 0x46460000u + static_cast<uint32_t>(k), trace_with_backdrop);
-      write_rgb(full + "/" + image_name(k, options.jpeg), image, options.jpeg);
-      for (uint32_t f = 1; f < options.factor; f *= 2) image = downsample2(image);
-      if (options.factor > 1) write_rgb(reduced + "/" + image_name(k, options.jpeg), image, options.jpeg);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& thread : pool) thread.join();
-
-  // poses_bounds.npy: per view the 3×5 [down, right, backwards, position, (h, w, focal)] of LLFF, then near, far.
-  std::vector<double> rows;
-  for (const auto& camera : cameras) {
-    const auto& m = camera.camera_to_world;
-    const double hwf[3] = {static_cast<double>(camera.height_px), static_cast<double>(camera.width_px), camera.focal_x_px};
-    for (int r = 0; r < 3; ++r) {
-      for (double value : {-m[4 * r + 1], m[4 * r + 0], m[4 * r + 2], m[4 * r + 3], hwf[r]}) rows.push_back(value);
-    }
-    rows.push_back(camera.near);
-    rows.push_back(camera.far);
-  }
-  io::write_npy(out_dir + "/poses_bounds.npy", rows, {cameras.size(), 17});
+  LlffWriteOptions write;
+  write.factor = options.factor;
+  write.jpeg = options.jpeg;
+  write.seed = options.seed;
+  write.samples_per_axis = options.samples_per_axis;
+  write.threads = options.threads;
+  write.view_key_base = 0x46460000u;
+  write_llff_views(out_dir, cameras, trace_with_backdrop, write);
   if (log) {
     log(LogLevel::info, "forward-facing scene: " + std::to_string(cameras.size()) + " views at " +
                             std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +

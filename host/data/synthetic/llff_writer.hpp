@@ -1,0 +1,33 @@
+// Writes a traced scene in the LLFF layout, as the built-in forward-facing and unbounded (360°) scenes are written:
+// OUT/images/<name> at full resolution, OUT/images_<factor>/<name> box-downsampled, and OUT/poses_bounds.npy (per view
+// LLFF's 3×5 [down, right, backwards, position, (h, w, focal)] and the view's near and far).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/log.hpp"
+#include "data/synthetic/procedural.hpp"
+
+namespace mipnerf::data {
+
+struct LlffWriteOptions {
+  uint32_t factor = 4;            // also write images_<factor>/ (1: images/ only)
+  bool jpeg = false;              // JPEG (quality 95), as a phone capture holds them; else PNG
+  uint64_t seed = 0;              // sub-pixel jitter
+  uint32_t samples_per_axis = 4;  // jittered supersampling per pixel
+  unsigned threads = 0;           // 0: every hardware thread
+  uint32_t view_key_base = 0;     // view k draws its jitter as view key view_key_base + k
+};
+
+// "image007.png" (or .jpg): the name of view k.
+std::string llff_image_name(size_t k, bool jpeg);
+
+// Renders every camera through `trace` (render_traced: RGB, no alpha written) and writes the capture; cameras carry
+// their near and far.
+void write_llff_views(const std::string& out_dir, const std::vector<Camera>& cameras, SceneHit (*trace)(const Ray&),
+                      const LlffWriteOptions& options);
+
+}  // namespace mipnerf::data

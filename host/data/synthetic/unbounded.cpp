@@ -1,0 +1,178 @@
+// The unbounded scene: ground, pillars, sky, the orbit of cameras, the LLFF writer.
+#include "data/synthetic/unbounded.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+#include "core/rng.hpp"
+#include "data/pose.hpp"
+#include "data/synthetic/llff_writer.hpp"
+
+namespace mipnerf::data {
+namespace {
+
+constexpr double kGroundZ = -0.7;           // just under the procedural scene's slab, as the forward-facing floor
+constexpr uint32_t kStreamOrbit = 0x5CE2u;  // host-only Philox stream of the azimuth jitter
+
+// A vertical box standing on the ground: centre (x, y), half-widths, height; horizontal stripes of `period`.
+struct Pillar {
+  double x, y, half_x, half_y, height, period;
+  std::array<double, 3> colors[2];
+};
+const Pillar kPillars[] = {
+    {6.0, 1.5, 0.4, 0.4, 3.0, 0.3, {{0.75, 0.2, 0.15}, {0.9, 0.85, 0.7}}},
+    {-4.5, 5.0, 0.6, 0.3, 4.0, 0.5, {{0.15, 0.3, 0.7}, {0.85, 0.85, 0.85}}},
+    {-8.0, -3.0, 0.5, 0.5, 5.0, 0.4, {{0.2, 0.55, 0.25}, {0.9, 0.9, 0.6}}},
+    {2.0, -9.0, 0.8, 0.8, 6.0, 0.8, {{0.55, 0.2, 0.55}, {0.95, 0.8, 0.9}}},
+    {14.0, 10.0, 1.5, 1.0, 9.0, 1.2, {{0.7, 0.5, 0.1}, {0.2, 0.15, 0.1}}},
+    {-16.0, 12.0, 1.2, 1.2, 12.0, 1.5, {{0.3, 0.3, 0.35}, {0.85, 0.85, 0.9}}},
+    {-12.0, -20.0, 2.0, 1.5, 10.0, 2.0, {{0.6, 0.1, 0.1}, {0.95, 0.95, 0.95}}},
+    {25.0, -30.0, 3.0, 3.0, 20.0, 3.0, {{0.1, 0.35, 0.4}, {0.8, 0.9, 0.9}}},
+};
+
+// Slab test of a ray against a pillar's box; on a hit the distance and the stripe colour (shaded by its face).
+bool hit_pillar(const Pillar& p, const Ray& ray, double& t_hit, std::array<double, 3>& rgb) {
+  const auto& o = ray.origin_world;
+  const auto& d = ray.direction_world;
+  const double lo[3] = {p.x - p.half_x, p.y - p.half_y, kGroundZ}, hi[3] = {p.x + p.half_x, p.y + p.half_y,
+                                                                           kGroundZ + p.height};
+  double t_near = 1e-9, t_far = std::numeric_limits<double>::infinity();
+  int axis_near = -1;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0) {
+      if (o[a] < lo[a] || o[a] > hi[a]) return false;
+      continue;
+    }
+    double t0 = (lo[a] - o[a]) / d[a], t1 = (hi[a] - o[a]) / d[a];
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t_near) {
+      t_near = t0;
+      axis_near = a;
+    }
+    t_far = std::min(t_far, t1);
+    if (t_near > t_far) return false;
+  }
+  if (axis_near < 0) return false;  // the ray starts inside: not a view from outside
+  t_hit = t_near;
+  const double z = o[2] + t_near * d[2];
+  const auto& albedo = p.colors[static_cast<int>(std::floor((z - kGroundZ) / p.period)) & 1];
+  const double light = axis_near == 2 ? 1.0 : axis_near == 0 ? 0.8 : 0.65;
+  for (int c = 0; c < 3; ++c) rgb[c] = albedo[c] * light;
+  return true;
+}
+
+// The sky: a horizon-to-zenith gradient with soft bands in azimuth, so that the background has detail to learn.
+std::array<double, 3> sky(const std::array<double, 3>& d) {
+  const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const double up = std::max(0.0, d[2] / norm);
+  const double band = 0.5 + 0.5 * std::cos(6.0 * std::atan2(d[1], d[0]));
+  return {0.55 + 0.25 * (1 - up) + 0.1 * band * (1 - up), 0.65 + 0.2 * (1 - up), 0.9 - 0.05 * band * (1 - up)};
+}
+
+// The finite depths a camera sees over a 32 × 24 grid: 0.9× the nearest and 1.1× the 99th percentile.
+std::array<double, 2> finite_depth_bounds(const Camera& camera) {
+  std::vector<double> depths;
+  for (int j = 0; j < 24; ++j) {
+    for (int i = 0; i < 32; ++i) {
+      const SceneHit hit = trace_unbounded(
+          camera_ray(camera, (i + 0.5) * camera.width_px / 32.0, (j + 0.5) * camera.height_px / 24.0));
+      if (hit.hit && std::isfinite(hit.t)) depths.push_back(hit.t);
+    }
+  }
+  if (depths.empty()) throw Error("unbounded scene: a camera sees only sky (a camera placement bug)");
+  std::sort(depths.begin(), depths.end());
+  const size_t high = std::min(depths.size() - 1, static_cast<size_t>(0.99 * (depths.size() - 1) + 0.5));
+  return {0.9 * depths.front(), 1.1 * depths[high]};
+}
+
+}  // namespace
+
+SceneHit trace_unbounded(const Ray& ray) {
+  SceneHit hit = trace_procedural(ray);
+  if (hit.hit) return hit;
+  const auto& o = ray.origin_world;
+  const auto& d = ray.direction_world;
+  double best = std::numeric_limits<double>::infinity();
+  if (d[2] < 0) {
+    const double t = (kGroundZ - o[2]) / d[2];
+    if (t > 1e-9) {
+      best = t;
+      const double x = o[0] + t * d[0], y = o[1] + t * d[1];
+      const bool odd = ((static_cast<int>(std::floor(x)) ^ static_cast<int>(std::floor(y))) & 1) != 0;
+      hit.rgb = odd ? std::array<double, 3>{0.32, 0.3, 0.26} : std::array<double, 3>{0.6, 0.56, 0.48};
+    }
+  }
+  for (const auto& pillar : kPillars) {
+    double t = 0;
+    std::array<double, 3> rgb{};
+    if (hit_pillar(pillar, ray, t, rgb) && t < best) {
+      best = t;
+      hit.rgb = rgb;
+    }
+  }
+  hit.hit = true;
+  hit.t = best;
+  if (!std::isfinite(best)) hit.rgb = sky(d);
+  return hit;
+}
+
+void validate(const UnboundedOptions& o) {
+  const uint32_t divisor = 4 * std::max<uint32_t>(o.factor, 1);
+  if (o.width_px < 8 || o.width_px > 4096 || o.width_px % divisor != 0) {
+    throw Error("make-scene --unbounded: --size must be 8 to 4096 and divisible by " + std::to_string(divisor) +
+                " (4:3 images, downsampled by " + std::to_string(o.factor) + "), got " + std::to_string(o.width_px));
+  }
+  if (o.factor < 1 || o.factor > 16 || (o.factor & (o.factor - 1)) != 0) {
+    throw Error("make-scene --unbounded: --factor must be a power of two from 1 to 16");
+  }
+  if (o.views < 8 || o.views > 400) throw Error("make-scene --unbounded: --views must be 8 to 400 (a full orbit)");
+  if (o.samples_per_axis < 1 || o.samples_per_axis > 64) throw Error("make-scene: --samples must be 1 to 64");
+}
+
+std::vector<Camera> unbounded_cameras(const UnboundedOptions& options) {
+  validate(options);
+  std::vector<Camera> cameras;
+  const uint32_t height = options.width_px * 3 / 4;
+  for (uint32_t k = 0; k < options.views; ++k) {
+    // Two interleaved rings: even views low (0.6), odd views high (1.6), each azimuth jittered by up to a third of
+    // the spacing (deterministic in the seed), all looking at the scene's centre.
+    const auto u = rng_uniform4(options.seed, k, 0, 0, kStreamOrbit);
+    const double spacing = 2 * M_PI / options.views;
+    const double azimuth = spacing * (k + (u[0] - 0.5) / 1.5);
+    const double z = k % 2 == 0 ? 0.6 : 1.6;
+    const Vec3 eye{options.camera_distance * std::cos(azimuth), options.camera_distance * std::sin(azimuth), z};
+    Camera camera;
+    camera.camera_to_world = look_at_pose(eye, {0.0, 0.0, 0.0}, {0, 0, 1});
+    camera.width_px = options.width_px;
+    camera.height_px = height;
+    camera.focal_x_px = camera.focal_y_px = 0.5 * options.width_px / std::tan(0.5 * options.camera_angle_x);
+    camera.center_x_px = 0.5 * options.width_px;
+    camera.center_y_px = 0.5 * height;
+    const auto bounds = finite_depth_bounds(camera);
+    camera.near = bounds[0];
+    camera.far = bounds[1];
+    cameras.push_back(camera);
+  }
+  return cameras;
+}
+
+void write_unbounded_scene(const std::string& out_dir, const UnboundedOptions& options, const LogFn& log) {
+  const auto cameras = unbounded_cameras(options);
+  LlffWriteOptions write;
+  write.factor = options.factor;
+  write.jpeg = options.jpeg;
+  write.seed = options.seed;
+  write.samples_per_axis = options.samples_per_axis;
+  write.threads = options.threads;
+  write.view_key_base = 0x55420000u;
+  write_llff_views(out_dir, cameras, trace_unbounded, write);
+  if (log) {
+    log(LogLevel::info, "unbounded scene: " + std::to_string(cameras.size()) + " views around it at " +
+                            std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +
+                            (options.factor > 1 ? " (and images_" + std::to_string(options.factor) + "/)" : ""));
+  }
+}
+
+}  // namespace mipnerf::data
