@@ -6,6 +6,8 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <functional>
 #include <limits>
 
 #include "cl/launch.hpp"
@@ -122,6 +124,21 @@ void check_bit_equal(const DeviceResult& a, const DeviceResult& b) {
 struct RefResult {
   std::vector<double> comp_rgb, acc, distance, weights, d_rgb, d_density;
 };
+
+// The central-difference step of the reference's derivative checks: h = 1e-6·max(|x|, 1) (each use says why its
+// truncation and rounding errors stay below 1e-9 with it).
+double central_step(double x) { return 1e-6 * std::max(std::abs(x), 1.0); }
+
+// ∂loss/∂x by central differences with central_step(x); x is restored.
+double central_difference(double& x, const std::function<double()>& loss) {
+  const double x0 = x, h = central_step(x0);
+  x = x0 + h;
+  const double up = loss();
+  x = x0 - h;
+  const double down = loss();
+  x = x0;
+  return (up - down) / (2 * h);
+}
 
 RefResult run_ref(const RenderOptions& options, const Batch& b, bool with_d_acc) {
   RefResult r;
@@ -858,18 +875,9 @@ TEST_CASE("render: density noise - the reference backward is the derivative of i
       ref::render_raw_fwd(options, activation, ray_rgb, ray_density, ray_t, ray_dir, c, a, dist, w, 1, n, ray_key);
       return d_acc[ray] * a[0] + d_comp[3 * ray] * c[0] + d_comp[3 * ray + 1] * c[1] + d_comp[3 * ray + 2] * c[2];
     };
-    const auto difference = [&](double& x) {
-      const double x0 = x, h = 1e-6 * std::max(std::abs(x0), 1.0);
-      x = x0 + h;
-      const double up = loss();
-      x = x0 - h;
-      const double down = loss();
-      x = x0;
-      return (up - down) / (2 * h);
-    };
     for (size_t i = 0; i < n; ++i) {
-      fd_density[ray * n + i] = difference(ray_density[i]);
-      for (int c = 0; c < 3; ++c) fd_rgb[3 * (ray * n + i) + c] = difference(ray_rgb[3 * i + c]);
+      fd_density[ray * n + i] = central_difference(ray_density[i], loss);
+      for (int c = 0; c < 3; ++c) fd_rgb[3 * (ray * n + i) + c] = central_difference(ray_rgb[3 * i + c], loss);
     }
   }
   const auto fd_tol = [](const std::vector<double>& fd) {
@@ -1089,15 +1097,9 @@ std::vector<double> weights_loss_differences(const RenderOptions& options, const
       return sum;
     };
     for (size_t i = 0; i < n; ++i) {
-      const double x0 = density[i], h = 1e-6 * std::max(std::abs(x0), 1.0);
-      const bool at_kink =
-          activation.density == DensityActivation::relu && std::abs(x0 + activation.density_bias) < 10 * h;
-      density[i] = x0 + h;
-      const double up = loss();
-      density[i] = x0 - h;
-      const double down = loss();
-      density[i] = x0;
-      fd[ray * n + i] = at_kink ? std::nan("") : (up - down) / (2 * h);
+      const bool at_kink = activation.density == DensityActivation::relu &&
+                           std::abs(density[i] + activation.density_bias) < 10 * central_step(density[i]);
+      fd[ray * n + i] = at_kink ? std::nan("") : central_difference(density[i], loss);
     }
   }
   return fd;
@@ -1373,16 +1375,7 @@ TEST_CASE("render: the fused backward adds a loss on the weights (d_weights) to 
       for (size_t i = 0; i < n; ++i) l += d_w[ray * n + i] * w[i];
       return l;
     };
-    for (size_t i = 0; i < n; ++i) {
-      double& x = ray_density[i];
-      const double x0 = x, h = 1e-6 * std::max(std::abs(x0), 1.0);
-      x = x0 + h;
-      const double up = loss();
-      x = x0 - h;
-      const double down = loss();
-      x = x0;
-      fd_density[ray * n + i] = (up - down) / (2 * h);
-    }
+    for (size_t i = 0; i < n; ++i) fd_density[ray * n + i] = central_difference(ray_density[i], loss);
   }
   size_t outside = 0;
   for (size_t k = 0; k < rows; ++k) outside += !(std::abs(d_density[k] - fd_density[k]) <= 1e-8 + 1e-7 * std::abs(fd_density[k]));
