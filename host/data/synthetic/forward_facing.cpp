@@ -40,20 +40,11 @@ SceneHit trace_with_backdrop(const Ray& ray) {
   return hit;
 }
 
-// Nearest and farthest depth the camera sees, over a 32 × 24 grid of rays (depth = t: the camera-frame direction
-// has z = −1), widened by 10 % as a capture's bounds from its sparse points would be.
+// Nearest and farthest depth the camera sees (every ray hits the scene or the backdrop), widened by 10 % as a
+// capture's bounds from its sparse points would be.
 std::array<double, 2> depth_bounds(const Camera& camera) {
-  double nearest = 1e300, farthest = 0;
-  for (int j = 0; j < 24; ++j) {
-    for (int i = 0; i < 32; ++i) {
-      const SceneHit hit = trace_with_backdrop(
-          camera_ray(camera, (i + 0.5) * camera.width_px / 32.0, (j + 0.5) * camera.height_px / 24.0));
-      if (!hit.hit) continue;
-      nearest = std::min(nearest, hit.t);
-      farthest = std::max(farthest, hit.t);
-    }
-  }
-  return {0.9 * nearest, 1.1 * farthest};
+  const std::vector<double> depths = traced_depths(camera, trace_with_backdrop);
+  return {0.9 * depths.front(), 1.1 * depths.back()};
 }
 
 }  // namespace
@@ -87,13 +78,8 @@ std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) 
       const double grid_height = 0.5 * options.grid_width;
       const double x = -0.5 * options.grid_width + options.grid_width * col / (options.views_x - 1);
       const double z = 1.1 - 0.5 * (0.6 - grid_height) - grid_height * row / (options.views_y - 1);
-      Camera camera;
-      camera.camera_to_world = look_at_pose({x, kCameraY, z}, {0.5 * x, kWallY, 0.0}, {0, 0, 1});
-      camera.width_px = options.width_px;
-      camera.height_px = height;
-      camera.focal_x_px = camera.focal_y_px = 0.5 * options.width_px / std::tan(0.5 * options.camera_angle_x);
-      camera.center_x_px = 0.5 * options.width_px;
-      camera.center_y_px = 0.5 * height;
+      Camera camera = centred_pinhole(look_at_pose({x, kCameraY, z}, {0.5 * x, kWallY, 0.0}, {0, 0, 1}),
+                                      options.width_px, height, options.camera_angle_x);
       const auto bounds = depth_bounds(camera);
       camera.near = bounds[0];
       camera.far = bounds[1];
@@ -105,14 +91,7 @@ std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) 
 
 void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log) {
   const auto cameras = forward_facing_cameras(options);
-  LlffWriteOptions write;
-  write.factor = options.factor;
-  write.jpeg = options.jpeg;
-  write.seed = options.seed;
-  write.samples_per_axis = options.samples_per_axis;
-  write.threads = options.threads;
-  write.view_key_base = 0x46460000u;
-  write_llff_views(out_dir, cameras, trace_with_backdrop, write);
+  write_llff_views(out_dir, cameras, trace_with_backdrop, llff_write_options(options, 0x46460000u));
   if (log) {
     log(LogLevel::info, "forward-facing scene: " + std::to_string(cameras.size()) + " views at " +
                             std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +

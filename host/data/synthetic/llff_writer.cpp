@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <thread>
 
@@ -28,6 +29,19 @@ void write_rgb(const std::string& path, const RgbaImage& image, bool jpeg) {
 }
 
 }  // namespace
+
+std::vector<double> traced_depths(const Camera& camera, SceneHit (*trace)(const Ray&)) {
+  std::vector<double> depths;
+  for (int j = 0; j < 24; ++j) {
+    for (int i = 0; i < 32; ++i) {
+      const SceneHit hit =
+          trace(camera_ray(camera, (i + 0.5) * camera.width_px / 32.0, (j + 0.5) * camera.height_px / 24.0));
+      if (hit.hit && std::isfinite(hit.t)) depths.push_back(hit.t);
+    }
+  }
+  std::sort(depths.begin(), depths.end());
+  return depths;
+}
 
 std::string llff_image_name(size_t k, bool jpeg) {
   char name[32];

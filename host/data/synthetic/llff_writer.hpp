@@ -22,6 +22,24 @@ struct LlffWriteOptions {
   uint32_t view_key_base = 0;     // view k draws its jitter as view key view_key_base + k
 };
 
+// The writer's settings from a built-in capture's options (their fields of the same names), view keys from
+// view_key_base.
+template <typename CaptureOptions>
+LlffWriteOptions llff_write_options(const CaptureOptions& capture, uint32_t view_key_base) {
+  LlffWriteOptions write;
+  write.factor = capture.factor;
+  write.jpeg = capture.jpeg;
+  write.seed = capture.seed;
+  write.samples_per_axis = capture.samples_per_axis;
+  write.threads = capture.threads;
+  write.view_key_base = view_key_base;
+  return write;
+}
+
+// The depths (t) of the surfaces a camera sees along a 32 × 24 grid of rays through `trace`, sorted; misses and the
+// sky (t = +∞) left out. What a capture's bounds are chosen from, as COLMAP's sparse points would give them.
+std::vector<double> traced_depths(const Camera& camera, SceneHit (*trace)(const Ray&));
+
 // "image007.png" (or .jpg): the name of view k.
 std::string llff_image_name(size_t k, bool jpeg);
 

@@ -131,11 +131,8 @@ bool hit_box(const Box& box, const Ray& ray, double& t_hit, Vec3& rgb) {
 }
 
 Camera camera_at(const Vec3& eye, const SceneOptions& options) {
-  Camera camera;
-  camera.camera_to_world = look_at_pose(eye, {0, 0, 0}, {0, 0, 1});
-  camera.width_px = camera.height_px = options.size_px;
-  camera.focal_x_px = camera.focal_y_px = 0.5 * options.size_px / std::tan(0.5 * options.camera_angle_x);
-  camera.center_x_px = camera.center_y_px = 0.5 * options.size_px;
+  Camera camera = centred_pinhole(look_at_pose(eye, {0, 0, 0}, {0, 0, 1}), options.size_px, options.size_px,
+                                  options.camera_angle_x);
   camera.near = options.near;
   camera.far = options.far;
   camera.lens = options.lens;
@@ -278,6 +275,18 @@ RgbaImage render_traced(const Camera& camera, const SceneOptions& options, uint3
     }
   }
   return image;
+}
+
+Camera centred_pinhole(const std::array<double, 12>& camera_to_world, uint32_t width_px, uint32_t height_px,
+                       double angle_x) {
+  Camera camera;
+  camera.camera_to_world = camera_to_world;
+  camera.width_px = width_px;
+  camera.height_px = height_px;
+  camera.focal_x_px = camera.focal_y_px = 0.5 * width_px / std::tan(0.5 * angle_x);
+  camera.center_x_px = 0.5 * width_px;
+  camera.center_y_px = 0.5 * height_px;
+  return camera;
 }
 
 void write_procedural_scene(const std::string& out_dir, const SceneOptions& options, const LogFn& log) {

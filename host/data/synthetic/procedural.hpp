@@ -32,6 +32,12 @@ struct SceneOptions {
   Lens lens;                      // every camera behind this lens (pinhole: none); written into the transforms files
 };
 
+// A camera of a built-in scene: a pinhole of width × height pixels with the horizontal field of view angle_x
+// (radians), square pixels, the principal point at the image centre, placed by camera_to_world; near/far and lens are
+// the caller's.
+Camera centred_pinhole(const std::array<double, 12>& camera_to_world, uint32_t width_px, uint32_t height_px,
+                       double angle_x);
+
 // Checks the options (sizes, counts, scales dividing the size); throws mipnerf::Error saying what to change.
 void validate(const SceneOptions& options);
 

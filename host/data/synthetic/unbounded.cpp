@@ -71,18 +71,10 @@ std::array<double, 3> sky(const std::array<double, 3>& d) {
   return {0.55 + 0.25 * (1 - up) + 0.1 * band * (1 - up), 0.65 + 0.2 * (1 - up), 0.9 - 0.05 * band * (1 - up)};
 }
 
-// The finite depths a camera sees over a 32 × 24 grid: 0.9× the nearest and 1.1× the 99th percentile.
+// 0.9× the nearest and 1.1× the 99th percentile of the finite depths the camera sees.
 std::array<double, 2> finite_depth_bounds(const Camera& camera) {
-  std::vector<double> depths;
-  for (int j = 0; j < 24; ++j) {
-    for (int i = 0; i < 32; ++i) {
-      const SceneHit hit = trace_unbounded(
-          camera_ray(camera, (i + 0.5) * camera.width_px / 32.0, (j + 0.5) * camera.height_px / 24.0));
-      if (hit.hit && std::isfinite(hit.t)) depths.push_back(hit.t);
-    }
-  }
+  const std::vector<double> depths = traced_depths(camera, trace_unbounded);
   if (depths.empty()) throw Error("unbounded scene: a camera sees only sky (a camera placement bug)");
-  std::sort(depths.begin(), depths.end());
   const size_t high = std::min(depths.size() - 1, static_cast<size_t>(0.99 * (depths.size() - 1) + 0.5));
   return {0.9 * depths.front(), 1.1 * depths[high]};
 }
@@ -143,13 +135,8 @@ std::vector<Camera> unbounded_cameras(const UnboundedOptions& options) {
     const double azimuth = spacing * (k + (u[0] - 0.5) / 1.5);
     const double z = k % 2 == 0 ? 0.6 : 1.6;
     const Vec3 eye{options.camera_distance * std::cos(azimuth), options.camera_distance * std::sin(azimuth), z};
-    Camera camera;
-    camera.camera_to_world = look_at_pose(eye, {0.0, 0.0, 0.0}, {0, 0, 1});
-    camera.width_px = options.width_px;
-    camera.height_px = height;
-    camera.focal_x_px = camera.focal_y_px = 0.5 * options.width_px / std::tan(0.5 * options.camera_angle_x);
-    camera.center_x_px = 0.5 * options.width_px;
-    camera.center_y_px = 0.5 * height;
+    Camera camera =
+        centred_pinhole(look_at_pose(eye, {0.0, 0.0, 0.0}, {0, 0, 1}), options.width_px, height, options.camera_angle_x);
     const auto bounds = finite_depth_bounds(camera);
     camera.near = bounds[0];
     camera.far = bounds[1];
@@ -160,14 +147,7 @@ std::vector<Camera> unbounded_cameras(const UnboundedOptions& options) {
 
 void write_unbounded_scene(const std::string& out_dir, const UnboundedOptions& options, const LogFn& log) {
   const auto cameras = unbounded_cameras(options);
-  LlffWriteOptions write;
-  write.factor = options.factor;
-  write.jpeg = options.jpeg;
-  write.seed = options.seed;
-  write.samples_per_axis = options.samples_per_axis;
-  write.threads = options.threads;
-  write.view_key_base = 0x55420000u;
-  write_llff_views(out_dir, cameras, trace_unbounded, write);
+  write_llff_views(out_dir, cameras, trace_unbounded, llff_write_options(options, 0x55420000u));
   if (log) {
     log(LogLevel::info, "unbounded scene: " + std::to_string(cameras.size()) + " views around it at " +
                             std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +
