@@ -108,17 +108,60 @@ __kernel void sample_intervals_fwd(__global const float* s_edges, __global const
   out[n_new] = proposal_clip(2.0f * centre_prev - mid_prev, domain_near, domain_far);
 }
 
-// Normalised s → metric t for bounded scenes (official coord.construct_ray_warps with raydist_fn = None, Blender and
-// LLFF-in-NDC: the identity warp): t = clip(s·far + (1 − s)·near, near, far) per ray, s [R][K] → t [R][K] with the
-// ray's near [R] and far [R]. The official form (not near + s·(far − near)): s = 0 and s = 1 give near and far
-// exactly, and the clip keeps rounding inside [near, far].
+#ifndef RAY_DISTANCE
+#define RAY_DISTANCE 0 /* RayDistance in host/core/stage_options.hpp: 0 linear, 1 power ladder */
+#endif
+
+#if RAY_DISTANCE == 1
+// The unbounded scenes' warp (camp_zipnerf configs/zipnerf/360.gin: raydist_fn = math.power_ladder and
+// math.inv_power_ladder with p = −3/2, premult 2; near 0, far 1e6). power_ladder(t) = y(t) = (5/3)·(1 − h(t)) with
+// h(t) = (1 + 2t/2.5)^(−3/2) (x = premult·t = 2t, xs = x/|p − 1|, |p − 1|/p = −5/3), and inv_power_ladder(y) =
+// 2.5·((1 − 0.6·y)^(−2/3) − 1)/2. So with 1 − 0.6·y(t) = h(t), s_to_t(s) = inv(s·y(far) + (1 − s)·y(near)) is
+//   t = 1.25·(G^(−2/3) − 1),  G = s·h(far) + (1 − s)·h(near) ∈ [h(far), h(near)] ⊂ (0, 1],
+// written so that G keeps its relative precision as s → 1 (the official's 1 − 0.6·y cancels there: in float32 it would
+// lose every digit of G below 2^−24). Half the samples of a uniform s lie within t = 0.73 of the origin, 90 % within
+// 4.6: the cameras of a 360° capture sit at radius ≈ 1 (spherified), so the samples go where the object is and thin
+// out towards the contracted background.
+//
+// The official's float32 constants, mirrored so that our edges are the official's to the last one (under float64 the
+// rest of its arithmetic is exact by comparison):
+//  - power_ladder's |p − 1|/p and inv_power_ladder's p/|p − 1| are float32 −5/3 and −0.6, whose product κ is
+//    1 + 1.589e−8, not 1: the official's G is 1 − κ·(1 − G) = G − (κ − 1)·(1 − G), a shift of −1.6e−8 that moves t
+//    by 1 % where G ≈ 1e−6 (t ≈ 1e4, the far background). Applied in that form (1 − κ(1 − G) would cancel in float32);
+//  - inv_power_ladder clips y at minus_eps(5/3) (float32's next value below its float32 limit), which is G ≥
+//    1 + (−0.6)·y_max = RAY_DISTANCE_MIN_G = 5.5631e−8: the last edge lies at t ≈ 8.58e4, whatever `far` is;
+//  - its exponent 1/p is float32 −0.6666667: that one is not mirrored (G^(−2/3) by cbrt instead); it changes t by
+//    at most 3.3e−7 relative (at the clip), below float32's resolution.
+#define RAY_DISTANCE_KAPPA_MINUS_1 1.5894570992713852e-8f
+#define RAY_DISTANCE_MIN_G 5.563100557992584e-8f
+
+// h(t) = (1 + 2t/2.5)^(−3/2) for t ≥ 0 (b·√b overflows to ∞ past b ≈ 7e25, giving 0: beyond the clip anyway).
+inline float ray_distance_h(float t) {
+  const float b = 1.0f + (2.0f * t) / 2.5f;
+  return 1.0f / (b * sqrt(b));
+}
+
+inline float ray_distance_s_to_t(float s, float near, float far) {
+  const float g_exact = s * ray_distance_h(far) + (1.0f - s) * ray_distance_h(near);
+  const float g = fmax(g_exact - RAY_DISTANCE_KAPPA_MINUS_1 * (1.0f - g_exact), RAY_DISTANCE_MIN_G);
+  const float r = 1.0f / cbrt(g);  // G^(−1/3): cbrt and a reciprocal, not pow (whose bound is 16 ulp)
+  return clamp(1.25f * (r * r - 1.0f), near, far);
+}
+#else
+// The bounded scenes' identity warp (official raydist_fn = None, Blender and LLFF in NDC): t = clip(s·far + (1 − s)·near,
+// near, far). The official form (not near + s·(far − near)): s = 0 and s = 1 give near and far exactly, and the clip
+// keeps rounding inside [near, far].
+inline float ray_distance_s_to_t(float s, float near, float far) { return clamp(s * far + (1.0f - s) * near, near, far); }
+#endif
+
+// Normalised s → metric t (official coord.construct_ray_warps' s_to_t, by RAY_DISTANCE): s [R][K] → t [R][K] with the
+// ray's near [R] and far [R].
 __kernel void sample_intervals_s_to_t(__global const float* s, __global const float* near, __global const float* far,
                                       __global float* t, const uint n_rays, const uint n_per_ray) {
   const size_t i = get_global_id(0);
   if (i >= (size_t)n_rays * n_per_ray) return;
   const size_t ray = i / n_per_ray;
-  const float n = near[ray], f = far[ray];
-  t[i] = clamp(s[i] * f + (1.0f - s[i]) * n, n, f);
+  t[i] = ray_distance_s_to_t(s[i], near[ray], far[ray]);
 }
 
 #endif

@@ -41,6 +41,16 @@ constexpr std::array<EnumName<DensityActivation>, 2> enum_names(DensityActivatio
   return {{{DensityActivation::softplus, "softplus"}, {DensityActivation::relu, "relu"}}};
 }
 
+// RAY_DISTANCE: how proposal sampling's normalised s ∈ [0, 1] maps to metric t ∈ [near, far] (official
+// coord.construct_ray_warps with Model.raydist_fn).
+enum class RayDistance : int {
+  linear = 0,        // t = s·far + (1 − s)·near (raydist_fn = None: Blender, LLFF in NDC)
+  power_ladder = 1,  // camp_zipnerf 360.gin: math.power_ladder with p = −3/2, premult 2 (unbounded scenes, near 0)
+};
+constexpr std::array<EnumName<RayDistance>, 2> enum_names(RayDistance) {
+  return {{{RayDistance::linear, "linear"}, {RayDistance::power_ladder, "power_ladder"}}};
+}
+
 // Everything random is a function of (seed, step, ray): the ray's index in its batch is first_ray + (index in
 // the launch), so a batch gives the same numbers however it is split into chunks.
 struct RngKey {

@@ -169,7 +169,7 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   // A proposal-sampled level reads a proposal-sampled previous level (GraphSpec::validate), so some level samples by
   // proposal exactly when the first does.
   if (spec_.levels.front().sampling == Sampling::proposal) {
-    sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx);
+    sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx, spec_.ray_distance);
   }
   if (training && spec_.has_proposal_levels()) interlevel_ = std::make_unique<ops::SplineInterlevel>(ctx);
   if (training && spec_.levels.back().distortion_mult > 0.0f) distortion_ = std::make_unique<ops::Distortion>(ctx);

@@ -101,6 +101,10 @@ void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string&
 
 void GraphSpec::validate() const {
   if (levels.empty()) throw Error("graph: at least one level is needed");
+  if (ray_distance != RayDistance::linear && levels.front().sampling != Sampling::proposal) {
+    throw Error("graph: ray_distance " + std::string(enum_name(ray_distance)) +
+                " is proposal sampling's s → t, but the levels sample from t directly (sampler=proposal)");
+  }
   if (levels.front().sampling != Sampling::stratified && levels.front().sampling != Sampling::proposal) {
     throw Error("graph: the first level must sample stratified or by proposal (from the whole ray)");
   }

@@ -76,6 +76,9 @@ struct GraphSpec {
   // with no rng).
   SampleIntervalsOptions sample_intervals;
   float anneal_slope = 10.0f;  // Schlick's bias slope of the anneal (official Model.anneal_slope)
+  // How proposal sampling's s maps to t (official Model.raydist_fn): linear for bounded scenes, the power ladder for
+  // unbounded ones (with zip.contract, near 0 and a far bound out at 1e6).
+  RayDistance ray_distance = RayDistance::linear;
   GaussianOptions gaussian;
   EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
   EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)

@@ -9,8 +9,10 @@
 
 namespace mipnerf::ops {
 
-SampleIntervals::SampleIntervals(ocl::Context& ctx) : ctx_(&ctx) {
-  auto& program = ctx.program({"common.cl", "sample_intervals.cl"});
+SampleIntervals::SampleIntervals(ocl::Context& ctx, RayDistance ray_distance)
+    : ctx_(&ctx), ray_distance_(ray_distance) {
+  auto& program = ctx.program({"common.cl", "sample_intervals.cl"},
+                              ocl::BuildOptions().define("RAY_DISTANCE", static_cast<int>(ray_distance)));
   fwd_ = &program.kernel("sample_intervals_fwd");
   s_to_t_ = &program.kernel("sample_intervals_s_to_t");
 }

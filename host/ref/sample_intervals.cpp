@@ -125,13 +125,32 @@ void sample_intervals_fwd(const SampleIntervalsOptions& options, const std::vect
   }
 }
 
+double ray_distance_s_to_t(RayDistance ray_distance, double s, double near, double far) {
+  if (ray_distance == RayDistance::linear) return std::clamp(s * far + (1.0 - s) * near, near, far);
+  const auto h = [](double t) { return std::pow(1.0 + 2.0 * t / 2.5, -1.5); };
+  // The official's float32 constants (kernels/sample_intervals.cl): |p − 1|/p and p/|p − 1| rounded to float32, their
+  // product κ; inv_power_ladder's clip at y_max = nextafter(float32 of the limit, −∞).
+  const double forward = static_cast<double>(2.5f / -1.5f), inverse = static_cast<double>(-1.5f / 2.5f);
+  const double kappa_minus_1 = forward * inverse - 1.0;
+  const double y_max = std::nextafter(static_cast<float>(-forward), -std::numeric_limits<float>::infinity());
+  const double min_g = inverse * y_max + 1.0;
+  const double g_exact = s * h(far) + (1.0 - s) * h(near);
+  const double g = std::max(g_exact - kappa_minus_1 * (1.0 - g_exact), min_g);
+  return std::clamp(1.25 * (std::pow(g, -2.0 / 3.0) - 1.0), near, far);
+}
+
 void sample_intervals_s_to_t(const std::vector<double>& s, const std::vector<double>& near,
-                             const std::vector<double>& far, std::vector<double>& t, size_t n_rays, size_t n_per_ray) {
+                             const std::vector<double>& far, std::vector<double>& t, size_t n_rays, size_t n_per_ray,
+                             RayDistance ray_distance) {
   t.assign(n_rays * n_per_ray, 0.0);
   for (size_t i = 0; i < n_rays * n_per_ray; ++i) {
     const size_t ray = i / n_per_ray;
-    t[i] = std::clamp(s[i] * far[ray] + (1.0 - s[i]) * near[ray], near[ray], far[ray]);
+    t[i] = ray_distance_s_to_t(ray_distance, s[i], near[ray], far[ray]);
   }
+}
+
+double ray_distance_power_ladder_float32_bound(double t) {
+  return 32.0 * std::ldexp(1.0, -23) * (std::abs(t) + 1.25);
 }
 
 SampleIntervalsEnvelope sample_intervals_envelope(const SampleIntervalsOptions& options, const double* s,

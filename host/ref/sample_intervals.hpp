@@ -39,10 +39,27 @@ void sample_intervals_fwd(const SampleIntervalsOptions& options, const std::vect
                           const std::vector<double>& weights, std::vector<double>& s_new, size_t n_rays,
                           size_t n_intervals, size_t n_new, const RngKey& key);
 
-// Mirror of sample_intervals_s_to_t: t [R][K] = clip(s·far + (1 − s)·near, near, far) per ray (the official identity
-// ray warp of bounded scenes, coord.construct_ray_warps with fn = None).
+// One value of sample_intervals_s_to_t (kernels/sample_intervals.cl ray_distance_s_to_t): linear clip(s·far + (1 − s)·near,
+// near, far) (the official identity ray warp of bounded scenes, coord.construct_ray_warps with fn = None), or the power
+// ladder 1.25·(G^(−2/3) − 1), G = s·h(far) + (1 − s)·h(near), h(t) = (1 + 2t/2.5)^(−3/2), clipped likewise (camp_zipnerf
+// 360.gin's power_ladder p = −3/2, premult 2), with the official's float32 constants: G shifted by −(κ − 1)(1 − G) and
+// held ≥ inv_power_ladder's clip (kernels/sample_intervals.cl says why).
+double ray_distance_s_to_t(RayDistance ray_distance, double s, double near, double far);
+
+// Mirror of sample_intervals_s_to_t: t [R][K] from s [R][K] by ray_distance_s_to_t with each ray's near and far.
 void sample_intervals_s_to_t(const std::vector<double>& s, const std::vector<double>& near,
-                             const std::vector<double>& far, std::vector<double>& t, size_t n_rays, size_t n_per_ray);
+                             const std::vector<double>& far, std::vector<double>& t, size_t n_rays, size_t n_per_ray,
+                             RayDistance ray_distance = RayDistance::linear);
+
+// The float32 kernel's power ladder within this of the exact t (absolute): 32·2^−23·(t + 1.25). Derivation (each
+// operation within OpenCL's ulp bound, s exact): b = 1 + 2t/2.5 (2 roundings), h = 1/(b·√b) (√ 3 ulp, product,
+// reciprocal 2.5 ulp): ≤ 10 ε relative; G = s·h_f + (1 − s)·h_n, non-negative terms: ≤ 13 ε; the official's shift
+// G' = G − (κ − 1)(1 − G) (a product and a difference; where the clip does not hold, (κ − 1) ≤ 0.29·G' as G' ≥ min G =
+// 3.5·(κ − 1)): ≤ 13 ε·1.29 + 2 ε·0.29 + ε < 19 ε; G'^(−1/3) by cbrt (2 ulp) and a reciprocal (2.5 ulp): < 11 ε;
+// squared: ≤ 23 ε on Q = G'^(−2/3); Q − 1 and × 1.25 add ε·(Q − 1) each: |δt| ≤ 1.25·23 ε·Q + 2 ε·t =
+// 23 ε·(t + 1.25) + 2 ε·t < 32 ε·(t + 1.25). The clips (G' at its minimum, t to [near, far]) are 1-Lipschitz and add
+// nothing.
+double ray_distance_power_ladder_float32_bound(double t);
 
 // Where an implementation whose operations are each within one ulp-relative `eps` (the machine epsilon: 2^-23 for the
 // float32 kernel, 2^-52 for the float64 official) may put one ray's edges, given the exact u [M]: lo [M+1] ≤ edge ≤ hi

@@ -52,6 +52,12 @@ const std::vector<Entry>& table() {
        &TrainConfig::ray_shape},
       {{"spherify", "LLFF: re-pose a 360-degree capture around its centre (official spherify)", "scene"},
        &TrainConfig::spherify},
+      {{"unbounded",
+        "zipnerf, sampler=proposal: a scene without bounds (a 360-degree capture's background): each grid point "
+        "through mip-NeRF 360's contraction into [-2, 2]^3, samples spaced by camp_zipnerf's power ladder from near 0 "
+        "to far 1e6 (explicit near, far and grid_bound win)",
+        "scene"},
+       &TrainConfig::unbounded},
       {{"lindisp", "sample linearly in disparity instead of depth", "scene"}, &TrainConfig::lindisp},
       {{"batching", "a step's rays come from every image, or from one image", "scene"}, &TrainConfig::batching},
       {{"pixel_center", "offset of a pixel's ray inside the pixel (0.5 = centre)", "scene"},
@@ -516,6 +522,18 @@ void validate(const TrainConfig& c) {
                            " cells (each earlier round 4x coarser): " + e.what());
       }
     }
+  }
+  if (c.unbounded) {
+    require(c.variant == ModelFamily::zipnerf,
+            "unbounded is Zip-NeRF's (its grid contracts space; mip-NeRF 360's contracted IPE is not built yet): train "
+            "with --model zipnerf --set sampler=proposal, or leave unbounded=false for the " +
+                std::string(enum_name(c.variant)) + " model family");
+    require(c.sampler == Sampler::proposal,
+            "unbounded needs sampler=proposal (its samples are spaced in the normalised distance proposal sampling "
+            "draws): add --set sampler=proposal");
+    require(c.ray_shape == RayShape::cone,
+            "unbounded needs ray_shape=cone (world rays): NDC's cylinders are a forward-facing capture's, bounded "
+            "already");
   }
   require(c.grid_bound >= 0, "grid_bound must be >= 0 (0 = from the scene)");
   require(c.grid_weight_decay >= 0, "grid_weight_decay must be >= 0");

@@ -46,9 +46,12 @@ mlp::GridConfig grid_config(const TrainConfig& c) {
 }
 
 // The grid's cube: [−b, b]³, b from the setting or the scene (NDC space spans [−1, 1]³; a Blender object fits in
-// [−1.5, 1.5]³).
+// [−1.5, 1.5]³; an unbounded scene is contracted into the ball of radius 2).
 void set_grid_box(const TrainConfig& c, ops::ZipFeatureOptions& zip) {
-  const double bound = c.grid_bound > 0 ? c.grid_bound : c.ray_shape == RayShape::cylinder ? 1.0 : 1.5;
+  const double bound = c.grid_bound > 0             ? c.grid_bound
+                       : c.unbounded                   ? 2.0  // the contraction's ball of radius 2
+                       : c.ray_shape == RayShape::cylinder ? 1.0
+                                                           : 1.5;
   for (float& m : zip.box_min) m = static_cast<float>(-bound);
   zip.box_size = static_cast<float>(2 * bound);
 }
@@ -99,6 +102,7 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
   spec.sample_intervals.single_jitter = true;
   spec.sample_intervals.randomized = c.randomized;
   spec.anneal_slope = static_cast<float>(c.anneal_slope);
+  spec.ray_distance = c.unbounded ? RayDistance::power_ladder : RayDistance::linear;
 }
 
 }  // namespace
@@ -119,6 +123,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
     spec.zip.append_scale = c.grid_append_scale;
     spec.zip.cylinder = c.ray_shape == RayShape::cylinder;
     spec.zip.randomized = c.randomized;
+    spec.zip.contract = c.unbounded;
     set_grid_box(c, spec.zip);
     spec.grid_weight_decay = static_cast<float>(c.grid_weight_decay);
   }
@@ -195,6 +200,10 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? config.multiscale_scales : 1;
   if (config.near > 0) options.near = config.near;
   if (config.far > 0) options.far = config.far;
+  // An unbounded scene is sampled from the camera out (official 360.gin near 0, far 1e6), not between the capture's
+  // depth bounds: the background lies beyond them.
+  if (config.unbounded && !(config.near > 0)) options.near = 0.0;
+  if (config.unbounded && !(config.far > 0)) options.far = 1e6;
   options.llff.spherify = config.spherify;
   options.llff.ndc = config.ray_shape == RayShape::cylinder;  // the ray kernel's cylinders are NDC rays
   options.splits = std::move(splits);

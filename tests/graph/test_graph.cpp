@@ -196,7 +196,7 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
       } else {
         ref::sample_intervals_fwd(options, s_prev, weights_prev, s, R, n_prev, n, round_key);
       }
-      ref::sample_intervals_s_to_t(s, near, far, t, R, n + 1);
+      ref::sample_intervals_s_to_t(s, near, far, t, R, n + 1, spec.ray_distance);
       if (fixed_t_edges && l > 0) t = (*fixed_t_edges)[l];
     } else if (fixed_t_edges && l > 0) {
       // The stop-gradient between levels, for finite differences: later levels keep the edges the unperturbed
@@ -796,6 +796,26 @@ TEST_CASE("graph: a Zip-NeRF proposal step with the distortion loss equals the r
   check_step_against_reference("zipnerf", test::small_scene(),
                                {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_grid_max", "64"},
                                 {"grid_max", "64"}, {"grid_hash_log2", "12"}, {"distortion_mult", "1"}});
+}
+
+// An unbounded scene's step (`unbounded`: every grid's points through the contraction into [−2, 2]³ with their
+// footprints scaled, proposal sampling's s spaced by the power ladder), with the distortion loss: the loss and every
+// gradient against the reference composed of the stage references, which contract and warp as the spec says (a graph
+// that ignored either would look its grids up elsewhere). The small scene's rays run from 2 to 6, their points out to
+// |x| ≈ 6: most of them contracted.
+TEST_CASE("graph: an unbounded Zip-NeRF proposal step (contraction, power ladder) equals the reference") {
+  const auto config = train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}, {"unbounded", "true"}});
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.ray_distance == RayDistance::power_ladder);
+  for (size_t g = 0; g < spec.grids.size(); ++g) {
+    CHECK(spec.zip_options(g).contract);
+    CHECK(spec.zip_options(g).box_min[0] == -2.0f);
+    CHECK(spec.zip_options(g).box_size == 4.0f);
+  }
+  check_step_against_reference("zipnerf", test::small_scene(),
+                               {{"sampler", "proposal"}, {"unbounded", "true"}, {"proposal_samples", "8"},
+                                {"proposal_grid_max", "64"}, {"grid_max", "64"}, {"grid_hash_log2", "12"},
+                                {"distortion_mult", "0.1"}});
 }
 
 // A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at

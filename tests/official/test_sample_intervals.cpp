@@ -5,6 +5,7 @@
 // clipped domains; and Schlick's bias, the anneal schedule. The official math ran in float64.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -179,4 +180,59 @@ TEST_CASE("official sample_intervals: proposal_anneal is models.py's Schlick bia
     ++checked;
   }
   CHECK(checked == 28);
+}
+
+// Zip-NeRF's ray distance of unbounded scenes (configs/zipnerf/360.gin: raydist_fn = power_ladder / inv_power_ladder
+// with p = −3/2, premult 2) against the official construct_ray_warps' s_to_t (fixtures/zipnerf_ray_distance.json):
+// near 0 / far 1e6 as the official trains, other bounds, s up to the last float32 values below 1 and 1 (where the
+// official's clip holds the edge at ≈ 8.58e4). The official ran in float64 but with its float32 constants, mirrored
+// by ours but for its float32 exponent 1/p (−0.6666667 for −2/3): t^(official) differs from the exact one by
+// ≤ |ln G|·2e−8 ≤ 3.4e−7 relative (G ≥ 5.6e−8), the slack below; the kernel's own float32 bound on top.
+TEST_CASE("official ray distance: the power ladder's s to t equals camp_zipnerf's, reference and kernel") {
+  const auto path = official::fixture_dir() / "zipnerf_ray_distance.json";
+  INFO("fixture " << path.string());
+  REQUIRE(std::filesystem::is_regular_file(path));
+  const io::Json json = io::read_json(path.string());
+  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kSampleIntervalsZipnerfCommit);
+  const auto s = json.at("s").get<std::vector<double>>();
+  const auto& cases = json.at("cases");
+  REQUIRE(cases.size() >= 5);
+  const size_t n_rays = cases.size(), per_ray = s.size();
+  std::vector<float> s_all, near, far;
+  std::vector<double> official_t;
+  for (const auto& c : cases) {
+    near.push_back(c.at("near").get<float>());
+    far.push_back(c.at("far").get<float>());
+    for (double v : s) s_all.push_back(static_cast<float>(v));
+    const auto t = c.at("t").get<std::vector<double>>();
+    REQUIRE(t.size() == per_ray);
+    official_t.insert(official_t.end(), t.begin(), t.end());
+  }
+  for (size_t i = 0; i < s_all.size(); ++i) REQUIRE(static_cast<double>(s_all[i]) == s[i % per_ray]);  // float32 s
+  auto& ctx = test::test_context();
+  ops::RayBundle rays(ctx, n_rays);
+  rays.near.upload(ctx, near);
+  rays.far.upload(ctx, far);
+  ocl::DeviceArray<float> s_device(ctx, s_all.size(), "s"), t_device(ctx, s_all.size(), "t");
+  s_device.upload(ctx, s_all);
+  ops::SampleIntervals(ctx, RayDistance::power_ladder).s_to_t(s_device, rays, n_rays, per_ray, t_device);
+  const auto t = t_device.download(ctx);
+  const auto exponent_slack = [](double t_value) { return 3.4e-7 * (t_value + 1.25); };
+  double worst_ref = 0.0, worst_kernel = 0.0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    const size_t ray = i / per_ray;
+    const double expected = official_t[i];
+    INFO("near " << near[ray] << ", far " << far[ray] << ", s = " << s[i % per_ray] << ": official t " << expected);
+    const double ours = ref::ray_distance_s_to_t(RayDistance::power_ladder, s[i % per_ray], near[ray], far[ray]);
+    CHECK(std::abs(ours - expected) <= exponent_slack(expected));
+    const double kernel_bound = ref::ray_distance_power_ladder_float32_bound(expected) + exponent_slack(expected);
+    CHECK(std::abs(t[i] - expected) <= kernel_bound);
+    worst_ref = std::max(worst_ref, std::abs(ours - expected) / exponent_slack(expected));
+    worst_kernel = std::max(worst_kernel, std::abs(t[i] - expected) / kernel_bound);
+  }
+  MESSAGE("ray distance vs official: reference " << worst_ref << " of its slack, kernel " << worst_kernel
+                                                 << " of its bound");
+  // The official's own range: s = 1 at its clip, not at far = 1e6.
+  CHECK(official_t[per_ray - 1] < 1e5);
+  CHECK(std::abs(t[per_ray - 1] - official_t[per_ray - 1]) <= 1e-5 * official_t[per_ray - 1]);
 }

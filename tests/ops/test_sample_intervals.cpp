@@ -293,6 +293,60 @@ TEST_CASE("sample_intervals: s to t is the official linear warp per ray, exact a
                        doctest::Contains("n_per_ray must be at least 1"), Error);
 }
 
+// The unbounded scenes' power ladder (camp_zipnerf 360.gin): against the reference within its float32 bound, from
+// s = 0 to the last float32 below 1 and 1 itself, near 0 and far 1e6 as the official trains and other bounds; the
+// ends near and min(far, ≈ 8.58e4) (the official's clip of y); increasing in s; finite with far = +∞. The bound is the
+// derivation's (ref::ray_distance_power_ladder_float32_bound): the linear warp's value at s = 0.5 misses it by 10^5×.
+TEST_CASE("sample_intervals: s to t by the power ladder is the reference within its float32 bound, out to 1 and far = inf") {
+  auto& ctx = test::test_context();
+  const std::vector<float> near = {0.0f, 0.0f, 0.2f, 1e-3f, 0.0f}, far = {1e6f, 10.0f, 1e6f, 3.0f,
+                                                                       std::numeric_limits<float>::infinity()};
+  const size_t n_rays = near.size();
+  std::vector<float> per_ray_s = {0.0f, 1e-7f, 1e-3f, 0.01f, 0.1f, 0.25f, 0.5f, 0.75f, 0.9f, 0.99f, 0.999f,
+                                  0.9999f, 0.99999f, 0.999999f, 0.9999999f, std::nextafter(1.0f, 0.0f), 1.0f};
+  for (int k = 1; k < 40; ++k) per_ray_s.push_back(static_cast<float>(k) / 40.0f);
+  std::sort(per_ray_s.begin(), per_ray_s.end());
+  const size_t per_ray = per_ray_s.size();
+  std::vector<float> s;
+  for (size_t ray = 0; ray < n_rays; ++ray) s.insert(s.end(), per_ray_s.begin(), per_ray_s.end());
+  ops::RayBundle rays(ctx, n_rays);
+  rays.near.upload(ctx, near);
+  rays.far.upload(ctx, far);
+  auto s_device = test::upload(ctx, s, "s");
+  auto t_device = test::filled(ctx, n_rays * per_ray, -1.0f, "t");
+  ops::SampleIntervals warp(ctx, RayDistance::power_ladder);
+  CHECK(warp.ray_distance() == RayDistance::power_ladder);
+  warp.s_to_t(s_device, rays, n_rays, per_ray, t_device);
+  const auto t = t_device.download(ctx);
+  std::vector<double> expected;
+  ref::sample_intervals_s_to_t(test::to_double(s), test::to_double(near), test::to_double(far), expected, n_rays,
+                               per_ray, RayDistance::power_ladder);
+  double worst_ratio = 0.0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    const size_t ray = i / per_ray, k = i % per_ray;
+    INFO("ray " << ray << " (near " << near[ray] << ", far " << far[ray] << ") s = " << s[i]);
+    REQUIRE(std::isfinite(t[i]));
+    CHECK(t[i] >= near[ray]);
+    CHECK(t[i] <= far[ray]);
+    if (k > 0) CHECK(t[i] >= t[i - 1]);
+    const double bound = ref::ray_distance_power_ladder_float32_bound(expected[i]);
+    CHECK(std::abs(t[i] - expected[i]) <= bound);
+    worst_ratio = std::max(worst_ratio, std::abs(t[i] - expected[i]) / bound);
+    // A warp that is not the power ladder (the linear one) misses the bound by far.
+    const double linear = ref::ray_distance_s_to_t(RayDistance::linear, s[i], near[ray], std::min(far[ray], 1e6f));
+    if (s[i] == 0.5f) CHECK(std::abs(linear - expected[i]) > 1e5 * bound);
+  }
+  MESSAGE("power ladder s to t: worst error / bound " << worst_ratio);
+  // The ends: s = 0 gives near; s = 1 gives far where far is below the official's clip, ≈ 8.58e4 past it.
+  CHECK(t[0] == 0.0f);
+  CHECK(t[2 * per_ray] == 0.2f);
+  CHECK(t[2 * per_ray - 1] == 10.0f);
+  CHECK(std::abs(t[per_ray - 1] - 85774.7) < 85774.7 * 1e-5);
+  CHECK(std::abs(t[n_rays * per_ray - 1] - 85774.7) < 85774.7 * 1e-5);
+  // Half the uniform s within t ≈ 0.73 of the origin (near 0, far 1e6): where a spherified capture's object is.
+  CHECK(std::abs(expected[std::find(per_ray_s.begin(), per_ray_s.end(), 0.5f) - per_ray_s.begin()] - 0.7345) < 1e-3);
+}
+
 TEST_CASE("sample_intervals: sorted, finite and inside the domain on extreme weights, whatever the chunking") {
   const RngKey key{77, 3, 100};
   auto h = random_proposal_histograms(300, 24, 4242);

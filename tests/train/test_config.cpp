@@ -7,6 +7,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "support/train_fixtures.hpp"
 #include "train/config.hpp"
 #include "train/model.hpp"
 
@@ -384,6 +385,11 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
     CHECK(written.contains(name));
     written.erase(name);
   }
+  // unbounded (a scene without bounds: contraction and the power ladder) too; without it a configuration loads with
+  // false, what every earlier run trained with.
+  CHECK(written.at("unbounded") == false);
+  CHECK(!old.unbounded);
+  written.erase("unbounded");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
@@ -474,4 +480,46 @@ TEST_CASE("config: distortion_mult needs sampler=proposal, and weights the NeRF 
   graph::GraphSpec on_round = spec;
   on_round.levels[0].distortion_mult = 0.01f;
   CHECK_THROWS_WITH_AS(on_round.validate(), doctest::Contains("only the last level takes the distortion loss"), Error);
+}
+
+// `unbounded` (a 360° capture's background): Zip-NeRF with proposal sampling and cones only, each refusal one line
+// saying what to add; with it the grids contract into [−2, 2]³ (an explicit grid_bound wins), proposal sampling's s
+// is spaced by the power ladder, and the data is loaded from near 0 to far 1e6 (explicit near and far win). Off, the
+// spec and the load options are what they were.
+TEST_CASE("config: unbounded contracts Zip-NeRF's grids, spaces proposal samples by the power ladder, from 0 to 1e6") {
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"unbounded", "true"}}),
+                       doctest::Contains("unbounded is Zip-NeRF's"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "zipnerf", {{"unbounded", "true"}}),
+                       doctest::Contains("unbounded needs sampler=proposal"), Error);
+  CHECK_THROWS_WITH_AS(
+      train::resolve_config("tiny", "zipnerf", {{"unbounded", "true"}, {"sampler", "proposal"}, {"ray_shape", "cylinder"}}),
+      doctest::Contains("unbounded needs ray_shape=cone"), Error);
+  const auto off = train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}});
+  CHECK(!off.unbounded);
+  const auto off_spec = train::make_graph_spec(off, false);
+  CHECK(off_spec.ray_distance == RayDistance::linear);
+  CHECK(!off_spec.zip.contract);
+  CHECK(off_spec.zip.box_size == 3.0f);
+  const auto off_load = train::load_options(off, test::small_scene(), {"train"}, 1);
+  CHECK(!off_load.near.has_value());
+  CHECK(!off_load.far.has_value());
+
+  const auto on = train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}, {"unbounded", "true"}});
+  const auto spec = train::make_graph_spec(on, false);
+  CHECK(spec.ray_distance == RayDistance::power_ladder);
+  CHECK(spec.zip.contract);
+  CHECK(spec.zip.box_min[0] == -2.0f);
+  CHECK(spec.zip.box_size == 4.0f);
+  const auto load = train::load_options(on, test::small_scene(), {"train"}, 1);
+  REQUIRE(load.near.has_value());
+  REQUIRE(load.far.has_value());
+  CHECK(*load.near == 0.0);
+  CHECK(*load.far == 1e6);
+  const auto given = train::resolve_config(
+      "tiny", "zipnerf",
+      {{"sampler", "proposal"}, {"unbounded", "true"}, {"near", "0.1"}, {"far", "500"}, {"grid_bound", "2.5"}});
+  const auto given_load = train::load_options(given, test::small_scene(), {"train"}, 1);
+  CHECK(*given_load.near == 0.1);
+  CHECK(*given_load.far == 500.0);
+  CHECK(train::make_graph_spec(given, false).zip.box_size == 5.0f);
 }
