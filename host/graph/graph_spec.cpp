@@ -162,10 +162,14 @@ std::string GraphSpec::describe() const {
                            : level.encoding == Encoding::zip_grid        ? (zip.multisample ? "multisampled grid"
                                                                                             : "grid at frustum means")
                                                                          : "PE of midpoints";
-    out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals, " << encoding;
+    out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals"
+        << (level.sampling == Sampling::proposal && ray_distance == RayDistance::power_ladder ? " (power ladder s→t)"
+                                                                                             : "")
+        << ", " << encoding;
     if (level.encoding == Encoding::zip_grid) {
       out << " " << level.grid_index << " (" << mlp::describe(grids[level.grid_index])
-          << (zip.downweight ? ", footprint-weighted" : ", not footprint-weighted") << ")";
+          << (zip.downweight ? ", footprint-weighted" : ", not footprint-weighted")
+          << (zip.contract ? ", points contracted (unbounded)" : "") << ")";
     } else {
       out << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1;
     }

@@ -510,6 +510,10 @@ TEST_CASE("config: unbounded contracts Zip-NeRF's grids, spaces proposal samples
   CHECK(spec.zip.contract);
   CHECK(spec.zip.box_min[0] == -2.0f);
   CHECK(spec.zip.box_size == 4.0f);
+  CHECK(spec.describe().find("(power ladder s→t)") != std::string::npos);
+  CHECK(spec.describe().find("points contracted (unbounded)") != std::string::npos);
+  CHECK(off_spec.describe().find("power ladder") == std::string::npos);
+  CHECK(off_spec.describe().find("contracted") == std::string::npos);
   const auto load = train::load_options(on, test::small_scene(), {"train"}, 1);
   REQUIRE(load.near.has_value());
   REQUIRE(load.far.has_value());
