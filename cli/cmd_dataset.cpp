@@ -134,6 +134,7 @@ data::LoadOptions train_like_options(const InspectArgs& args, std::string& scene
   options.llff.ndc = effect("ray_shape", "cone") == "cylinder";
   scene_line = "scene: " + effects.summary;
   if (!args.background.empty() || args.spherify) scene_line += " (flags given here win)";
+  if (!effects.zipnerf_summary.empty()) scene_line += "; with --model zipnerf: " + effects.zipnerf_summary;
   return options;
 }
 

@@ -194,7 +194,8 @@ WhatToTrain what_to_train(const TrainArgs& args, CLI::App& cmd) {
   // The effects the data calls for, where no setting was given (train/scene_effects.hpp).
   std::string scene_line;
   const auto with_scene =
-      train::with_scene_effects(train::scene_effects(what.data_path, unscened.factor), settings, scene_line);
+      train::with_scene_effects(train::scene_effects(what.data_path, unscened.factor, unscened.variant), settings,
+                                scene_line);
   what.config = train::resolve_config(args.preset, args.variant, with_scene);
   what.config.scene_effects = scene_line;
   return what;

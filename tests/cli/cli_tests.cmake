@@ -180,17 +180,18 @@ mipnerf_add_checked_test("cli: train on the unbounded scene takes it for a 360-d
   --out "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run" --preset tiny --factor 4 --steps 4 --val_views 1)
 set_tests_properties("cli: train on the unbounded scene takes it for a 360-degree capture" PROPERTIES
   FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_clean")
-# Zip-NeRF with contraction and the power ladder on it (`--set unbounded=true`): trains, then evaluates and renders the
-# capture's own spherical path from the checkpoint (from near 0 to far 1e6, as it trained).
+# Zip-NeRF on it trains unbounded with no flag (the scene's choice for the zipnerf family: contraction, proposal
+# sampling spaced by the power ladder), then evaluates and renders an orbit from the checkpoint (from near 0 to far
+# 1e6, as it trained).
 set(MIPNERF_UNBOUNDED_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-zip-run")
 add_test(NAME "cli: unbounded zipnerf: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_UNBOUNDED_RUN}")
 set_tests_properties("cli: unbounded zipnerf: clear the run folder" PROPERTIES FIXTURES_SETUP cli_unbounded_zip_clean)
 mipnerf_add_checked_test("cli: unbounded zipnerf: train with contraction and the power ladder"
-  EXPECT "zipnerf.*proposal.*trained 4 steps"
+  EXPECT "scene: 360° LLFF capture → [^\n]*; Zip-NeRF unbounded \\(contraction, proposal sampling spaced by the power ladder from 0 to 1e6\\).*proposal-sampled 16 intervals \\(power ladder s→t\\).*points contracted \\(unbounded\\).*trained 4 steps"
   COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded"
   --out "${MIPNERF_UNBOUNDED_RUN}" --model zipnerf --preset tiny --factor 4 --steps 4 --val_views 1
-  --set sampler=proposal --set unbounded=true --set proposal_samples=16 --set num_samples=16
-  --set proposal_grid_max=128 --set grid_max=128 --set grid_hash_log2=14)
+  --set proposal_samples=16 --set num_samples=16 --set proposal_grid_max=128 --set grid_max=128
+  --set grid_hash_log2=14)
 set_tests_properties("cli: unbounded zipnerf: train with contraction and the power ladder" PROPERTIES
   FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_zip_clean" FIXTURES_SETUP cli_unbounded_zip)
 mipnerf_add_checked_test("cli: unbounded zipnerf: eval" EXPECT "mean PSNR [0-9.]+ dB"
@@ -201,7 +202,7 @@ mipnerf_add_checked_test("cli: unbounded zipnerf: render the capture's path" EXP
 set_tests_properties("cli: unbounded zipnerf: render the capture's path" PROPERTIES FIXTURES_REQUIRED cli_unbounded_zip)
 mipnerf_add_cli_error_test("train: unbounded without sampler=proposal" PATTERN "unbounded needs sampler=proposal"
   ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-run"
-  --model zipnerf --set unbounded=true)
+  --model zipnerf --set sampler=resample --set unbounded=true)
 set_tests_properties("cli: train: unbounded without sampler=proposal" PROPERTIES FIXTURES_REQUIRED cli_unbounded)
 mipnerf_add_cli_error_test("make-scene: --unbounded with --forward-facing" PATTERN "--unbounded and --forward-facing are two different scenes: give one"
   ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --unbounded --forward-facing)

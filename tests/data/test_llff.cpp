@@ -254,6 +254,28 @@ TEST_CASE("llff: a capture looking inward from all around is 360 degrees, spheri
   CHECK(effects.summary == "360° LLFF capture → spherified poses, world rays, cones, black background");
   CHECK(effects.settings.at("spherify") == "true");
   CHECK(effects.settings.at("ray_shape") == "cone");
+  // mip-NeRF (and NeRF) get no Zip-NeRF effect; Zip-NeRF gets the unbounded group, all of it or, where an explicit
+  // setting disagrees with one of them, none (the line says which).
+  CHECK(effects.zipnerf_settings.empty());
+  CHECK(train::scene_effects(dir.string(), 1, train::ModelFamily::nerf).zipnerf_settings.empty());
+  const train::SceneEffects zip = train::scene_effects(dir.string(), 1, train::ModelFamily::zipnerf);
+  CHECK(zip.zipnerf_settings.at("unbounded") == "true");
+  CHECK(zip.zipnerf_settings.at("sampler") == "proposal");
+  std::string line;
+  auto settings = train::with_scene_effects(zip, {}, line);
+  CHECK(settings.at("unbounded") == "true");
+  CHECK(settings.at("sampler") == "proposal");
+  CHECK(line.find("; Zip-NeRF unbounded (contraction") != std::string::npos);
+  CHECK(train::resolve_config("fast", "zipnerf", settings).unbounded);
+  settings = train::with_scene_effects(zip, {{"sampler", "resample"}}, line);
+  CHECK(settings.count("unbounded") == 0);
+  CHECK(settings.at("sampler") == "resample");
+  CHECK(line.find("Zip-NeRF not unbounded (contraction") != std::string::npos);
+  CHECK(line.find("(given explicitly: sampler = resample)") != std::string::npos);
+  CHECK(!train::resolve_config("fast", "zipnerf", settings).unbounded);  // and it resolves: nothing half-applied
+  settings = train::with_scene_effects(zip, {{"unbounded", "false"}}, line);
+  CHECK(settings.at("unbounded") == "false");
+  CHECK(settings.count("sampler") == 0);
   data::LoadOptions options;
   options.llff.spherify = true;
   const data::LlffCapture capture = data::read_llff(dir.string(), options);

@@ -519,6 +519,10 @@ TEST_CASE("train: a forward-facing LLFF capture trains in NDC with cylinders and
   // An explicit setting wins, and the line says so.
   train::with_scene_effects(effects, {{"background", "white"}}, line);
   CHECK(line.find("(given explicitly, kept: background = white)") != std::string::npos);
+  // Zip-NeRF on a forward-facing capture: the same effects, nothing unbounded (NDC is bounded already).
+  const train::SceneEffects zip_effects = train::scene_effects(scene.string(), 4, train::ModelFamily::zipnerf);
+  CHECK(zip_effects.zipnerf_settings.empty());
+  CHECK(zip_effects.settings == effects.settings);
 
   const std::string out = test::fresh_run_dir("llff");
   train::Trainer trainer(ctx, config, scene.string(), out, false);

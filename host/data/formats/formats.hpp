@@ -31,6 +31,11 @@ struct SceneTraits {
 struct SceneEffects {
   std::map<std::string, std::string> settings;  // setting name → value the data calls for
   std::string summary;                          // "forward-facing LLFF → NDC rays, cylinders, black background"
+  // What the scene calls for from the Zip-NeRF family alone (a 360° capture: proposal sampling and the unbounded
+  // contraction, which mip-NeRF's model does not have), added to `settings` when training it: as a group, all or
+  // none (train/scene_effects.hpp), and said by `zipnerf_summary` ("unbounded (contraction, …)").
+  std::map<std::string, std::string> zipnerf_settings;
+  std::string zipnerf_summary;
 };
 
 // A render path a format defines for its captures (LLFF's official spiral or spherical circle).

@@ -19,15 +19,19 @@ void add_traits(const std::string& path, const LoadOptions& options, SceneTraits
 
 // The official LLFF conventions: a forward-facing capture trains on NDC rays (cylinders) with the un-normalised world
 // directions as view directions (datasets.py LLFF._generate_rays: viewdirs = rays.directions) and density noise 1
-// (configs/llff.gin); a spherified 360° capture goes through the Blender ray generation (unit view directions).
+// (configs/llff.gin); a spherified 360° capture goes through the Blender ray generation (unit view directions), and
+// Zip-NeRF trains it unbounded (bench/results/unbounded: ahead of the bounded grid at equal time on every seed).
 SceneEffects effects(const SceneTraits& traits) {
   if (traits.llff_360) {
+    // Zip-NeRF's grid can contract the background (camp_zipnerf configs/zipnerf/360.gin); mip-NeRF's IPE cannot yet.
     return {{{"ray_shape", "cone"},
              {"spherify", "true"},
              {"background", "black"},
              {"unit_viewdirs", "true"},
              {"density_noise", "0"}},
-            "360° LLFF capture → spherified poses, world rays, cones, black background"};
+            "360° LLFF capture → spherified poses, world rays, cones, black background",
+            {{"sampler", "proposal"}, {"unbounded", "true"}, {"ray_shape", "cone"}},
+            "unbounded (contraction, proposal sampling spaced by the power ladder from 0 to 1e6)"};
   }
   return {{{"ray_shape", "cylinder"},
            {"spherify", "false"},
