@@ -122,7 +122,7 @@ TEST_CASE("view cameras: a camera path file's frames, named by index, its folder
 // A camera path (a file, or the viewer's page) that leaves near/far out renders in the run's range: NDC's 0..1 on a
 // run of cylinders (a forward-facing capture: Blender's 2..6 there sampled beyond the far plane, and the viewer's
 // first view of such a run was 2 dB worse than the same camera's `render --split train`), the training cameras' own
-// range on a capture that records one, the run's settings when it has them.
+// range on a capture that records one, the run's settings when it has them, an unbounded run's 0..1e6.
 TEST_CASE("view cameras: a camera path without near/far takes the run's range: NDC, the capture's, or the settings'") {
   train::TrainedModel ndc;
   ndc.config.ray_shape = RayShape::cylinder;
@@ -163,5 +163,12 @@ TEST_CASE("view cameras: a camera path without near/far takes the run's range: N
   const data::CameraPathDefaults d = eval::camera_path_defaults(train::TrainedModel{}, {});
   CHECK(d.near == 2.0);
   CHECK(d.far == 6.0);
+  // An unbounded run samples from the camera out to 1e6, as it trained (train::load_options), not between the
+  // capture's bounds or Blender's, also when its data is gone.
+  train::TrainedModel unbounded;
+  unbounded.config.unbounded = true;
+  const data::CameraPathDefaults e = eval::camera_path_defaults(unbounded, {});
+  CHECK(e.near == 0.0);
+  CHECK(e.far == 1e6);
   fs::remove_all(scene);
 }
