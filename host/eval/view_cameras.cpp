@@ -144,8 +144,8 @@ data::CameraPathDefaults camera_path_defaults(const train::TrainedModel& model,
     defaults.near = 0.0;
     defaults.far = 1.0;
   } else if (model.config.unbounded) {  // sampled from the camera out, as it trained (train::load_options)
-    defaults.near = 0.0;
-    defaults.far = 1e6;
+    defaults.near = train::kUnboundedNear;
+    defaults.far = train::kUnboundedFar;
   } else if (!(model.config.near > 0 && model.config.far > 0)) {
     const std::vector<Camera> train = training_cameras(model, "");
     if (!train.empty()) {

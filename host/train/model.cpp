@@ -200,10 +200,8 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? config.multiscale_scales : 1;
   if (config.near > 0) options.near = config.near;
   if (config.far > 0) options.far = config.far;
-  // An unbounded scene is sampled from the camera out (official 360.gin near 0, far 1e6), not between the capture's
-  // depth bounds: the background lies beyond them.
-  if (config.unbounded && !(config.near > 0)) options.near = 0.0;
-  if (config.unbounded && !(config.far > 0)) options.far = 1e6;
+  if (config.unbounded && !(config.near > 0)) options.near = kUnboundedNear;
+  if (config.unbounded && !(config.far > 0)) options.far = kUnboundedFar;
   options.llff.spherify = config.spherify;
   options.llff.ndc = config.ray_shape == RayShape::cylinder;  // the ray kernel's cylinders are NDC rays
   options.splits = std::move(splits);

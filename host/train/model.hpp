@@ -28,6 +28,11 @@ std::vector<std::unique_ptr<mlp::Network>> make_networks(ocl::Context& ctx, cons
 // One table per entry of spec.grids (Zip-NeRF; none for mip-NeRF), freshly initialised (GridConfig::seed).
 std::vector<std::unique_ptr<mlp::GridTable>> make_grids(ocl::Context& ctx, const graph::GraphSpec& spec);
 
+// An unbounded scene's sampling range when no near/far is given: from the camera out (camp_zipnerf 360.gin: near 0,
+// far 1e6), not between a capture's depth bounds (the background lies beyond them).
+inline constexpr double kUnboundedNear = 0.0;
+inline constexpr double kUnboundedFar = 1e6;
+
 // How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
 // (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0
 // forces that many scales.

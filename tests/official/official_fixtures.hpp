@@ -31,14 +31,28 @@ inline std::filesystem::path fixture_dir() {
   return std::filesystem::path(__FILE__).parent_path() / "fixtures";
 }
 
-// One fixture, checked to come from kOfficialCommit.
-inline io::Json fixture(const std::string& name) {
+// The commits of the other official repositories whose functions wrote fixtures (each fixture records its own under
+// "zipnerf_commit" or "multinerf_commit").
+inline constexpr const char* kZipnerfCommit = "8e6d57e3aee34235faf3ef99decca0994efe66c9";    // jonbarron/camp_zipnerf
+inline constexpr const char* kMultinerfCommit = "5b4d4f64608ec8077222c52fdf814d40acc10bc1";  // google-research/multinerf
+
+// One fixture, checked to record `commit` under `commit_key`.
+inline io::Json fixture_from(const std::string& name, const std::string& commit_key, const std::string& commit) {
   const auto path = fixture_dir() / name;
   INFO("fixture " << path.string() << " (set MIPNERF_OFFICIAL_FIXTURES if the sources moved)");
   REQUIRE(std::filesystem::is_regular_file(path));
   io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("official_commit").get<std::string>() == kOfficialCommit);
+  REQUIRE(json.at(commit_key).get<std::string>() == commit);
   return json;
+}
+
+// One fixture of google/mipnerf's, checked to come from kOfficialCommit.
+inline io::Json fixture(const std::string& name) { return fixture_from(name, "official_commit", kOfficialCommit); }
+
+// One fixture of camp_zipnerf's (kZipnerfCommit) or multinerf's (kMultinerfCommit).
+inline io::Json zipnerf_fixture(const std::string& name) { return fixture_from(name, "zipnerf_commit", kZipnerfCommit); }
+inline io::Json multinerf_fixture(const std::string& name) {
+  return fixture_from(name, "multinerf_commit", kMultinerfCommit);
 }
 
 namespace detail {

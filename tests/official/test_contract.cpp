@@ -22,15 +22,8 @@ using namespace mipnerf;
 
 namespace {
 
-const char* kContractMultinerfCommit = "5b4d4f64608ec8077222c52fdf814d40acc10bc1";
-
 io::Json contract_fixture() {
-  const auto path = official::fixture_dir() / "multinerf_contract.json";
-  INFO("fixture " << path.string());
-  REQUIRE(std::filesystem::is_regular_file(path));
-  io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("multinerf_commit").get<std::string>() == kContractMultinerfCommit);
-  return json;
+  return official::multinerf_fixture("multinerf_contract.json");
 }
 
 // A number, or the strings "inf", "-inf", "nan" the generator writes for non-finite values.

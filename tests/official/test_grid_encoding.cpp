@@ -18,15 +18,8 @@ using namespace mipnerf;
 
 namespace {
 
-const char* kZipnerfCommit = "8e6d57e3aee34235faf3ef99decca0994efe66c9";
-
 io::Json grid_fixture() {
-  const auto path = official::fixture_dir() / "zipnerf_grid.json";
-  INFO("fixture " << path.string());
-  REQUIRE(std::filesystem::is_regular_file(path));
-  io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kZipnerfCommit);
-  return json;
+  return official::zipnerf_fixture("zipnerf_grid.json");
 }
 
 // The largest |ours − official| over a lookup's coordinates (`lookup` gives our features at one coordinate).
@@ -128,11 +121,7 @@ TEST_CASE("zipnerf multisamples: the deterministic hexagons are coord.hexify's, 
 // reference writes the official's formulas in double: roundoff agreement. track_isotropic, the general form, agrees
 // with the fast one (to its own float64 determinant's digits) wherever its clamp (float32 tiny) is not reached.
 TEST_CASE("zipnerf contraction: a multisample's point and footprint scale are coord.contract's and contract3_isoscale's") {
-  const auto path = official::fixture_dir() / "zipnerf_contract.json";
-  INFO("fixture " << path.string());
-  REQUIRE(std::filesystem::is_regular_file(path));
-  const io::Json fixture = io::read_json(path.string());
-  REQUIRE(fixture.at("zipnerf_commit").get<std::string>() == kZipnerfCommit);
+  const io::Json fixture = official::zipnerf_fixture("zipnerf_contract.json");
   const auto points = official::flat(fixture.at("points"));
   const auto contracted = official::flat(fixture.at("contract"));
   const auto isoscale = official::flat(fixture.at("contract3_isoscale"));

@@ -22,15 +22,8 @@ using namespace mipnerf;
 
 namespace {
 
-const char* kProposalZipnerfCommit = "8e6d57e3aee34235faf3ef99decca0994efe66c9";
-
 io::Json proposal_fixture() {
-  const auto path = official::fixture_dir() / "zipnerf_proposal.json";
-  INFO("fixture " << path.string());
-  REQUIRE(std::filesystem::is_regular_file(path));
-  io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kProposalZipnerfCommit);
-  return json;
+  return official::zipnerf_fixture("zipnerf_proposal.json");
 }
 
 // The official runs blur_stepfun's cumulative sums of slopes and the integral's cumulative sums in float64: a drift

@@ -22,15 +22,8 @@ using namespace mipnerf;
 
 namespace {
 
-const char* kSampleIntervalsZipnerfCommit = "8e6d57e3aee34235faf3ef99decca0994efe66c9";
-
 io::Json sample_intervals_fixture() {
-  const auto path = official::fixture_dir() / "zipnerf_sample_intervals.json";
-  INFO("fixture " << path.string() << " (set MIPNERF_OFFICIAL_FIXTURES if the sources moved)");
-  REQUIRE(std::filesystem::is_regular_file(path));
-  io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kSampleIntervalsZipnerfCommit);
-  return json;
+  return official::zipnerf_fixture("zipnerf_sample_intervals.json");
 }
 
 SampleIntervalsOptions case_options(const io::Json& c) {
@@ -189,11 +182,7 @@ TEST_CASE("official sample_intervals: proposal_anneal is models.py's Schlick bia
 // by ours but for its float32 exponent 1/p (−0.6666667 for −2/3): t^(official) differs from the exact one by
 // ≤ |ln G|·2e−8 ≤ 3.4e−7 relative (G ≥ 5.6e−8), the slack below; the kernel's own float32 bound on top.
 TEST_CASE("official ray distance: the power ladder's s to t equals camp_zipnerf's, reference and kernel") {
-  const auto path = official::fixture_dir() / "zipnerf_ray_distance.json";
-  INFO("fixture " << path.string());
-  REQUIRE(std::filesystem::is_regular_file(path));
-  const io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kSampleIntervalsZipnerfCommit);
+  const io::Json json = official::zipnerf_fixture("zipnerf_ray_distance.json");
   const auto s = json.at("s").get<std::vector<double>>();
   const auto& cases = json.at("cases");
   REQUIRE(cases.size() >= 5);

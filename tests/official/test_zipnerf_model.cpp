@@ -30,15 +30,8 @@ using official::kU;
 
 namespace {
 
-const char* kZipModelCommit = "8e6d57e3aee34235faf3ef99decca0994efe66c9";
-
 io::Json zip_model_fixture() {
-  const auto path = official::fixture_dir() / "zipnerf_model.json";
-  INFO("fixture " << path.string());
-  REQUIRE(std::filesystem::is_regular_file(path));
-  io::Json json = io::read_json(path.string());
-  REQUIRE(json.at("zipnerf_commit").get<std::string>() == kZipModelCommit);
-  return json;
+  return official::zipnerf_fixture("zipnerf_model.json");
 }
 
 // Our configuration of the fixture's HashEncoding and MLP keywords (camp_zipnerf names → our settings): the zipnerf
