@@ -5,7 +5,9 @@
 #   mpi        the MPI tests (mpirun -np 2) on PoCL
 #   oclgrind   the kernel tests under the oclgrind simulator
 #   sanitizer  the suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh), but
-#              the `quality` tests
+#              the `quality` tests and the `sweep` tests (a training step against the double reference for variant
+#              after variant: their time under ASan is the reference's; tests/CMakeLists.txt says what runs their host
+#              code there)
 #   fuzz       each fuzz target for 12 s, in that build, each with at least 1,000 inputs run
 #   tsan       the tests whose code starts threads (label `threads`: the viewer, its server, the scene writers, the host
 #              MLP's threads in training) built with clang++ under ThreadSanitizer (scripts/test-tsan.sh), on PoCL
@@ -141,7 +143,7 @@ fi
 # the fuzz targets' short runs.
 if wanted sanitizer || wanted fuzz; then
   if ./scripts/test-sanitize.sh --build-only; then
-    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi|quality)$'; fi
+    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi|quality|sweep)$'; fi
     if wanted fuzz; then run_ctest fuzz "$pocl_platform" "$sanitize_dir" -L '^fuzz$'; fi
   else
     for stage in sanitizer fuzz; do

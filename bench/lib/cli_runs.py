@@ -3,9 +3,11 @@
 
 import json
 import os
+import shlex
 import statistics
 
 from lib.provenance import commit_of  # noqa: F401  (the studies import it from here)
+from lib.machine import load_average
 from lib.run import run  # noqa: F401  (the studies import it from here)
 
 
@@ -72,3 +74,43 @@ def warm_seconds_per_step(run_dir):
     """The median step time of a run logged every step, from its second step on (the first is cold)."""
     rows = read_train_log(run_dir)
     return statistics.median(b[1] - a[1] for a, b in zip(rows[1:], rows[2:]))
+
+
+def train_for_minutes(exe, data, out, model_args, seed, minutes, factor, log):
+    """`mipnerf-cl train --minutes` into `out` with `model_args` (a string) at `seed` and `--set factor`, resumable:
+    a finished run (summary.json, not interrupted) is reused, an interrupted one continues with --resume. The load
+    average before and after goes to out/load.txt. Returns `out`."""
+    summary = os.path.join(out, "summary.json")
+    if not (os.path.exists(summary) and not read_json(summary).get("interrupted", True)):
+        resume = os.path.isdir(os.path.join(out, "checkpoints")) and os.listdir(os.path.join(out, "checkpoints"))
+        command = [exe, "train", "--data", data, "--out", out, *shlex.split(model_args),
+                   "--set", f"factor={factor}", "--set", f"seed={seed}", "--minutes", f"{minutes:g}",
+                   "--set", "val_views=1", "--set", "val_every=0"]
+        load_before = load_average()
+        run(command + (["--resume"] if resume else []), log)
+        with open(os.path.join(out, "load.txt"), "w") as f:
+            f.write(f"{load_before} {load_average()}\n")
+    return out
+
+
+def evaluate_val(exe, data, run_dir, views, log):
+    """`mipnerf-cl eval` of a run on `views` val views of `data` (no images), once; returns its metrics.json."""
+    out = os.path.join(run_dir, "eval_val")
+    if not os.path.exists(os.path.join(out, "metrics.json")):
+        run([exe, "eval", "--checkpoint", run_dir, "--data", data, "--split", "val", "--views", str(views),
+             "--out", out, "--no-images"], log)
+    return read_json(os.path.join(out, "metrics.json"))
+
+
+def run_record(seed, run_dir, metrics):
+    """One trained and scored run as a study's JSON keeps it."""
+    summary = read_json(os.path.join(run_dir, "summary.json"))
+    return {"seed": seed, "steps": summary["steps"], "train_seconds": summary["train_seconds"],
+            "parameters": summary["parameters"], "psnr": metrics["mean"]["psnr"], "ssim": metrics["mean"]["ssim"],
+            "render_seconds_per_megapixel": metrics["render"]["seconds_per_megapixel"], "device": metrics["device"]}
+
+
+def mean_sd(values):
+    """Mean and sample standard deviation (0 for one value)."""
+    mean = statistics.mean(values)
+    return mean, (statistics.stdev(values) if len(values) > 1 else 0.0)

@@ -19,15 +19,14 @@ mean and sample standard deviation over seeds, and each seed's PSNR. Finished ru
 """
 
 import os
-import shlex
 import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import commit_of, device_line, read_json, run  # noqa: E402
-from lib.machine import load_average  # noqa: E402
+from lib.cli_runs import (commit_of, device_line, evaluate_val, mean_sd, run, run_record,  # noqa: E402
+                          train_for_minutes)
 
 RESULTS = report_md.results_folder("unbounded")
 SCRIPT = "bench/studies/unbounded.py"
@@ -58,29 +57,6 @@ def scene(args, log):
     return folder
 
 
-def train(args, data, key, model_args, seed, log):
-    out = os.path.join(args.work, key, f"seed{seed}")
-    summary = os.path.join(out, "summary.json")
-    if not (os.path.exists(summary) and not read_json(summary).get("interrupted", True)):
-        resume = os.path.isdir(os.path.join(out, "checkpoints")) and os.listdir(os.path.join(out, "checkpoints"))
-        command = [args.exe, "train", "--data", data, "--out", out, *shlex.split(model_args),
-                   "--set", f"factor={args.factor}", "--set", f"seed={seed}", "--minutes", f"{args.minutes:g}",
-                   "--set", "val_views=1", "--set", "val_every=0"]
-        load_before = load_average()
-        run(command + (["--resume"] if resume else []), log)
-        with open(os.path.join(out, "load.txt"), "w") as f:
-            f.write(f"{load_before} {load_average()}\n")
-    return out
-
-
-def evaluate(args, data, run_dir, log):
-    out = os.path.join(run_dir, "eval_val")
-    if not os.path.exists(os.path.join(out, "metrics.json")):
-        run([args.exe, "eval", "--checkpoint", run_dir, "--data", data, "--split", "val", "--views", str(args.views),
-             "--out", out, "--no-images"], log)
-    return read_json(os.path.join(out, "metrics.json"))
-
-
 def measure(args):
     args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
     args.work = os.path.abspath(args.work)
@@ -95,26 +71,16 @@ def measure(args):
     # Seed by seed, every model in turn: a slow spell of the shared machine falls on all models, not on one.
     for seed in seeds:
         for key, _, model_args in models:
-            run_dir = train(args, data, key, model_args, seed, log)
-            summary = read_json(os.path.join(run_dir, "summary.json"))
-            metrics = evaluate(args, data, run_dir, log)
-            runs[key].append({
-                "seed": seed, "steps": summary["steps"], "train_seconds": summary["train_seconds"],
-                "parameters": summary["parameters"], "psnr": metrics["mean"]["psnr"], "ssim": metrics["mean"]["ssim"],
-                "render_seconds_per_megapixel": metrics["render"]["seconds_per_megapixel"],
-                "device": metrics["device"],
-            })
+            run_dir = train_for_minutes(args.exe, data, os.path.join(args.work, key, f"seed{seed}"), model_args, seed,
+                                        args.minutes, args.factor, log)
+            metrics = evaluate_val(args.exe, data, run_dir, args.views, log)
+            runs[key].append(run_record(seed, run_dir, metrics))
     rows = [{"key": key, "label": label, "arguments": model_args, "runs": runs[key]} for key, label, model_args in models]
     return {
         "study": "unbounded", "date": time.strftime("%Y-%m-%d", time.gmtime()), "commit": commit_of(),
         "scene": f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views",
         "budget_minutes": args.minutes, "seeds": seeds, "wall_seconds": round(time.time() - started, 1), "rows": rows,
     }
-
-
-def mean_sd(values):
-    mean = statistics.mean(values)
-    return mean, (statistics.stdev(values) if len(values) > 1 else 0.0)
 
 
 def write_markdown(record):

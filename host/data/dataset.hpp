@@ -45,6 +45,11 @@ struct LoadOptions {
   // "test" (and "val"), the rest "train"; 0 = none.
   int holdout_every = 8;
   LlffOptions llff;  // LLFF captures only
+  // transforms.json only: move the world into the frame an unbounded run's contraction expects (data::
+  // world_around_cameras: the origin where the cameras look, their RMS distance 1; LLFF's spherify does the same),
+  // from every frame of the file whatever the splits, so train, eval and render see one world. Near/far from the file
+  // (or the defaults) scale with it; near/far given here are in the new units.
+  bool world_around_cameras = false;
   LogFn log;         // notes and warnings (defaults taken, splits skipped)
 };
 

@@ -198,5 +198,29 @@ std::optional<Vec3> closest_point_to_axes(const std::vector<Camera>& cameras) {
   return p;
 }
 
-}  // namespace mipnerf::data
+WorldAroundCameras world_around_cameras(const std::vector<Matrix34>& poses, const std::string& where) {
+  if (poses.empty()) throw Error(where + ": no cameras to centre the world on");
+  std::vector<Camera> cameras(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) cameras[i].camera_to_world = poses[i];
+  WorldAroundCameras world;
+  if (const auto look_at = closest_point_to_axes(cameras)) {
+    world.centre = *look_at;
+  } else {
+    world.centre_is_look_at = false;
+    Vec3 sum{0, 0, 0};
+    for (const auto& pose : poses) sum = add(sum, column(pose, 3));
+    world.centre = {sum[0] / poses.size(), sum[1] / poses.size(), sum[2] / poses.size()};
+  }
+  double mean_square = 0.0;
+  for (const auto& pose : poses) {
+    const Vec3 offset = sub(column(pose, 3), world.centre);
+    mean_square += dot(offset, offset) / static_cast<double>(poses.size());
+  }
+  if (!(mean_square > 0.0) || !std::isfinite(mean_square)) {
+    throw Error(where + ": every camera sits at the scene's centre: a capture's cameras need distinct positions");
+  }
+  world.scale = 1.0 / std::sqrt(mean_square);
+  return world;
+}
 
+}  // namespace mipnerf::data

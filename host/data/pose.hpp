@@ -64,4 +64,18 @@ Vec3 optical_axis(const Camera& camera);
 // solves Σ (I − d dᵀ) p = Σ (I − d dᵀ) o. Empty when the axes are (nearly) parallel or there are none.
 std::optional<Vec3> closest_point_to_axes(const std::vector<Camera>& cameras);
 
+// The world an unbounded run's contraction expects of a capture taken all around (mip-NeRF 360: the scene's centre at
+// the origin, the cameras about one unit out, everything beyond the ball of radius 1 contracted): the centre is the
+// point closest to every optical axis (where the capture looks, as the official spherify takes it), else, with
+// parallel axes, the mean camera position; the scale makes the cameras' root-mean-square distance from it 1, as
+// spherify's does (data/formats/llff_capture.cpp). Applied with centre_and_scale; rotations are left as they are
+// (the contraction is the same in every direction).
+struct WorldAroundCameras {
+  Vec3 centre{};
+  double scale = 1.0;           // new units per old unit
+  bool centre_is_look_at = true;  // false: the mean camera position (parallel axes)
+};
+// Throws mipnerf::Error naming `where` when there are no poses or every camera sits at the centre.
+WorldAroundCameras world_around_cameras(const std::vector<Matrix34>& camera_to_world, const std::string& where);
+
 }  // namespace mipnerf::data

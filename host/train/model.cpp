@@ -202,6 +202,9 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   if (config.far > 0) options.far = config.far;
   if (config.unbounded && !(config.near > 0)) options.near = kUnboundedNear;
   if (config.unbounded && !(config.far > 0)) options.far = kUnboundedFar;
+  // The contraction leaves the ball of radius 1 as it is: a transforms.json's world (an import puts its median camera
+  // 4 from the centre) moves to the one around its cameras, as spherify moves an LLFF capture's.
+  options.world_around_cameras = config.unbounded;
   options.llff.spherify = config.spherify;
   options.llff.ndc = config.ray_shape == RayShape::cylinder;  // the ray kernel's cylinders are NDC rays
   options.splits = std::move(splits);

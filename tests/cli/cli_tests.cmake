@@ -184,7 +184,8 @@ set_tests_properties("cli: train on the unbounded scene takes it for a 360-degre
 # sampling spaced by the power ladder), then evaluates and renders an orbit from the checkpoint (from near 0 to far
 # 1e6, as it trained).
 set(MIPNERF_UNBOUNDED_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-zip-run")
-add_test(NAME "cli: unbounded zipnerf: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_UNBOUNDED_RUN}")
+add_test(NAME "cli: unbounded zipnerf: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_UNBOUNDED_RUN}"
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-photos" "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-photos-run")
 set_tests_properties("cli: unbounded zipnerf: clear the run folder" PROPERTIES FIXTURES_SETUP cli_unbounded_zip_clean)
 mipnerf_add_checked_test("cli: unbounded zipnerf: train with contraction and the power ladder"
   EXPECT "scene: 360° LLFF capture → [^\n]*; Zip-NeRF unbounded \\(contraction, proposal sampling spaced by the power ladder from 0 to 1e6\\).*proposal-sampled 16 intervals \\(power ladder s→t\\).*points contracted \\(unbounded\\).*trained 4 steps"
@@ -200,6 +201,23 @@ set_tests_properties("cli: unbounded zipnerf: eval" PROPERTIES FIXTURES_REQUIRED
 mipnerf_add_checked_test("cli: unbounded zipnerf: render the capture's path" EXPECT "rendered 2 frames"
   COMMAND mipnerf-cl render --checkpoint "${MIPNERF_UNBOUNDED_RUN}" --path orbit --frames 2 --size 16x12)
 set_tests_properties("cli: unbounded zipnerf: render the capture's path" PROPERTIES FIXTURES_REQUIRED cli_unbounded_zip)
+# Photos taken all around as a transforms.json (what `dataset from-photos` writes for them; here the frames and
+# transforms.json of an orbit rendered from that run): an unbounded scene for Zip-NeRF too, trained in the world
+# centred where its cameras look (data::world_around_cameras), which train says.
+set(MIPNERF_UNBOUNDED_PHOTOS "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-photos")
+mipnerf_add_checked_test("cli: unbounded zipnerf: render an orbit of photos all around" EXPECT "rendered 9 frames"
+  COMMAND mipnerf-cl render --checkpoint "${MIPNERF_UNBOUNDED_RUN}" --path orbit --frames 9 --size 32x24
+  --out "${MIPNERF_UNBOUNDED_PHOTOS}")
+set_tests_properties("cli: unbounded zipnerf: render an orbit of photos all around" PROPERTIES
+  FIXTURES_REQUIRED cli_unbounded_zip FIXTURES_SETUP cli_unbounded_photos)
+mipnerf_add_checked_test("cli: unbounded zipnerf: a transforms.json of photos all around trains unbounded"
+  EXPECT "transforms.json: the world for an unbounded run: centred on \\([^)]*\\) \\(where the cameras look\\) and scaled by [0-9.e+-]+, so the cameras sit at RMS distance 1 from the centre\n.*scene: transforms.json of photos taken all around \\(360°\\) → cones, black background; Zip-NeRF unbounded \\(contraction[^\n]*\n.*points contracted \\(unbounded\\).*trained 2 steps"
+  COMMAND mipnerf-cl train --data "${MIPNERF_UNBOUNDED_PHOTOS}/transforms.json"
+  --out "${MIPNERF_UNBOUNDED_PHOTOS}-run" --model zipnerf --preset tiny --steps 2 --val_views 1
+  --set proposal_samples=16 --set num_samples=16 --set proposal_grid_max=128 --set grid_max=128
+  --set grid_hash_log2=14)
+set_tests_properties("cli: unbounded zipnerf: a transforms.json of photos all around trains unbounded" PROPERTIES
+  FIXTURES_REQUIRED cli_unbounded_photos)
 mipnerf_add_cli_error_test("train: unbounded without sampler=proposal" PATTERN "unbounded needs sampler=proposal"
   ARGS train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-run"
   --model zipnerf --set sampler=resample --set unbounded=true)

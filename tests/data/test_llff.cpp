@@ -180,7 +180,7 @@ TEST_CASE(
 
   const auto traits = data::scene_traits(capture_dir(), data::LoadOptions{});
   CHECK(traits.format == data::DatasetFormat::llff);
-  CHECK(!traits.llff_360);
+  CHECK(!traits.all_around);
   CHECK(!traits.has_alpha);
 }
 
@@ -249,7 +249,7 @@ TEST_CASE("llff: a capture looking inward from all around is 360 degrees, spheri
   }
   io::write_npy((dir / "poses_bounds.npy").string(), rows, {20, 17});
   const auto traits = data::scene_traits(dir.string(), data::LoadOptions{});
-  CHECK(traits.llff_360);
+  CHECK(traits.all_around);
   const train::SceneEffects effects = train::scene_effects(dir.string(), 1);  // what train then chooses
   CHECK(effects.summary == "360° LLFF capture → spherified poses, world rays, cones, black background");
   CHECK(effects.settings.at("spherify") == "true");
@@ -310,7 +310,7 @@ TEST_CASE("llff: the built-in unbounded scene is a 360-degree capture whose sky 
   options.threads = 2;
   data::write_unbounded_scene(dir.string(), options);
   const auto traits = data::scene_traits(dir.string(), data::LoadOptions{});
-  CHECK(traits.llff_360);
+  CHECK(traits.all_around);
   const train::SceneEffects effects = train::scene_effects(dir.string(), 1);
   CHECK(effects.settings.at("spherify") == "true");
   CHECK(effects.settings.at("ray_shape") == "cone");

@@ -78,9 +78,18 @@ SceneEffects scene_effects(const std::string& path, const LoadOptions& options) 
 SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::string& kind) {
   SceneEffects effects;
   effects.settings = {{"ray_shape", "cone"}, {"background", traits.has_alpha ? "white" : "black"}};
+  // A rendered object seen from all around (Blender's) is bounded: only photos bring the world behind them.
+  const bool unbounded = traits.all_around && !traits.has_alpha;
   effects.summary = kind + (traits.has_alpha ? " with alpha → cones, white background"
+                            : unbounded      ? " of photos taken all around (360°) → cones, black background"
                                              : " without alpha (photos) → cones, black background");
+  if (unbounded) add_zipnerf_unbounded(effects);
   return effects;
+}
+
+void add_zipnerf_unbounded(SceneEffects& effects) {
+  effects.zipnerf_settings = {{"sampler", "proposal"}, {"unbounded", "true"}, {"ray_shape", "cone"}};
+  effects.zipnerf_summary = "unbounded (contraction, proposal sampling spaced by the power ladder from 0 to 1e6)";
 }
 
 }  // namespace mipnerf::data

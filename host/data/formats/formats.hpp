@@ -22,7 +22,7 @@ namespace mipnerf::data {
 struct SceneTraits {
   DatasetFormat format = DatasetFormat::blender;
   bool has_alpha = false;   // the first image has an alpha channel (rendered objects, not photos)
-  bool llff_360 = false;    // an LLFF capture looking inward from all around (looks_360), not forward
+  bool all_around = false;  // LLFF or transforms.json: the cameras look inward from all around (360°), not forward
   bool multiscale = false;  // images at several scales on disk (multiscale Blender)
 };
 
@@ -97,7 +97,13 @@ extern const FormatReader kLlffFormat;
 // Shared by the rows: the file a format reads inside a folder, or the path itself when it is that file.
 std::string format_file(const std::string& path, const char* file_name);
 
-// The Blender-family effects: cones; a white background for rendered objects with alpha, black for photos.
+// The Blender-family effects: cones; a white background for rendered objects with alpha, black for photos; photos
+// taken all around (traits.all_around, set by transforms.json) are an unbounded scene for Zip-NeRF, as a 360° LLFF
+// capture is.
 SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::string& kind);
+
+// What a capture all around calls for from Zip-NeRF: proposal sampling, the contraction and the power ladder, as one
+// group (SceneEffects::zipnerf_settings), with its summary.
+void add_zipnerf_unbounded(SceneEffects& effects);
 
 }  // namespace mipnerf::data

@@ -14,7 +14,7 @@ bool detect(const std::filesystem::path& path, bool is_file) {
 void add_traits(const std::string& path, const LoadOptions& options, SceneTraits& traits) {
   LoadOptions as_taken = options;
   as_taken.llff.spherify = false;  // the capture as it was taken
-  traits.llff_360 = looks_360(read_llff(path, as_taken));
+  traits.all_around = looks_360(read_llff(path, as_taken));
 }
 
 // The official LLFF conventions: a forward-facing capture trains on NDC rays (cylinders) with the un-normalised world
@@ -22,23 +22,25 @@ void add_traits(const std::string& path, const LoadOptions& options, SceneTraits
 // (configs/llff.gin); a spherified 360° capture goes through the Blender ray generation (unit view directions), and
 // Zip-NeRF trains it unbounded (bench/results/unbounded: ahead of the bounded grid at equal time on every seed).
 SceneEffects effects(const SceneTraits& traits) {
-  if (traits.llff_360) {
+  SceneEffects effects;
+  if (traits.all_around) {
     // Zip-NeRF's grid can contract the background (camp_zipnerf configs/zipnerf/360.gin); mip-NeRF's IPE cannot yet.
-    return {{{"ray_shape", "cone"},
-             {"spherify", "true"},
-             {"background", "black"},
-             {"unit_viewdirs", "true"},
-             {"density_noise", "0"}},
-            "360° LLFF capture → spherified poses, world rays, cones, black background",
-            {{"sampler", "proposal"}, {"unbounded", "true"}, {"ray_shape", "cone"}},
-            "unbounded (contraction, proposal sampling spaced by the power ladder from 0 to 1e6)"};
+    effects.settings = {{"ray_shape", "cone"},
+                        {"spherify", "true"},
+                        {"background", "black"},
+                        {"unit_viewdirs", "true"},
+                        {"density_noise", "0"}};
+    effects.summary = "360° LLFF capture → spherified poses, world rays, cones, black background";
+    add_zipnerf_unbounded(effects);
+    return effects;
   }
-  return {{{"ray_shape", "cylinder"},
-           {"spherify", "false"},
-           {"background", "black"},
-           {"unit_viewdirs", "false"},
-           {"density_noise", "1"}},
-          "forward-facing LLFF → NDC rays, cylinders, black background, raw view directions, density noise 1"};
+  effects.settings = {{"ray_shape", "cylinder"},
+                      {"spherify", "false"},
+                      {"background", "black"},
+                      {"unit_viewdirs", "false"},
+                      {"density_noise", "1"}};
+  effects.summary = "forward-facing LLFF → NDC rays, cylinders, black background, raw view directions, density noise 1";
+  return effects;
 }
 
 FormatRenderPath render_path(const std::string& path, const LoadOptions& options, int frames) {

@@ -14,7 +14,20 @@ std::vector<detail::SplitSpec> parse(const std::string& path, const LoadOptions&
   return detail::parse_transforms_json(format_file(path, "transforms.json"), options);
 }
 
-void add_traits(const std::string&, const LoadOptions&, SceneTraits&) {}
+// Photos taken all around (what `dataset from-photos` writes here for a capture that is not forward-facing): the
+// poses alone tell, from every frame of the file.
+void add_traits(const std::string& path, const LoadOptions& options, SceneTraits& traits) {
+  LoadOptions every_frame = options;
+  every_frame.splits = {};
+  every_frame.holdout_every = 0;
+  every_frame.world_around_cameras = false;
+  every_frame.log = nullptr;
+  std::vector<Matrix34> poses;
+  for (const auto& split : parse(path, every_frame)) {
+    for (const auto& frame : split.frames) poses.push_back(frame.camera_to_world);
+  }
+  traits.all_around = !poses.empty() && !looks_forward(poses);
+}
 
 SceneEffects effects(const SceneTraits& traits) { return object_or_photo_effects(traits, "transforms.json"); }
 

@@ -1,6 +1,7 @@
 // Parsers of the Blender format (transforms_<split>.json) and of the single-file transforms.json.
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 
 #include "core/error.hpp"
@@ -45,6 +46,29 @@ std::vector<FrameSpec> parse_frames(const io::Json& root, const std::string& fil
     specs.push_back(std::move(spec));
   }
   return specs;
+}
+
+// options.world_around_cameras: every frame's pose (and near/far unless given in the options) in the world centred
+// on where the cameras look, at RMS distance 1 (data::world_around_cameras).
+void move_world_around_cameras(std::vector<FrameSpec>& frames, const std::string& file, const LoadOptions& options) {
+  std::vector<Matrix34> poses;
+  for (const auto& frame : frames) poses.push_back(frame.camera_to_world);
+  const WorldAroundCameras world = world_around_cameras(poses, file);
+  centre_and_scale(poses, world.centre, world.scale);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    frames[i].camera_to_world = poses[i];
+    if (!options.near) frames[i].near *= world.scale;
+    if (!options.far) frames[i].far *= world.scale;
+  }
+  if (options.log) {
+    char text[160];
+    std::snprintf(text, sizeof(text), "centred on (%.3g, %.3g, %.3g) (%s) and scaled by %.4g", world.centre[0],
+                  world.centre[1], world.centre[2],
+                  world.centre_is_look_at ? "where the cameras look" : "the mean camera: their axes are parallel",
+                  world.scale);
+    options.log(LogLevel::info, file + ": the world for an unbounded run: " + text +
+                                    ", so the cameras sit at RMS distance 1 from the centre");
+  }
 }
 
 bool has_near_far(const io::Json& root) {
@@ -139,6 +163,7 @@ std::vector<SplitSpec> parse_transforms_json(const std::string& file, const Load
     options.log(LogLevel::warning, file + " gives no near/far: using near " + std::to_string(frames[0].near) +
                                        ", far " + std::to_string(frames[0].far) + " (set them with --near/--far)");
   }
+  if (options.world_around_cameras) move_world_around_cameras(frames, file, options);
   SplitSpec train, test;
   train.name = "train";
   test.name = "test";
