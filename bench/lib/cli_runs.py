@@ -114,3 +114,16 @@ def mean_sd(values):
     """Mean and sample standard deviation (0 for one value)."""
     mean = statistics.mean(values)
     return mean, (statistics.stdev(values) if len(values) > 1 else 0.0)
+
+
+SEED_TABLE_HEADER = ["PSNR (mean ± sd)", "SSIM (mean ± sd)", "PSNR per seed", "steps (mean)", "s/step", "train s (mean)"]
+
+
+def seed_table_cells(runs):
+    """A model's cells under SEED_TABLE_HEADER from its runs (run_record dicts, one per seed)."""
+    psnr, psnr_sd = mean_sd([x["psnr"] for x in runs])
+    ssim, ssim_sd = mean_sd([x["ssim"] for x in runs])
+    steps = statistics.mean(x["steps"] for x in runs)
+    train_s = statistics.mean(x["train_seconds"] for x in runs)
+    return [f"{psnr:.2f} ± {psnr_sd:.2f}", f"{ssim:.3f} ± {ssim_sd:.3f}", " / ".join(f"{x['psnr']:.2f}" for x in runs),
+            f"{steps:.0f}", f"{train_s / steps:.3f}", f"{train_s:.0f}"]

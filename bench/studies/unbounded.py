@@ -25,8 +25,8 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (commit_of, device_line, evaluate_val, mean_sd, run, run_record,  # noqa: E402
-                          train_for_minutes)
+from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, run, run_record,  # noqa: E402
+                          seed_table_cells, train_for_minutes)
 
 RESULTS = report_md.results_folder("unbounded")
 SCRIPT = "bench/studies/unbounded.py"
@@ -85,17 +85,9 @@ def measure(args):
 
 def write_markdown(record):
     rows = record["rows"]
-    header = ["model", "PSNR (mean ± sd)", "SSIM (mean ± sd)", "PSNR per seed", "steps (mean)", "s/step",
-              "train s (mean)", "render s/MP"]
-    body = []
-    for r in rows:
-        psnr, psnr_sd = mean_sd([x["psnr"] for x in r["runs"]])
-        ssim, ssim_sd = mean_sd([x["ssim"] for x in r["runs"]])
-        steps = statistics.mean(x["steps"] for x in r["runs"])
-        train_s = statistics.mean(x["train_seconds"] for x in r["runs"])
-        body.append([r["label"], f"{psnr:.2f} ± {psnr_sd:.2f}", f"{ssim:.3f} ± {ssim_sd:.3f}",
-                     " / ".join(f"{x['psnr']:.2f}" for x in r["runs"]), f"{steps:.0f}", f"{train_s / steps:.3f}",
-                     f"{train_s:.0f}", f"{statistics.mean(x['render_seconds_per_megapixel'] for x in r['runs']):.1f}"])
+    header = ["model", *SEED_TABLE_HEADER, "render s/MP"]
+    body = [[r["label"], *seed_table_cells(r["runs"]),
+             f"{statistics.mean(x['render_seconds_per_megapixel'] for x in r['runs']):.1f}"] for r in rows]
     lines = [report_md.generated_banner(SCRIPT, "unbounded.json"), "",
              "# Unbounded 360° scenes: contraction against spherified world rays, at equal training time", "",
              f"{record['scene']}; `train --minutes {record['budget_minutes']:g}` per run, seeds "

@@ -12,12 +12,14 @@ camera distance 1; data::world_around_cameras), as spherify does for LLFF.
 The capture: `make-scene --unbounded` (40 views around, 5 held out) written as a transforms.json the way the import
 writes one (the world centred where the cameras look, the median camera 4 from it, then moved by an arbitrary offset
 since other tools leave their own origin; near/far from the views' depth bounds with the import's 0.9/1.1 margins),
-trained at `--set factor=4` (64x48) for `train --minutes M`, 3 seeds. The runs, side by side in one run of this script:
-  - before: the previous build's executable (--before-exe), no flag: what `train --model zipnerf` did with it
-    (bounded, proposal-free coarse/fine);
-  - stored: the previous build with `--set sampler=proposal --set unbounded=true` given by hand: the contraction in
-    the import's world (cameras at 4, contraction from radius 1);
-  - now: this build, no flag: the scene's choice (proposal, unbounded, the world around the cameras).
+and as written (centred), trained at `--set factor=4` (64x48) for `train --minutes M`, 3 seeds. The runs:
+  - before: the previous build's executable (--before-exe), no flag: what `train --model zipnerf` did with the moved
+    capture (bounded, proposal-free coarse/fine);
+  - before_centred: the same on the capture as the import writes it (centred);
+  - stored: the previous build with `--set sampler=proposal --set unbounded=true` given by hand on the moved capture:
+    the contraction in the file's world (cameras at 4 from a centre 33 from the origin, contraction from radius 1);
+  - now: this build, no flag, on the moved capture: the scene's choice (proposal, unbounded, the world around the
+    cameras; the centred capture gives it the same world).
 Each scored by its own executable's `eval` on the val views. Finished runs and scores in --work are reused.
 
   python3 bench/studies/unbounded_photos.py --before-exe /tmp/mipnerf-cl-before --minutes 3 --seeds 0,1,2
@@ -33,21 +35,26 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (commit_of, device_line, evaluate_val, mean_sd, run, run_record,  # noqa: E402
-                          train_for_minutes)
+from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, run, run_record,  # noqa: E402
+                          seed_table_cells, train_for_minutes)
 
 RESULTS = report_md.results_folder("unbounded_photos")
 SCRIPT = "bench/studies/unbounded_photos.py"
-# (key, label, which executable, train arguments)
+# (key, label, which executable, which capture, train arguments)
 MODELS = [
-    ("before", "before: Zip-NeRF fast as the tool trained it (bounded)", "before", "--model zipnerf --preset fast"),
-    ("stored", "before, unbounded by hand: contraction in the import's world (cameras at 4)", "before",
+    ("before", "before: Zip-NeRF fast as the tool trained it (bounded)", "before", "moved",
+     "--model zipnerf --preset fast"),
+    ("before_centred", "before, on the import's own world (centred where the cameras look)", "before", "centred",
+     "--model zipnerf --preset fast"),
+    ("stored", "before, unbounded by hand: contraction in the file's world (cameras at 4)", "before", "moved",
      "--model zipnerf --preset fast --set sampler=proposal --set unbounded=true"),
-    ("now", "now: Zip-NeRF fast, no flag (unbounded, the world around the cameras)", "now",
+    ("now", "now: Zip-NeRF fast, no flag (unbounded, the world around the cameras)", "now", "moved",
      "--model zipnerf --preset fast"),
 ]
 IMPORTED_CAMERA_DISTANCE = 4.0  # data::kImportedCameraDistance
-OFFSET = (30.0, -12.0, 5.0)     # another tool's origin
+# The capture's origin: "moved" as another tool's (instant-ngp, nerfstudio) would leave it, "centred" as the import
+# writes it (the look-at point at the origin).
+CAPTURES = {"moved": ("transforms.json", (30.0, -12.0, 5.0)), "centred": ("transforms_centred.json", (0.0, 0.0, 0.0))}
 
 
 def add_arguments(parser):
@@ -100,9 +107,9 @@ def look_at_point(centres, axes):
     return solve3(a, b)
 
 
-def write_transforms_json(scene_dir, log):
-    """scene_dir/transforms.json of scene_dir's LLFF capture, the way the COLMAP import writes one (see __doc__)."""
-    path = os.path.join(scene_dir, "transforms.json")
+def write_transforms_json(scene_dir, name, offset, log):
+    """scene_dir/name: scene_dir's LLFF capture the way the COLMAP import writes one (see __doc__), moved by offset."""
+    path = os.path.join(scene_dir, name)
     if os.path.exists(path):
         return path
     rows = read_npy_rows(os.path.join(scene_dir, "poses_bounds.npy"))
@@ -119,7 +126,7 @@ def write_transforms_json(scene_dir, log):
     images = sorted(os.listdir(os.path.join(scene_dir, "images")))
     frames = []
     for name, rot, c in zip(images, rotations, centres):
-        matrix = [rot[r] + [scale * (c[r] - centre[r]) + OFFSET[r]] for r in range(3)] + [[0.0, 0.0, 0.0, 1.0]]
+        matrix = [rot[r] + [scale * (c[r] - centre[r]) + offset[r]] for r in range(3)] + [[0.0, 0.0, 0.0, 1.0]]
         frames.append({"file_path": f"images/{name}", "transform_matrix": matrix})
     near = 0.9 * scale * min(row[15] for row in rows)
     far = 1.1 * scale * max(row[16] for row in rows)
@@ -143,39 +150,32 @@ def measure(args):
     scene = os.path.join(args.work, "scene")
     if not os.path.exists(os.path.join(scene, "poses_bounds.npy")):
         run([exes["now"], "make-scene", scene, "--unbounded"], log)
-    data = write_transforms_json(scene, log)
+    data = {key: write_transforms_json(scene, name, offset, log) for key, (name, offset) in CAPTURES.items()}
     seeds = [int(s) for s in args.seeds.split(",")]
     started = time.time()
-    runs = {key: [] for key, _, _, _ in MODELS}
+    runs = {key: [] for key, _, _, _, _ in MODELS}
     # Seed by seed, every model in turn: a slow spell of the shared machine falls on all models, not on one.
     for seed in seeds:
-        for key, _, exe, model_args in MODELS:
-            run_dir = train_for_minutes(exes[exe], data, os.path.join(args.work, key, f"seed{seed}"), model_args, seed,
-                                        args.minutes, args.factor, log)
-            runs[key].append(run_record(seed, run_dir, evaluate_val(exes[exe], data, run_dir, args.views, log)))
-    rows = [{"key": key, "label": label, "executable": exe, "arguments": model_args, "runs": runs[key]}
-            for key, label, exe, model_args in MODELS]
+        for key, _, exe, capture, model_args in MODELS:
+            run_dir = train_for_minutes(exes[exe], data[capture], os.path.join(args.work, key, f"seed{seed}"),
+                                        model_args, seed, args.minutes, args.factor, log)
+            metrics = evaluate_val(exes[exe], data[capture], run_dir, args.views, log)
+            runs[key].append(run_record(seed, run_dir, metrics))
+    rows = [{"key": key, "label": label, "executable": exe, "capture": capture, "arguments": model_args,
+             "runs": runs[key]} for key, label, exe, capture, model_args in MODELS]
     return {
         "study": "unbounded_photos", "date": time.strftime("%Y-%m-%d", time.gmtime()), "commit": commit_of(),
         "scene": f"make-scene --unbounded as a transforms.json (median camera {IMPORTED_CAMERA_DISTANCE:g} from where "
-                 f"the cameras look, moved by {OFFSET}), factor {args.factor}, {args.views} val views",
+                 f"the cameras look, moved by {CAPTURES['moved'][1]}; and as written, centred), factor {args.factor}, "
+                 f"{args.views} val views",
         "budget_minutes": args.minutes, "seeds": seeds, "wall_seconds": round(time.time() - started, 1), "rows": rows,
     }
 
 
 def write_markdown(record):
     rows = record["rows"]
-    header = ["model", "PSNR (mean ± sd)", "SSIM (mean ± sd)", "PSNR per seed", "steps (mean)", "s/step",
-              "train s (mean)"]
-    body = []
-    for r in rows:
-        psnr, psnr_sd = mean_sd([x["psnr"] for x in r["runs"]])
-        ssim, ssim_sd = mean_sd([x["ssim"] for x in r["runs"]])
-        steps = statistics.mean(x["steps"] for x in r["runs"])
-        train_s = statistics.mean(x["train_seconds"] for x in r["runs"])
-        body.append([r["label"], f"{psnr:.2f} ± {psnr_sd:.2f}", f"{ssim:.3f} ± {ssim_sd:.3f}",
-                     " / ".join(f"{x['psnr']:.2f}" for x in r["runs"]), f"{steps:.0f}", f"{train_s / steps:.3f}",
-                     f"{train_s:.0f}"])
+    header = ["model", *SEED_TABLE_HEADER]
+    body = [[r["label"], *seed_table_cells(r["runs"])] for r in rows]
     lines = [report_md.generated_banner(SCRIPT, "unbounded_photos.json"), "",
              "# Photos taken all around as a transforms.json: Zip-NeRF now and before, at equal training time", "",
              f"{record['scene']}; `train --minutes {record['budget_minutes']:g}` per run, seeds "
@@ -183,7 +183,7 @@ def write_markdown(record):
              f"commit {record['commit']}; {record['date']}.", ""]
     lines += report_md.table(header, "lrrrrrr", body)
     by_key = {r["key"]: r for r in rows}
-    for other in ("before", "stored"):
+    for other in (k for k in ("before", "before_centred", "stored") if k in by_key):
         gains = [n["psnr"] - o["psnr"] for n, o in zip(by_key["now"]["runs"], by_key[other]["runs"])]
         lines += ["", f"Now minus {other}, seed by seed: " + ", ".join(f"{g:+.2f} dB" for g in gains)
                   + f" (mean {statistics.mean(gains):+.2f} dB)."]
