@@ -132,6 +132,7 @@ data::LoadOptions train_like_options(const InspectArgs& args, std::string& scene
   options.background = parse_background_flag(args.background.empty() ? effect("background", "white") : args.background);
   options.llff.spherify = args.spherify ? *args.spherify : effect("spherify", "false") == "true";
   options.llff.ndc = effect("ray_shape", "cone") == "cylinder";
+  options.forward_facing_ndc = options.llff.ndc;
   scene_line = "scene: " + effects.summary;
   if (!args.background.empty() || args.spherify) scene_line += " (flags given here win)";
   if (!effects.zipnerf_summary.empty()) scene_line += "; with --model zipnerf: " + effects.zipnerf_summary;
@@ -154,8 +155,10 @@ void run_inspect(const InspectArgs& args) {
             << scene_line << "\n";
   for (const auto& split : dataset.splits) {
     const data::SplitSummary summary = data::summarize(split);
-    // An LLFF capture's near 0, far 1 are NDC bounds, not depths the look-at centre could be compared with.
-    print_split(summary, data::format_reader(dataset.format).ndc_bounds && summary.near_max == 0 && summary.far_min == 1);
+    // An NDC capture's near 0, far 1 (LLFF's, a forward-facing transforms.json's) are NDC bounds, not depths the
+    // look-at centre could be compared with.
+    const bool ndc = data::format_reader(dataset.format).ndc_bounds || options.forward_facing_ndc;
+    print_split(summary, ndc && summary.near_max == 0 && summary.far_min == 1);
   }
 }
 

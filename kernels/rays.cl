@@ -32,7 +32,10 @@
 //    the radius scales by |column 0| as the pinhole's does. A point off the centre (PIXEL_CENTER_OFFSET ≠ 0.5,
 //    SUBPIXEL_JITTER) moves along the table's differences to the next pixel across and down: first order in the
 //    offset, exact at the centre (tests/ops/test_rays_lens.cpp: 0.003 px off for a 0.4 px offset behind an OPENCV
-//    lens, 0.17 px at the rim of a fisheye at 83°). Cone rays only (NDC assumes a pinhole; the host refuses it).
+//    lens, 0.17 px at the rim of a fisheye at 83°). With RAY_SHAPE_CYLINDER (a forward-facing capture behind a lens,
+//    in NDC) the lens ray converts to NDC as a pinhole's does, and the radius is the mean NDC distance of the pairs
+//    of neighbouring table entries across and down (lens_ndc_radius): the pairs the pinhole formula uses, each
+//    pixel's own undistorted position instead of a step of 1/f.
 //  - Invalid input (camera id ≥ n_cameras, pixel id ≥ width·height) gives NaN in every output of that ray, so
 //    it cannot pass unnoticed downstream.
 
@@ -61,9 +64,6 @@
 #endif
 #ifndef LENS_TABLES
 #define LENS_TABLES 0
-#endif
-#if LENS_TABLES && RAY_SHAPE != RAY_SHAPE_CONE
-#error "LENS_TABLES needs cone rays (NDC assumes a pinhole camera)"
 #endif
 #ifndef NDC_MIN_DIR_Z
 #define NDC_MIN_DIR_Z 1e-8f
@@ -124,12 +124,15 @@ inline float pair_start_shift(uint p, uint size) {
 // The normalised (u, v) of image position (pixel + offset) behind a lens, and the pixel's radius at unit depth, from
 // the camera's table (entries [height][width], each u, v, radius, 0). Off the centre, first order in the offset along
 // the differences to the next entry across and down (the previous one in the last column / row).
-inline float3 lens_point(__global const float* table, uint px, uint py, uint width, uint height, float offset_x,
-                         float offset_y) {
+inline float3 lens_point(__global const float* cam, __global const float* table, uint px, uint py, uint width,
+                         uint height, float offset_x, float offset_y) {
   const size_t pixel = (size_t)py * width + px;
   __global const float* here = table + 4 * pixel;
   float u = here[0], v = here[1];
   const float along_x = offset_x - 0.5f, along_y = offset_y - 0.5f;
+  // An axis one pixel long has no next entry: a step of 1/f there, as the table's radius takes it.
+  if (along_x != 0.0f && width == 1) u += along_x / cam[CAMERA_FOCAL_X];
+  if (along_y != 0.0f && height == 1) v += along_y / cam[CAMERA_FOCAL_Y];
   if (along_x != 0.0f && width > 1) {
     // The difference to the next entry across (the previous one's to this in the last column).
     __global const float* a = px + 1 < width ? here : here - 4;
@@ -142,6 +145,37 @@ inline float3 lens_point(__global const float* table, uint px, uint py, uint wid
     v += along_y * (b[4 * (size_t)width + 1] - b[1]);
   }
   return (float3)(u, v, here[2]);
+}
+
+// The world direction of image position (pixel + offset) behind the lens: camera_to_world·(u, −v, −1).
+inline float3 lens_direction(__global const float* cam, __global const float* table, uint px, uint py, uint width,
+                             uint height, float offset_x, float offset_y) {
+  const float3 p = lens_point(cam, table, px, py, width, height, offset_x, offset_y);
+  return camera_rotate(cam, (float3)(p.x, -p.y, -1.0f));
+}
+
+// A lens pixel's NDC radius: as the pinhole's (the mean distance to the next NDC origin across and down, from the pair
+// pair_start_shift picks, × 2/√12), with the pair's two directions read from the table at the same sub-pixel offset.
+// An axis one pixel long has no neighbour in the table: there the pair is the pinhole's, a step of 1/f back from the
+// pixel (pair_start_shift −1), as the table's own radius takes 1/f for it.
+inline float lens_ndc_radius(__global const float* cam, __global const float* table, uint px, uint py, uint width,
+                             uint height, float offset_x, float offset_y, float3 origin, float sx, float sy) {
+  const float3 here = lens_direction(cam, table, px, py, width, height, offset_x, offset_y);
+  float3 step_h = camera_rotate(cam, (float3)(1.0f / cam[CAMERA_FOCAL_X], 0.0f, 0.0f)), first_h = here - step_h;
+  if (width >= 2) {
+    const uint start = px + 1 < width ? px : width - 2 - (width >= 3 ? 1 : 0);
+    first_h = lens_direction(cam, table, start, py, width, height, offset_x, offset_y);
+    step_h = lens_direction(cam, table, start + 1, py, width, height, offset_x, offset_y) - first_h;
+  }
+  float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / cam[CAMERA_FOCAL_Y], 0.0f)), first_v = here - step_v;
+  if (height >= 2) {
+    const uint start = py + 1 < height ? py : height - 2 - (height >= 3 ? 1 : 0);
+    first_v = lens_direction(cam, table, px, start, width, height, offset_x, offset_y);
+    step_v = lens_direction(cam, table, px, start + 1, width, height, offset_x, offset_y) - first_v;
+  }
+  const float dist_h = ndc_neighbour_distance(origin, first_h, step_h, sx, sy);
+  const float dist_v = ndc_neighbour_distance(origin, first_v, step_v, sx, sy);
+  return 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
 }
 #endif
 
@@ -199,7 +233,7 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   float lens_radius = 0.0f;  // at unit depth, before the rotation's scale; 0: a pinhole camera
   if (lens_table != 0) {
     const float3 lens =
-        lens_point(lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x, offset_y);
+        lens_point(cam, lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x, offset_y);
     dir_camera = (float3)(lens.x, -lens.y, -1.0f);
     lens_radius = lens.z;
   }
@@ -237,9 +271,17 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   const float3 step_h = camera_rotate(cam, (float3)(1.0f / fx, 0.0f, 0.0f));
   const float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / fy, 0.0f));
   const float sx = 2.0f * fx / w, sy = 2.0f * fy / h;
-  const float dist_h = ndc_neighbour_distance(origin, dir + shift_x * step_h, step_h, sx, sy);
-  const float dist_v = ndc_neighbour_distance(origin, dir + shift_y * step_v, step_v, sx, sy);
-  radii[i] = 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
+#if LENS_TABLES
+  if (lens_table != 0) {
+    radii[i] = lens_ndc_radius(cam, lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x,
+                               offset_y, origin, sx, sy);
+  } else
+#endif
+  {
+    const float dist_h = ndc_neighbour_distance(origin, dir + shift_x * step_h, step_h, sx, sy);
+    const float dist_v = ndc_neighbour_distance(origin, dir + shift_y * step_v, step_v, sx, sy);
+    radii[i] = 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
+  }
 #else
   store3(origins, i, origin);
   store3(directions, i, dir);

@@ -2,6 +2,7 @@
 // composite and pack every image of each split.
 #include "data/dataset.hpp"
 
+#include <array>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -126,6 +127,34 @@ class LensCheck {
   std::set<std::vector<double>> checked_;
 };
 
+// NDC is the frustum of one camera: the ray kernel maps each camera's rays through its own focal length and principal
+// point per image size, so a second projection would put the same world point elsewhere in NDC. Throws naming the
+// frame that differs from the first (LoadOptions::forward_facing_ndc).
+class ProjectionCheck {
+ public:
+  void check(const Camera& camera, const std::string& where) {
+    const std::array<double, 4> projection = {camera.focal_x_px / camera.width_px, camera.focal_y_px / camera.height_px,
+                                              camera.center_x_px / camera.width_px,
+                                              camera.center_y_px / camera.height_px};
+    if (first_where_.empty()) {
+      first_ = projection;
+      first_where_ = where;
+      return;
+    }
+    for (size_t k = 0; k < projection.size(); ++k) {
+      if (std::abs(projection[k] - first_[k]) > 1e-6 * std::abs(first_[k])) {
+        throw Error(where + ": its focal length or principal point, per image size, differs from " + first_where_ +
+                    "'s: NDC rays (ray_shape = cylinder) map one camera's frustum, so a capture of several cameras "
+                    "trains with --set ray_shape=cone");
+      }
+    }
+  }
+
+ private:
+  std::array<double, 4> first_{};
+  std::string first_where_;
+};
+
 // "1 row", "3 rows", "0 rows".
 std::string count_of(uint32_t n, const std::string& noun) {
   return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
@@ -137,6 +166,7 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
   split.source = spec.source;
   detail::SizeCheck sizes;
   LensCheck lenses;
+  ProjectionCheck projections;
   // A size the factor does not divide is cropped at its right and bottom edges to the largest size it divides, then
   // box-downsampled: pixel k still covers source pixels [f·k, f·k + f), so the intrinsics (focal, principal point, lens)
   // stay exact. The official LLFF loader reads ImageMagick's minified copies instead (`mogrify -resize 25%`: 800x533 →
@@ -176,6 +206,7 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
       for (uint32_t f = 1; f < factor; f *= 2) image = downsample2(image);
       camera = scale_camera(camera, factor);
     }
+    if (options.forward_facing_ndc) projections.check(camera, frame.where);
     camera.near = frame.near;
     camera.far = frame.far;
     camera.lossmult = frame.lossmult;

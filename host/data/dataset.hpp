@@ -50,6 +50,12 @@ struct LoadOptions {
   // from every frame of the file whatever the splits, so train, eval and render see one world. Near/far from the file
   // (or the defaults) scale with it; near/far given here are in the new units.
   bool world_around_cameras = false;
+  // transforms.json only: NDC rays (cylinders) for a forward-facing capture, as LLFF's (llff.ndc): every frame moves
+  // into LLFF's NDC world (positions scaled so the file's nearest depth becomes 1/0.75, then recentred on the average
+  // camera: data::ndc_world_of) and gets near 0, far 1 (near/far given here are NDC values, as for LLFF). The file must
+  // give near/far; the loaded cameras must share one projection (focal length and principal point per image width
+  // and height), since NDC is the frustum of one camera.
+  bool forward_facing_ndc = false;
   LogFn log;         // notes and warnings (defaults taken, splits skipped)
 };
 

@@ -49,6 +49,19 @@ std::string resolve_image_path(const std::string& base_dir, const std::string& f
 // The split names to read: options.splits, or `available` in train, val, test order.
 std::vector<std::string> wanted_splits(const LoadOptions& options);
 
+// A transforms file gives near and far (globally, or on its first frame).
+bool has_near_far(const io::Json& root);
+
+// A transforms.json's frames in LLFF's NDC world (LoadOptions::forward_facing_ndc): moved by move_into_ndc_world from
+// the file's nearest depth, with near/far the NDC range (options.near/far, else 0 and 1); and the file's depth range
+// in the new units, as the spiral path takes it. Throws naming the file when it gives no near/far.
+struct NdcFrames {
+  std::vector<FrameSpec> frames;
+  double scale = 1.0;                      // new units per file unit
+  double near_depth = 0.0, far_depth = 0.0;  // the file's nearest near and farthest far, scaled
+};
+NdcFrames ndc_frames(const io::Json& root, const std::string& file, const LoadOptions& options);
+
 // The near/far for a frame: the option if set, else the file's value, else Blender's 2 and 6.
 void apply_near_far(FrameSpec& frame, const io::Json& global, const io::Json& object, const LoadOptions& options);
 

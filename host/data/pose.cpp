@@ -69,6 +69,18 @@ void centre_and_scale(std::vector<Matrix34>& poses, const Vec3& centre, double s
   }
 }
 
+double move_into_ndc_world(std::vector<Matrix34>& poses, double nearest_depth, const std::string& where) {
+  if (poses.empty()) throw Error(where + ": no cameras to place in NDC");
+  if (!(nearest_depth > 0.0) || !std::isfinite(nearest_depth)) {
+    throw Error(where + ": NDC rays need the capture's nearest depth, a positive number; the file's near is " +
+                std::to_string(nearest_depth) + " (set a positive \"near\" in it, or train with --set ray_shape=cone)");
+  }
+  const double s = 1.0 / (nearest_depth * 0.75);
+  scale_positions(poses, s);
+  recentre(poses);
+  return s;
+}
+
 bool looks_forward(const std::vector<Matrix34>& poses) {
   Vec3 mean{0, 0, 0};
   for (const auto& p : poses) mean = add(mean, column(p, 2));

@@ -48,6 +48,13 @@ void scale_positions(std::vector<Matrix34>& poses, double s);
 // Positions mapped x → s·(x − centre) (rotations unchanged): the world's origin moved to `centre`, then rescaled.
 void centre_and_scale(std::vector<Matrix34>& poses, const Vec3& centre, double s);
 
+// LLFF's NDC world for any forward-facing capture (google/mipnerf datasets.py, LLFF: bd_factor 0.75, then
+// recenter_poses): positions scaled by 1/(0.75·nearest_depth), so the nearest depth becomes 4/3 and NDC's near plane at
+// depth 1 lies before the scene, then every pose expressed in the frame of their average pose (the cameras look down
+// −z). Returns the scale (new units per old unit). Throws naming `where` when nearest_depth is not positive or there
+// are no poses. The LLFF loader does the same steps inline (with its extent check between them).
+double move_into_ndc_world(std::vector<Matrix34>& poses, double nearest_depth, const std::string& where);
+
 // Whether the cameras look forward, as a forward-facing capture does (LLFF's, and its imgs2poses from a COLMAP
 // model): every optical axis within 45° of their mean, so they spread over less than 90°. False for a capture that
 // looks inward from all around (360°), and when the axes cancel out.

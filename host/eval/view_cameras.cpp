@@ -111,8 +111,8 @@ ViewFrames spiral_views(const train::TrainedModel& model, const std::string& che
   const std::string data_path = resolve_data_path(data, model, checkpoint);
   const data::FormatReader& reader = data::detect_reader(data_path);
   if (reader.render_path == nullptr) {
-    throw Error(data_path + ": --path spiral follows an LLFF capture's cameras (poses_bounds.npy); this is a " +
-                reader.name + " dataset: use --path orbit");
+    throw Error(data_path + ": --path spiral follows an LLFF capture's cameras (poses_bounds.npy), or a forward-facing "
+                "transforms.json trained in NDC; this is a " + reader.name + " dataset: use --path orbit");
   }
   const data::LoadOptions options = train::load_options(model.config, data_path, {"train"}, 1);
   const data::FormatRenderPath path = reader.render_path(data_path, options, static_cast<int>(frames));

@@ -20,10 +20,6 @@ ocl::BuildOptions rays_build_options(const RaysOptions& options) {
 
 Rays::Rays(ocl::Context& ctx, const RaysOptions& options)
     : ctx_(&ctx), options_(options), no_lens_tables_(ctx, 4, "rays: no lens tables") {
-  if (options_.lens_tables && options_.ray_shape != RayShape::cone) {
-    throw Error("rays: lens cameras need cone rays (NDC, ray_shape = cylinder, assumes a pinhole camera); train a "
-                "capture with distortion as a transforms.json with ray_shape = cone, or undistort it first");
-  }
   fwd_ = &ctx.program({"common.cl", "rays.cl"}, rays_build_options(options_)).kernel("rays_fwd");
 }
 

@@ -101,10 +101,11 @@ LensPoint lens_point(const std::vector<double>& tables, size_t first, const Came
   auto entry = [&](uint32_t x, uint32_t y, int k) { return tables[4 * (first + static_cast<size_t>(y) * w + x) + k]; };
   LensPoint p{entry(px, py, 0), entry(px, py, 1), entry(px, py, 2)};
   for (int k = 0; k < 2; ++k) {
-    const double across = w < 2 ? 0.0
+    // An axis one pixel long: a step of 1/f along it (the kernel's, and the table radius's, choice).
+    const double across = w < 2 ? (k == 0 ? 1.0 / cam.focal_x_px : 0.0)
                           : px + 1 < w ? entry(px + 1, py, k) - entry(px, py, k)
                                        : entry(px, py, k) - entry(px - 1, py, k);
-    const double down = h < 2 ? 0.0
+    const double down = h < 2 ? (k == 1 ? 1.0 / cam.focal_y_px : 0.0)
                         : py + 1 < h ? entry(px, py + 1, k) - entry(px, py, k)
                                      : entry(px, py, k) - entry(px, py - 1, k);
     (k == 0 ? p.u : p.v) += (offset_x - 0.5) * across + (offset_y - 0.5) * down;
@@ -122,6 +123,46 @@ RayOut lens_cone_ray(const Camera& cam, const LensPoint& p) {
     out.direction[a] = m[4 * a] * d_camera[0] + m[4 * a + 1] * d_camera[1] + m[4 * a + 2] * d_camera[2];
   }
   out.radius = std::sqrt(m[0] * m[0] + m[4] * m[4] + m[8] * m[8]) * p.radius;
+  return out;
+}
+
+// A lens ray in NDC (a forward-facing capture behind a lens): the lens ray of lens_cone_ray converted as a pinhole's,
+// and, literally as ndc_ray's, the mean distance between the NDC origins of the pair of neighbours across and down
+// (pair_start_shift's pairs), each neighbour's ray read from the table at the same offset. On an axis one pixel long
+// the pair is the pinhole's: the point 1/f back along that axis, and the pixel.
+RayOut lens_ndc_ray(const Camera& cam, const std::vector<double>& tables, size_t first, uint32_t px, uint32_t py,
+                    double offset_x, double offset_y, double near_plane) {
+  const auto& m = cam.camera_to_world;
+  const double o[3] = {m[3], m[7], m[11]};
+  const auto ndc_origin = [&](double u, double v, double o_ndc[3], double d_ndc[3]) {
+    const double d_camera[3] = {u, -v, -1.0};
+    double d[3];
+    for (int a = 0; a < 3; ++a) d[a] = m[4 * a] * d_camera[0] + m[4 * a + 1] * d_camera[1] + m[4 * a + 2] * d_camera[2];
+    convert_to_ndc(o, d, cam.focal_x_px, cam.focal_y_px, cam.width_px, cam.height_px, near_plane, o_ndc, d_ndc);
+  };
+  const LensPoint here = lens_point(tables, first, cam, px, py, offset_x, offset_y);
+  RayOut out;
+  ndc_origin(here.u, here.v, out.origin, out.direction);
+  double unused[3], a[3], b[3];
+  double distance[2];
+  for (int axis = 0; axis < 2; ++axis) {
+    const uint32_t p = axis == 0 ? px : py, size = axis == 0 ? cam.width_px : cam.height_px;
+    if (size < 2) {
+      const double back_u = axis == 0 ? 1.0 / cam.focal_x_px : 0.0, back_v = axis == 1 ? 1.0 / cam.focal_y_px : 0.0;
+      ndc_origin(here.u - back_u, here.v - back_v, a, unused);
+      ndc_origin(here.u, here.v, b, unused);
+    } else {
+      const uint32_t start = static_cast<uint32_t>(static_cast<int64_t>(p) + static_cast<int64_t>(pair_start_shift(p, size)));
+      const LensPoint p0 = axis == 0 ? lens_point(tables, first, cam, start, py, offset_x, offset_y)
+                                     : lens_point(tables, first, cam, px, start, offset_x, offset_y);
+      const LensPoint p1 = axis == 0 ? lens_point(tables, first, cam, start + 1, py, offset_x, offset_y)
+                                     : lens_point(tables, first, cam, px, start + 1, offset_x, offset_y);
+      ndc_origin(p0.u, p0.v, a, unused);
+      ndc_origin(p1.u, p1.v, b, unused);
+    }
+    distance[axis] = distance3(a, b);
+  }
+  out.radius = 0.5 * (distance[0] + distance[1]) * kRadiusPerPixelWidth;
   return out;
 }
 
@@ -176,8 +217,11 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
     RayOut ray;
     std::array<double, 3> world_direction;  // viewdirs: the world direction (in NDC scenes too)
     if (lens_slot != 0) {
-      ray = lens_cone_ray(cam, lens_point(lens_tables, lens_slot - 1, cam, px, py, offset_x, offset_y));
-      world_direction = {ray.direction[0], ray.direction[1], ray.direction[2]};
+      const RayOut lens_ray = lens_cone_ray(cam, lens_point(lens_tables, lens_slot - 1, cam, px, py, offset_x, offset_y));
+      world_direction = {lens_ray.direction[0], lens_ray.direction[1], lens_ray.direction[2]};
+      ray = options.ray_shape == RayShape::cylinder
+                ? lens_ndc_ray(cam, lens_tables, lens_slot - 1, px, py, offset_x, offset_y, options.ndc_near_plane)
+                : lens_ray;
     } else {
       ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
                                                     : cone_ray(cam, x, y, px);

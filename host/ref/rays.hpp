@@ -14,7 +14,8 @@ namespace mipnerf::ref {
 // kernel's closed forms, computes each radius literally as the official code does: the distance between the
 // neighbouring pixels' directions (cone) or NDC origins (cylinder; official LLFF convert_to_ndc), times 2/√12
 // (paper §3.1: the disc's per-axis variance r²/4 equals the pixel's w²/12). With options.lens_tables, a camera whose
-// packed lens slot is set reads its ray from `lens_tables` ([pixels][4], data/lens_tables.hpp) as the kernel does.
+// packed lens slot is set reads its ray from `lens_tables` ([pixels][4], data/lens_tables.hpp) as the kernel does; in
+// NDC its radius is the distance between its table neighbours' NDC origins, as for a pinhole.
 void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
               const std::vector<uint32_t>& camera_ids, const std::vector<uint32_t>& pixel_ids,
               std::vector<double>& origins, std::vector<double>& directions, std::vector<double>& viewdirs,

@@ -207,6 +207,7 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.world_around_cameras = config.unbounded;
   options.llff.spherify = config.spherify;
   options.llff.ndc = config.ray_shape == RayShape::cylinder;  // the ray kernel's cylinders are NDC rays
+  options.forward_facing_ndc = options.llff.ndc;             // a transforms.json's world moves into NDC's
   options.splits = std::move(splits);
   return options;
 }

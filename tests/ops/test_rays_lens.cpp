@@ -221,7 +221,7 @@ TEST_CASE("rays: behind a lens, off the pixel centre, first order in the offset,
   CHECK(worst_px[1] < 0.2);
 }
 
-TEST_CASE("rays: behind a lens, a stage without LENS_TABLES refuses tables, one with it needs them, NDC refuses") {
+TEST_CASE("rays: behind a lens, a stage without LENS_TABLES refuses tables, one with it needs them") {
   auto& ctx = test::test_context();
   const LensBatch b = lens_batch(4);
   auto cameras = test::upload(ctx, b.packed, "cameras");
@@ -235,6 +235,124 @@ TEST_CASE("rays: behind a lens, a stage without LENS_TABLES refuses tables, one 
   lens.lens_tables = true;
   CHECK_THROWS_WITH(ops::Rays(ctx, lens).fwd({cameras, ids, pixels, n}, rays),
                     doctest::Contains("needs the cameras' lens tables"));
-  lens.ray_shape = RayShape::cylinder;
-  CHECK_THROWS_WITH(ops::Rays(ctx, lens), doctest::Contains("lens cameras need cone rays"));
+}
+
+namespace {
+
+// Forward-facing cameras for NDC (a capture's world after LLFF's recentring: looking down −z from near the origin,
+// the near plane at z = −1 ahead): the OPENCV and fisheye lenses and a pinhole of lens_cameras, and the OPENCV lens on
+// images 2 and 1 pixels wide and high, where a pixel's neighbour pair is the padding pair or none.
+LensBatch ndc_lens_batch() {
+  LensBatch b;
+  b.cameras = lens_cameras();
+  for (size_t c = 0; c < b.cameras.size(); ++c) {
+    rotate(b.cameras[c], 0.05 * (c + 1));
+    b.cameras[c].camera_to_world[3] = 0.1 * c - 0.1;
+    b.cameras[c].camera_to_world[7] = 0.05 * c;
+    b.cameras[c].camera_to_world[11] = 0.02 * c;
+  }
+  for (uint32_t size : {2u, 1u}) {
+    Camera small = b.cameras[0];
+    small.width_px = size;
+    small.height_px = 3 - size;
+    small.center_x_px = 0.5 * size;
+    small.center_y_px = 0.5 * (3 - size);
+    small.focal_x_px = small.focal_y_px = 1.5;
+    b.cameras.push_back(small);
+  }
+  b.tables = data::build_lens_tables(b.cameras);
+  b.packed = pack_cameras(b.cameras);
+  data::set_lens_table_slots(b.packed, b.tables);
+  for (uint32_t c = 0; c < b.cameras.size(); ++c) {
+    const uint32_t pixels = b.cameras[c].width_px * b.cameras[c].height_px;
+    for (uint32_t p = 0; p < pixels; p += (pixels > 8 ? 13 : 1)) {
+      b.camera_ids.push_back(c);
+      b.pixel_ids.push_back(p);
+    }
+    for (uint32_t p : {b.cameras[c].width_px - 1, pixels - 1}) {  // the last column and row's pairs
+      b.camera_ids.push_back(c);
+      b.pixel_ids.push_back(p);
+    }
+  }
+  return b;
+}
+
+}  // namespace
+
+TEST_CASE("rays: behind a lens in NDC (cylinders), the kernel is the reference mirror, at the centre, offset and jittered") {
+  const LensBatch b = ndc_lens_batch();
+  std::vector<double> tables(b.tables.values.begin(), b.tables.values.end());
+  for (bool jitter : {false, true}) {
+    for (float offset : {0.5f, 0.0f}) {
+      if (jitter && offset == 0.0f) continue;
+      RaysOptions options;
+      options.ray_shape = RayShape::cylinder;
+      options.lens_tables = true;
+      options.unit_viewdirs = false;
+      options.jitter_subpixel = jitter;
+      options.pixel_center_offset = offset;
+      INFO("jitter " << jitter << ", offset " << offset);
+      const RngKey key{5, 2, 40};
+      const DeviceRays rays = run_device(options, b, key);
+      std::vector<double> ro, rd, rv, rr, rn, rf, rl;
+      ref::rays_fwd(options, test::to_double(b.packed), b.camera_ids, b.pixel_ids, ro, rd, rv, rr, rn, rf, rl,
+                    b.camera_ids.size(), b.cameras.size(), key, tables);
+      double worst_radius = 0.0;
+      for (size_t k = 0; k < rd.size(); ++k) {
+        // The NDC ray is a few float32 operations on entries of size ≤ 5 (a slope of ≤ 1.6 for these cameras, NDC
+        // scales 2f/w ≤ 3): within 4e-6 of each value's size.
+        REQUIRE(std::abs(rays.origins[k] - ro[k]) < 4e-6 * (1 + std::abs(ro[k])));
+        REQUIRE(std::abs(rays.directions[k] - rd[k]) < 4e-6 * (1 + std::abs(rd[k])));
+        REQUIRE(std::abs(rays.viewdirs[k] - rv[k]) < 1e-6 * (1 + std::abs(rv[k])));
+      }
+      for (size_t k = 0; k < rr.size(); ++k) {
+        REQUIRE(std::isfinite(rays.radii[k]));
+        REQUIRE(rr[k] > 0.0);
+        worst_radius = std::max(worst_radius, std::abs(rays.radii[k] - rr[k]) / rr[k]);
+      }
+      // The radius differences two neighbouring float32 table entries (|u| ≤ 4, neighbours ~1/f ≥ 0.005 apart in the
+      // 64-pixel cameras): an error of ~2^-24·4 / 0.005 ≈ 5e-5 relative at worst.
+      MESSAGE("worst NDC radius " << worst_radius << " relative");
+      CHECK(worst_radius < 1e-4);
+    }
+  }
+}
+
+TEST_CASE("rays: a lens without distortion in NDC gives the pinhole's NDC rays and radii") {
+  // OPENCV with every coefficient 0 is a pinhole read through its table: the table's neighbour pairs must give the
+  // pinhole formula's radius (its 1/f steps and padding pairs), in the reference and on the device.
+  LensBatch lens = ndc_lens_batch();
+  for (auto& cam : lens.cameras) cam.lens = {LensModel::opencv, 0, 0, 0, 0, 0, 0};
+  lens.tables = data::build_lens_tables(lens.cameras);
+  lens.packed = pack_cameras(lens.cameras);
+  data::set_lens_table_slots(lens.packed, lens.tables);
+  LensBatch pinhole = lens;
+  for (auto& cam : pinhole.cameras) cam.lens = Lens{};
+  pinhole.packed = pack_cameras(pinhole.cameras);
+  std::vector<double> tables(lens.tables.values.begin(), lens.tables.values.end());
+  for (float offset : {0.5f, 0.25f}) {
+    RaysOptions options;
+    options.ray_shape = RayShape::cylinder;
+    options.pixel_center_offset = offset;
+    RaysOptions with_tables = options;
+    with_tables.lens_tables = true;
+    INFO("offset " << offset);
+    std::vector<double> lo, ld, lv, lr, ln, lf, ll, po, pd, pv, pr, pn, pf, pl;
+    const size_t n = lens.camera_ids.size();
+    ref::rays_fwd(with_tables, test::to_double(lens.packed), lens.camera_ids, lens.pixel_ids, lo, ld, lv, lr, ln, lf,
+                  ll, n, lens.cameras.size(), {}, tables);
+    ref::rays_fwd(options, test::to_double(pinhole.packed), pinhole.camera_ids, pinhole.pixel_ids, po, pd, pv, pr, pn,
+                  pf, pl, n, pinhole.cameras.size(), {});
+    const DeviceRays device = run_device(with_tables, lens, {});
+    for (size_t k = 0; k < n; ++k) {
+      const std::string where = "camera " + std::to_string(lens.camera_ids[k]) + ", pixel " +
+                                std::to_string(lens.pixel_ids[k]);
+      INFO(where);
+      for (int a = 0; a < 3; ++a) REQUIRE(lo[3 * k + a] == doctest::Approx(po[3 * k + a]).epsilon(1e-6));
+      // The table holds float32 (u, v): the reference's radius from them is the pinhole's to float32's rounding of
+      // neighbour differences; the kernel's too.
+      CHECK(lr[k] == doctest::Approx(pr[k]).epsilon(1e-4));
+      CHECK(device.radii[k] == doctest::Approx(pr[k]).epsilon(1e-4));
+    }
+  }
 }

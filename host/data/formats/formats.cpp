@@ -75,7 +75,19 @@ SceneEffects scene_effects(const std::string& path, const LoadOptions& options) 
   return effects;
 }
 
+SceneEffects forward_facing_ndc_effects(const std::string& kind) {
+  SceneEffects effects;
+  effects.settings = {{"ray_shape", "cylinder"}, {"background", "black"}, {"unit_viewdirs", "false"},
+                      {"density_noise", "1"}};
+  effects.summary = kind + " → NDC rays, cylinders, black background, raw view directions, density noise 1";
+  return effects;
+}
+
 SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::string& kind) {
+  // Forward-facing photos (a phone capture, a COLMAP import with a lens) are what LLFF's conventions were made for.
+  if (!traits.has_alpha && traits.forward_facing && traits.ndc_blocker.empty()) {
+    return forward_facing_ndc_effects(kind + " of forward-facing photos");
+  }
   SceneEffects effects;
   effects.settings = {{"ray_shape", "cone"}, {"background", traits.has_alpha ? "white" : "black"}};
   // A rendered object seen from all around (Blender's) is bounded: only photos bring the world behind them.
@@ -83,6 +95,9 @@ SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::strin
   effects.summary = kind + (traits.has_alpha ? " with alpha → cones, white background"
                             : unbounded      ? " of photos taken all around (360°) → cones, black background"
                                              : " without alpha (photos) → cones, black background");
+  if (!traits.has_alpha && traits.forward_facing) {
+    effects.summary += " (forward-facing, but not NDC: " + traits.ndc_blocker + ")";
+  }
   if (unbounded) add_zipnerf_unbounded(effects);
   return effects;
 }

@@ -24,6 +24,10 @@ struct SceneTraits {
   bool has_alpha = false;   // the first image has an alpha channel (rendered objects, not photos)
   bool all_around = false;  // LLFF or transforms.json: the cameras look inward from all around (360°), not forward
   bool multiscale = false;  // images at several scales on disk (multiscale Blender)
+  // transforms.json: the cameras look forward (not all around). NDC holds such a capture when `ndc_blocker` is empty;
+  // else it says why not ("the file gives no near/far", "its frames differ in focal length or image size").
+  bool forward_facing = false;
+  std::string ndc_blocker;
 };
 
 // The effects a scene calls for: settings (by name, as train's settings table spells them) and one line for people.
@@ -101,6 +105,10 @@ std::string format_file(const std::string& path, const char* file_name);
 // taken all around (traits.all_around, set by transforms.json) are an unbounded scene for Zip-NeRF, as a 360° LLFF
 // capture is.
 SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::string& kind);
+
+// What a forward-facing capture of photos calls for (the official LLFF conventions, configs/llff.gin): NDC rays as
+// cylinders, a black background, the world directions as view directions, density noise 1; `kind` opens the summary.
+SceneEffects forward_facing_ndc_effects(const std::string& kind);
 
 // What a capture all around calls for from Zip-NeRF: proposal sampling, the contraction and the power ladder, as one
 // group (SceneEffects::zipnerf_settings), with its summary.

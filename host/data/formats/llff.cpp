@@ -34,12 +34,8 @@ SceneEffects effects(const SceneTraits& traits) {
     add_zipnerf_unbounded(effects);
     return effects;
   }
-  effects.settings = {{"ray_shape", "cylinder"},
-                      {"spherify", "false"},
-                      {"background", "black"},
-                      {"unit_viewdirs", "false"},
-                      {"density_noise", "1"}};
-  effects.summary = "forward-facing LLFF → NDC rays, cylinders, black background, raw view directions, density noise 1";
+  effects = forward_facing_ndc_effects("forward-facing LLFF");
+  effects.settings["spherify"] = "false";
   return effects;
 }
 

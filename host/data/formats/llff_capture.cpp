@@ -213,48 +213,55 @@ std::vector<SplitSpec> parse_llff(const std::string& dir, const LoadOptions& opt
 
 }  // namespace detail
 
+std::vector<Matrix34> spiral_poses(const std::vector<Matrix34>& camera_to_world, double nearest_depth,
+                                   double farthest_depth, int frames) {
+  // The official _generate_spiral_poses.
+  std::vector<Matrix34> path;
+  const Matrix34 average = average_pose(camera_to_world);
+  Vec3 up{0, 0, 0};
+  for (const auto& pose : camera_to_world) up = add(up, column(pose, 1));
+  up = normalize(up);
+  const double close = nearest_depth * 0.9;
+  const double far_depth = farthest_depth * 5.0;
+  const double dt = 0.75;
+  const double focus = 1.0 / ((1.0 - dt) / close + dt / far_depth);
+  // Radii: the 90th percentile of |position| per axis.
+  Vec3 radii{};
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> values;
+    for (const auto& p : camera_to_world) values.push_back(std::abs(p[4 * axis + 3]));
+    std::sort(values.begin(), values.end());
+    const double rank = 0.9 * static_cast<double>(values.size() - 1);  // numpy's linear percentile
+    const size_t lo = static_cast<size_t>(std::floor(rank));
+    const size_t hi = std::min(lo + 1, values.size() - 1);
+    radii[axis] = values[lo] + (rank - static_cast<double>(lo)) * (values[hi] - values[lo]);
+  }
+  const double turns = 2.0, z_rate = 0.5;
+  auto transform = [&average](Vec3 p) {
+    return Vec3{dot({average[0], average[1], average[2]}, p) + average[3],
+                dot({average[4], average[5], average[6]}, p) + average[7],
+                dot({average[8], average[9], average[10]}, p) + average[11]};
+  };
+  for (int k = 0; k < frames; ++k) {
+    const double theta = 2.0 * M_PI * turns * k / frames;
+    const Vec3 c =
+        transform({std::cos(theta) * radii[0], -std::sin(theta) * radii[1], -std::sin(theta * z_rate) * radii[2]});
+    const Vec3 z = normalize(sub(c, transform({0, 0, -focus})));
+    path.push_back(view_matrix(z, up, c));
+  }
+  return path;
+}
+
 std::vector<Camera> llff_render_path(const LlffCapture& capture, const LoadOptions& options, int frames) {
   if (frames < 1) throw Error("the render path needs at least one frame");
   std::vector<Matrix34> path;
   if (!capture.spherify) {
-    // The official _generate_spiral_poses.
-    const Matrix34 average = average_pose(capture.camera_to_world);
-    Vec3 up{0, 0, 0};
     double close = capture.bounds[0][0], far_depth = capture.bounds[0][1];
     for (size_t i = 0; i < capture.camera_to_world.size(); ++i) {
-      up = add(up, column(capture.camera_to_world[i], 1));
       close = std::min(close, capture.bounds[i][0]);
       far_depth = std::max(far_depth, capture.bounds[i][1]);
     }
-    up = normalize(up);
-    close *= 0.9;
-    far_depth *= 5.0;
-    const double dt = 0.75;
-    const double focus = 1.0 / ((1.0 - dt) / close + dt / far_depth);
-    // Radii: the 90th percentile of |position| per axis.
-    Vec3 radii{};
-    for (int axis = 0; axis < 3; ++axis) {
-      std::vector<double> values;
-      for (const auto& p : capture.camera_to_world) values.push_back(std::abs(p[4 * axis + 3]));
-      std::sort(values.begin(), values.end());
-      const double rank = 0.9 * static_cast<double>(values.size() - 1);  // numpy's linear percentile
-      const size_t lo = static_cast<size_t>(std::floor(rank));
-      const size_t hi = std::min(lo + 1, values.size() - 1);
-      radii[axis] = values[lo] + (rank - static_cast<double>(lo)) * (values[hi] - values[lo]);
-    }
-    const double turns = 2.0, z_rate = 0.5;
-    auto transform = [&average](Vec3 p) {
-      return Vec3{dot({average[0], average[1], average[2]}, p) + average[3],
-                  dot({average[4], average[5], average[6]}, p) + average[7],
-                  dot({average[8], average[9], average[10]}, p) + average[11]};
-    };
-    for (int k = 0; k < frames; ++k) {
-      const double theta = 2.0 * M_PI * turns * k / frames;
-      const Vec3 c =
-          transform({std::cos(theta) * radii[0], -std::sin(theta) * radii[1], -std::sin(theta * z_rate) * radii[2]});
-      const Vec3 z = normalize(sub(c, transform({0, 0, -focus})));
-      path.push_back(view_matrix(z, up, c));
-    }
+    path = spiral_poses(capture.camera_to_world, close, far_depth, frames);
   } else {
     // The official spherical path: a circle at the cameras' mean height, looking at the centre, at angles
     // np.linspace(0, 2π, frames), whose last angle is 2π: the last frame repeats the first, as the official's does.

@@ -39,6 +39,12 @@ LlffCapture read_llff(const std::string& dir, const LoadOptions& options);
 // optical axes spread over more than 90°.
 bool looks_360(const LlffCapture& capture);
 
+// The official spiral (_generate_spiral_poses) around recentred forward-facing poses (their average pose near the
+// identity, as LLFF's and NDC's world has it): two turns of `frames` views, radii from the 90th percentile of |position|
+// per axis, focused at the mean disparity depth between 0.9 × nearest_depth and 5 × farthest_depth.
+std::vector<Matrix34> spiral_poses(const std::vector<Matrix34>& camera_to_world, double nearest_depth,
+                                   double farthest_depth, int frames);
+
 // The official render path: for a forward-facing capture the spiral (two turns, `frames` views, radii from the
 // 90th percentile of camera positions, focused at the capture's mean disparity depth), for a spherified one the
 // circle at the cameras' height. Cameras at the capture's focal length and image size (image_dir), NDC/world near

@@ -71,13 +71,49 @@ void move_world_around_cameras(std::vector<FrameSpec>& frames, const std::string
   }
 }
 
+}  // namespace
+
 bool has_near_far(const io::Json& root) {
   if (root.contains("near") && root.contains("far")) return true;
   const auto& frames = root.at("frames");
   return !frames.empty() && frames[0].is_object() && frames[0].contains("near") && frames[0].contains("far");
 }
 
-}  // namespace
+NdcFrames ndc_frames(const io::Json& root, const std::string& file, const LoadOptions& options) {
+  if (!root.is_object() || !root.contains("frames") || !root.at("frames").is_array() || !has_near_far(root)) {
+    io::require_object(root, file);
+    io::require_array(root, "frames", file);
+    throw Error(file + ": NDC rays (ray_shape = cylinder, for a forward-facing capture) need the capture's nearest "
+                       "depth, and this file gives no near/far: add \"near\" and \"far\" (its scene units), or train "
+                       "with --set ray_shape=cone");
+  }
+  LoadOptions from_file = options;  // the depths the file gives; options.near/far are NDC values here
+  from_file.near.reset();
+  from_file.far.reset();
+  NdcFrames out;
+  out.frames = parse_frames(root, file, from_file);
+  double nearest = out.frames[0].near, farthest = out.frames[0].far;
+  std::vector<Matrix34> poses;
+  for (const auto& frame : out.frames) {
+    nearest = std::min(nearest, frame.near);
+    farthest = std::max(farthest, frame.far);
+    poses.push_back(frame.camera_to_world);
+  }
+  out.scale = move_into_ndc_world(poses, nearest, file);
+  out.near_depth = nearest * out.scale;
+  out.far_depth = farthest * out.scale;
+  const double near = options.near.value_or(0.0), far = options.far.value_or(1.0);
+  if (!(near >= 0.0) || !(far > near)) {
+    throw Error(file + ": near = " + std::to_string(near) + ", far = " + std::to_string(far) +
+                " in NDC: need 0 <= near < far");
+  }
+  for (size_t i = 0; i < out.frames.size(); ++i) {
+    out.frames[i].camera_to_world = poses[i];
+    out.frames[i].near = near;
+    out.frames[i].far = far;
+  }
+  return out;
+}
 
 std::string join_path(const std::string& dir, const std::string& name) {
   return dir.empty() ? name : (fs::path(dir) / name).string();
@@ -157,11 +193,28 @@ std::vector<SplitSpec> parse_transforms_json(const std::string& file, const Load
     }
   }
   if (options.holdout_every < 0) throw Error("holdout_every must be >= 0");
+  if (options.world_around_cameras && options.forward_facing_ndc) {
+    throw Error(file + ": an unbounded run casts world rays; NDC is for a forward-facing capture: not both");
+  }
   const io::Json root = io::read_json(file);
-  auto frames = parse_frames(root, file, options);
-  if (!has_near_far(root) && !(options.near && options.far) && options.log) {
-    options.log(LogLevel::warning, file + " gives no near/far: using near " + std::to_string(frames[0].near) +
-                                       ", far " + std::to_string(frames[0].far) + " (set them with --near/--far)");
+  std::vector<FrameSpec> frames;
+  if (options.forward_facing_ndc) {
+    const NdcFrames ndc = ndc_frames(root, file, options);
+    frames = ndc.frames;
+    if (options.log) {
+      char text[200];
+      std::snprintf(text, sizeof(text),
+                    "the NDC world of a forward-facing capture: scaled by %.4g so that its nearest depth, %.4g, "
+                    "becomes 4/3, and recentred on the average camera",
+                    ndc.scale, ndc.near_depth / ndc.scale);
+      options.log(LogLevel::info, file + ": " + text);
+    }
+  } else {
+    frames = parse_frames(root, file, options);
+    if (!has_near_far(root) && !(options.near && options.far) && options.log) {
+      options.log(LogLevel::warning, file + " gives no near/far: using near " + std::to_string(frames[0].near) +
+                                         ", far " + std::to_string(frames[0].far) + " (set them with --near/--far)");
+    }
   }
   if (options.world_around_cameras) move_world_around_cameras(frames, file, options);
   SplitSpec train, test;
