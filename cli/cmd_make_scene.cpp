@@ -81,7 +81,8 @@ void register_make_scene(CLI::App& app) {
   auto lens = std::make_shared<std::string>();
   auto fov = std::make_shared<double>(0.0);
   cmd->add_option("--lens", *lens,
-                  "Render through a lens, MODEL:c1,c2,... in COLMAP's order: " + lens_shapes() + " (needs --scales 1)");
+                  "Render through a lens, MODEL:c1,c2,... in COLMAP's order: " + lens_shapes() +
+                      " (needs --scales 1; with --forward-facing the capture is written as a transforms.json)");
   cmd->add_option("--fov", *fov, "Horizontal field of view of the focal length, degrees (default: the Blender scenes' 39.6)");
   auto forward = std::make_shared<data::ForwardFacingOptions>();
   auto forward_facing = std::make_shared<bool>(false);
@@ -133,7 +134,7 @@ void register_make_scene(CLI::App& app) {
       return;
     }
     if (*forward_facing) {
-      for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales", "--lens", "--fov"}) {
+      for (const char* blender_only : {"--views", "--val-views", "--test-views", "--scales", "--fov"}) {
         if (cmd->count(blender_only) > 0) throw Error(std::string(blender_only) + " applies to the Blender scene, not --forward-facing");
       }
       unsigned x = 0, y = 0;
@@ -145,10 +146,14 @@ void register_make_scene(CLI::App& app) {
       forward->seed = options->seed;
       if (cmd->count("--samples") > 0) forward->samples_per_axis = options->samples_per_axis;
       forward->threads = options->threads;
+      forward->lens = options->lens;
       data::write_forward_facing_scene(*out, *forward, print_log);
-      std::cout << "wrote " << *out << ": an LLFF capture of " << x * y << " views at " << forward->width_px << "x"
-                << forward->width_px * 3 / 4 << " (images/" << (forward->factor > 1 ? ", images_" + std::to_string(forward->factor) + "/" : "")
-                << ", poses_bounds.npy" << (forward->jpeg ? "; JPEG" : "") << ")\n";
+      const bool lens = !forward->lens.is_pinhole();
+      std::cout << "wrote " << *out << ": " << (lens ? "a transforms.json" : "an LLFF capture") << " of " << x * y
+                << (lens ? " forward-facing" : "") << " views at " << forward->width_px << "x" << forward->width_px * 3 / 4
+                << (lens ? std::string(" behind an ") + lens_model_name(forward->lens.model) + " lens" : "") << " (images/"
+                << (forward->factor > 1 ? ", images_" + std::to_string(forward->factor) + "/" : "")
+                << (lens ? ", transforms.json" : ", poses_bounds.npy") << (forward->jpeg ? "; JPEG" : "") << ")\n";
       return;
     }
     for (const char* forward_only : {"--grid", "--grid-width", "--factor", "--jpeg"}) {

@@ -140,6 +140,27 @@ mipnerf_add_checked_test("cli: render --path spiral of an LLFF run" EXPECT "rend
   COMMAND mipnerf-cl render
   --checkpoint "${CMAKE_CURRENT_BINARY_DIR}/cli-llff-run" --path spiral --frames 3)
 set_tests_properties("cli: render --path spiral of an LLFF run" PROPERTIES FIXTURES_REQUIRED cli_llff_run)
+# The same forward-facing scene behind an OPENCV lens, as import-colmap writes such a capture (a transforms.json:
+# LLFF holds pinholes): trained in NDC with cylinders through its lens tables, as the LLFF capture is, and its spiral.
+set(MIPNERF_LENS_FORWARD "${CMAKE_CURRENT_BINARY_DIR}/cli-lens-forward")
+mipnerf_add_checked_test("cli: make-scene --forward-facing --lens writes a transforms.json"
+  EXPECT "a transforms.json of 12 forward-facing views at 32x24 behind an OPENCV lens \\(images/, transforms.json\\)"
+  COMMAND mipnerf-cl make-scene "${MIPNERF_LENS_FORWARD}" --forward-facing --size 32 --grid 4x3 --factor 1 --samples 1
+  --lens OPENCV:-0.1,0.02,0.001,-0.0005)
+set_tests_properties("cli: make-scene --forward-facing --lens writes a transforms.json" PROPERTIES
+  FIXTURES_SETUP cli_lens_forward)
+add_test(NAME "cli: train behind a lens in NDC: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_LENS_FORWARD}-run")
+set_tests_properties("cli: train behind a lens in NDC: clear the run folder" PROPERTIES FIXTURES_SETUP cli_lens_forward_clean)
+mipnerf_add_checked_test("cli: a forward-facing capture behind a lens trains in NDC through its lens"
+  EXPECT "transforms.json: the NDC world of a forward-facing capture: scaled by [0-9.e+-]+ so that its nearest depth, [0-9.e+-]+, becomes 4/3, and recentred on the average camera\n.*scene: transforms.json of forward-facing photos → NDC rays, cylinders, black background, raw view directions, density noise 1.*trained 2 steps"
+  COMMAND mipnerf-cl train --data "${MIPNERF_LENS_FORWARD}" --out "${MIPNERF_LENS_FORWARD}-run" --preset tiny
+  --steps 2 --val_views 1)
+set_tests_properties("cli: a forward-facing capture behind a lens trains in NDC through its lens" PROPERTIES
+  FIXTURES_REQUIRED "cli_lens_forward;cli_lens_forward_clean" FIXTURES_SETUP cli_lens_forward_run)
+mipnerf_add_checked_test("cli: render --path spiral of a run behind a lens"
+  EXPECT "rendered 3 frames of the spiral of .*cli-lens-forward/transforms.json \\(through a pinhole of its focal length: undistorted\\) \\(32x24\\)"
+  COMMAND mipnerf-cl render --checkpoint "${MIPNERF_LENS_FORWARD}-run" --path spiral --frames 3)
+set_tests_properties("cli: render --path spiral of a run behind a lens" PROPERTIES FIXTURES_REQUIRED cli_lens_forward_run)
 # train --minutes (host/train/step_budget.*): what it refuses, and a budget run on the LLFF capture whose recorded
 # steps a --resume keeps (the warm-up, the steps and the resume themselves: tests/train/test_step_budget.cpp).
 mipnerf_add_cli_error_test("train: --minutes must be positive" PATTERN "--minutes 0: the training budget must be a positive number of minutes"
@@ -706,8 +727,9 @@ if(MIPNERF_COLMAP)
     "${MIPNERF_PHOTOS}-transforms" --layout transforms)
   set_tests_properties("cli: import-colmap of JPEG photos as transforms.json" PROPERTIES
     FIXTURES_REQUIRED cli_photos_dataset FIXTURES_SETUP cli_photos_transforms)
+  # The same forward-facing capture as a transforms.json trains in NDC as its LLFF import does.
   mipnerf_add_checked_test("cli: train on an imported transforms.json of JPEG photos"
-    EXPECT "scene: transforms.json without alpha \\(photos\\) → cones, black background.*trained 4 steps"
+    EXPECT "the NDC world of a forward-facing capture.*scene: transforms.json of forward-facing photos → NDC rays, cylinders, black background.*trained 4 steps"
     COMMAND mipnerf-cl train --data "${MIPNERF_PHOTOS}-transforms/transforms.json" --out "${MIPNERF_PHOTOS}-transforms-run"
     --preset tiny --factor 4 --steps 4 --val_views 1)
   set_tests_properties("cli: train on an imported transforms.json of JPEG photos" PROPERTIES

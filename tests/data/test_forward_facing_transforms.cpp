@@ -163,7 +163,7 @@ TEST_CASE("transforms.json: forward-facing photos train in NDC, in the world and
   CHECK(spiral.kind == "transforms.json spiral");
 }
 
-TEST_CASE("transforms.json: forward-facing photos NDC cannot hold stay on world rays, saying why; NDC refuses them") {
+TEST_CASE("transforms.json: forward-facing photos NDC cannot hold stay on world rays, saying why, and NDC refuses them") {
   SUBCASE("no near/far in the file") {
     const Capture capture = forward_capture("transforms-forward-no-depths", /*with_depths=*/false);
     const auto traits = data::scene_traits(capture.file, data::LoadOptions{});

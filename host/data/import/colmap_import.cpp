@@ -530,7 +530,9 @@ void choose_layout(const ColmapImportOptions& options, const std::vector<Matrix3
   } else {
     result.layout = ImportLayout::transforms_json;
     result.layout_reason = !forward ? "cameras looking from around the scene (a 360-degree capture)"
-                           : !misfit.empty() ? "forward-facing, but " + misfit + ", which LLFF cannot hold"
+                           : !misfit.empty() ? "forward-facing, but " + misfit +
+                                                   " (train takes it in NDC all the same when its cameras share one "
+                                                   "projection)"
                                              : "forward-facing, but --near/--far given (they apply to transforms.json)";
   }
 }

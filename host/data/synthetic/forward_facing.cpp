@@ -5,7 +5,11 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/lens_models.hpp"
+#include "data/intrinsics.hpp"
+#include "data/lens_tables.hpp"
 #include "data/pose.hpp"
+#include "io/json.hpp"
 #include "data/synthetic/llff_writer.hpp"
 #include "data/synthetic/procedural.hpp"
 
@@ -65,6 +69,12 @@ void validate(const ForwardFacingOptions& o) {
   if (!(o.grid_width >= 0.01 && o.grid_width <= 4.0)) {
     throw Error("make-scene --forward-facing: --grid-width must be 0.01 to 4 (scene units; the scene is 4 away)");
   }
+  if (!o.lens.is_pinhole()) {
+    Camera camera = centred_pinhole(look_at_pose({0, kCameraY, 0.8}, {0, kWallY, 0}, {0, 0, 1}), o.width_px,
+                                    o.width_px * 3 / 4, o.camera_angle_x);
+    camera.lens = o.lens;
+    check_lens_over_image(camera, std::string("make-scene --forward-facing --lens ") + lens_model_name(o.lens.model));
+  }
 }
 
 std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) {
@@ -80,6 +90,7 @@ std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) 
       const double z = 1.1 - 0.5 * (0.6 - grid_height) - grid_height * row / (options.views_y - 1);
       Camera camera = centred_pinhole(look_at_pose({x, kCameraY, z}, {0.5 * x, kWallY, 0.0}, {0, 0, 1}),
                                       options.width_px, height, options.camera_angle_x);
+      camera.lens = options.lens;
       const auto bounds = depth_bounds(camera);
       camera.near = bounds[0];
       camera.far = bounds[1];
@@ -89,9 +100,34 @@ std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options) 
   return cameras;
 }
 
+namespace {
+
+// The capture behind a lens as a transforms.json, as `dataset import-colmap` writes one: every view's pose,
+// intrinsics and lens, near/far over every view.
+void write_lens_transforms(const std::string& out_dir, const std::vector<Camera>& cameras, bool jpeg) {
+  io::Json frames = io::Json::array();
+  double near = cameras.front().near, far = cameras.front().far;
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    io::Json frame = intrinsics_json(cameras[k]);
+    frame["file_path"] = "images/" + llff_image_name(k, jpeg);
+    frame["transform_matrix"] = pose_to_json(cameras[k].camera_to_world);
+    frames.push_back(frame);
+    near = std::min(near, cameras[k].near);
+    far = std::max(far, cameras[k].far);
+  }
+  io::write_json(out_dir + "/transforms.json", {{"near", near}, {"far", far}, {"frames", frames}});
+}
+
+}  // namespace
+
 void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log) {
   const auto cameras = forward_facing_cameras(options);
-  write_llff_views(out_dir, cameras, trace_with_backdrop, llff_write_options(options, 0x46460000u));
+  if (options.lens.is_pinhole()) {
+    write_llff_views(out_dir, cameras, trace_with_backdrop, llff_write_options(options, 0x46460000u));
+  } else {
+    write_view_images(out_dir, cameras, trace_with_backdrop, llff_write_options(options, 0x46460000u));
+    write_lens_transforms(out_dir, cameras, options.jpeg);
+  }
   if (log) {
     log(LogLevel::info, "forward-facing scene: " + std::to_string(cameras.size()) + " views at " +
                             std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +

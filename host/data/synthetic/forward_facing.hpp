@@ -23,6 +23,7 @@ struct ForwardFacingOptions {
   double grid_width = 1.2;        // the camera grid's width in scene units (its height: half), 4 from the scene's
                                   // centre: neighbours ~4° apart; narrower, a capture of small parallax
   bool jpeg = false;              // write the images as JPEG (quality 95), as a phone capture holds them; else PNG
+  Lens lens;                      // photos through this lens: written as OUT/transforms.json (LLFF holds pinholes)
 };
 
 // Checks sizes and counts; throws mipnerf::Error saying what to change.
@@ -30,7 +31,8 @@ void validate(const ForwardFacingOptions& options);
 // The cameras, full resolution, OpenGL axes, row by row of the grid; near/far = the depths they see.
 std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options);
 // Writes OUT/poses_bounds.npy, OUT/images/image<k>.png and OUT/images_<factor>/image<k>.png (RGB, no alpha; .jpg
-// with options.jpeg).
+// with options.jpeg). Behind a lens (options.lens), OUT/transforms.json instead of poses_bounds.npy: what `dataset
+// import-colmap` writes for a forward-facing capture with a lens (intrinsics and lens, near/far over every view).
 void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log = {});
 
 }  // namespace mipnerf::data

@@ -49,8 +49,8 @@ std::string llff_image_name(size_t k, bool jpeg) {
   return name;
 }
 
-void write_llff_views(const std::string& out_dir, const std::vector<Camera>& cameras, SceneHit (*trace)(const Ray&),
-                      const LlffWriteOptions& options) {
+void write_view_images(const std::string& out_dir, const std::vector<Camera>& cameras, SceneHit (*trace)(const Ray&),
+                       const LlffWriteOptions& options) {
   const std::string full = out_dir + "/images", reduced = out_dir + "/images_" + std::to_string(options.factor);
   io::make_directories(full);
   if (options.factor > 1) io::make_directories(reduced);
@@ -71,7 +71,11 @@ void write_llff_views(const std::string& out_dir, const std::vector<Camera>& cam
   for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
   worker();
   for (auto& thread : pool) thread.join();
+}
 
+void write_llff_views(const std::string& out_dir, const std::vector<Camera>& cameras, SceneHit (*trace)(const Ray&),
+                      const LlffWriteOptions& options) {
+  write_view_images(out_dir, cameras, trace, options);
   // poses_bounds.npy: per view the 3×5 [down, right, backwards, position, (h, w, focal)] of LLFF, then near, far.
   std::vector<double> rows;
   for (const auto& camera : cameras) {

@@ -43,8 +43,12 @@ std::vector<double> traced_depths(const Camera& camera, SceneHit (*trace)(const 
 // "image007.png" (or .jpg): the name of view k.
 std::string llff_image_name(size_t k, bool jpeg);
 
-// Renders every camera through `trace` (render_traced: RGB, no alpha written) and writes the capture; cameras carry
-// their near and far.
+// Renders every camera through `trace` (render_traced: RGB, no alpha written; through each camera's lens) into
+// OUT/images/ and OUT/images_<factor>/, named by llff_image_name.
+void write_view_images(const std::string& out_dir, const std::vector<Camera>& cameras, SceneHit (*trace)(const Ray&),
+                       const LlffWriteOptions& options);
+
+// write_view_images, then OUT/poses_bounds.npy: the capture in the LLFF layout; cameras carry their near and far.
 void write_llff_views(const std::string& out_dir, const std::vector<Camera>& cameras, SceneHit (*trace)(const Ray&),
                       const LlffWriteOptions& options);
 
