@@ -270,7 +270,7 @@ void Graph::generate_rays(const RaySource& source, ChunkRange chunk, StepKey key
     if (!lens_rays_) {
       RaysOptions lens_options = rays_->options();
       lens_options.lens_tables = true;
-      lens_rays_ = std::make_unique<ops::Rays>(*ctx_, lens_options);  // refuses cylinder rays with what to do
+      lens_rays_ = std::make_unique<ops::Rays>(*ctx_, lens_options);
     }
     lens_rays_->fwd({source.cameras.packed(), camera_ids_, pixel_ids_, chunk.count, &source.cameras.lens_tables()},
                     chunk_rays_, rng);

@@ -10,6 +10,7 @@
 #include "data/formats/formats.hpp"
 #include "data/formats/llff_capture.hpp"
 #include "data/synthetic/forward_facing.hpp"
+#include "support/data_fixtures.hpp"
 #include "support/temp_scene.hpp"
 #include "train/model.hpp"
 #include "train/scene_effects.hpp"
@@ -17,18 +18,6 @@
 using namespace mipnerf;
 
 namespace {
-
-// Every camera of every split, in file order (every 8th held out).
-std::vector<Camera> every_camera(const data::Dataset& dataset) {
-  const auto& train = dataset.split("train").cameras;
-  const auto& test = dataset.split("test").cameras;
-  std::vector<Camera> cameras;
-  size_t next_train = 0, next_test = 0;
-  for (size_t i = 0; i < train.size() + test.size(); ++i) {
-    cameras.push_back(i % 8 == 0 ? test[next_test++] : train[next_train++]);
-  }
-  return cameras;
-}
 
 double largest_difference(const data::Matrix34& a, const data::Matrix34& b) {
   double worst = 0.0;
@@ -66,7 +55,7 @@ Capture forward_capture(const std::string& name, bool with_depths = true, int ot
   data::write_forward_facing_scene(capture.dir, scene);
   data::LoadOptions llff_options;  // the official LLFF: NDC
   llff_options.holdout_every = 8;
-  capture.llff_ndc = every_camera(data::load_dataset(capture.dir, llff_options));
+  capture.llff_ndc = test::every_camera_in_file_order(data::load_dataset(capture.dir, llff_options));
   const data::LlffCapture llff = data::read_llff(capture.dir, llff_options);
   capture.llff_spiral = data::llff_render_path(llff, llff_options, 6);
   double nearest = llff.bounds[0][0], farthest = llff.bounds[0][1];
@@ -133,7 +122,7 @@ TEST_CASE("transforms.json: forward-facing photos train in NDC, in the world and
   // unit undone by the nearest depth and the recentring), near 0 and far 1.
   const data::LoadOptions options = train::load_options(config, capture.file, {}, 1);
   CHECK(options.forward_facing_ndc);
-  const std::vector<Camera> cameras = every_camera(data::load_dataset(capture.file, options));
+  const std::vector<Camera> cameras = test::every_camera_in_file_order(data::load_dataset(capture.file, options));
   REQUIRE(cameras.size() == capture.llff_ndc.size());
   double worst = 0.0;
   for (size_t i = 0; i < cameras.size(); ++i) {

@@ -19,18 +19,6 @@ using namespace mipnerf;
 
 namespace {
 
-// Every camera of every split, in file order: train and test interleaved back by holdout (every 8th is test).
-std::vector<Camera> every_camera(const data::Dataset& dataset) {
-  const auto& train = dataset.split("train").cameras;
-  const auto& test = dataset.split("test").cameras;
-  std::vector<Camera> cameras;
-  size_t next_train = 0, next_test = 0;
-  for (size_t i = 0; i < train.size() + test.size(); ++i) {
-    cameras.push_back(i % 8 == 0 ? test[next_test++] : train[next_train++]);
-  }
-  return cameras;
-}
-
 double distance(const Camera& a, const Camera& b) {
   return std::hypot(a.camera_to_world[3] - b.camera_to_world[3], a.camera_to_world[7] - b.camera_to_world[7],
                     a.camera_to_world[11] - b.camera_to_world[11]);
@@ -79,7 +67,7 @@ TEST_CASE("transforms.json: photos taken all around are an unbounded scene, load
   data::LoadOptions spherified;
   spherified.llff.spherify = true;
   spherified.llff.ndc = false;
-  const std::vector<Camera> llff = every_camera(data::load_dataset(dir.string(), spherified));
+  const std::vector<Camera> llff = test::every_camera_in_file_order(data::load_dataset(dir.string(), spherified));
   write_as_transforms_json(dir.string(), {30.0, -12.0, 5.0}, 4.0);
   const std::string file = (dir / "transforms.json").string();
 
@@ -105,7 +93,7 @@ TEST_CASE("transforms.json: photos taken all around are an unbounded scene, load
   const data::LoadOptions options = train::load_options(config, file, {}, 1);
   CHECK(options.world_around_cameras);
   const data::Dataset unbounded = data::load_dataset(file, options);
-  const std::vector<Camera> cameras = every_camera(unbounded);
+  const std::vector<Camera> cameras = test::every_camera_in_file_order(unbounded);
   REQUIRE(cameras.size() == 17);
   double mean_square = 0.0;
   for (const Camera& c : cameras) mean_square += norm_of_position(c) * norm_of_position(c) / 17.0;

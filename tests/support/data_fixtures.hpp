@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "core/error.hpp"
+#include "data/dataset.hpp"
 #include "data/pose.hpp"
 #include "io/file.hpp"
 #include "io/json.hpp"
@@ -87,5 +88,18 @@ std::string error_of(Body body) {
 }
 
 inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Every camera of a capture that holds out every 8th view (transforms.json, LLFF), in file order: its train and
+// test splits interleaved back.
+inline std::vector<Camera> every_camera_in_file_order(const data::Dataset& dataset) {
+  const auto& train = dataset.split("train").cameras;
+  const auto& test = dataset.split("test").cameras;
+  std::vector<Camera> cameras;
+  size_t next_train = 0, next_test = 0;
+  for (size_t i = 0; i < train.size() + test.size(); ++i) {
+    cameras.push_back(i % 8 == 0 ? test[next_test++] : train[next_train++]);
+  }
+  return cameras;
+}
 
 }  // namespace mipnerf::test
