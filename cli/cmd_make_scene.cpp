@@ -147,12 +147,17 @@ void register_make_scene(CLI::App& app) {
       if (cmd->count("--samples") > 0) forward->samples_per_axis = options->samples_per_axis;
       forward->threads = options->threads;
       forward->lens = options->lens;
+      if (!forward->lens.is_pinhole() && cmd->count("--factor") > 0 && forward->factor > 1) {
+        throw Error("--factor writes images_<factor>/ of an LLFF capture; behind a --lens the capture is a "
+                    "transforms.json, which train downsamples on load: give train --set factor=" +
+                    std::to_string(forward->factor) + " instead");
+      }
       data::write_forward_facing_scene(*out, *forward, print_log);
       const bool lens = !forward->lens.is_pinhole();
       std::cout << "wrote " << *out << ": " << (lens ? "a transforms.json" : "an LLFF capture") << " of " << x * y
                 << (lens ? " forward-facing" : "") << " views at " << forward->width_px << "x" << forward->width_px * 3 / 4
                 << (lens ? std::string(" behind an ") + lens_model_name(forward->lens.model) + " lens" : "") << " (images/"
-                << (forward->factor > 1 ? ", images_" + std::to_string(forward->factor) + "/" : "")
+                << (forward->factor > 1 && !lens ? ", images_" + std::to_string(forward->factor) + "/" : "")
                 << (lens ? ", transforms.json" : ", poses_bounds.npy") << (forward->jpeg ? "; JPEG" : "") << ")\n";
       return;
     }

@@ -125,7 +125,10 @@ void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingO
   if (options.lens.is_pinhole()) {
     write_llff_views(out_dir, cameras, trace_with_backdrop, llff_write_options(options, 0x46460000u));
   } else {
-    write_view_images(out_dir, cameras, trace_with_backdrop, llff_write_options(options, 0x46460000u));
+    // A transforms.json reads images/ only, downsampling on load (--set factor): no images_<factor>/ beside it.
+    LlffWriteOptions write = llff_write_options(options, 0x46460000u);
+    write.factor = 1;
+    write_view_images(out_dir, cameras, trace_with_backdrop, write);
     write_lens_transforms(out_dir, cameras, options.jpeg);
   }
   if (log) {

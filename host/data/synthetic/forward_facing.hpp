@@ -31,8 +31,9 @@ void validate(const ForwardFacingOptions& options);
 // The cameras, full resolution, OpenGL axes, row by row of the grid; near/far = the depths they see.
 std::vector<Camera> forward_facing_cameras(const ForwardFacingOptions& options);
 // Writes OUT/poses_bounds.npy, OUT/images/image<k>.png and OUT/images_<factor>/image<k>.png (RGB, no alpha; .jpg
-// with options.jpeg). Behind a lens (options.lens), OUT/transforms.json instead of poses_bounds.npy: what `dataset
-// import-colmap` writes for a forward-facing capture with a lens (intrinsics and lens, near/far over every view).
+// with options.jpeg). Behind a lens (options.lens), OUT/transforms.json instead of poses_bounds.npy and no
+// images_<factor>/: what `dataset import-colmap` writes for a forward-facing capture with a lens (intrinsics and lens,
+// near/far over every view).
 void write_forward_facing_scene(const std::string& out_dir, const ForwardFacingOptions& options, const LogFn& log = {});
 
 }  // namespace mipnerf::data
