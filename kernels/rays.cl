@@ -258,7 +258,14 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   const float dir_z = ndc_direction_z(dir.z);
   const float t_shift = -(n + origin.z) / dir_z;
   const float2 o_near = origin.xy + t_shift * dir.xy;
-  const float ax = -2.0f * fx / w, ay = -2.0f * fy / h;
+  // The NDC map: the run's (NDC_SCALE_X/Y, for a render camera of another field of view), else this camera's own
+  // 2f/size (training: every camera shares it). −sx is −2f/w exactly as written before, bit for bit.
+#ifdef NDC_SCALE_X
+  const float sx = NDC_SCALE_X, sy = NDC_SCALE_Y;
+#else
+  const float sx = 2.0f * fx / w, sy = 2.0f * fy / h;
+#endif
+  const float ax = -sx, ay = -sy;
   store3(origins, i, (float3)(ax * o_near.x / -n, ay * o_near.y / -n, -1.0f));
   const float n_dir_z = n * dir_z;
   store3(directions, i,
@@ -270,7 +277,6 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   const float shift_x = pair_start_shift(px, width), shift_y = pair_start_shift(py, height);
   const float3 step_h = camera_rotate(cam, (float3)(1.0f / fx, 0.0f, 0.0f));
   const float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / fy, 0.0f));
-  const float sx = 2.0f * fx / w, sy = 2.0f * fy / h;
 #if LENS_TABLES
   if (lens_table != 0) {
     radii[i] = lens_ndc_radius(cam, lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x,

@@ -67,6 +67,10 @@ struct RaysOptions {
   bool unit_viewdirs = true;            // UNIT_VIEWDIRS: unit viewdirs; false: the world directions as they are
   bool lens_tables = false;             // LENS_TABLES: cameras behind a lens read their rays from lens tables (cone)
   float ndc_near_plane = 1.0f;          // NDC_NEAR_PLANE (cylinder only), official 1
+  // NDC_SCALE_X/Y (cylinder only): the run's NDC map, 2·f/size across and down (as float, the kernel's own
+  // expression for the training cameras), used for every camera so that one of another field of view (a render path)
+  // lands in the NDC the run trained in; 0: each camera's own (training, where every camera shares it).
+  float ndc_scale_x = 0.0f, ndc_scale_y = 0.0f;
   // unit_viewdirs: the official Blender and spherified LLFF loaders normalise the view directions; the official
   // forward-facing LLFF loader passes viewdirs = rays.directions (camera-frame z = −1, taken before NDC).
 };

@@ -8,7 +8,11 @@
 namespace mipnerf::ops {
 
 ocl::BuildOptions rays_build_options(const RaysOptions& options) {
-  return ocl::BuildOptions()
+  ocl::BuildOptions build;
+  if (options.ray_shape == RayShape::cylinder && options.ndc_scale_x > 0.0f && options.ndc_scale_y > 0.0f) {
+    build.define_float("NDC_SCALE_X", options.ndc_scale_x).define_float("NDC_SCALE_Y", options.ndc_scale_y);
+  }
+  return build
       .define("RAY_SHAPE", static_cast<int>(options.ray_shape))
       .define_float("PIXEL_CENTER_OFFSET", options.pixel_center_offset)
       .define("SUBPIXEL_JITTER", options.jitter_subpixel ? 1 : 0)

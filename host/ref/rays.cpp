@@ -61,10 +61,19 @@ double pair_start_shift(uint32_t p, uint32_t size) {
   return size >= 3 ? -2.0 : -1.0;
 }
 
-RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, double near_plane) {
+// The focal lengths NDC maps a camera with: those of options.ndc_scale (2f/size, the run's map) when given, else its own.
+std::array<double, 2> ndc_focal_of(const Camera& cam, const RaysOptions& options) {
+  if (options.ndc_scale_x > 0.0f && options.ndc_scale_y > 0.0f) {
+    return {0.5 * options.ndc_scale_x * cam.width_px, 0.5 * options.ndc_scale_y * cam.height_px};
+  }
+  return {cam.focal_x_px, cam.focal_y_px};
+}
+
+RayOut ndc_ray(const Camera& cam, double x, double y, uint32_t px, uint32_t py, double near_plane,
+               const std::array<double, 2>& ndc_focal) {
   const auto ndc_origin = [&](double xx, double yy, double o_ndc[3], double d_ndc[3]) {
     const Ray r = camera_ray(cam, xx, yy);
-    convert_to_ndc(r.origin_world.data(), r.direction_world.data(), cam.focal_x_px, cam.focal_y_px, cam.width_px,
+    convert_to_ndc(r.origin_world.data(), r.direction_world.data(), ndc_focal[0], ndc_focal[1], cam.width_px,
                    cam.height_px, near_plane, o_ndc, d_ndc);
   };
   RayOut out;
@@ -131,14 +140,14 @@ RayOut lens_cone_ray(const Camera& cam, const LensPoint& p) {
 // (pair_start_shift's pairs), each neighbour's ray read from the table at the same offset. On an axis one pixel long
 // the pair is the pinhole's: the point 1/f back along that axis, and the pixel.
 RayOut lens_ndc_ray(const Camera& cam, const std::vector<double>& tables, size_t first, uint32_t px, uint32_t py,
-                    double offset_x, double offset_y, double near_plane) {
+                    double offset_x, double offset_y, double near_plane, const std::array<double, 2>& ndc_focal) {
   const auto& m = cam.camera_to_world;
   const double o[3] = {m[3], m[7], m[11]};
   const auto ndc_origin = [&](double u, double v, double o_ndc[3], double d_ndc[3]) {
     const double d_camera[3] = {u, -v, -1.0};
     double d[3];
     for (int a = 0; a < 3; ++a) d[a] = m[4 * a] * d_camera[0] + m[4 * a + 1] * d_camera[1] + m[4 * a + 2] * d_camera[2];
-    convert_to_ndc(o, d, cam.focal_x_px, cam.focal_y_px, cam.width_px, cam.height_px, near_plane, o_ndc, d_ndc);
+    convert_to_ndc(o, d, ndc_focal[0], ndc_focal[1], cam.width_px, cam.height_px, near_plane, o_ndc, d_ndc);
   };
   const LensPoint here = lens_point(tables, first, cam, px, py, offset_x, offset_y);
   RayOut out;
@@ -220,10 +229,11 @@ void rays_fwd(const RaysOptions& options, const std::vector<double>& cameras,
       const RayOut lens_ray = lens_cone_ray(cam, lens_point(lens_tables, lens_slot - 1, cam, px, py, offset_x, offset_y));
       world_direction = {lens_ray.direction[0], lens_ray.direction[1], lens_ray.direction[2]};
       ray = options.ray_shape == RayShape::cylinder
-                ? lens_ndc_ray(cam, lens_tables, lens_slot - 1, px, py, offset_x, offset_y, options.ndc_near_plane)
+                ? lens_ndc_ray(cam, lens_tables, lens_slot - 1, px, py, offset_x, offset_y, options.ndc_near_plane,
+                               ndc_focal_of(cam, options))
                 : lens_ray;
     } else {
-      ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane)
+      ray = options.ray_shape == RayShape::cylinder ? ndc_ray(cam, x, y, px, py, options.ndc_near_plane, ndc_focal_of(cam, options))
                                                     : cone_ray(cam, x, y, px);
       world_direction = camera_ray(cam, x, y).direction_world;  // `directions` holds the NDC one for cylinders
     }

@@ -33,6 +33,7 @@ struct Entry {
 constexpr const char* kVariantBundleKey = "variant_bundle";  // the record's JSON key (TrainConfig::variant_bundle)
 constexpr const char* kSceneEffectsKey = "scene_effects";  // the record's JSON key (TrainConfig::scene_effects)
 constexpr const char* kTimeBudgetKey = "time_budget";  // the record's JSON key (TrainConfig::time_budget)
+constexpr const char* kNdcProjectionKey = "ndc_projection";  // the record's JSON key (TrainConfig::ndc_projection)
 
 const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
@@ -579,6 +580,7 @@ nlohmann::ordered_json config_json(const TrainConfig& config) {
   }
   if (!config.scene_effects.empty()) j[kSceneEffectsKey] = config.scene_effects;
   if (!config.time_budget.empty()) j[kTimeBudgetKey] = config.time_budget;
+  if (config.ndc_projection[0] > 0.0) j[kNdcProjectionKey] = {config.ndc_projection[0], config.ndc_projection[1]};
   return j;
 }
 
@@ -605,6 +607,15 @@ TrainConfig config_from_json(const nlohmann::json& j, const std::string& where) 
     if (name == kSceneEffectsKey) {
       if (!value.is_string()) throw Error(where + ": \"" + kSceneEffectsKey + "\" must be a string");
       config.scene_effects = value.get<std::string>();
+      continue;
+    }
+    if (name == kNdcProjectionKey) {
+      if (!value.is_array() || value.size() != 2 || !value[0].is_number() || !value[1].is_number() ||
+          !(value[0].get<double>() > 0.0) || !(value[1].get<double>() > 0.0) ||
+          !std::isfinite(value[0].get<double>()) || !std::isfinite(value[1].get<double>())) {
+        throw Error(where + ": \"" + kNdcProjectionKey + "\" must be two positive numbers (2f/width, 2f/height)");
+      }
+      config.ndc_projection = {value[0].get<double>(), value[1].get<double>()};
       continue;
     }
     if (name == kTimeBudgetKey) {

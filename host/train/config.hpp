@@ -187,6 +187,11 @@ struct TrainConfig {
   // printed: the measured s/step and the steps chosen. A record, not a setting (the steps are in `steps`): empty when
   // the steps were given.
   std::string time_budget;
+  // A run of NDC rays (ray_shape = cylinder): the NDC map its training cameras share, 2·f/width and 2·f/height as the
+  // ray kernel computes them in float, recorded by the trainer as "ndc_projection" so a render camera of another field
+  // of view is mapped into the same NDC (RaysOptions::ndc_scale_x/y). {0, 0}: not recorded (each camera's own, as
+  // runs written before it render).
+  std::array<double, 2> ndc_projection{0.0, 0.0};
 };
 
 // One named setting: how to read it from text and write it back, with its help line.

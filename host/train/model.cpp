@@ -161,6 +161,10 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.rays.jitter_subpixel = c.jitter_pixels;  // training only: rendering decides its own supersampling
   spec.rays.view_dependence = c.view_dependence;
   spec.rays.unit_viewdirs = c.unit_viewdirs;
+  if (c.ray_shape == RayShape::cylinder && c.ndc_projection[0] > 0.0) {
+    spec.rays.ndc_scale_x = static_cast<float>(c.ndc_projection[0]);
+    spec.rays.ndc_scale_y = static_cast<float>(c.ndc_projection[1]);
+  }
   spec.gaussian.ray_shape = spec.rays.ray_shape;
   spec.sample.lindisp = c.lindisp;
   spec.sample.randomized = c.randomized;

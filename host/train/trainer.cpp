@@ -75,6 +75,14 @@ Trainer::Trainer(ocl::Context& ctx, const TrainConfig& config, const std::string
   data_fingerprint_ = data::fingerprint(train);
   const bool multiscale_data = train.num_scales() > 1;
   spec_ = make_graph_spec(config_, multiscale_data);
+  // An NDC run records the map its cameras share (after the training spec is made: training keeps each camera's own,
+  // the same value, so its kernels are the ones before this record existed), for renders at another field of view.
+  if (config_.ray_shape == RayShape::cylinder && !(config_.ndc_projection[0] > 0.0) && train.num_images() > 0) {
+    const Camera& first = train.cameras[0];
+    config_.ndc_projection = {
+        static_cast<double>(2.0f * static_cast<float>(first.focal_x_px) / static_cast<float>(first.width_px)),
+        static_cast<double>(2.0f * static_cast<float>(first.focal_y_px) / static_cast<float>(first.height_px))};
+  }
   // The plan comes before the first allocation on the device: what does not fit stops here, naming the setting.
   const size_t batch_rays = static_cast<size_t>(config_.batch_size);
   if (static_cast<size_t>(parallel::world().size()) > batch_rays) {

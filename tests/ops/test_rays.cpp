@@ -457,3 +457,62 @@ TEST_CASE("rays: an unknown camera or a pixel outside the image gives NaN, not a
   CHECK_THROWS_WITH_AS(rays.fwd({cameras, ids, ids, 4}, out),
                        doctest::Contains("cameras [25]"), Error);
 }
+
+TEST_CASE("rays: with the run's NDC map, a camera of another field of view lands in the NDC the run trained in") {
+  // Camera A (the capture's: f = 10 on 16×12) and camera B at the same pose with twice its focal length (a 2× zoom).
+  // With pixel centres at offset 0, B's pixel (2x − 8, 2y − 6) looks along A's pixel (x, y). Mapped with A's NDC map
+  // (RaysOptions::ndc_scale, what an NDC run records), B's ray is A's ray in NDC; with its own map it is elsewhere.
+  Scene s;
+  Camera a;
+  a.width_px = 16;
+  a.height_px = 12;
+  a.focal_x_px = a.focal_y_px = 10.0;
+  a.center_x_px = 8.0;
+  a.center_y_px = 6.0;
+  a.camera_to_world = {0.96, 0.0, 0.28, 0.1, 0.0, 1.0, 0.0, -0.2, -0.28, 0.0, 0.96, 0.05};
+  a.near = 0.0;
+  a.far = 1.0;
+  Camera b = a;
+  b.focal_x_px = b.focal_y_px = 20.0;
+  s.cameras = {a, b};
+  for (uint32_t y = 3; y < 9; ++y) {
+    for (uint32_t x = 4; x < 12; ++x) {
+      s.camera_ids.insert(s.camera_ids.end(), {0, 1});
+      s.pixel_ids.insert(s.pixel_ids.end(), {y * 16 + x, (2 * y - 6) * 16 + (2 * x - 8)});
+    }
+  }
+  RaysOptions options;
+  options.ray_shape = RayShape::cylinder;
+  options.pixel_center_offset = 0.0f;
+  RaysOptions with_map = options;
+  with_map.ndc_scale_x = 2.0f * 10.0f / 16.0f;
+  with_map.ndc_scale_y = 2.0f * 10.0f / 12.0f;
+  const RayArrays own = run_device(options, s), mapped = run_device(with_map, s);
+  const RefArrays mapped_ref = run_ref(with_map, s);
+  double worst_mapped = 0.0, smallest_own = 1e300;
+  for (size_t i = 0; i < s.camera_ids.size(); i += 2) {
+    double own_difference = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      worst_mapped =
+          std::max({worst_mapped, static_cast<double>(std::abs(mapped.origins[3 * (i + 1) + k] - mapped.origins[3 * i + k])),
+                    static_cast<double>(std::abs(mapped.directions[3 * (i + 1) + k] - mapped.directions[3 * i + k]))});
+      own_difference =
+          std::max(own_difference, static_cast<double>(std::abs(own.origins[3 * (i + 1) + k] - own.origins[3 * i + k])));
+      // The device with the map is the reference with it.
+      REQUIRE(mapped.origins[3 * i + k] == doctest::Approx(mapped_ref.origins[3 * i + k]).epsilon(1e-6));
+      REQUIRE(mapped.origins[3 * (i + 1) + k] == doctest::Approx(mapped_ref.origins[3 * (i + 1) + k]).epsilon(1e-6));
+    }
+    if (std::abs(own.origins[3 * i]) > 0.05) smallest_own = std::min(smallest_own, own_difference);
+  }
+  MESSAGE("B against A in NDC: with the run's map " << worst_mapped << ", each with its own at least " << smallest_own);
+  CHECK(worst_mapped < 1e-5);
+  CHECK(smallest_own > 0.01);
+  // A's rays are the same with the map as with its own (its map is its own): bit for bit.
+  for (size_t i = 0; i < s.camera_ids.size(); i += 2) {
+    for (int k = 0; k < 3; ++k) {
+      CHECK(mapped.origins[3 * i + k] == own.origins[3 * i + k]);
+      CHECK(mapped.directions[3 * i + k] == own.directions[3 * i + k]);
+    }
+    CHECK(mapped.radii[i] == own.radii[i]);
+  }
+}
