@@ -34,7 +34,7 @@
 //    offset, exact at the centre (tests/ops/test_rays_lens.cpp: 0.003 px off for a 0.4 px offset behind an OPENCV
 //    lens, 0.17 px at the rim of a fisheye at 83°). With RAY_SHAPE_CYLINDER (a forward-facing capture behind a lens,
 //    in NDC) the lens ray converts to NDC as a pinhole's does, and the radius is the mean NDC distance of the pairs
-//    of neighbouring table entries across and down (lens_ndc_radius): the pairs the pinhole formula uses, each
+//    of neighbouring table entries across and down (lens_ndc_pairs): the pairs the pinhole formula uses, each
 //    pixel's own undistorted position instead of a step of 1/f.
 //  - Invalid input (camera id ≥ n_cameras, pixel id ≥ width·height) gives NaN in every output of that ray, so
 //    it cannot pass unnoticed downstream.
@@ -154,28 +154,23 @@ inline float3 lens_direction(__global const float* cam, __global const float* ta
   return camera_rotate(cam, (float3)(p.x, -p.y, -1.0f));
 }
 
-// A lens pixel's NDC radius: as the pinhole's (the mean distance to the next NDC origin across and down, from the pair
-// pair_start_shift picks, × 2/√12), with the pair's two directions read from the table at the same sub-pixel offset.
-// An axis one pixel long has no neighbour in the table: there the pair is the pinhole's, a step of 1/f back from the
-// pixel (pair_start_shift −1), as the table's own radius takes 1/f for it.
-inline float lens_ndc_radius(__global const float* cam, __global const float* table, uint px, uint py, uint width,
-                             uint height, float offset_x, float offset_y, float3 origin, float sx, float sy) {
-  const float3 here = lens_direction(cam, table, px, py, width, height, offset_x, offset_y);
-  float3 step_h = camera_rotate(cam, (float3)(1.0f / cam[CAMERA_FOCAL_X], 0.0f, 0.0f)), first_h = here - step_h;
+// A lens pixel's neighbour pairs for its NDC radius: along each axis of at least 2 pixels, the pair pair_start_shift
+// picks (as for a pinhole) read from the table at the same sub-pixel offset — the first neighbour's direction and the
+// step to the second. An axis one pixel long has no neighbour in the table and keeps the pinhole's pair (a step of
+// 1/f back from the pixel), as the table's own radius takes 1/f for it.
+inline void lens_ndc_pairs(__global const float* cam, __global const float* table, uint px, uint py, uint width,
+                           uint height, float offset_x, float offset_y, float3* first_h, float3* step_h,
+                           float3* first_v, float3* step_v) {
   if (width >= 2) {
-    const uint start = px + 1 < width ? px : width - 2 - (width >= 3 ? 1 : 0);
-    first_h = lens_direction(cam, table, start, py, width, height, offset_x, offset_y);
-    step_h = lens_direction(cam, table, start + 1, py, width, height, offset_x, offset_y) - first_h;
+    const uint start = (uint)((int)px + (int)pair_start_shift(px, width));
+    *first_h = lens_direction(cam, table, start, py, width, height, offset_x, offset_y);
+    *step_h = lens_direction(cam, table, start + 1, py, width, height, offset_x, offset_y) - *first_h;
   }
-  float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / cam[CAMERA_FOCAL_Y], 0.0f)), first_v = here - step_v;
   if (height >= 2) {
-    const uint start = py + 1 < height ? py : height - 2 - (height >= 3 ? 1 : 0);
-    first_v = lens_direction(cam, table, px, start, width, height, offset_x, offset_y);
-    step_v = lens_direction(cam, table, px, start + 1, width, height, offset_x, offset_y) - first_v;
+    const uint start = (uint)((int)py + (int)pair_start_shift(py, height));
+    *first_v = lens_direction(cam, table, px, start, width, height, offset_x, offset_y);
+    *step_v = lens_direction(cam, table, px, start + 1, width, height, offset_x, offset_y) - *first_v;
   }
-  const float dist_h = ndc_neighbour_distance(origin, first_h, step_h, sx, sy);
-  const float dist_v = ndc_neighbour_distance(origin, first_v, step_v, sx, sy);
-  return 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
 }
 #endif
 
@@ -275,19 +270,18 @@ __kernel void rays_fwd(__global const float* cameras, __global const uint* camer
   // of a pair of neighbours: this pixel and the next, or in the last column / row the pair the official code repeats
   // there (pair_start_shift).
   const float shift_x = pair_start_shift(px, width), shift_y = pair_start_shift(py, height);
-  const float3 step_h = camera_rotate(cam, (float3)(1.0f / fx, 0.0f, 0.0f));
-  const float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / fy, 0.0f));
+  float3 step_h = camera_rotate(cam, (float3)(1.0f / fx, 0.0f, 0.0f));
+  float3 step_v = camera_rotate(cam, (float3)(0.0f, -1.0f / fy, 0.0f));
+  float3 first_h = dir + shift_x * step_h, first_v = dir + shift_y * step_v;
 #if LENS_TABLES
   if (lens_table != 0) {
-    radii[i] = lens_ndc_radius(cam, lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x,
-                               offset_y, origin, sx, sy);
-  } else
-#endif
-  {
-    const float dist_h = ndc_neighbour_distance(origin, dir + shift_x * step_h, step_h, sx, sy);
-    const float dist_v = ndc_neighbour_distance(origin, dir + shift_y * step_v, step_v, sx, sy);
-    radii[i] = 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
+    lens_ndc_pairs(cam, lens_tables + 4 * (size_t)(lens_table - 1), px, py, width, height, offset_x, offset_y,
+                   &first_h, &step_h, &first_v, &step_v);
   }
+#endif
+  const float dist_h = ndc_neighbour_distance(origin, first_h, step_h, sx, sy);
+  const float dist_v = ndc_neighbour_distance(origin, first_v, step_v, sx, sy);
+  radii[i] = 0.5f * (dist_h + dist_v) * RADIUS_PER_PIXEL_WIDTH;
 #else
   store3(origins, i, origin);
   store3(directions, i, dir);

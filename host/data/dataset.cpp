@@ -45,6 +45,18 @@ const Split& Dataset::split(const std::string& name) const {
 }
 
 
+Camera camera_at_factor(const Camera& camera, uint32_t factor) {
+  if (factor <= 1) return camera;
+  if (camera.width_px < factor || camera.height_px < factor) {
+    throw Error("camera_at_factor: " + std::to_string(camera.width_px) + "x" + std::to_string(camera.height_px) +
+                " is smaller than factor " + std::to_string(factor));
+  }
+  Camera cropped = camera;
+  cropped.width_px -= camera.width_px % factor;
+  cropped.height_px -= camera.height_px % factor;
+  return scale_camera(cropped, factor);
+}
+
 Camera scale_camera(const Camera& camera, uint32_t factor) {
   if (factor == 1) return camera;
   if (camera.width_px % factor != 0 || camera.height_px % factor != 0) {
@@ -200,11 +212,9 @@ Split load_split(const detail::SplitSpec& spec, const LoadOptions& options) {
           cropped_note_given = true;
         }
         image = crop_top_left(image, cropped_width, cropped_height);
-        camera.width_px = cropped_width;
-        camera.height_px = cropped_height;
       }
       for (uint32_t f = 1; f < factor; f *= 2) image = downsample2(image);
-      camera = scale_camera(camera, factor);
+      camera = camera_at_factor(camera, factor);
     }
     if (options.forward_facing_ndc) projections.check(camera, frame.where);
     camera.near = frame.near;

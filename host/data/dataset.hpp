@@ -102,4 +102,9 @@ void append_image(Split& split, const RgbaImage& image, const Camera& camera, ui
 // full-resolution pixels). The cone radius follows from the smaller focal length through the ray kernel.
 Camera scale_camera(const Camera& camera, uint32_t factor);
 
+// The camera a stored image of `camera` trains at with `factor` (the loader's rule): cropped at its right and bottom
+// edges to the largest size the factor divides (the intrinsics stay exact: pixel k still covers source pixels
+// [f·k, f·k + f)), then scale_camera. Throws when the image is smaller than the factor.
+Camera camera_at_factor(const Camera& camera, uint32_t factor);
+
 }  // namespace mipnerf::data

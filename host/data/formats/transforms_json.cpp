@@ -79,14 +79,12 @@ FormatRenderPath render_path(const std::string& path, const LoadOptions& options
   resolve_intrinsics(first.intrinsics, size.width, size.height, camera, first.where);
   const bool had_lens = !camera.lens.is_pinhole();
   camera.lens = Lens{};
-  // The size the loader trains at: cropped to what the factor divides, then downsampled (data/dataset.cpp).
+  // The size the loader trains at.
   const uint32_t factor = std::max<uint32_t>(1, options.factor);
   if (camera.width_px < factor || camera.height_px < factor) {
     throw Error(first.image_path + ": smaller than factor " + std::to_string(factor) + "; use a smaller factor");
   }
-  camera.width_px -= camera.width_px % factor;
-  camera.height_px -= camera.height_px % factor;
-  if (factor > 1) camera = scale_camera(camera, factor);
+  camera = camera_at_factor(camera, factor);
   camera.near = first.near;
   camera.far = first.far;
   camera.lossmult = 1.0;
