@@ -24,6 +24,7 @@ struct BufferPlan {
   bool unit_histogram = false;         // the first level samples by proposal: [R][2] + [R]
   size_t proposal_intervals = 0;       // training: the proposal rounds' most intervals (their shared backward)
   size_t distortion_intervals = 0;     // training with a distortion loss: the last level's intervals
+  size_t dilated_from = 0;             // the most intervals a dilated level's previous level has (N: 3N − 1 edges)
   size_t batch_rays = 0;
   size_t partial_slots = 0;  // per colour level (training)
   bool training = false;
@@ -43,6 +44,7 @@ struct BufferPlan {
     if (unit_histogram) n += 3 * rays;
     n += rays * proposal_intervals * (2 + 3) + (proposal_intervals ? rays : 0);
     if (distortion_intervals) n += rays * (2 * distortion_intervals + 1) + rays + batch_rays;
+    if (dilated_from) n += rays * (6 * dilated_from - 3);
     return n;
   }
 };
@@ -73,6 +75,9 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
     }
   }
   if (plan.training && spec.levels.back().distortion_mult > 0.0f) plan.distortion_intervals = plan.level_intervals.back();
+  for (size_t l = 1; l < spec.levels.size(); ++l) {
+    if (spec.levels[l].dilation > 0.0f) plan.dilated_from = std::max(plan.dilated_from, plan.level_intervals[l - 1]);
+  }
   // Each chunk of n rays writes ceil(n / group) slots: at most batch/group + one partial group per chunk.
   const size_t chunks = max_chunk_rays ? (max_batch_rays + max_chunk_rays - 1) / max_chunk_rays : 0;
   plan.partial_slots = max_batch_rays / loss_group_size + chunks + 1;
@@ -171,7 +176,17 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   if (spec_.levels.front().sampling == Sampling::proposal) {
     sample_intervals_ = std::make_unique<ops::SampleIntervals>(ctx, spec_.ray_distance);
   }
-  if (training && spec_.has_proposal_levels()) interlevel_ = std::make_unique<ops::SplineInterlevel>(ctx);
+  if (training) {
+    for (const auto& level : spec_.levels) {
+      if (level.role != LevelRole::proposal) continue;
+      if (level.interlevel.kind == ops::InterlevelKind::spline && !interlevel_) {
+        interlevel_ = std::make_unique<ops::SplineInterlevel>(ctx);
+      }
+      if (level.interlevel.kind == ops::InterlevelKind::outer && !outer_interlevel_) {
+        outer_interlevel_ = std::make_unique<ops::OuterInterlevel>(ctx);
+      }
+    }
+  }
   if (training && spec_.levels.back().distortion_mult > 0.0f) distortion_ = std::make_unique<ops::Distortion>(ctx);
   for (size_t g = 0; g < spec_.grids.size(); ++g) {
     ops::ZipFeatureOptions zip_options = spec_.zip_options(g);
@@ -219,6 +234,11 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     chunk_ray_loss_ = ocl::DeviceArray<float>(ctx, R, "interlevel ray_loss [R]");
     zero_d_raw_rgb_ = ocl::DeviceArray<float>(ctx, 3 * R * M, "proposal d_raw_rgb [R·M][3] (zeros)");
     zero_d_raw_rgb_.fill(ctx, 0.0f);
+  }
+  if (const size_t N = plan.dilated_from) {
+    dilate_ = std::make_unique<ops::MaxDilate>(ctx);
+    dilated_s_edges_ = ocl::DeviceArray<float>(ctx, R * ops::dilated_edges(N), "dilated s_edges [R][3N-1]");
+    dilated_weights_ = ocl::DeviceArray<float>(ctx, R * ops::dilated_intervals(N), "dilated weights [R][3N-2]");
   }
   if (const size_t N = plan.distortion_intervals) {
     d_w_distortion_ = ocl::DeviceArray<float>(ctx, R * N, "distortion d_w [R][N]");
@@ -319,6 +339,14 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
       if (l == 0) {
         sample_intervals_->fwd(sample_intervals_options_, {unit_s_edges_, unit_weights_, n_rays, 1, level.new_samples},
                                out.s_edges, round_rng);
+      } else if (level.dilation > 0.0f) {  // mip-NeRF 360: from the previous histogram max-dilated
+        const LevelBuffers& previous = levels_[l - 1];
+        dilate_->fwd(previous.s_edges, previous.weights, n_rays, previous.intervals, level.dilation, dilated_s_edges_,
+                     dilated_weights_);
+        sample_intervals_->fwd(sample_intervals_options_,
+                               {dilated_s_edges_, dilated_weights_, n_rays, ops::dilated_intervals(previous.intervals),
+                                level.new_samples},
+                               out.s_edges, round_rng);
       } else {
         const LevelBuffers& previous = levels_[l - 1];
         sample_intervals_->fwd(sample_intervals_options_,
@@ -368,8 +396,8 @@ void Graph::encode_level(size_t l, size_t n_rays, const RngKey& key) {
                                   level_features(l), key);
       break;
     }
-    case Encoding::integrated:
-      encode_->gaussian_ipe(spec_.position_encoding, intervals, features_);
+    case Encoding::integrated:  // a training proposal round's into its own features (kept for its backward)
+      encode_->gaussian_ipe(spec_.position_encoding, intervals, level_features(l));
       break;
     case Encoding::frustum_mean_pe:
       gaussian_->fwd(intervals, {means_, covs_});
@@ -472,21 +500,29 @@ void Graph::backward_proposal(size_t l, ChunkRange chunk, const DensityNoiseKey&
                                  n_rays,       last.intervals, round.intervals};
   {
     ocl::StageScope stage(*ctx_, "interlevel loss");
-    interlevel_->fwd(in, level.interlevel.blur_halfwidth, w_blur_, chunk_ray_loss_);
+    if (level.interlevel.kind == ops::InterlevelKind::outer) {
+      outer_interlevel_->fwd(in, chunk_ray_loss_);
+      outer_interlevel_->bwd(in, level.interlevel.mult, step_batch_rays_, d_wp_);
+    } else {
+      interlevel_->fwd(in, level.interlevel.blur_halfwidth, w_blur_, chunk_ray_loss_);
+      interlevel_->bwd(in, w_blur_, level.interlevel.mult, step_batch_rays_, d_wp_);
+    }
     ocl::copy(*ctx_, chunk_ray_loss_, 0, round.ray_loss, chunk.first, n_rays);
-    interlevel_->bwd(in, w_blur_, level.interlevel.mult, step_batch_rays_, d_wp_);
   }
   {
     ocl::StageScope stage(*ctx_, "render backward");
     render_->raw_weights_bwd({round.raw_density, round.t_edges, chunk_rays_, n_rays, round.intervals}, round.weights,
                              d_wp_, d_raw_density_, noise);
   }
+  // A grid round's features take the gradient on to its grid; IPE features have no parameters behind them.
+  const bool grid_level = level.encoding == Encoding::zip_grid;
   mlp::Network& network = *networks_[level.mlp_index];
   {
     ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
     network.backward(workspaces_[level.mlp_index], {mlp::view(d_raw_density_, 1), mlp::view(zero_d_raw_rgb_, 3)},
-                     mlp::view(d_features_, network.config().input_width));
+                     grid_level ? mlp::view(d_features_, network.config().input_width) : mlp::MatrixView{});
   }
+  if (!grid_level) return;
   ocl::StageScope grid_stage(*ctx_, "grid backward");
   mlp::GridTable& grid = *grids_[level.grid_index];
   zip_[level.grid_index]->bwd({chunk_rays_, round.t_edges, n_rays, round.intervals}, {grid.levels(), grid.layout()},
@@ -555,8 +591,12 @@ std::vector<ops::LevelLoss> Graph::end_step() {
       round.lossmult_sum = step_lossmult_sum_;
       std::vector<float> ray_loss(step_batch_rays_);
       level.ray_loss.download(*ctx_, ray_loss.data(), ray_loss.size());  // blocking: waits for the step
+      const ops::InterlevelRound& constants = spec_.levels[l].interlevel;
+      // The spline loss is a mean over the round's intervals, the outer loss over the last level's.
       round.interlevel =
-          ops::interlevel_loss_value(ray_loss, step_batch_rays_, level.intervals, spec_.levels[l].interlevel.mult);
+          constants.kind == ops::InterlevelKind::outer
+              ? ops::outer_interlevel_loss_value(ray_loss, step_batch_rays_, levels_.back().intervals, constants.mult)
+              : ops::interlevel_loss_value(ray_loss, step_batch_rays_, level.intervals, constants.mult);
       losses.push_back(round);
       continue;
     }

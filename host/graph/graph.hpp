@@ -24,10 +24,12 @@
 #include "graph/graph_spec.hpp"
 #include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
+#include "ops/dilate.hpp"
 #include "ops/distortion.hpp"
 #include "ops/encode.hpp"
 #include "ops/gaussian.hpp"
 #include "ops/interlevel.hpp"
+#include "ops/interlevel_outer.hpp"
 #include "ops/loss.hpp"
 #include "ops/ray_bundle.hpp"
 #include "ops/rays.hpp"
@@ -183,7 +185,8 @@ class Graph {
   std::unique_ptr<ops::Loss> loss_;
   std::vector<std::unique_ptr<ops::ZipFeatures>> zip_;  // one per grid (its features are compiled in)
   std::unique_ptr<ops::SampleIntervals> sample_intervals_;  // proposal sampling (when a level samples so)
-  std::unique_ptr<ops::SplineInterlevel> interlevel_;       // proposal rounds' loss (training)
+  std::unique_ptr<ops::SplineInterlevel> interlevel_;       // Zip-NeRF proposal rounds' loss (training)
+  std::unique_ptr<ops::OuterInterlevel> outer_interlevel_;  // mip-NeRF 360 proposal rounds' loss (training)
   std::unique_ptr<ops::Distortion> distortion_;             // the last level's distortion loss (training, when asked)
   ResampleOptions resample_options_;
   SampleIntervalsOptions sample_intervals_options_;  // anneal: the step's (training) or 1 (rendering)
@@ -205,6 +208,9 @@ class Graph {
   ocl::DeviceArray<float> d_w_distortion_, d_t_distortion_, distortion_chunk_loss_, distortion_ray_loss_;
   // Proposal sampling: the first round's histogram, the whole ray [0, 1] with weight 1 (official initial sdist).
   ocl::DeviceArray<float> unit_s_edges_, unit_weights_;  // [R][2], [R]
+  // mip-NeRF 360's dilation of a previous histogram before proposal sampling (when a level asks for it).
+  std::unique_ptr<ops::MaxDilate> dilate_;
+  ocl::DeviceArray<float> dilated_s_edges_, dilated_weights_;  // [R][3N−1], [R][3N−2]
   // The proposal rounds' backward, shared (one round at a time), M = the rounds' most intervals.
   ocl::DeviceArray<float> w_blur_, d_wp_;      // [R][M]
   ocl::DeviceArray<float> chunk_ray_loss_;     // [R]

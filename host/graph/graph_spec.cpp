@@ -2,6 +2,7 @@
 #include "graph/graph_spec.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -62,7 +63,7 @@ namespace {
 
 // The rules of proposal sampling: s-edges exist only on levels that sample by `proposal`, so a proposal-sampled level
 // reads a proposal-sampled (or no) previous level; a proposal round needs the last level's s-histogram, its own
-// network (its forward waits in its workspace for the backward after the last level's) and a grid.
+// network (its forward waits in its workspace for the backward after the last level's) and a grid or IPE features.
 void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string& where) {
   const auto& level = spec.levels[l];
   if (level.sampling == Sampling::proposal) {
@@ -71,6 +72,11 @@ void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string&
                           "proposal too");
     }
     if (level.new_samples < 2) throw Error(where + ": proposal sampling draws at least 2 intervals");
+  }
+  if (level.dilation != 0.0f && (l == 0 || level.sampling != Sampling::proposal || !(level.dilation > 0.0f) ||
+                                 !std::isfinite(level.dilation))) {
+    throw Error(where + ": a dilation (finite, > 0) dilates the previous level's histogram before proposal sampling: "
+                        "only a proposal-sampled level after the first takes one");
   }
   if (level.distortion_mult != 0.0f) {
     if (!(level.distortion_mult > 0.0f)) throw Error(where + ": the distortion loss weight must be ≥ 0");
@@ -85,14 +91,17 @@ void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string&
     throw Error(where + ": a proposal round and the last level must sample by proposal (the interlevel loss compares "
                         "their s-histograms)");
   }
-  if (level.encoding != Encoding::zip_grid) throw Error(where + ": a proposal round reads a grid (zip_grid encoding)");
+  if (level.encoding != Encoding::zip_grid && level.encoding != Encoding::integrated) {
+    throw Error(where + ": a proposal round reads a grid (Zip-NeRF) or the IPE of its frustums (mip-NeRF 360)");
+  }
   for (size_t k = 0; k < spec.levels.size(); ++k) {
     if (k != l && spec.levels[k].mlp_index == level.mlp_index) {
       throw Error(where + ": a proposal round needs a network of its own, but level " + std::to_string(k) +
                   " uses network " + std::to_string(level.mlp_index) + " too");
     }
   }
-  if (!(level.interlevel.blur_halfwidth > 0.0f) || !(level.interlevel.mult >= 0.0f)) {
+  const bool spline = level.interlevel.kind == ops::InterlevelKind::spline;
+  if ((spline && !(level.interlevel.blur_halfwidth > 0.0f)) || !(level.interlevel.mult >= 0.0f)) {
     throw Error(where + ": the interlevel blur half-width must be > 0 and its mult ≥ 0");
   }
 }
@@ -165,6 +174,7 @@ std::string GraphSpec::describe() const {
     out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals"
         << (level.sampling == Sampling::proposal && ray_distance == RayDistance::power_ladder ? " (power ladder s→t)"
                                                                                              : "")
+        << (level.dilation > 0.0f ? " from the previous histogram dilated by " + std::to_string(level.dilation) : "")
         << ", " << encoding;
     if (level.encoding == Encoding::zip_grid) {
       out << " " << level.grid_index << " (" << mlp::describe(grids[level.grid_index])
@@ -175,8 +185,12 @@ std::string GraphSpec::describe() const {
     }
     out << ", network " << level.mlp_index;
     if (level.role == LevelRole::proposal) {
-      out << ", proposal round (density only; interlevel loss, blur " << level.interlevel.blur_halfwidth << ", mult "
-          << level.interlevel.mult << ")";
+      if (level.interlevel.kind == ops::InterlevelKind::outer) {
+        out << ", proposal round (density only; outer interlevel loss, mult " << level.interlevel.mult << ")";
+      } else {
+        out << ", proposal round (density only; interlevel loss, blur " << level.interlevel.blur_halfwidth << ", mult "
+            << level.interlevel.mult << ")";
+      }
     } else {
       out << ", loss weight " << level.loss_weight;
       if (level.distortion_mult > 0.0f) out << ", distortion loss mult " << level.distortion_mult;

@@ -52,6 +52,9 @@ struct LevelSpec {
   float loss_weight = 1.0f;  // λ = 0.1 on coarse levels, 1 on the last (nerf levels)
   LevelRole role = LevelRole::nerf;
   ops::InterlevelRound interlevel;  // a proposal level's loss: its blur half-width (in s) and mult
+  // A proposal-sampled level after the first: the previous level's histogram is max-dilated by this much (normalised
+  // s) before this level samples from it (mip-NeRF 360's stepfun.max_dilate_weights; 0: not dilated, Zip-NeRF).
+  float dilation = 0.0f;
   // The last level's distortion loss weight (mip-NeRF 360 eq. 15 over its s edges, so proposal-sampled only; 0: none).
   float distortion_mult = 0.0f;
   // Intervals this level renders: new_samples, or previous + new_samples + 1 for a union of edge sets.

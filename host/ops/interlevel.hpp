@@ -15,9 +15,17 @@
 
 namespace mipnerf::ops {
 
-// One round's constants (the official Zip-NeRF config: mults 0.01, blurs (0.03, 0.003) over its two rounds).
+// Which interlevel loss a proposal round takes.
+enum class InterlevelKind {
+  spline,  // Zip-NeRF's anti-aliased loss (this file): the NeRF's histogram blurred, resampled into the round's
+  outer,   // mip-NeRF 360's eq. 13 (ops/interlevel_outer.hpp): the round's outer measure must bound the NeRF's weights
+};
+
+// One round's constants (the official Zip-NeRF config: mults 0.01, blurs (0.03, 0.003) over its two rounds; mip-NeRF
+// 360's: the outer loss, mult 1).
 struct InterlevelRound {
-  float blur_halfwidth = 0.03f;  // r, in the normalised s-distance of c and cp; must be > 0
+  InterlevelKind kind = InterlevelKind::spline;
+  float blur_halfwidth = 0.03f;  // r, in the normalised s-distance of c and cp; must be > 0 (spline only)
   float mult = 0.01f;            // the round's loss multiplier
 };
 

@@ -125,8 +125,9 @@ const std::vector<Entry>& table() {
       {{"grid_weight_decay", "zipnerf: weight of each grid level's mean squared value in the loss", "optimisation"},
        &TrainConfig::grid_weight_decay},
       {{"sampler",
-        "how later levels choose their intervals: resampling the previous level's weights (mip-NeRF), or Zip-NeRF's "
-        "proposal rounds (zipnerf only: density-only networks on their own grids, trained by the interlevel loss)",
+        "how later levels choose their intervals: resampling the previous level's weights (mip-NeRF), or proposal "
+        "rounds (density-only networks trained by an interlevel loss: Zip-NeRF's on grids of their own, mip-NeRF "
+        "360's on the IPE)",
         "model"},
        &TrainConfig::sampler},
       {{"proposal_rounds", "sampler=proposal: density-only proposal rounds before the NeRF level (official 2)", "model"},
@@ -138,14 +139,30 @@ const std::vector<Entry>& table() {
         "(official 2048, 512)",
         "model"},
        &TrainConfig::proposal_grid_max},
+      {{"proposal_mlp_depth", "mipnerf, sampler=proposal: layers of each proposal round's MLP (official mip-NeRF 360: 4)",
+        "model"},
+       &TrainConfig::proposal_mlp_depth},
+      {{"proposal_mlp_width", "mipnerf, sampler=proposal: units per layer of each proposal round's MLP (official 256)",
+        "model"},
+       &TrainConfig::proposal_mlp_width},
       {{"anneal_slope",
         "sampler=proposal: slope of Schlick's bias annealing the proposal weights over training (<= 0: off; official "
         "10)",
         "model"},
        &TrainConfig::anneal_slope},
-      {{"interlevel_mult", "sampler=proposal: weight of each proposal round's interlevel loss (official 0.01)",
+      {{"interlevel_mult",
+        "sampler=proposal: weight of each proposal round's interlevel loss (< 0: the official, Zip-NeRF 0.01, "
+        "mip-NeRF 360 1)",
         "optimisation"},
        &TrainConfig::interlevel_mult},
+      {{"dilation_bias",
+        "sampler=proposal: dilation of each proposal histogram before the next level samples it, plus dilation_mult / "
+        "the samples before (< 0: the official, mip-NeRF 360 0.0025, Zip-NeRF 0)",
+        "model"},
+       &TrainConfig::dilation_bias},
+      {{"dilation_mult",
+        "sampler=proposal: see dilation_bias (< 0: the official, mip-NeRF 360 0.5, Zip-NeRF 0)", "model"},
+       &TrainConfig::dilation_mult},
       {{"distortion_mult",
         "sampler=proposal: weight of mip-NeRF 360's distortion loss on the NeRF level's weights over normalised "
         "distance (against floaters; 0 = off; official Zip-NeRF 360° scenes 0.01)",
@@ -501,19 +518,23 @@ void validate(const TrainConfig& c) {
   require(c.distortion_mult >= 0, "distortion_mult must be >= 0 (0 = off)");
   require(c.distortion_mult == 0 || c.sampler == Sampler::proposal,
           "distortion_mult needs sampler=proposal (the distortion loss is taken over the normalised distances its "
-          "levels are drawn in): add --set sampler=proposal (zipnerf), or leave distortion_mult at 0");
+          "levels are drawn in): add --set sampler=proposal, or leave distortion_mult at 0");
   if (c.sampler == Sampler::proposal) {
-    require(c.variant == ModelFamily::zipnerf,
-            "sampler=proposal is Zip-NeRF's (density-only proposal networks on grids of their own): train with --model "
-            "zipnerf, or keep sampler=resample for the " + std::string(enum_name(c.variant)) + " model family");
+    require(c.variant != ModelFamily::nerf,
+            "sampler=proposal is Zip-NeRF's and mip-NeRF 360's (density-only proposal networks on grids or on the IPE); "
+            "the nerf model family samples points by resampling: keep sampler=resample, or train --model mipnerf or "
+            "zipnerf");
+    require(c.variant == ModelFamily::zipnerf || c.integrated_encoding,
+            "sampler=proposal with --model mipnerf encodes every level by IPE (mip-NeRF 360): leave "
+            "integrated_encoding=true");
     require(c.proposal_rounds >= 1 && c.proposal_rounds <= 4, "proposal_rounds must be in 1..4 (official 2)");
     require(c.proposal_samples >= 2, "proposal_samples must be at least 2 (proposal sampling draws >= 2 intervals)");
-    require(c.interlevel_mult >= 0, "interlevel_mult must be >= 0");
+    require(c.proposal_mlp_depth >= 1 && c.proposal_mlp_width >= 1, "proposal_mlp_depth and _width must be positive");
     mlp::GridConfig grid;
     grid.min_grid_size = c.grid_min;
     grid.scale_supersample = c.grid_supersample;
     grid.features = 1;
-    for (int round = 0; round < c.proposal_rounds; ++round) {
+    for (int round = 0; c.variant == ModelFamily::zipnerf && round < c.proposal_rounds; ++round) {
       grid.max_grid_size = proposal_round_grid_max(c, round);
       try {
         grid.validate();

@@ -139,12 +139,22 @@ struct TrainConfig {
   // 2048); their loss is the spline interlevel loss, interlevel_mult per round (official mults 0.01), blurred by the
   // official half-widths (graph/proposal blur table in train/model.cpp), with weights annealed by Schlick's bias of
   // slope anneal_slope (official 10).
+  // With --model mipnerf (mip-NeRF 360's sampler, multinerf's Model and PropMLP): every level encodes its frustums by
+  // IPE, each round has a density-only MLP of proposal_mlp_depth × proposal_mlp_width (official 4 × 256), the NeRF
+  // level the mip-NeRF MLP, and the rounds take mip-NeRF 360's outer interlevel loss (eq. 13).
   Sampler sampler = Sampler::resample;
   int proposal_rounds = 2;
   int proposal_samples = 64;
   int proposal_grid_max = 2048;
+  int proposal_mlp_depth = 4;
+  int proposal_mlp_width = 256;
   double anneal_slope = 10.0;
-  double interlevel_mult = 0.01;
+  double interlevel_mult = -1.0;  // < 0: the model's official (Zip-NeRF's spline loss 0.01, mip-NeRF 360's outer 1)
+  // mip-NeRF 360's dilation of each proposal histogram before the next level samples from it: by dilation_bias +
+  // dilation_mult / (the samples drawn by the levels before), in normalised s (official Model.dilation_bias 0.0025,
+  // dilation_multiplier 0.5). < 0: the model's official (mip-NeRF 360 those; Zip-NeRF none: camp_zipnerf has none).
+  double dilation_bias = -1.0;
+  double dilation_mult = -1.0;
   // mip-NeRF 360's distortion loss (eq. 15) on the NeRF level's weights over normalised distance s, this weight (0 =
   // off; sampler = proposal only: its levels are drawn in s). Official camp_zipnerf 360.gin: 0.01 (on a curve of t).
   double distortion_mult = 0.0;

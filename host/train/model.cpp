@@ -61,39 +61,78 @@ void set_grid_box(const TrainConfig& c, ops::ZipFeatureOptions& zip) {
 // NeRF level and the coarser one for every earlier round.
 float proposal_blur_halfwidth(int round, int rounds) { return round + 1 == rounds ? 0.003f : 0.03f; }
 
-// Zip-NeRF's proposal pipeline (sampler = proposal; official Model.__call__ with 360.gin's sampling_strategy):
-// levels 0 .. K−1 are the proposal rounds, each with grid i (1 feature a level, finest proposal_grid_max / 4^(K−1−i))
-// and a density-only network i; level K is the NeRF level with grid K (the grid_* settings) and network K. Every level
-// samples by proposal, the first from the whole ray.
+// The interlevel loss weight of each proposal round: the setting, or (negative: automatic) the official of the model
+// family's loss: Zip-NeRF's spline loss 0.01 (camp_zipnerf 360.gin), mip-NeRF 360's outer loss 1 (multinerf
+// Config.interlevel_loss_mult).
+float proposal_interlevel_mult(const TrainConfig& c) {
+  if (c.interlevel_mult >= 0) return static_cast<float>(c.interlevel_mult);
+  return c.variant == ModelFamily::zipnerf ? 0.01f : 1.0f;
+}
+
+// The dilation of proposal level `l` ≥ 1 after levels drawing `samples_before` intervals in all (their product): the
+// settings, or (negative: automatic) the official of the model family (multinerf Model: 0.0025 + 0.5 / that product;
+// camp_zipnerf: none).
+float proposal_dilation(const TrainConfig& c, double samples_before) {
+  const bool zipnerf = c.variant == ModelFamily::zipnerf;
+  const double bias = c.dilation_bias >= 0 ? c.dilation_bias : zipnerf ? 0.0 : 0.0025;
+  const double mult = c.dilation_mult >= 0 ? c.dilation_mult : zipnerf ? 0.0 : 0.5;
+  return static_cast<float>(bias + mult / samples_before);
+}
+
+// A mip-NeRF 360 proposal round's network (official PropMLP: net_depth 4, net_width 256, disable_rgb): the IPE in, the
+// skip rule of the NeRF's (none within 4 layers), density only.
+mlp::MlpConfig proposal_mlp(const TrainConfig& c, size_t input_width, size_t index) {
+  mlp::MlpConfig m = network(c, input_width, index);
+  m.depth = static_cast<size_t>(c.proposal_mlp_depth);
+  m.width = static_cast<size_t>(c.proposal_mlp_width);
+  m.skip_layer = c.mlp_skip > 0 && c.mlp_skip < c.proposal_mlp_depth - 1 ? static_cast<size_t>(c.mlp_skip) : 0;
+  m.bottleneck_width = m.width;
+  m.view_dependence = false;
+  return m;
+}
+
+// The proposal pipeline (sampler = proposal; official Model.__call__ of camp_zipnerf 360.gin's sampling_strategy, or
+// of multinerf's mip-NeRF 360): levels 0 .. K−1 are the proposal rounds, level K the NeRF level; every level samples
+// by proposal, the first from the whole ray.
+//   Zip-NeRF: round i has grid i (1 feature a level, finest proposal_grid_max / 4^(K−1−i)) and a density-only network
+//   i of the tiny MLP's shape; the NeRF level grid K (the grid_* settings) and network K; the spline interlevel loss.
+//   mip-NeRF: every level encodes its frustums by IPE; round i has a density-only network of proposal_mlp_depth ×
+//   proposal_mlp_width, the NeRF level the mip-NeRF MLP; the outer interlevel loss (mip-NeRF 360 eq. 13).
 void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
   const int rounds = c.proposal_rounds;
+  const bool grids = c.variant == ModelFamily::zipnerf;
   spec.grids.clear();
-  for (int round = 0; round < rounds; ++round) {
+  for (int round = 0; grids && round < rounds; ++round) {
     mlp::GridConfig grid = grid_config(c);
     grid.features = 1;  // official: "no need for >1 features in the proposal NGPs, the output is 1d"
     grid.max_grid_size = proposal_round_grid_max(c, round);
     grid.seed = grid.seed + 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(round + 1);
     spec.grids.push_back(grid);
   }
-  spec.grids.push_back(grid_config(c));
+  if (grids) spec.grids.push_back(grid_config(c));
+  double samples_before = 1.0;  // the product of the earlier levels' samples (official prod_num_samples)
   for (int l = 0; l <= rounds; ++l) {
     graph::LevelSpec level;
     level.sampling = graph::Sampling::proposal;
-    level.encoding = graph::Encoding::zip_grid;
-    level.grid_index = static_cast<size_t>(l);
+    if (l > 0) level.dilation = proposal_dilation(c, samples_before);
+    level.encoding = grids ? graph::Encoding::zip_grid : graph::Encoding::integrated;
+    level.grid_index = grids ? static_cast<size_t>(l) : 0;
     level.mlp_index = static_cast<size_t>(l);
     if (l < rounds) {
       level.role = graph::LevelRole::proposal;
       level.new_samples = static_cast<size_t>(c.proposal_samples);
+      level.interlevel.kind = grids ? ops::InterlevelKind::spline : ops::InterlevelKind::outer;
       level.interlevel.blur_halfwidth = proposal_blur_halfwidth(l, rounds);
-      level.interlevel.mult = static_cast<float>(c.interlevel_mult);
+      level.interlevel.mult = proposal_interlevel_mult(c);
     } else {
       level.new_samples = static_cast<size_t>(c.num_samples);
       level.distortion_mult = static_cast<float>(c.distortion_mult);
     }
+    samples_before *= static_cast<double>(level.new_samples);
     spec.levels.push_back(level);
-    mlp::MlpConfig m = network(c, spec.feature_width(level), static_cast<size_t>(l));
-    // A proposal round's network: the tiny trunk and its density, no colour to condition (official disable_rgb).
+    const size_t input_width = spec.feature_width(level), index = static_cast<size_t>(l);
+    mlp::MlpConfig m = grids || l == rounds ? network(c, input_width, index) : proposal_mlp(c, input_width, index);
+    // A proposal round's network: its trunk and density, no colour to condition (official disable_rgb).
     if (l < rounds) m.view_dependence = false;
     spec.mlps.push_back(m);
   }
@@ -135,7 +174,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   graph::LevelSpec encoded;
   encoded.encoding = encoding;
   const size_t input_width = spec.feature_width(encoded);
-  const bool proposal = zipnerf && c.sampler == Sampler::proposal;
+  const bool proposal = c.sampler == Sampler::proposal;
   if (proposal) add_proposal_levels(c, spec);
   for (int l = 0; l < (proposal ? 0 : c.num_levels); ++l) {
     graph::LevelSpec level;

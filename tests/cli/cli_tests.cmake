@@ -323,8 +323,8 @@ mipnerf_add_checked_test("cli: dataset import-colmap --help names the seven came
   COMMAND mipnerf-cl dataset import-colmap --help)
 mipnerf_add_cli_error_test("train: invalid combination" PATTERN "invalid configuration: lr_warmup_mult must be in"
   ARGS train --lr_warmup_mult 2 --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
-mipnerf_add_cli_error_test("train: sampler=proposal for mip-NeRF says it is Zip-NeRF's" PATTERN "invalid configuration: sampler=proposal is Zip-NeRF's \\(density-only proposal networks on grids of their own\\): train with --model zipnerf, or keep sampler=resample for the mipnerf model family$"
-  ARGS train --set sampler=proposal --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
+mipnerf_add_cli_error_test("train: sampler=proposal for the NeRF baseline says whose it is" PATTERN "invalid configuration: sampler=proposal is Zip-NeRF's and mip-NeRF 360's \\(density-only proposal networks on grids or on the IPE\\); the nerf model family samples points by resampling: keep sampler=resample, or train --model mipnerf or zipnerf$"
+  ARGS train --variant nerf --set sampler=proposal --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: missing data" PATTERN "nowhere: no such file or folder"
   ARGS train --data "${MIPNERF_DATA_FIXTURES}/nowhere" --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 # An output folder that cannot be made: one line naming it, before anything runs (a file sits where a folder must be).

@@ -17,7 +17,9 @@
 #include "ref/distortion.hpp"
 #include "ref/encode.hpp"
 #include "ref/gaussian.hpp"
+#include "ref/dilate.hpp"
 #include "ref/interlevel.hpp"
+#include "ref/interlevel_outer.hpp"
 #include "ref/sample_intervals.hpp"
 #include "ref/loss.hpp"
 #include "ref/mlp.hpp"
@@ -193,6 +195,10 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
         std::vector<double> unit_edges, unit_weights(R, 1.0);
         for (size_t ray = 0; ray < R; ++ray) unit_edges.insert(unit_edges.end(), {0.0, 1.0});
         ref::sample_intervals_fwd(options, unit_edges, unit_weights, s, R, 1, n, round_key);
+      } else if (level.dilation > 0.0f) {  // mip-NeRF 360: from the previous histogram max-dilated
+        std::vector<double> dilated_s, dilated_w;
+        ref::max_dilate_weights_fwd(s_prev, weights_prev, level.dilation, 0.0, 1.0, dilated_s, dilated_w, R, n_prev);
+        ref::sample_intervals_fwd(options, dilated_s, dilated_w, s, R, 3 * n_prev - 2, n, round_key);
       } else {
         ref::sample_intervals_fwd(options, s_prev, weights_prev, s, R, n_prev, n, round_key);
       }
@@ -306,20 +312,32 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
     const auto& mlp_config = spec.mlps[level.mlp_index];
     const size_t M = round.n;
     std::vector<double> w_blur(R * M), ray_loss(R), d_wp(R * M), d_raw_density, d_features;
-    ref::spline_interlevel_fwd(s_prev.data(), weights_prev.data(), round.s.data(), round.weights.data(),
-                               level.interlevel.blur_halfwidth, w_blur.data(), ray_loss.data(), R, n_prev, M);
-    const double loss = ref::spline_interlevel_loss(ray_loss, M, level.interlevel.mult);
+    double loss = 0;
+    if (level.interlevel.kind == ops::InterlevelKind::outer) {  // mip-NeRF 360: a mean over the NeRF's intervals
+      ref::outer_interlevel_fwd(s_prev.data(), weights_prev.data(), round.s.data(), round.weights.data(),
+                                ray_loss.data(), R, n_prev, M);
+      loss = ref::outer_interlevel_loss(ray_loss, n_prev, level.interlevel.mult);
+      ref::outer_interlevel_bwd(s_prev.data(), weights_prev.data(), round.s.data(), round.weights.data(),
+                                static_cast<double>(level.interlevel.mult) / static_cast<double>(R * n_prev),
+                                d_wp.data(), R, n_prev, M);
+    } else {
+      ref::spline_interlevel_fwd(s_prev.data(), weights_prev.data(), round.s.data(), round.weights.data(),
+                                 level.interlevel.blur_halfwidth, w_blur.data(), ray_loss.data(), R, n_prev, M);
+      loss = ref::spline_interlevel_loss(ray_loss, M, level.interlevel.mult);
+      ref::spline_interlevel_bwd(w_blur.data(), round.weights.data(),
+                                 static_cast<double>(level.interlevel.mult) / static_cast<double>(R * M), d_wp.data(),
+                                 R * M);
+    }
     out.level_loss[round.level] = loss;
     out.weighted_loss += loss;
-    ref::spline_interlevel_bwd(w_blur.data(), round.weights.data(),
-                               static_cast<double>(level.interlevel.mult) / static_cast<double>(R * M), d_wp.data(),
-                               R * M);
     const DensityNoiseKey noise{key, static_cast<uint32_t>(round.level)};
     ref::render_raw_weights_bwd(spec.render, spec.activation, round.raw_density, round.t, directions, round.weights,
                                 d_wp, d_raw_density, R, M, noise);
     const std::vector<double> d_raw_rgb(3 * R * M, 0.0);
+    const bool grid_round = level.encoding == graph::Encoding::zip_grid;  // an IPE round has nothing behind its input
     ref::mlp_backward(mlp_config, params[level.mlp_index], round.tape, d_raw_density, d_raw_rgb,
-                      out.grads[level.mlp_index], &d_features);
+                      out.grads[level.mlp_index], grid_round ? &d_features : nullptr);
+    if (!grid_round) continue;
     ref::zip_features_bwd({origins, directions, radii, round.t, R, M}, grids.levels[level.grid_index], d_features,
                           reference_zip_settings(spec, level.grid_index, key), out.grid_grads[level.grid_index]);
   }
@@ -786,6 +804,34 @@ TEST_CASE("graph: a Zip-NeRF training step with proposal sampling equals the ref
   check_step_against_reference("zipnerf", test::small_scene(),
                                {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_grid_max", "64"},
                                 {"grid_max", "64"}, {"grid_hash_log2", "12"}});
+}
+
+// mip-NeRF 360's proposal sampling with the mip-NeRF model: two density-only rounds, each the IPE of its frustums into
+// its own small MLP (official PropMLP, here 2 × 32), then the NeRF level through the mip-NeRF MLP; the rounds' losses
+// are the outer interlevel losses (eq. 13) against the NeRF's histogram. Losses and every network's gradient against
+// the reference composed of the stage references (an outer loss averaged over the wrong intervals, or a round's
+// backward that skipped its network, fails here).
+TEST_CASE("graph: a mip-NeRF training step with mip-NeRF 360's proposal sampling equals the reference") {
+  const auto config = train::resolve_config("tiny", "mipnerf", {{"sampler", "proposal"}});
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.levels.size() == 3);
+  CHECK(spec.grids.empty());
+  for (size_t l = 0; l < 2; ++l) {
+    CHECK(spec.levels[l].encoding == graph::Encoding::integrated);
+    CHECK(spec.levels[l].interlevel.kind == ops::InterlevelKind::outer);
+    CHECK(spec.levels[l].interlevel.mult == 1.0f);
+    CHECK(spec.mlps[l].depth == 4);
+    CHECK(spec.mlps[l].width == 256);
+    CHECK(!spec.mlps[l].view_dependence);
+  }
+  // The official dilations: 0.0025 + 0.5 / (the samples before): none for the first round.
+  CHECK(spec.levels[0].dilation == 0.0f);
+  CHECK(spec.levels[1].dilation == doctest::Approx(0.0025 + 0.5 / config.proposal_samples));
+  CHECK(spec.levels[2].dilation ==
+        doctest::Approx(0.0025 + 0.5 / (config.proposal_samples * config.proposal_samples)));
+  check_step_against_reference("mipnerf", test::small_scene(),
+                               {{"sampler", "proposal"}, {"proposal_samples", "8"}, {"proposal_mlp_depth", "2"},
+                                {"proposal_mlp_width", "32"}, {"distortion_mult", "0.5"}});
 }
 
 // The distortion loss on the NeRF level's weights over its s-edges (mip-NeRF 360 eq. 15; held: no gradient reaches the

@@ -110,6 +110,10 @@ mipnerf_add_oclgrind_test("zip feature kernels" test_ops "zip features:*" oclgri
 # comparisons with the reference and hard cases only; the finite-difference cases relaunch the same kernels ~100 times.
 mipnerf_add_oclgrind_test("proposal loss kernels" test_ops
   "spline interlevel: forward*,spline interlevel: hard*,distortion: forward*" oclgrind ON)
+# mip-NeRF 360's outer interlevel loss (its window walks, forward and backward) and the max-dilation of proposal
+# histograms (its three-list merge and window): the kernels --model mipnerf --set sampler=proposal adds.
+mipnerf_add_oclgrind_test("mip-NeRF 360 proposal kernels" test_ops
+  "outer interlevel: forward*,dilate: the kernel*" oclgrind ON)
 # mip-NeRF 360's contraction of Gaussians and its ray warps (issue 45: not yet stages of the model): the forward and
 # backward over the hard cases (inside, on and beside the sphere, far out, rank-1 covariances) and both warps. The
 # finite-difference case relaunches the forward ~150 times and is left out.

@@ -381,7 +381,7 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(old.sampler == train::Sampler::resample);
   for (const char* name :
        {"sampler", "proposal_rounds", "proposal_samples", "proposal_grid_max", "anneal_slope", "interlevel_mult",
-        "distortion_mult"}) {
+        "distortion_mult", "proposal_mlp_depth", "proposal_mlp_width", "dilation_bias", "dilation_mult"}) {
     CHECK(written.contains(name));
     written.erase(name);
   }
@@ -395,26 +395,25 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
 }
 
-// Zip-NeRF's proposal sampling (camp_zipnerf configs/zipnerf/360.gin): only for the zipnerf family, refused for the
-// others with the setting and what to do; its settings checked; the spec it builds is the official pipeline's shape.
-TEST_CASE("config: sampler=proposal is Zip-NeRF's: refused elsewhere with what to do, its settings checked") {
-  for (const char* family : {"mipnerf", "nerf"}) {
-    INFO("variant " << family);
-    CHECK_THROWS_WITH_AS(train::resolve_config("tiny", family, {{"sampler", "proposal"}}),
-                         doctest::Contains("sampler=proposal is Zip-NeRF's"), Error);
-    CHECK_THROWS_WITH_AS(train::resolve_config("tiny", family, {{"sampler", "proposal"}}),
-                         doctest::Contains("--model zipnerf, or keep sampler=resample"), Error);
-  }
+// Proposal sampling (camp_zipnerf configs/zipnerf/360.gin; multinerf's mip-NeRF 360 for --model mipnerf): refused for
+// the NeRF baseline and for mip-NeRF without IPE, with the setting and what to do; its settings checked; the spec it
+// builds is the official Zip-NeRF pipeline's shape.
+TEST_CASE("config: sampler=proposal is Zip-NeRF's and mip-NeRF 360's: refused elsewhere, its settings checked") {
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "nerf", {{"sampler", "proposal"}}),
+                       doctest::Contains("keep sampler=resample, or train --model mipnerf or zipnerf"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"sampler", "proposal"}, {"integrated_encoding", "false"}}),
+                       doctest::Contains("leave integrated_encoding=true"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"sampler", "proposal"}, {"proposal_mlp_width", "0"}}),
+                       doctest::Contains("proposal_mlp_depth and _width must be positive"), Error);
   const auto config = train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}});
   CHECK(config.proposal_rounds == 2);
   CHECK(config.proposal_samples == 64);
   CHECK(config.proposal_grid_max == 2048);
   CHECK(config.anneal_slope == 10.0);
-  CHECK(config.interlevel_mult == 0.01);
+  CHECK(config.interlevel_mult < 0);  // the model's official (below: 0.01 for Zip-NeRF)
   CHECK(config.distortion_mult == 0.0);  // off unless asked: the default runs are unchanged
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {"proposal_rounds", "0"},       {"proposal_samples", "1"},   {"interlevel_mult", "-1"},
-      {"proposal_grid_max", "1000"}, {"distortion_mult", "-0.1"}};
+      {"proposal_rounds", "0"}, {"proposal_samples", "1"}, {"proposal_grid_max", "1000"}, {"distortion_mult", "-0.1"}};
   for (const auto& entry : refused) {
     const std::string name = entry.first, value = entry.second;  // INFO cannot capture a structured binding
     INFO(name << " = " << value);
@@ -444,6 +443,7 @@ TEST_CASE("config: sampler=proposal is Zip-NeRF's: refused elsewhere with what t
       CHECK(level.role == graph::LevelRole::proposal);
       CHECK(level.new_samples == 64u);
       CHECK(level.interlevel.blur_halfwidth == blur[l]);
+      CHECK(level.interlevel.kind == ops::InterlevelKind::spline);
       CHECK(level.interlevel.mult == 0.01f);
     } else {
       CHECK(level.role == graph::LevelRole::nerf);
@@ -459,6 +459,7 @@ TEST_CASE("config: sampler=proposal is Zip-NeRF's: refused elsewhere with what t
   CHECK(resampled.mlps.size() == 1);
   CHECK(!resampled.has_proposal_levels());
   for (const auto& level : spec.levels) CHECK(level.distortion_mult == 0.0f);
+  for (const auto& level : spec.levels) CHECK(level.dilation == 0.0f);  // camp_zipnerf dilates no histogram
 }
 
 // The distortion loss (mip-NeRF 360 eq. 15) is taken over the s-edges proposal sampling draws: asked for without it
