@@ -44,7 +44,7 @@ struct BufferPlan {
     if (unit_histogram) n += 3 * rays;
     n += rays * proposal_intervals * (2 + 3) + (proposal_intervals ? rays : 0);
     if (distortion_intervals) n += rays * (2 * distortion_intervals + 1) + rays + batch_rays;
-    if (dilated_from) n += rays * (6 * dilated_from - 3);
+    if (dilated_from) n += rays * (7 * dilated_from - 3);  // + the deque's [R][N] (4-byte indices)
     return n;
   }
 };
@@ -239,6 +239,7 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     dilate_ = std::make_unique<ops::MaxDilate>(ctx);
     dilated_s_edges_ = ocl::DeviceArray<float>(ctx, R * ops::dilated_edges(N), "dilated s_edges [R][3N-1]");
     dilated_weights_ = ocl::DeviceArray<float>(ctx, R * ops::dilated_intervals(N), "dilated weights [R][3N-2]");
+    dilate_scratch_ = ocl::DeviceArray<uint32_t>(ctx, R * N, "dilation deque [R][N]");
   }
   if (const size_t N = plan.distortion_intervals) {
     d_w_distortion_ = ocl::DeviceArray<float>(ctx, R * N, "distortion d_w [R][N]");
@@ -342,7 +343,7 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
       } else if (level.dilation > 0.0f) {  // mip-NeRF 360: from the previous histogram max-dilated
         const LevelBuffers& previous = levels_[l - 1];
         dilate_->fwd(previous.s_edges, previous.weights, n_rays, previous.intervals, level.dilation, dilated_s_edges_,
-                     dilated_weights_);
+                     dilated_weights_, dilate_scratch_);
         sample_intervals_->fwd(sample_intervals_options_,
                                {dilated_s_edges_, dilated_weights_, n_rays, ops::dilated_intervals(previous.intervals),
                                 level.new_samples},

@@ -211,6 +211,7 @@ class Graph {
   // mip-NeRF 360's dilation of a previous histogram before proposal sampling (when a level asks for it).
   std::unique_ptr<ops::MaxDilate> dilate_;
   ocl::DeviceArray<float> dilated_s_edges_, dilated_weights_;  // [R][3N−1], [R][3N−2]
+  ocl::DeviceArray<uint32_t> dilate_scratch_;                  // [R][N] each ray's sliding-window deque
   // The proposal rounds' backward, shared (one round at a time), M = the rounds' most intervals.
   ocl::DeviceArray<float> w_blur_, d_wp_;      // [R][M]
   ocl::DeviceArray<float> chunk_ray_loss_;     // [R]

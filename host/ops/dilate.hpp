@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 #include "cl/buffer.hpp"
 #include "cl/context.hpp"
@@ -18,10 +19,11 @@ class MaxDilate {
   explicit MaxDilate(ocl::Context& ctx);
 
   // Enqueues max_dilate_weights_fwd: (s_edges [R][N+1], weights [R][N]) dilated by `dilation` (normalised s, ≥ 0)
-  // within [0, 1] → s_out [R][3N−1], w_out [R][3N−2]. Throws mipnerf::Error for a buffer too small, N = 0 or a
-  // dilation that is negative or not finite.
+  // within [0, 1] → s_out [R][3N−1], w_out [R][3N−2]; `scratch` [R][N] holds each ray's sliding-window deque. Throws
+  // mipnerf::Error for a buffer too small, N = 0 or a dilation that is negative or not finite.
   void fwd(const ocl::DeviceArray<float>& s_edges, const ocl::DeviceArray<float>& weights, size_t n_rays,
-           size_t n_intervals, float dilation, ocl::DeviceArray<float>& s_out, ocl::DeviceArray<float>& w_out);
+           size_t n_intervals, float dilation, ocl::DeviceArray<float>& s_out, ocl::DeviceArray<float>& w_out,
+           ocl::DeviceArray<uint32_t>& scratch);
 
  private:
   ocl::Context* ctx_;

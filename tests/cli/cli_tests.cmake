@@ -455,6 +455,22 @@ set_tests_properties("cli: proposal: eval a proposal-sampled model" PROPERTIES F
 mipnerf_add_checked_test("cli: proposal: render an orbit of a proposal-sampled model" EXPECT "rendered 2 frames of an orbit \\(16x16\\) from step 4"
   COMMAND mipnerf-cl render --checkpoint "${MIPNERF_PROPOSAL_RUN}" --path orbit --frames 2 --size 16x16)
 set_tests_properties("cli: proposal: render an orbit of a proposal-sampled model" PROPERTIES FIXTURES_REQUIRED cli_proposal_model)
+# mip-NeRF with mip-NeRF 360's proposal sampling (IPE proposal rounds on their own MLPs, the outer interlevel loss,
+# the dilation): the same path through the executable, the levels it logs, its checkpoint evaluated and rendered.
+set(MIPNERF_MIP_PROPOSAL_RUN "${CMAKE_CURRENT_BINARY_DIR}/cli-mip-proposal-run")
+add_test(NAME "cli: mip-NeRF proposal: clear the run folder" COMMAND ${CMAKE_COMMAND} -E rm -rf "${MIPNERF_MIP_PROPOSAL_RUN}")
+mipnerf_add_checked_test("cli: mip-NeRF proposal: train --set sampler=proposal" EXPECT "level 1: proposal-sampled 16 intervals from the previous histogram dilated by 0.0[0-9]+, IPE degrees 0..[0-9]+, network 1, proposal round \\(density only. outer interlevel loss, mult 1\\).*trained 4 steps"
+  COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene" --out "${MIPNERF_MIP_PROPOSAL_RUN}"
+  --config "${CMAKE_CURRENT_SOURCE_DIR}/train/fixtures/short.toml" --set sampler=proposal --set proposal_samples=16
+  --set num_samples=16 --set proposal_mlp_depth=2 --set proposal_mlp_width=32)
+set_tests_properties("cli: mip-NeRF proposal: clear the run folder" PROPERTIES FIXTURES_SETUP cli_mip_proposal_clean)
+set_tests_properties("cli: mip-NeRF proposal: train --set sampler=proposal" PROPERTIES FIXTURES_REQUIRED "cli_scene;cli_mip_proposal_clean" FIXTURES_SETUP cli_mip_proposal_model)
+mipnerf_add_checked_test("cli: mip-NeRF proposal: eval its checkpoint" EXPECT "mean PSNR [0-9.]+ dB"
+  COMMAND mipnerf-cl eval --checkpoint "${MIPNERF_MIP_PROPOSAL_RUN}" --data "${CMAKE_CURRENT_BINARY_DIR}/cli-scene")
+set_tests_properties("cli: mip-NeRF proposal: eval its checkpoint" PROPERTIES FIXTURES_REQUIRED cli_mip_proposal_model)
+mipnerf_add_checked_test("cli: mip-NeRF proposal: render an orbit of its checkpoint" EXPECT "rendered 2 frames of an orbit \\(16x16\\) from step 4"
+  COMMAND mipnerf-cl render --checkpoint "${MIPNERF_MIP_PROPOSAL_RUN}" --path orbit --frames 2 --size 16x16)
+set_tests_properties("cli: mip-NeRF proposal: render an orbit of its checkpoint" PROPERTIES FIXTURES_REQUIRED cli_mip_proposal_model)
 # The errors. Those that need a model use the run above.
 mipnerf_add_cli_error_test("render: missing checkpoint" PATTERN "nowhere: no checkpoint found \\(expected a .mnck file"
   ARGS render --checkpoint "${MIPNERF_RENDER_FIXTURES}/nowhere")

@@ -44,7 +44,8 @@ TEST_CASE("mipnerf360 proposal: max_dilate_weights, our reference and kernel") {
     auto s_in = official::upload(ctx, official::as_float(t), "s"), w_in = official::upload(ctx, official::as_float(w), "w");
     ocl::DeviceArray<float> ks(ctx, n_rays * ops::dilated_edges(n), "s_out"),
         kw(ctx, n_rays * ops::dilated_intervals(n), "w_out");
-    stage.fwd(s_in, w_in, n_rays, n, static_cast<float>(dilation), ks, kw);
+    ocl::DeviceArray<uint32_t> scratch(ctx, n_rays * n, "scratch");
+    stage.fwd(s_in, w_in, n_rays, n, static_cast<float>(dilation), ks, kw, scratch);
     const double knot = 4 * official::kU * (1 + dilation);
     OFFICIAL_CHECK_AGREES("kernel edges", ks.download(ctx), expected_s, official::constant_bound(knot));
     std::vector<double> largest_pdf(n_rays, 0.0);

@@ -109,9 +109,10 @@ TEST_CASE("dilate: the kernel equals the double reference, hard cases finite") {
   auto s_in = test::upload(ctx, b.s, "s"), w_in = test::upload(ctx, b.w, "w");
   const size_t edges = ops::dilated_edges(b.n), intervals = ops::dilated_intervals(b.n);
   ocl::DeviceArray<float> s_out(ctx, b.n_rays * edges, "s_out"), w_out(ctx, b.n_rays * intervals, "w_out");
+  ocl::DeviceArray<uint32_t> scratch(ctx, b.n_rays * b.n, "scratch");
   for (double dilation : {0.0, 0.0025 + 0.5 / 64, 0.05, 2.0}) {
     CAPTURE(dilation);
-    stage.fwd(s_in, w_in, b.n_rays, b.n, static_cast<float>(dilation), s_out, w_out);
+    stage.fwd(s_in, w_in, b.n_rays, b.n, static_cast<float>(dilation), s_out, w_out, scratch);
     std::vector<double> ref_s;
     const auto ref_w = run_reference(b, dilation, ref_s);
     const auto s = s_out.download(ctx), w = w_out.download(ctx);
@@ -135,7 +136,7 @@ TEST_CASE("dilate: the kernel equals the double reference, hard cases finite") {
     });
   }
   // The empty histogram stays empty (the ε² guard, no NaN), and the spike's mass stays near its interval.
-  stage.fwd(s_in, w_in, b.n_rays, b.n, 0.01f, s_out, w_out);
+  stage.fwd(s_in, w_in, b.n_rays, b.n, 0.01f, s_out, w_out, scratch);
   const auto w = w_out.download(ctx);
   for (size_t k = 0; k < intervals; ++k) CHECK(w[(b.n_rays - 1) * intervals + k] == 0.0f);
 }
