@@ -9,11 +9,33 @@
 
 namespace mipnerf::ops {
 
-double interlevel_loss_value(const std::vector<float>& ray_loss, size_t batch_rays, size_t n_proposal, float mult) {
-  if (batch_rays == 0 || n_proposal == 0) throw Error("spline interlevel loss: a batch without rays or intervals");
+namespace detail {
+
+double mean_interlevel_loss(const std::vector<float>& ray_loss, size_t batch_rays, size_t intervals, float mult,
+                            const std::string& what) {
+  if (batch_rays == 0 || intervals == 0) throw Error(what + ": a batch without rays or intervals");
   double sum = 0.0;
   for (float v : ray_loss) sum += v;
-  return static_cast<double>(mult) * sum / (static_cast<double>(batch_rays) * static_cast<double>(n_proposal));
+  return static_cast<double>(mult) * sum / (static_cast<double>(batch_rays) * static_cast<double>(intervals));
+}
+
+void check_interlevel_inputs(const InterlevelInputs& in, const std::string& where) {
+  if (in.n_intervals == 0 || in.n_proposal == 0) {
+    throw Error(where + ": histograms of " + std::to_string(in.n_intervals) + " NeRF and " +
+                std::to_string(in.n_proposal) + " proposal intervals; each needs at least one");
+  }
+  require(in.c, in.n_rays * (in.n_intervals + 1), where);
+  require(in.w, in.n_rays * in.n_intervals, where);
+  require(in.cp, in.n_rays * (in.n_proposal + 1), where);
+  require(in.wp, in.n_rays * in.n_proposal, where);
+  to_uint(in.n_rays * (in.n_proposal + 1), where, "proposal edges");
+  to_uint(in.n_rays * (in.n_intervals + 1), where, "NeRF edges");
+}
+
+}  // namespace detail
+
+double interlevel_loss_value(const std::vector<float>& ray_loss, size_t batch_rays, size_t n_proposal, float mult) {
+  return detail::mean_interlevel_loss(ray_loss, batch_rays, n_proposal, mult, "spline interlevel loss");
 }
 
 SplineInterlevel::SplineInterlevel(ocl::Context& ctx) : ctx_(&ctx) {
@@ -22,23 +44,10 @@ SplineInterlevel::SplineInterlevel(ocl::Context& ctx) : ctx_(&ctx) {
   bwd_ = &program.kernel("spline_interlevel_bwd");
 }
 
-void SplineInterlevel::check(const InterlevelInputs& in, const std::string& where) const {
-  if (in.n_intervals == 0 || in.n_proposal == 0) {
-    throw Error(where + ": histograms of " + std::to_string(in.n_intervals) + " NeRF and " +
-                std::to_string(in.n_proposal) + " proposal intervals; each needs at least one");
-  }
-  detail::require(in.c, in.n_rays * (in.n_intervals + 1), where);
-  detail::require(in.w, in.n_rays * in.n_intervals, where);
-  detail::require(in.cp, in.n_rays * (in.n_proposal + 1), where);
-  detail::require(in.wp, in.n_rays * in.n_proposal, where);
-  detail::to_uint(in.n_rays * (in.n_proposal + 1), where, "proposal edges");
-  detail::to_uint(in.n_rays * (in.n_intervals + 1), where, "NeRF edges");
-}
-
 void SplineInterlevel::fwd(const InterlevelInputs& in, float blur_halfwidth, ocl::DeviceArray<float>& w_blur,
                            ocl::DeviceArray<float>& ray_loss) {
   const std::string where = "spline_interlevel_fwd";
-  check(in, where);
+  detail::check_interlevel_inputs(in, where);
   if (!(blur_halfwidth > 0.0f) || !std::isfinite(blur_halfwidth)) {
     throw Error(where + ": blur half-width " + std::to_string(blur_halfwidth) +
                 "; it must be positive and finite (the official blurs are 0.03 and 0.003)");
@@ -55,7 +64,7 @@ void SplineInterlevel::fwd(const InterlevelInputs& in, float blur_halfwidth, ocl
 void SplineInterlevel::bwd(const InterlevelInputs& in, const ocl::DeviceArray<float>& w_blur, float mult,
                            size_t batch_rays, ocl::DeviceArray<float>& d_wp, float upstream) {
   const std::string where = "spline_interlevel_bwd";
-  check(in, where);
+  detail::check_interlevel_inputs(in, where);
   if (batch_rays < in.n_rays) {
     throw Error(where + ": a batch of " + std::to_string(batch_rays) + " rays cannot hold a chunk of " +
                 std::to_string(in.n_rays));

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "cl/buffer.hpp"
@@ -44,6 +45,14 @@ struct InterlevelInputs {
 // mult · Σ ray_loss / (batch_rays · M): the round's loss from the forward's per-ray sums (downloaded), in double.
 double interlevel_loss_value(const std::vector<float>& ray_loss, size_t batch_rays, size_t n_proposal, float mult);
 
+namespace detail {
+// Both interlevel losses' checks of a chunk's histograms (shapes and buffer sizes), naming `where`.
+void check_interlevel_inputs(const InterlevelInputs& in, const std::string& where);
+// mult · Σ ray_loss / (batch_rays · intervals) in double: a round's loss as a mean over `intervals` per ray.
+double mean_interlevel_loss(const std::vector<float>& ray_loss, size_t batch_rays, size_t intervals, float mult,
+                            const std::string& what);
+}  // namespace detail
+
 class SplineInterlevel {
  public:
   explicit SplineInterlevel(ocl::Context& ctx);
@@ -58,7 +67,6 @@ class SplineInterlevel {
            ocl::DeviceArray<float>& d_wp, float upstream = 1.0f);
 
  private:
-  void check(const InterlevelInputs& in, const std::string& where) const;
 
   ocl::Context* ctx_;
   ::cl::Kernel* fwd_;

@@ -9,10 +9,7 @@ namespace mipnerf::ops {
 
 double outer_interlevel_loss_value(const std::vector<float>& ray_loss, size_t batch_rays, size_t n_intervals,
                                    float mult) {
-  if (batch_rays == 0 || n_intervals == 0) throw Error("outer interlevel loss: a batch without rays or intervals");
-  double sum = 0.0;
-  for (float v : ray_loss) sum += v;
-  return static_cast<double>(mult) * sum / (static_cast<double>(batch_rays) * static_cast<double>(n_intervals));
+  return detail::mean_interlevel_loss(ray_loss, batch_rays, n_intervals, mult, "outer interlevel loss");
 }
 
 OuterInterlevel::OuterInterlevel(ocl::Context& ctx) : ctx_(&ctx) {
@@ -21,22 +18,9 @@ OuterInterlevel::OuterInterlevel(ocl::Context& ctx) : ctx_(&ctx) {
   bwd_ = &program.kernel("outer_interlevel_bwd");
 }
 
-void OuterInterlevel::check(const InterlevelInputs& in, const std::string& where) const {
-  if (in.n_intervals == 0 || in.n_proposal == 0) {
-    throw Error(where + ": histograms of " + std::to_string(in.n_intervals) + " NeRF and " +
-                std::to_string(in.n_proposal) + " proposal intervals; each needs at least one");
-  }
-  detail::require(in.c, in.n_rays * (in.n_intervals + 1), where);
-  detail::require(in.w, in.n_rays * in.n_intervals, where);
-  detail::require(in.cp, in.n_rays * (in.n_proposal + 1), where);
-  detail::require(in.wp, in.n_rays * in.n_proposal, where);
-  detail::to_uint(in.n_rays * (in.n_proposal + 1), where, "proposal edges");
-  detail::to_uint(in.n_rays * (in.n_intervals + 1), where, "NeRF edges");
-}
-
 void OuterInterlevel::fwd(const InterlevelInputs& in, ocl::DeviceArray<float>& ray_loss) {
   const std::string where = "outer_interlevel_fwd";
-  check(in, where);
+  detail::check_interlevel_inputs(in, where);
   detail::require(ray_loss, in.n_rays, where);
   if (in.n_rays == 0) return;
   ocl::set_args(*fwd_, where, in.c, in.w, in.cp, in.wp, ray_loss, static_cast<cl_uint>(in.n_rays),
@@ -47,7 +31,7 @@ void OuterInterlevel::fwd(const InterlevelInputs& in, ocl::DeviceArray<float>& r
 void OuterInterlevel::bwd(const InterlevelInputs& in, float mult, size_t batch_rays, ocl::DeviceArray<float>& d_wp,
                           float upstream) {
   const std::string where = "outer_interlevel_bwd";
-  check(in, where);
+  detail::check_interlevel_inputs(in, where);
   if (batch_rays < in.n_rays) {
     throw Error(where + ": a batch of " + std::to_string(batch_rays) + " rays cannot hold a chunk of " +
                 std::to_string(in.n_rays));

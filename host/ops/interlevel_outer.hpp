@@ -34,7 +34,6 @@ class OuterInterlevel {
            float upstream = 1.0f);
 
  private:
-  void check(const InterlevelInputs& in, const std::string& where) const;
 
   ocl::Context* ctx_;
   ::cl::Kernel* fwd_;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <random>
 
+#include "histogram_pairs.hpp"
 #include "kernel_checks.hpp"
 #include "ops/interlevel.hpp"
 #include "ref/interlevel.hpp"
@@ -20,79 +21,43 @@ using test::kUnitRoundoff;
 
 namespace {
 
-// A batch of rays: the NeRF's histogram (c, w) over N intervals and a proposal round's (cp, wp) over M.
-struct InterlevelBatch {
-  std::vector<float> c, w, cp, wp;
-  size_t n_rays = 0, n = 16, m = 12;
-};
-
-std::vector<float> interlevel_edges(std::mt19937& rng, size_t count, float lo, float hi) {
-  std::uniform_real_distribution<float> u(lo, hi);
-  std::vector<float> e(count);
-  e.front() = lo;
-  e.back() = hi;
-  for (size_t i = 1; i + 1 < count; ++i) e[i] = u(rng);
-  std::sort(e.begin(), e.end());
-  return e;
-}
-
-std::vector<float> interlevel_weights(std::mt19937& rng, size_t count, float total) {
-  std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  std::vector<float> w(count);
-  float sum = 0;
-  for (auto& x : w) sum += (x = u(rng) * u(rng));
-  for (auto& x : w) x = x * total / sum;
-  return w;
-}
-
-void interlevel_add_ray(InterlevelBatch& b, const std::vector<float>& c, const std::vector<float>& w,
-                        const std::vector<float>& cp, const std::vector<float>& wp) {
-  REQUIRE(c.size() == b.n + 1);
-  REQUIRE(w.size() == b.n);
-  REQUIRE(cp.size() == b.m + 1);
-  REQUIRE(wp.size() == b.m);
-  b.c.insert(b.c.end(), c.begin(), c.end());
-  b.w.insert(b.w.end(), w.begin(), w.end());
-  b.cp.insert(b.cp.end(), cp.begin(), cp.end());
-  b.wp.insert(b.wp.end(), wp.begin(), wp.end());
-  ++b.n_rays;
-}
+using InterlevelBatch = test::HistogramPairs;  // n = 16 NeRF and m = 12 proposal intervals a ray
 
 // Random rays plus the hard cases: an empty NeRF histogram; all weight in one interval (narrower than most blurs);
 // zero-width intervals in c and in cp; proposal weights of 0 where the NeRF has mass; queries reaching past [0, 1].
 InterlevelBatch interlevel_batch(std::mt19937& rng) {
   InterlevelBatch b;
   for (int i = 0; i < 10; ++i) {
-    interlevel_add_ray(b, interlevel_edges(rng, b.n + 1, 0.0f, 1.0f), interlevel_weights(rng, b.n, 1.0f),
-                       interlevel_edges(rng, b.m + 1, 0.0f, 1.0f), interlevel_weights(rng, b.m, 1.0f));
+    test::add_histogram_pair(b, test::random_sorted_edges(rng, b.n + 1, 0.0f, 1.0f), test::random_weights(rng, b.n, 1.0f),
+                       test::random_sorted_edges(rng, b.m + 1, 0.0f, 1.0f), test::random_weights(rng, b.m, 1.0f));
   }
   // Empty: all w = 0.
-  interlevel_add_ray(b, interlevel_edges(rng, b.n + 1, 0.0f, 1.0f), std::vector<float>(b.n, 0.0f),
-                     interlevel_edges(rng, b.m + 1, 0.0f, 1.0f), interlevel_weights(rng, b.m, 1.0f));
+  test::add_histogram_pair(b, test::random_sorted_edges(rng, b.n + 1, 0.0f, 1.0f), std::vector<float>(b.n, 0.0f),
+                     test::random_sorted_edges(rng, b.m + 1, 0.0f, 1.0f), test::random_weights(rng, b.m, 1.0f));
   // One interval of width 0.004 carries everything.
   {
-    std::vector<float> c = interlevel_edges(rng, b.n + 1, 0.0f, 1.0f), w(b.n, 0.0f);
+    std::vector<float> c = test::random_sorted_edges(rng, b.n + 1, 0.0f, 1.0f), w(b.n, 0.0f);
     c[8] = 0.5f;
     c[9] = 0.504f;
     std::sort(c.begin(), c.end());
     const size_t k = std::find(c.begin(), c.end(), 0.5f) - c.begin();
     w[k] = 1.0f;
-    interlevel_add_ray(b, c, w, interlevel_edges(rng, b.m + 1, 0.0f, 1.0f), interlevel_weights(rng, b.m, 1.0f));
+    test::add_histogram_pair(b, c, w, test::random_sorted_edges(rng, b.m + 1, 0.0f, 1.0f), test::random_weights(rng, b.m, 1.0f));
   }
   // Zero-width intervals in both histograms (c's carries weight, which weight_to_pdf drops); queries past [0, 1].
   {
-    std::vector<float> c = interlevel_edges(rng, b.n + 1, 0.0f, 1.0f), cp = interlevel_edges(rng, b.m + 1, -0.2f, 1.2f);
+    std::vector<float> c = test::random_sorted_edges(rng, b.n + 1, 0.0f, 1.0f), cp = test::random_sorted_edges(rng, b.m + 1, -0.2f, 1.2f);
     c[5] = c[4];
     c[11] = c[10];
     cp[6] = cp[5];
-    interlevel_add_ray(b, c, interlevel_weights(rng, b.n, 1.0f), cp, interlevel_weights(rng, b.m, 1.0f));
+    test::add_histogram_pair(b, c, test::random_weights(rng, b.n, 1.0f), cp, test::random_weights(rng, b.m, 1.0f));
   }
   // The proposal misses mass: wp = 0 on half the intervals.
   {
-    std::vector<float> wp = interlevel_weights(rng, b.m, 1.0f);
+    std::vector<float> wp = test::random_weights(rng, b.m, 1.0f);
     std::fill(wp.begin(), wp.begin() + 6, 0.0f);
-    interlevel_add_ray(b, interlevel_edges(rng, b.n + 1, 0.0f, 1.0f), interlevel_weights(rng, b.n, 1.0f),
-                       interlevel_edges(rng, b.m + 1, 0.0f, 1.0f), wp);
+    test::add_histogram_pair(b, test::random_sorted_edges(rng, b.n + 1, 0.0f, 1.0f), test::random_weights(rng, b.n, 1.0f),
+                       test::random_sorted_edges(rng, b.m + 1, 0.0f, 1.0f), wp);
   }
   return b;
 }

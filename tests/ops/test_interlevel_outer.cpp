@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "histogram_pairs.hpp"
 #include "kernel_checks.hpp"
 #include "ops/interlevel_outer.hpp"
 #include "ref/interlevel.hpp"
@@ -20,61 +21,28 @@ using test::kUnitRoundoff;
 
 namespace {
 
-struct OuterBatch {
-  std::vector<float> c, w, cp, wp;
-  size_t n_rays = 0, n = 12, m = 20;
-};
-
-std::vector<float> outer_edges(std::mt19937& rng, size_t count, float lo, float hi) {
-  std::uniform_real_distribution<float> u(lo, hi);
-  std::vector<float> e(count);
-  e.front() = lo;
-  e.back() = hi;
-  for (size_t i = 1; i + 1 < count; ++i) e[i] = u(rng);
-  std::sort(e.begin(), e.end());
-  return e;
-}
-
-std::vector<float> outer_weights(std::mt19937& rng, size_t count, float total) {
-  std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  std::vector<float> w(count);
-  float sum = 0;
-  for (auto& x : w) sum += (x = u(rng) * u(rng));
-  for (auto& x : w) x = x * total / sum;
-  return w;
-}
-
-void outer_add_ray(OuterBatch& b, const std::vector<float>& c, const std::vector<float>& w,
-                   const std::vector<float>& cp, const std::vector<float>& wp) {
-  REQUIRE(c.size() == b.n + 1);
-  REQUIRE(w.size() == b.n);
-  REQUIRE(cp.size() == b.m + 1);
-  REQUIRE(wp.size() == b.m);
-  b.c.insert(b.c.end(), c.begin(), c.end());
-  b.w.insert(b.w.end(), w.begin(), w.end());
-  b.cp.insert(b.cp.end(), cp.begin(), cp.end());
-  b.wp.insert(b.wp.end(), wp.begin(), wp.end());
-  ++b.n_rays;
-}
-
 // Random rays, then the hard cases.
+using OuterBatch = test::HistogramPairs;
+
 OuterBatch outer_batch() {
   std::mt19937 rng(20261202);
   OuterBatch b;
+  b.n = 12;
+  b.m = 20;
   for (int i = 0; i < 24; ++i) {
-    outer_add_ray(b, outer_edges(rng, b.n + 1, 0, 1), outer_weights(rng, b.n, 0.9f), outer_edges(rng, b.m + 1, 0, 1),
-                  outer_weights(rng, b.m, 0.7f));
+    test::add_histogram_pair(b, test::random_sorted_edges(rng, b.n + 1, 0, 1), test::random_weights(rng, b.n, 0.9f), test::random_sorted_edges(rng, b.m + 1, 0, 1),
+                  test::random_weights(rng, b.m, 0.7f));
   }
-  const auto c = outer_edges(rng, b.n + 1, 0, 1), cp = outer_edges(rng, b.m + 1, 0, 1);
-  outer_add_ray(b, c, std::vector<float>(b.n, 0.0f), cp, outer_weights(rng, b.m, 1));  // empty NeRF histogram
+  const auto c = test::random_sorted_edges(rng, b.n + 1, 0, 1), cp = test::random_sorted_edges(rng, b.m + 1, 0, 1);
+  test::add_histogram_pair(b, c, std::vector<float>(b.n, 0.0f), cp, test::random_weights(rng, b.m, 1));  // empty NeRF histogram
   std::vector<float> spike(b.n, 0.0f);
   spike[5] = 1.0f;
-  outer_add_ray(b, c, spike, cp, std::vector<float>(b.m, 0.0f));             // all mass, no proposal weight
-  outer_add_ray(b, c, outer_weights(rng, b.n, 1), cp, std::vector<float>(b.m, 1e30f));  // huge proposal weights
-  outer_add_ray(b, outer_edges(rng, b.n + 1, -0.5f, 1.5f), outer_weights(rng, b.n, 1), cp, outer_weights(rng, b.m, 1));
+  test::add_histogram_pair(b, c, spike, cp, std::vector<float>(b.m, 0.0f));             // all mass, no proposal weight
+  test::add_histogram_pair(b, c, test::random_weights(rng, b.n, 1), cp, std::vector<float>(b.m, 1e30f));  // huge proposal weights
+  test::add_histogram_pair(b, test::random_sorted_edges(rng, b.n + 1, -0.5f, 1.5f), test::random_weights(rng, b.n, 1), cp, test::random_weights(rng, b.m, 1));
   std::vector<float> on_edges(b.m + 1);
   for (size_t k = 0; k <= b.m; ++k) on_edges[k] = c[std::min(k, b.n)];  // proposal edges on NeRF edges (and repeats)
-  outer_add_ray(b, c, outer_weights(rng, b.n, 1), on_edges, outer_weights(rng, b.m, 0.5f));
+  test::add_histogram_pair(b, c, test::random_weights(rng, b.n, 1), on_edges, test::random_weights(rng, b.m, 0.5f));
   return b;
 }
 
