@@ -340,19 +340,22 @@ void Graph::sample_level(size_t l, size_t n_rays, StepKey key, uint32_t first_ra
       if (l == 0) {
         sample_intervals_->fwd(sample_intervals_options_, {unit_s_edges_, unit_weights_, n_rays, 1, level.new_samples},
                                out.s_edges, round_rng);
-      } else if (level.dilation > 0.0f) {  // mip-NeRF 360: from the previous histogram max-dilated
-        const LevelBuffers& previous = levels_[l - 1];
-        dilate_->fwd(previous.s_edges, previous.weights, n_rays, previous.intervals, level.dilation, dilated_s_edges_,
-                     dilated_weights_, dilate_scratch_);
-        sample_intervals_->fwd(sample_intervals_options_,
-                               {dilated_s_edges_, dilated_weights_, n_rays, ops::dilated_intervals(previous.intervals),
-                                level.new_samples},
-                               out.s_edges, round_rng);
       } else {
+        // From the previous level's histogram, or (mip-NeRF 360) from that histogram max-dilated.
         const LevelBuffers& previous = levels_[l - 1];
+        const ocl::DeviceArray<float>* from_edges = &previous.s_edges;
+        const ocl::DeviceArray<float>* from_weights = &previous.weights;
+        size_t from_intervals = previous.intervals;
+        if (level.dilation > 0.0f) {
+          dilate_->fwd(previous.s_edges, previous.weights, n_rays, previous.intervals, level.dilation,
+                       dilated_s_edges_, dilated_weights_, dilate_scratch_);
+          from_edges = &dilated_s_edges_;
+          from_weights = &dilated_weights_;
+          from_intervals = ops::dilated_intervals(previous.intervals);
+        }
         sample_intervals_->fwd(sample_intervals_options_,
-                               {previous.s_edges, previous.weights, n_rays, previous.intervals, level.new_samples},
-                               out.s_edges, round_rng);
+                               {*from_edges, *from_weights, n_rays, from_intervals, level.new_samples}, out.s_edges,
+                               round_rng);
       }
       sample_intervals_->s_to_t(out.s_edges, chunk_rays_, n_rays, out.intervals + 1, out.t_edges);
       break;

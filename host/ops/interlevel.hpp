@@ -67,7 +67,6 @@ class SplineInterlevel {
            ocl::DeviceArray<float>& d_wp, float upstream = 1.0f);
 
  private:
-
   ocl::Context* ctx_;
   ::cl::Kernel* fwd_;
   ::cl::Kernel* bwd_;

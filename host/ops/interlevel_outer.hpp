@@ -34,7 +34,6 @@ class OuterInterlevel {
            float upstream = 1.0f);
 
  private:
-
   ocl::Context* ctx_;
   ::cl::Kernel* fwd_;
   ::cl::Kernel* bwd_;

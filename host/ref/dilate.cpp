@@ -8,6 +8,7 @@ namespace mipnerf::ref {
 void max_dilate_weights_ray(const double* s, const double* w, size_t n_intervals, double dilation, double domain_near,
                             double domain_far, double* s_out, double* w_out) {
   const size_t n = n_intervals;
+  if (n == 0) return;  // no histogram, nothing written (as the kernel)
   const double eps_sq = 1.1920928955078125e-07 * 1.1920928955078125e-07;
   std::vector<double> pdf(n), start(n), end(n), knots;
   for (size_t i = 0; i < n; ++i) {
@@ -45,10 +46,6 @@ void max_dilate_weights_fwd(const std::vector<double>& s_edges, const std::vecto
     max_dilate_weights_ray(&s_edges[ray * (n + 1)], &weights[ray * n], n, dilation, domain_near, domain_far,
                            &s_out[ray * (3 * n - 1)], &w_out[ray * (3 * n - 2)]);
   }
-}
-
-double proposal_dilation(double bias, double multiplier, double samples_before) {
-  return bias + multiplier / samples_before;
 }
 
 }  // namespace mipnerf::ref

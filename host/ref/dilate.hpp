@@ -17,8 +17,4 @@ void max_dilate_weights_fwd(const std::vector<double>& s_edges, const std::vecto
                             double domain_near, double domain_far, std::vector<double>& s_out,
                             std::vector<double>& w_out, size_t n_rays, size_t n_intervals);
 
-// The dilation of the proposal round at `level` (≥ 1) of a pipeline whose earlier levels drew `samples_before`
-// intervals in all (their product): official dilation_bias + dilation_multiplier · (s_far − s_near) / that product.
-double proposal_dilation(double bias, double multiplier, double samples_before);
-
 }  // namespace mipnerf::ref
