@@ -109,7 +109,7 @@ __kernel void sample_intervals_fwd(__global const float* s_edges, __global const
 }
 
 #ifndef RAY_DISTANCE
-#define RAY_DISTANCE 0 /* RayDistance in host/core/stage_options.hpp: 0 linear, 1 power ladder */
+#define RAY_DISTANCE 0 /* RayDistance in host/core/stage_options.hpp: 0 linear, 1 power ladder, 2 reciprocal */
 #endif
 
 #if RAY_DISTANCE == 1
@@ -146,6 +146,14 @@ inline float ray_distance_s_to_t(float s, float near, float far) {
   const float g = fmax(g_exact - RAY_DISTANCE_KAPPA_MINUS_1 * (1.0f - g_exact), RAY_DISTANCE_MIN_G);
   const float r = 1.0f / cbrt(g);  // G^(−1/3): cbrt and a reciprocal, not pow (whose bound is 16 ulp)
   return clamp(1.25f * (r * r - 1.0f), near, far);
+}
+#elif RAY_DISTANCE == 2
+// mip-NeRF 360's warp (multinerf configs/360.gin: raydist_fn = jnp.reciprocal, near 0.2, far 1e6; the paper's eq. 11
+// with g(x) = 1/x): t = 1/(s/far + (1 − s)/near), as contract.cl's ray_warp_s_to_t_of writes it (two non-negative
+// terms, no cancellation), clipped to [near, far] against rounding. Uniform s is uniform in disparity 1/t: half of
+// the samples lie within t = 2·near/(1 + near/far) ≈ 0.4 of the camera, the other half spread out to far.
+inline float ray_distance_s_to_t(float s, float near, float far) {
+  return clamp(1.0f / (s * (1.0f / far) + (1.0f - s) * (1.0f / near)), near, far);
 }
 #else
 // The bounded scenes' identity warp (official raydist_fn = None, Blender and LLFF in NDC): t = clip(s·far + (1 − s)·near,

@@ -46,9 +46,12 @@ constexpr std::array<EnumName<DensityActivation>, 2> enum_names(DensityActivatio
 enum class RayDistance : int {
   linear = 0,        // t = s·far + (1 − s)·near (raydist_fn = None: Blender, LLFF in NDC)
   power_ladder = 1,  // camp_zipnerf 360.gin: math.power_ladder with p = −3/2, premult 2 (unbounded scenes, near 0)
+  reciprocal = 2,    // multinerf 360.gin: jnp.reciprocal, t = 1/(s/far + (1 − s)/near) (mip-NeRF 360; near > 0)
 };
-constexpr std::array<EnumName<RayDistance>, 2> enum_names(RayDistance) {
-  return {{{RayDistance::linear, "linear"}, {RayDistance::power_ladder, "power_ladder"}}};
+constexpr std::array<EnumName<RayDistance>, 3> enum_names(RayDistance) {
+  return {{{RayDistance::linear, "linear"},
+           {RayDistance::power_ladder, "power_ladder"},
+           {RayDistance::reciprocal, "reciprocal"}}};
 }
 
 // Everything random is a function of (seed, step, ray): the ray's index in its batch is first_ray + (index in

@@ -166,6 +166,11 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
   ops::EncodeTuning encode_tuning;
   for (const auto& level : spec_.levels) encode_tuning.concat_pe |= level.encoding == Encoding::concat_pe;
   encode_ = std::make_unique<ops::Encode>(ctx, spec_.gaussian, encode_tuning);
+  for (const auto& level : spec_.levels) {
+    if (level.encoding == Encoding::contracted_ipe && !contracted_ipe_) {
+      contracted_ipe_ = std::make_unique<ops::ContractedIpe>(ctx, spec_.gaussian, spec_.basis_tessellation);
+    }
+  }
   // Density noise regularises training only (official: when randomized); rendering never compiles it in.
   RenderOptions render_options = spec_.render;
   if (!training) render_options.density_noise = 0.0f;
@@ -402,6 +407,9 @@ void Graph::encode_level(size_t l, size_t n_rays, const RngKey& key) {
     }
     case Encoding::integrated:  // a training proposal round's into its own features (kept for its backward)
       encode_->gaussian_ipe(spec_.position_encoding, intervals, level_features(l));
+      break;
+    case Encoding::contracted_ipe:
+      contracted_ipe_->fwd(spec_.position_encoding, intervals, level_features(l));
       break;
     case Encoding::frustum_mean_pe:
       gaussian_->fwd(intervals, {means_, covs_});

@@ -24,6 +24,7 @@
 #include "graph/graph_spec.hpp"
 #include "mlp/grid_table.hpp"
 #include "mlp/network.hpp"
+#include "ops/contracted_ipe.hpp"
 #include "ops/dilate.hpp"
 #include "ops/distortion.hpp"
 #include "ops/encode.hpp"
@@ -181,6 +182,7 @@ class Graph {
   std::unique_ptr<ops::Resample> resample_;
   std::unique_ptr<ops::Gaussian> gaussian_;
   std::unique_ptr<ops::Encode> encode_;
+  std::unique_ptr<ops::ContractedIpe> contracted_ipe_;  // when a level encodes contracted frustums (mip-NeRF 360)
   std::unique_ptr<ops::Render> render_;
   std::unique_ptr<ops::Loss> loss_;
   std::vector<std::unique_ptr<ops::ZipFeatures>> zip_;  // one per grid (its features are compiled in)

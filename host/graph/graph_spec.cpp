@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "ops/contracted_ipe.hpp"
 
 namespace mipnerf::graph {
 
@@ -15,6 +16,8 @@ size_t GraphSpec::feature_width(Encoding encoding) const {
       return static_cast<size_t>(position_encoding.ipe_width());
     case Encoding::concat_pe:
       return static_cast<size_t>(position_encoding.concat_pe_width());
+    case Encoding::contracted_ipe:
+      return ops::contracted_ipe_width(position_encoding, basis_tessellation);
     case Encoding::zip_grid:
       throw Error("graph: a grid level's feature width is its grid's (GraphSpec::feature_width(level))");
     case Encoding::frustum_mean_pe:
@@ -91,7 +94,8 @@ void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string&
     throw Error(where + ": a proposal round and the last level must sample by proposal (the interlevel loss compares "
                         "their s-histograms)");
   }
-  if (level.encoding != Encoding::zip_grid && level.encoding != Encoding::integrated) {
+  if (level.encoding != Encoding::zip_grid && level.encoding != Encoding::integrated &&
+      level.encoding != Encoding::contracted_ipe) {
     throw Error(where + ": a proposal round reads a grid (Zip-NeRF) or the IPE of its frustums (mip-NeRF 360)");
   }
   for (size_t k = 0; k < spec.levels.size(); ++k) {
@@ -135,7 +139,8 @@ void GraphSpec::validate() const {
       throw Error(where + ": the encoding gives " + std::to_string(width) + " features but network " +
                   std::to_string(level.mlp_index) + " expects " + std::to_string(mlp.input_width));
     }
-    if (level.encoding == Encoding::integrated && position_encoding.append_identity) {
+    if ((level.encoding == Encoding::integrated || level.encoding == Encoding::contracted_ipe) &&
+        position_encoding.append_identity) {
       throw Error(where + ": IPE has no identity features; set pos_identity = false or use PE");
     }
     if (level.encoding != Encoding::zip_grid &&
@@ -166,14 +171,17 @@ std::string GraphSpec::describe() const {
                            : level.sampling == Sampling::proposal ? "proposal-sampled"
                                                                   : "resampled + previous";
     const char* encoding = level.encoding == Encoding::integrated        ? "IPE"
+                           : level.encoding == Encoding::contracted_ipe  ? "IPE of contracted frustums"
                            : level.encoding == Encoding::frustum_mean_pe ? "PE of frustum means"
                            : level.encoding == Encoding::concat_pe       ? "PE of frustum means ++ PE of sqrt(cov)"
                            : level.encoding == Encoding::zip_grid        ? (zip.multisample ? "multisampled grid"
                                                                                             : "grid at frustum means")
                                                                          : "PE of midpoints";
     out << (l ? "; " : "") << "level " << l << ": " << sampling << " " << intervals[l] << " intervals"
-        << (level.sampling == Sampling::proposal && ray_distance == RayDistance::power_ladder ? " (power ladder s→t)"
-                                                                                             : "")
+        << (level.sampling != Sampling::proposal           ? ""
+            : ray_distance == RayDistance::power_ladder ? " (power ladder s→t)"
+            : ray_distance == RayDistance::reciprocal   ? " (reciprocal s→t)"
+                                                        : "")
         << (level.dilation > 0.0f ? " from the previous histogram dilated by " + std::to_string(level.dilation) : "")
         << ", " << encoding;
     if (level.encoding == Encoding::zip_grid) {
@@ -182,6 +190,9 @@ std::string GraphSpec::describe() const {
           << (zip.contract ? ", points contracted (unbounded)" : "") << ")";
     } else {
       out << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1;
+      if (level.encoding == Encoding::contracted_ipe) {
+        out << " on " << feature_width(level) / (2 * static_cast<size_t>(position_encoding.degrees())) << " directions";
+      }
     }
     out << ", network " << level.mlp_index;
     if (level.role == LevelRole::proposal) {

@@ -41,6 +41,9 @@ enum class Encoding {
   midpoint_pe,      // PE of the interval's midpoint on the ray (NeRF's point samples)
   concat_pe,        // PE of the Gaussian's mean ++ PE of its covariance's signed square roots (supplement §7)
   zip_grid,         // Zip-NeRF: the interval's multisamples looked up in a trained grid (zip_features.cl)
+  // mip-NeRF 360: the frustum's full Gaussian through the contraction, projected onto the tessellated icosahedron's
+  // directions, then IPE (contracted_ipe.cl; GraphSpec::basis_tessellation, position_encoding's degrees)
+  contracted_ipe,
 };
 
 struct LevelSpec {
@@ -80,10 +83,12 @@ struct GraphSpec {
   SampleIntervalsOptions sample_intervals;
   float anneal_slope = 10.0f;  // Schlick's bias slope of the anneal (official Model.anneal_slope)
   // How proposal sampling's s maps to t (official Model.raydist_fn): linear for bounded scenes, the power ladder for
-  // unbounded ones (with zip.contract, near 0 and a far bound out at 1e6).
+  // unbounded ones (with zip.contract, near 0 and a far bound out at 1e6), the reciprocal for mip-NeRF 360's
+  // (contracted_ipe, near 0.2).
   RayDistance ray_distance = RayDistance::linear;
   GaussianOptions gaussian;
   EncodingOptions position_encoding;  // IPE or PE degrees of sample positions
+  int basis_tessellation = 2;         // contracted_ipe's directions: the icosahedron tessellated this often (2: 21)
   EncodingOptions view_encoding;      // PE of view directions (identity + degrees 0..3)
   ActivationOptions activation;
   RenderOptions render;

@@ -127,6 +127,7 @@ void sample_intervals_fwd(const SampleIntervalsOptions& options, const std::vect
 
 double ray_distance_s_to_t(RayDistance ray_distance, double s, double near, double far) {
   if (ray_distance == RayDistance::linear) return std::clamp(s * far + (1.0 - s) * near, near, far);
+  if (ray_distance == RayDistance::reciprocal) return std::clamp(1.0 / (s / far + (1.0 - s) / near), near, far);
   const auto h = [](double t) { return std::pow(1.0 + 2.0 * t / 2.5, -1.5); };
   // The official's float32 constants (kernels/sample_intervals.cl): |p − 1|/p and p/|p − 1| rounded to float32, their
   // product κ; inv_power_ladder's clip at y_max = nextafter(float32 of the limit, −∞).

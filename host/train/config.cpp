@@ -54,9 +54,11 @@ const std::vector<Entry>& table() {
       {{"spherify", "LLFF: re-pose a 360-degree capture around its centre (official spherify)", "scene"},
        &TrainConfig::spherify},
       {{"unbounded",
-        "zipnerf, sampler=proposal: a scene without bounds (a 360-degree capture's background): each grid point "
-        "through mip-NeRF 360's contraction into [-2, 2]^3, samples spaced by camp_zipnerf's power ladder from near 0 "
-        "to far 1e6 (explicit near, far and grid_bound win)",
+        "sampler=proposal: a scene without bounds (a 360-degree capture's background) through mip-NeRF 360's "
+        "contraction into the ball of radius 2. zipnerf: each grid point contracted, samples spaced by camp_zipnerf's "
+        "power ladder from near 0 to far 1e6 (explicit near, far and grid_bound win); mipnerf: mip-NeRF 360's model, "
+        "each frustum's Gaussian contracted and its IPE taken on 21 directions (pos_max_deg 12 is the official), "
+        "samples spaced in disparity from near 0.2 to far 1e6",
         "scene"},
        &TrainConfig::unbounded},
       {{"lindisp", "sample linearly in disparity instead of depth", "scene"}, &TrainConfig::lindisp},
@@ -546,10 +548,9 @@ void validate(const TrainConfig& c) {
     }
   }
   if (c.unbounded) {
-    require(c.variant == ModelFamily::zipnerf,
-            "unbounded is Zip-NeRF's (its grid contracts space; mip-NeRF 360's contracted IPE is not built yet): train "
-            "with --model zipnerf --set sampler=proposal, or leave unbounded=false for the " +
-                std::string(enum_name(c.variant)) + " model family");
+    require(c.variant != ModelFamily::nerf,
+            "unbounded is mip-NeRF 360's contraction of frustums (mipnerf) or of grid points (zipnerf): the nerf "
+            "baseline has neither; train with --model mipnerf or zipnerf, or leave unbounded=false");
     require(c.sampler == Sampler::proposal,
             "unbounded needs sampler=proposal (its samples are spaced in the normalised distance proposal sampling "
             "draws): add --set sampler=proposal");
@@ -579,6 +580,10 @@ void validate(const TrainConfig& c) {
   require(c.density_noise >= 0, "density_noise must be >= 0 (0 = no noise)");
   require(c.pixel_center >= 0 && c.pixel_center < 1, "pixel_center must be in [0, 1)");
   require(c.near >= 0 && c.far >= 0 && (c.far == 0 || c.far > c.near), "need 0 <= near < far (0 = from data)");
+  // A frustum's variances grow as t²: past t ≈ 1e19 they overflow float32 (kernels/gaussian.cl), so its IPE would be
+  // NaN; mip-NeRF 360's far of 1e6 is far inside.
+  require(c.far <= 1e18, "far = " + std::to_string(c.far) + " is beyond 1e18, where a frustum's variances overflow "
+                         "float32; an unbounded scene's far of 1e6 already reaches the contraction's edge");
 }
 
 nlohmann::ordered_json config_json(const TrainConfig& config) {

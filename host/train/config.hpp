@@ -80,9 +80,11 @@ struct TrainConfig {
   double far = 0.0;                  // 0 takes the dataset's value (Blender: 6)
   RayShape ray_shape = RayShape::cone;  // cylinder: forward-facing scenes in NDC
   bool spherify = false;             // LLFF: re-pose a 360° capture around its centre (world rays, cones)
-  // A scene without bounds (zipnerf, sampler = proposal, cones; camp_zipnerf configs/zipnerf/360.gin): the grid's
-  // points through mip-NeRF 360's contraction into [−2, 2]³ (grid_bound 2 unless given), proposal sampling's s spaced
-  // by the power ladder (RayDistance::power_ladder), near 0 and far 1e6 unless given.
+  // A scene without bounds (sampler = proposal, cones), through mip-NeRF 360's contraction into the ball of radius 2.
+  // zipnerf (camp_zipnerf configs/zipnerf/360.gin): the grid's points contracted (grid_bound 2 unless given), proposal
+  // sampling's s spaced by the power ladder (RayDistance::power_ladder), near 0 and far 1e6 unless given.
+  // mipnerf (multinerf configs/360.gin): every level's frustums contracted and encoded on the icosahedron's 21
+  // directions (Encoding::contracted_ipe), s spaced by the reciprocal (RayDistance::reciprocal), near 0.2, far 1e6.
   bool unbounded = false;
   bool lindisp = false;              // sample linearly in disparity instead of depth
   ops::Batching batching = ops::Batching::all_images;  // where a batch's rays come from

@@ -96,8 +96,9 @@ mlp::MlpConfig proposal_mlp(const TrainConfig& c, size_t input_width, size_t ind
 // by proposal, the first from the whole ray.
 //   Zip-NeRF: round i has grid i (1 feature a level, finest proposal_grid_max / 4^(K−1−i)) and a density-only network
 //   i of the tiny MLP's shape; the NeRF level grid K (the grid_* settings) and network K; the spline interlevel loss.
-//   mip-NeRF: every level encodes its frustums by IPE; round i has a density-only network of proposal_mlp_depth ×
-//   proposal_mlp_width, the NeRF level the mip-NeRF MLP; the outer interlevel loss (mip-NeRF 360 eq. 13).
+//   mip-NeRF: every level encodes its frustums by IPE (unbounded: mip-NeRF 360's IPE of contracted frustums); round i
+//   has a density-only network of proposal_mlp_depth × proposal_mlp_width, the NeRF level the mip-NeRF MLP; the outer
+//   interlevel loss (mip-NeRF 360 eq. 13).
 void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
   const int rounds = c.proposal_rounds;
   const bool grids = c.variant == ModelFamily::zipnerf;
@@ -115,7 +116,9 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
     graph::LevelSpec level;
     level.sampling = graph::Sampling::proposal;
     if (l > 0) level.dilation = proposal_dilation(c, samples_before);
-    level.encoding = grids ? graph::Encoding::zip_grid : graph::Encoding::integrated;
+    level.encoding = grids         ? graph::Encoding::zip_grid
+                     : c.unbounded ? graph::Encoding::contracted_ipe
+                                   : graph::Encoding::integrated;
     level.grid_index = grids ? static_cast<size_t>(l) : 0;
     level.mlp_index = static_cast<size_t>(l);
     if (l < rounds) {
@@ -141,7 +144,7 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
   spec.sample_intervals.single_jitter = true;
   spec.sample_intervals.randomized = c.randomized;
   spec.anneal_slope = static_cast<float>(c.anneal_slope);
-  spec.ray_distance = c.unbounded ? RayDistance::power_ladder : RayDistance::linear;
+  spec.ray_distance = !c.unbounded ? RayDistance::linear : grids ? RayDistance::power_ladder : RayDistance::reciprocal;
 }
 
 }  // namespace
@@ -243,7 +246,8 @@ data::LoadOptions load_options(const TrainConfig& config, const std::string& dat
   options.scales = scales > 0 ? scales : config.multiscale && !on_disk_multiscale ? config.multiscale_scales : 1;
   if (config.near > 0) options.near = config.near;
   if (config.far > 0) options.far = config.far;
-  if (config.unbounded && !(config.near > 0)) options.near = kUnboundedNear;
+  const bool zipnerf = config.variant == ModelFamily::zipnerf;
+  if (config.unbounded && !(config.near > 0)) options.near = zipnerf ? kUnboundedNear : kContractedIpeNear;
   if (config.unbounded && !(config.far > 0)) options.far = kUnboundedFar;
   // The contraction leaves the ball of radius 1 as it is: a transforms.json's world (an import puts its median camera
   // 4 from the centre) moves to the one around its cameras, as spherify moves an LLFF capture's.

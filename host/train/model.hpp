@@ -32,6 +32,8 @@ std::vector<std::unique_ptr<mlp::GridTable>> make_grids(ocl::Context& ctx, const
 // far 1e6), not between a capture's depth bounds (the background lies beyond them).
 inline constexpr double kUnboundedNear = 0.0;
 inline constexpr double kUnboundedFar = 1e6;
+// mip-NeRF 360's near (multinerf configs/360.gin: near 0.2): its reciprocal warp needs one > 0 (1/near).
+inline constexpr double kContractedIpeNear = 0.2;
 
 // How a run with `config` loads `data_path`: background, factor, near/far, and the multiscale pyramid
 // (built on the fly when config.multiscale asks and the folder is not multiscale on disk). `scales` > 0

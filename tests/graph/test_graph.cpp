@@ -9,12 +9,14 @@
 #include <random>
 #include <set>
 
+#include "core/geodesic_basis.hpp"
 #include "data/device_dataset.hpp"
 #include "data/synthetic/forward_facing.hpp"
 #include "graph/graph.hpp"
 #include "ops/batch.hpp"
 #include "core/proposal_anneal.hpp"
 #include "ref/distortion.hpp"
+#include "ref/contracted_ipe.hpp"
 #include "ref/encode.hpp"
 #include "ref/gaussian.hpp"
 #include "ref/dilate.hpp"
@@ -224,6 +226,13 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
       case graph::Encoding::integrated:
         ref::gaussian_ipe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R, n);
         break;
+      case graph::Encoding::contracted_ipe: {
+        std::vector<double> basis;
+        for (float x : icosahedron_basis_floats(spec.basis_tessellation)) basis.push_back(x);
+        ref::contracted_ipe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, basis, features,
+                                R, n);
+        break;
+      }
       case graph::Encoding::concat_pe:
         ref::gaussian_concat_pe_fwd(spec.gaussian, spec.position_encoding, origins, directions, radii, t, features, R,
                                     n);
@@ -244,7 +253,8 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
         break;
       }
     }
-    if (perturb && level.encoding != graph::Encoding::integrated && level.encoding != graph::Encoding::zip_grid) {
+    if (perturb && level.encoding != graph::Encoding::integrated && level.encoding != graph::Encoding::zip_grid &&
+        level.encoding != graph::Encoding::contracted_ipe) {
       const auto edge_bounds = edge_error_bounds(spec, level, t, R, n, near, far, t_prev, weights_prev, n_prev);
       perturb_mean_features(spec, features, spec.feature_width(level), t, edge_bounds, origins, directions, R,
                             n, perturb->rng);
@@ -427,7 +437,8 @@ void check_step_against_reference_on(gemm::GemmBackend backend, const std::strin
   // 1/40 for the losses). Without a PE level (IPE everywhere) the responses are 0.
   std::vector<ReferenceStep> responses;
   for (const auto& level : spec.levels) {
-    if (!with_response || level.encoding == graph::Encoding::integrated || level.encoding == graph::Encoding::zip_grid) {
+    if (!with_response || level.encoding == graph::Encoding::integrated || level.encoding == graph::Encoding::zip_grid ||
+        level.encoding == graph::Encoding::contracted_ipe) {
       continue;
     }
     for (unsigned draw = 0; draw < 3; ++draw) {
@@ -862,6 +873,26 @@ TEST_CASE("graph: an unbounded Zip-NeRF proposal step (contraction, power ladder
                                {{"sampler", "proposal"}, {"unbounded", "true"}, {"proposal_samples", "8"},
                                 {"proposal_grid_max", "64"}, {"grid_max", "64"}, {"grid_hash_log2", "12"},
                                 {"distortion_mult", "0.1"}});
+}
+
+// mip-NeRF 360's unbounded model (`--model mipnerf --set unbounded=true`): every level's frustums through the
+// contraction and encoded on the icosahedron's 21 directions (contracted_ipe, the proposal rounds' and the NeRF's),
+// proposal sampling's s spaced by the reciprocal, the outer interlevel losses, the dilation and the distortion loss: the
+// loss and every network's gradient against the reference composed of the stage references (a graph that encoded
+// without contracting, or warped s linearly, would feed other features). The small scene's rays run from 2 to 6.
+TEST_CASE("graph: an unbounded mip-NeRF 360 step (contracted IPE, reciprocal warp) equals the reference") {
+  const auto config = train::resolve_config("tiny", "mipnerf", {{"sampler", "proposal"}, {"unbounded", "true"},
+                                                                {"pos_max_deg", "12"}});
+  const auto spec = train::make_graph_spec(config, false);
+  REQUIRE(spec.ray_distance == RayDistance::reciprocal);
+  REQUIRE(spec.levels.size() == 3);
+  for (const auto& level : spec.levels) CHECK(level.encoding == graph::Encoding::contracted_ipe);
+  CHECK(spec.feature_width(spec.levels.back()) == 504);
+  CHECK(spec.mlps.back().input_width == 504);
+  check_step_against_reference("mipnerf", test::small_scene(),
+                               {{"sampler", "proposal"}, {"unbounded", "true"}, {"pos_max_deg", "12"},
+                                {"proposal_samples", "8"}, {"proposal_mlp_depth", "2"}, {"proposal_mlp_width", "32"},
+                                {"distortion_mult", "0.5"}});
 }
 
 // A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at

@@ -15,7 +15,10 @@
 #include "core/error.hpp"
 #include "official_fixtures.hpp"
 #include "ops/contract.hpp"
+#include "ops/ray_bundle.hpp"
+#include "ops/sample_intervals.hpp"
 #include "ref/contract.hpp"
+#include "ref/sample_intervals.hpp"
 #include "support/test_context.hpp"
 
 using namespace mipnerf;
@@ -250,4 +253,50 @@ TEST_CASE("multinerf contract: near = 0 makes the official warps NaN, and our wr
   auto& ctx = test::test_context();
   CHECK_THROWS_WITH_AS(ops::RayWarp(ctx, 0.0f, static_cast<float>(z.at("far").get<double>())),
                        doctest::Contains("set a near bound > 0"), Error);
+}
+
+// Proposal sampling's s → t for mip-NeRF 360 (RayDistance::reciprocal in sample_intervals.cl, the warp the training
+// graph runs) against the official construct_ray_warps(reciprocal)'s s_to_t, every (near, far) of the fixture, far = ∞
+// included: the same formula as ray_warp_s_to_t_of plus a clip to [near, far], within the same bound.
+TEST_CASE("multinerf contract: proposal sampling's reciprocal s to t equals the official warp, reference and kernel") {
+  const io::Json fixture = contract_fixture();
+  const io::Json& cases = fixture.at("ray_warps");
+  auto& ctx = test::test_context();
+  std::vector<float> s_all, near, far;
+  std::vector<double> official_t, s_double;
+  size_t per_ray = 0;
+  for (const auto& c : cases) {
+    const auto s = contract_values(c.at("s")), t_of_s = contract_values(c.at("t_of_s"));
+    per_ray = s.size();
+    near.push_back(static_cast<float>(c.at("near").get<double>()));
+    far.push_back(static_cast<float>(contract_value(c.at("far"))));
+    for (size_t i = 0; i < s.size(); ++i) {
+      s_all.push_back(static_cast<float>(s[i]));
+      s_double.push_back(s[i]);
+      official_t.push_back(t_of_s[i]);
+    }
+  }
+  const size_t n_rays = near.size();
+  ops::RayBundle rays(ctx, n_rays);
+  rays.near.upload(ctx, near);
+  rays.far.upload(ctx, far);
+  auto s_device = official::upload(ctx, s_all, "s");
+  ocl::DeviceArray<float> t_device(ctx, s_all.size(), "t");
+  ops::SampleIntervals(ctx, RayDistance::reciprocal).s_to_t(s_device, rays, n_rays, per_ray, t_device);
+  const auto t = t_device.download(ctx);
+  size_t infinite = 0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    const size_t ray = i / per_ray;
+    INFO("near " << near[ray] << ", far " << far[ray] << ", s = " << s_double[i] << ": official t " << official_t[i]);
+    const double ours = ref::ray_distance_s_to_t(RayDistance::reciprocal, s_double[i], near[ray], far[ray]);
+    if (std::isinf(official_t[i])) {  // s = 1 with far = ∞
+      ++infinite;
+      CHECK(std::isinf(ours));
+      CHECK(std::isinf(t[i]));
+      continue;
+    }
+    CHECK(std::abs(ours - official_t[i]) <= 1e-14 * official_t[i]);
+    CHECK(std::abs(t[i] - official_t[i]) <= (ref::ray_warp_s_to_t_float32_relative_bound() + 1e-14) * official_t[i]);
+  }
+  CHECK(infinite == 2);
 }

@@ -488,8 +488,10 @@ TEST_CASE("config: distortion_mult needs sampler=proposal, and weights the NeRF 
 // is spaced by the power ladder, and the data is loaded from near 0 to far 1e6 (explicit near and far win). Off, the
 // spec and the load options are what they were.
 TEST_CASE("config: unbounded contracts Zip-NeRF's grids, spaces proposal samples by the power ladder, from 0 to 1e6") {
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "nerf", {{"unbounded", "true"}}),
+                       doctest::Contains("the nerf baseline has neither"), Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"unbounded", "true"}}),
-                       doctest::Contains("unbounded is Zip-NeRF's"), Error);
+                       doctest::Contains("unbounded needs sampler=proposal"), Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "zipnerf", {{"unbounded", "true"}}),
                        doctest::Contains("unbounded needs sampler=proposal"), Error);
   CHECK_THROWS_WITH_AS(
@@ -527,4 +529,37 @@ TEST_CASE("config: unbounded contracts Zip-NeRF's grids, spaces proposal samples
   CHECK(*given_load.near == 0.1);
   CHECK(*given_load.far == 500.0);
   CHECK(train::make_graph_spec(given, false).zip.box_size == 5.0f);
+}
+
+// `unbounded` with the mip-NeRF family is mip-NeRF 360's model (multinerf configs/360.gin): every level encodes its
+// contracted frustums on the icosahedron's 21 directions, proposal sampling's s is spaced by the reciprocal, and the
+// data is loaded from near 0.2 (the reciprocal needs one > 0) to far 1e6 (explicit near and far win); `far` past 1e18
+// is refused (a frustum's variances overflow float32 there). Off, mip-NeRF's proposal spec is the IPE's.
+TEST_CASE("config: unbounded mip-NeRF is mip-NeRF 360's contracted IPE, reciprocal spacing, from 0.2 to 1e6") {
+  const auto off = train::resolve_config("tiny", "mipnerf", {{"sampler", "proposal"}});
+  const auto off_spec = train::make_graph_spec(off, false);
+  CHECK(off_spec.ray_distance == RayDistance::linear);
+  for (const auto& level : off_spec.levels) CHECK(level.encoding == graph::Encoding::integrated);
+  const auto on = train::resolve_config("tiny", "mipnerf", {{"sampler", "proposal"}, {"unbounded", "true"},
+                                                           {"pos_max_deg", "12"}});
+  const auto spec = train::make_graph_spec(on, false);
+  CHECK(spec.ray_distance == RayDistance::reciprocal);
+  for (const auto& level : spec.levels) CHECK(level.encoding == graph::Encoding::contracted_ipe);
+  for (const auto& mlp : spec.mlps) CHECK(mlp.input_width == 504);
+  CHECK(spec.describe().find("(reciprocal s→t)") != std::string::npos);
+  CHECK(spec.describe().find("IPE of contracted frustums degrees 0..11 on 21 directions") != std::string::npos);
+  CHECK(off_spec.describe().find("contracted") == std::string::npos);
+  const auto load = train::load_options(on, test::small_scene(), {"train"}, 1);
+  REQUIRE(load.near.has_value());
+  REQUIRE(load.far.has_value());
+  CHECK(*load.near == 0.2);
+  CHECK(*load.far == 1e6);
+  CHECK(load.world_around_cameras);
+  const auto given = train::resolve_config(
+      "tiny", "mipnerf", {{"sampler", "proposal"}, {"unbounded", "true"}, {"near", "0.5"}, {"far", "500"}});
+  const auto given_load = train::load_options(given, test::small_scene(), {"train"}, 1);
+  CHECK(*given_load.near == 0.5);
+  CHECK(*given_load.far == 500.0);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"far", "1e19"}}),
+                       doctest::Contains("beyond 1e18"), Error);
 }

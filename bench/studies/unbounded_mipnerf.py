@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""Unbounded 360-degree scenes with the mip-NeRF model: mip-NeRF 360's contracted IPE against today's spherified world
+rays, at equal training time.
+
+Issue 45's bar for mip-NeRF 360's own model: on a 360-degree capture, the contracted model beats what `train` does
+without it (spherified poses, world rays between the capture's near and far bounds, coarse/fine resampling) on held-out
+views at equal training time, over 3 seeds. The capture is the tool's own, as bench/studies/unbounded.py's:
+`make-scene --unbounded` (a procedural scene on an endless checkered ground with pillars 6 to 40 units away and a sky,
+from a full orbit of 40 cameras; every 8th view held out), trained at `--set factor=4` (64x48). The models, each
+through the command-line tool with `train --minutes M` (the step count fixed by the tool's timed warm-up, recorded):
+  - mip: mip-NeRF quick as a 360-degree capture trains it without options (spherified, coarse/fine resampling);
+  - m360: mip-NeRF quick as mip-NeRF 360 (multinerf configs/360.gin's model at the quick preset's size): proposal
+    sampling (two rounds of 64 on density-only 4x64 MLPs, the outer interlevel loss, the dilation, the distortion loss
+    0.01), every level's frustums through the contraction and encoded on the icosahedron's 21 directions (degrees
+    0..11: 504 features), s spaced by the reciprocal from near 0.2 to far 1e6;
+  - m360_32: the same with rounds of 32 (fewer encodings a step).
+Each is trained for every seed and scored by `eval` on the val views (PSNR, SSIM, render time). The table holds the
+mean and sample standard deviation over seeds, and each seed's PSNR. Finished runs and scores in --work are reused.
+
+  /usr/bin/python3 bench/studies/unbounded_mipnerf.py --minutes 4 --seeds 0,1,2
+  python3 bench/studies/unbounded_mipnerf.py --report-only
+"""
+
+import os
+import statistics
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
+from lib import report_md  # noqa: E402
+from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, run, run_record,  # noqa: E402
+                          seed_table_cells, train_for_minutes)
+
+RESULTS = report_md.results_folder("unbounded_mipnerf")
+SCRIPT = "bench/studies/unbounded_mipnerf.py"
+M360 = ("--preset quick --set sampler=proposal --set unbounded=true --set proposal_mlp_width=64 "
+        "--set distortion_mult=0.01")
+# (key, label, train arguments)
+MODELS = [
+    ("mip", "mip-NeRF quick, spherified world rays (the 360° default)", "--preset quick"),
+    ("m360", "mip-NeRF 360 at quick's size: contracted IPE, proposal 2 × 64 (4×64 MLPs)", M360),
+    ("m360_32", "the same, proposal rounds of 32", M360 + " --set proposal_samples=32"),
+]
+
+
+def add_arguments(parser):
+    parser.add_argument("--build", default="build", help="build folder holding mipnerf-cl")
+    parser.add_argument("--work", default="/tmp/mipnerf-unbounded-mipnerf", help="the scene, runs and logs")
+    parser.add_argument("--minutes", type=float, default=4.0, help="training budget of every run")
+    parser.add_argument("--seeds", default="0,1,2", help="comma-separated seeds, each model trained once per seed")
+    parser.add_argument("--factor", type=int, default=4, help="the capture's downsampling (4: 64x48)")
+    parser.add_argument("--views", type=int, default=5, help="val views scored (the capture holds out 5)")
+    parser.add_argument("--only", help="comma-separated model keys (mip, m360, m360_32)")
+
+
+def scene(args, log):
+    folder = os.path.join(args.work, "scene")
+    if not os.path.exists(os.path.join(folder, "poses_bounds.npy")):
+        run([args.exe, "make-scene", folder, "--unbounded"], log)
+    return folder
+
+
+def measure(args):
+    args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
+    args.work = os.path.abspath(args.work)
+    os.makedirs(args.work, exist_ok=True)
+    os.makedirs(RESULTS, exist_ok=True)
+    log = os.path.join(args.work, "study.log")
+    data = scene(args, log)
+    seeds = [int(s) for s in args.seeds.split(",")]
+    models = [m for m in MODELS if not args.only or m[0] in args.only.split(",")]
+    started = time.time()
+    runs = {key: [] for key, _, _ in models}
+    # Seed by seed, every model in turn: a slow spell of the shared machine falls on all models, not on one.
+    for seed in seeds:
+        for key, _, model_args in models:
+            run_dir = train_for_minutes(args.exe, data, os.path.join(args.work, key, f"seed{seed}"), model_args, seed,
+                                        args.minutes, args.factor, log)
+            metrics = evaluate_val(args.exe, data, run_dir, args.views, log)
+            runs[key].append(run_record(seed, run_dir, metrics))
+    rows = [{"key": key, "label": label, "arguments": model_args, "runs": runs[key]} for key, label, model_args in models]
+    return {
+        "study": "unbounded_mipnerf", "date": time.strftime("%Y-%m-%d", time.gmtime()), "commit": commit_of(),
+        "scene": f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views",
+        "budget_minutes": args.minutes, "seeds": seeds, "wall_seconds": round(time.time() - started, 1), "rows": rows,
+    }
+
+
+def write_markdown(record):
+    rows = record["rows"]
+    header = ["model", *SEED_TABLE_HEADER, "render s/MP"]
+    body = [[r["label"], *seed_table_cells(r["runs"]),
+             f"{statistics.mean(x['render_seconds_per_megapixel'] for x in r['runs']):.1f}"] for r in rows]
+    lines = [report_md.generated_banner(SCRIPT, "unbounded_mipnerf.json"), "",
+             "# Unbounded 360° scenes, mip-NeRF: mip-NeRF 360's contracted IPE against spherified world rays, at equal "
+             "training time", "",
+             f"{record['scene']}; `train --minutes {record['budget_minutes']:g}` per run, seeds "
+             f"{', '.join(str(s) for s in record['seeds'])}; device {device_line(rows[0]['runs'][0]['device'])}; "
+             f"commit {record['commit']}; {record['date']}.", ""]
+    lines += report_md.table(header, "lrrrrrrr", body)
+    by_key = {r["key"]: r for r in rows}
+    for key in ("m360", "m360_32"):
+        if key in by_key and "mip" in by_key:
+            gains = [u["psnr"] - s["psnr"] for u, s in zip(by_key[key]["runs"], by_key["mip"]["runs"])]
+            lines += ["", f"{by_key[key]['label']} minus spherified, seed by seed: "
+                      + ", ".join(f"{g:+.2f} dB" for g in gains) + f" (mean {statistics.mean(gains):+.2f} dB)."]
+    if record["wall_seconds"] >= 60:  # not when every run was reused from --work
+        lines += ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    report_md.study_main(__doc__, RESULTS, "unbounded_mipnerf", SCRIPT, add_arguments, measure, write_markdown)
