@@ -135,6 +135,7 @@ data::LoadOptions train_like_options(const InspectArgs& args, std::string& scene
   options.forward_facing_ndc = options.llff.ndc;
   scene_line = "scene: " + effects.summary;
   if (!args.background.empty() || args.spherify) scene_line += " (flags given here win)";
+  if (!effects.mipnerf_summary.empty()) scene_line += "; mip-NeRF: " + effects.mipnerf_summary;
   if (!effects.zipnerf_summary.empty()) scene_line += "; with --model zipnerf: " + effects.zipnerf_summary;
   return options;
 }

@@ -1,6 +1,6 @@
 // mip-NeRF 360's contraction of Gaussians and its ray warps (Barron et al. 2022, eqs. 10–11; the official multinerf
-// coord.contract, coord.track_linearize and coord.construct_ray_warps with raydist_fn = reciprocal). Standalone stages,
-// not yet wired into the training graph (issue 45). Reference: host/ref/contract.hpp (same names).
+// coord.contract, coord.track_linearize and coord.construct_ray_warps with raydist_fn = reciprocal). Standalone stages;
+// contracted_ipe.cl inlines the forward for the model. Reference: host/ref/contract.hpp (same names).
 //
 // contract(x) = x for |x| ≤ 1, (2 − 1/|x|) x/|x| outside (eq. 10): all of space into the ball of radius 2.
 // A Gaussian (μ, Σ) goes through the contraction linearised at its mean (track_linearize, a Kalman filter's step):

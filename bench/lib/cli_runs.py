@@ -5,7 +5,9 @@ import json
 import os
 import shlex
 import statistics
+import time
 
+from lib import report_md
 from lib.provenance import commit_of  # noqa: F401  (the studies import it from here)
 from lib.machine import load_average
 from lib.run import run  # noqa: F401  (the studies import it from here)
@@ -127,3 +129,50 @@ def seed_table_cells(runs):
     train_s = statistics.mean(x["train_seconds"] for x in runs)
     return [f"{psnr:.2f} ± {psnr_sd:.2f}", f"{ssim:.3f} ± {ssim_sd:.3f}", " / ".join(f"{x['psnr']:.2f}" for x in runs),
             f"{steps:.0f}", f"{train_s / steps:.3f}", f"{train_s:.0f}"]
+
+
+def models_seed_by_seed(args, data, models, log):
+    """The rows of a budget study's record: each (key, label, train arguments) of `models` trained with
+    `train --minutes args.minutes` at args.factor for every seed of args.seeds (comma-separated) and scored by `eval` on
+    args.views val views of `data`, seed by seed with every model in turn (a slow spell of the shared machine falls on
+    all models, not on one). Runs go to args.work/KEY/seedS; finished runs and scores there are reused."""
+    seeds = [int(s) for s in args.seeds.split(",")]
+    runs = {key: [] for key, _, _ in models}
+    for seed in seeds:
+        for key, _, model_args in models:
+            run_dir = train_for_minutes(args.exe, data, os.path.join(args.work, key, f"seed{seed}"), model_args, seed,
+                                        args.minutes, args.factor, log)
+            metrics = evaluate_val(args.exe, data, run_dir, args.views, log)
+            runs[key].append(run_record(seed, run_dir, metrics))
+    return [{"key": key, "label": label, "arguments": model_args, "runs": runs[key]} for key, label, model_args in models]
+
+
+def budget_report_head(record, script, json_name, title):
+    """The generated head of a budget study's report: banner, title, the runs' line (scene, budget, seeds, device,
+    commit, date) and the table of models (SEED_TABLE_HEADER and render s/MP), as lines."""
+    rows = record["rows"]
+    header = ["model", *SEED_TABLE_HEADER, "render s/MP"]
+    body = [[r["label"], *seed_table_cells(r["runs"]),
+             f"{statistics.mean(x['render_seconds_per_megapixel'] for x in r['runs']):.1f}"] for r in rows]
+    lines = [report_md.generated_banner(script, json_name), "", "# " + title, "",
+             f"{record['scene']}; `train --minutes {record['budget_minutes']:g}` per run, seeds "
+             f"{', '.join(str(s) for s in record['seeds'])}; device {device_line(rows[0]['runs'][0]['device'])}; "
+             f"commit {record['commit']}; {record['date']}.", ""]
+    return lines + report_md.table(header, "lrrrrrrr", body)
+
+
+def budget_record(study, args, scene, started, rows):
+    """A budget study's JSON record: its rows (models_seed_by_seed), what was measured and when."""
+    return {
+        "study": study, "date": time.strftime("%Y-%m-%d", time.gmtime()), "commit": commit_of(), "scene": scene,
+        "budget_minutes": args.minutes, "seeds": [int(s) for s in args.seeds.split(",")],
+        "wall_seconds": round(time.time() - started, 1), "rows": rows,
+    }
+
+
+def unbounded_scene(exe, work, log):
+    """The built-in 360-degree capture (`make-scene --unbounded`) in work/scene, made once."""
+    folder = os.path.join(work, "scene")
+    if not os.path.exists(os.path.join(folder, "poses_bounds.npy")):
+        run([exe, "make-scene", folder, "--unbounded"], log)
+    return folder

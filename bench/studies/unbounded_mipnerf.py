@@ -28,8 +28,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, run, run_record,  # noqa: E402
-                          seed_table_cells, train_for_minutes)
+from lib.cli_runs import budget_record, budget_report_head, models_seed_by_seed, unbounded_scene  # noqa: E402
 
 RESULTS = report_md.results_folder("unbounded_mipnerf")
 SCRIPT = "bench/studies/unbounded_mipnerf.py"
@@ -53,51 +52,25 @@ def add_arguments(parser):
     parser.add_argument("--only", help="comma-separated model keys (mip, m360, m360_32)")
 
 
-def scene(args, log):
-    folder = os.path.join(args.work, "scene")
-    if not os.path.exists(os.path.join(folder, "poses_bounds.npy")):
-        run([args.exe, "make-scene", folder, "--unbounded"], log)
-    return folder
-
-
 def measure(args):
     args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
     args.work = os.path.abspath(args.work)
     os.makedirs(args.work, exist_ok=True)
     os.makedirs(RESULTS, exist_ok=True)
     log = os.path.join(args.work, "study.log")
-    data = scene(args, log)
-    seeds = [int(s) for s in args.seeds.split(",")]
+    data = unbounded_scene(args.exe, args.work, log)
     models = [m for m in MODELS if not args.only or m[0] in args.only.split(",")]
     started = time.time()
-    runs = {key: [] for key, _, _ in models}
-    # Seed by seed, every model in turn: a slow spell of the shared machine falls on all models, not on one.
-    for seed in seeds:
-        for key, _, model_args in models:
-            run_dir = train_for_minutes(args.exe, data, os.path.join(args.work, key, f"seed{seed}"), model_args, seed,
-                                        args.minutes, args.factor, log)
-            metrics = evaluate_val(args.exe, data, run_dir, args.views, log)
-            runs[key].append(run_record(seed, run_dir, metrics))
-    rows = [{"key": key, "label": label, "arguments": model_args, "runs": runs[key]} for key, label, model_args in models]
-    return {
-        "study": "unbounded_mipnerf", "date": time.strftime("%Y-%m-%d", time.gmtime()), "commit": commit_of(),
-        "scene": f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views",
-        "budget_minutes": args.minutes, "seeds": seeds, "wall_seconds": round(time.time() - started, 1), "rows": rows,
-    }
+    rows = models_seed_by_seed(args, data, models, log)
+    scene = f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views"
+    return budget_record("unbounded_mipnerf", args, scene, started, rows)
 
 
 def write_markdown(record):
     rows = record["rows"]
-    header = ["model", *SEED_TABLE_HEADER, "render s/MP"]
-    body = [[r["label"], *seed_table_cells(r["runs"]),
-             f"{statistics.mean(x['render_seconds_per_megapixel'] for x in r['runs']):.1f}"] for r in rows]
-    lines = [report_md.generated_banner(SCRIPT, "unbounded_mipnerf.json"), "",
-             "# Unbounded 360° scenes, mip-NeRF: mip-NeRF 360's contracted IPE against spherified world rays, at equal "
-             "training time", "",
-             f"{record['scene']}; `train --minutes {record['budget_minutes']:g}` per run, seeds "
-             f"{', '.join(str(s) for s in record['seeds'])}; device {device_line(rows[0]['runs'][0]['device'])}; "
-             f"commit {record['commit']}; {record['date']}.", ""]
-    lines += report_md.table(header, "lrrrrrrr", body)
+    lines = budget_report_head(record, SCRIPT, "unbounded_mipnerf.json",
+                               "Unbounded 360° scenes, mip-NeRF: mip-NeRF 360's contracted IPE against spherified "
+                               "world rays, at equal training time")
     by_key = {r["key"]: r for r in rows}
     for key in ("m360", "m360_32"):
         if key in by_key and "mip" in by_key:

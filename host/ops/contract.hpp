@@ -1,7 +1,7 @@
 // Host wrapper of kernels/contract.cl: mip-NeRF 360's contraction of Gaussians (μ' = contract(μ), Σ' = J Σ Jᵀ, the
 // official coord.contract through coord.track_linearize) forward and backward, and the ray warps of
-// coord.construct_ray_warps with fn = reciprocal (configs/360.gin's raydist_fn). Not yet stages of the training graph
-// (issue 45).
+// coord.construct_ray_warps with fn = reciprocal (configs/360.gin's raydist_fn). Standalone stages: the training graph
+// runs the contraction's forward inside contracted_ipe.cl and the warp inside sample_intervals.cl.
 #pragma once
 
 #include <cstddef>

@@ -150,6 +150,7 @@ struct TrainConfig {
   int proposal_grid_max = 2048;
   int proposal_mlp_depth = 4;
   int proposal_mlp_width = 256;
+  int basis_subdivisions = 2;  // unbounded mipnerf: the contracted IPE's directions (official 2: 21; GraphSpec)
   double anneal_slope = 10.0;
   double interlevel_mult = -1.0;  // < 0: the model's official (Zip-NeRF's spline loss 0.01, mip-NeRF 360's outer 1)
   // mip-NeRF 360's dilation of each proposal histogram before the next level samples from it: by dilation_bias +

@@ -102,6 +102,7 @@ mlp::MlpConfig proposal_mlp(const TrainConfig& c, size_t input_width, size_t ind
 void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
   const int rounds = c.proposal_rounds;
   const bool grids = c.variant == ModelFamily::zipnerf;
+  spec.basis_tessellation = c.basis_subdivisions;  // before the networks: it sets a contracted IPE's width
   spec.grids.clear();
   for (int round = 0; grids && round < rounds; ++round) {
     mlp::GridConfig grid = grid_config(c);

@@ -13,8 +13,38 @@ SceneEffects scene_effects(const std::string& data_path, int factor, ModelFamily
     effects.zipnerf_settings.clear();
     effects.zipnerf_summary.clear();
   }
+  if (family != ModelFamily::mipnerf) {
+    effects.mipnerf_settings.clear();
+    effects.mipnerf_summary.clear();
+  }
   return effects;
 }
+
+namespace {
+
+// A family's group (`group`, said by `summary` after `label`) added to `settings` where no explicit setting disagrees
+// with any of it, else none of it; `line` says which.
+std::map<std::string, std::string> with_family_group(const std::map<std::string, std::string>& group,
+                                                     const std::string& summary, const std::string& label,
+                                                     std::map<std::string, std::string> settings, std::string& line) {
+  if (group.empty()) return settings;
+  std::string against;
+  for (const auto& [name, value] : group) {
+    const auto given = settings.find(name);
+    if (given != settings.end() && given->second != value) {
+      against += (against.empty() ? "" : ", ") + name + " = " + given->second;
+    }
+  }
+  if (!against.empty()) {
+    line += "; " + label + " not " + summary + " (given explicitly: " + against + ")";
+    return settings;
+  }
+  for (const auto& [name, value] : group) settings.emplace(name, value);
+  line += "; " + label + " " + summary;
+  return settings;
+}
+
+}  // namespace
 
 std::map<std::string, std::string> with_scene_effects(const SceneEffects& effects,
                                                       std::map<std::string, std::string> explicit_settings,
@@ -30,21 +60,10 @@ std::map<std::string, std::string> with_scene_effects(const SceneEffects& effect
     }
   }
   if (!kept.empty()) line += " (given explicitly, kept: " + kept + ")";
-  if (effects.zipnerf_settings.empty()) return explicit_settings;
-  std::string against;
-  for (const auto& [name, value] : effects.zipnerf_settings) {
-    const auto given = explicit_settings.find(name);
-    if (given != explicit_settings.end() && given->second != value) {
-      against += (against.empty() ? "" : ", ") + name + " = " + given->second;
-    }
-  }
-  if (!against.empty()) {
-    line += "; Zip-NeRF not " + effects.zipnerf_summary + " (given explicitly: " + against + ")";
-    return explicit_settings;
-  }
-  for (const auto& [name, value] : effects.zipnerf_settings) explicit_settings.emplace(name, value);
-  line += "; Zip-NeRF " + effects.zipnerf_summary;
-  return explicit_settings;
+  explicit_settings =
+      with_family_group(effects.zipnerf_settings, effects.zipnerf_summary, "Zip-NeRF", std::move(explicit_settings), line);
+  return with_family_group(effects.mipnerf_settings, effects.mipnerf_summary, "mip-NeRF", std::move(explicit_settings),
+                           line);
 }
 
 }  // namespace mipnerf::train

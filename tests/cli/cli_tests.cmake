@@ -184,8 +184,9 @@ mipnerf_add_cli_error_test("make-scene: bad --grid" PATTERN "--grid '5by4': expe
 mipnerf_add_cli_error_test("make-scene: bad --grid-width" PATTERN "--grid-width must be 0.01 to 4 \\(scene units"
   ARGS make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-bad-scene" --forward-facing --grid-width 0)
 
-# The unbounded (360°) scene in the LLFF layout: train takes it for a 360° capture with no flag (today: spherified
-# poses, world rays, cones: what mip-NeRF 360's contraction is to improve on, issue 45), and trains a few steps.
+# The unbounded (360°) scene in the LLFF layout: train takes it for a 360° capture with no flag: spherified poses,
+# cones, and for mip-NeRF the model of mip-NeRF 360 (contracted frustums IPE'd on 21 directions, proposal sampling
+# spaced by the reciprocal); it trains a few steps, evaluates and renders an orbit from the checkpoint.
 mipnerf_add_checked_test("cli: make-scene --unbounded writes a 360-degree LLFF capture"
   EXPECT "a 360-degree LLFF capture of 16 views at 64x48 \\(images/, images_4/, poses_bounds.npy\\)"
   COMMAND mipnerf-cl make-scene "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded" --unbounded --size 64 --views 16 --samples 1)
@@ -196,11 +197,32 @@ add_test(NAME "cli: train on the unbounded scene: clear the run folder"
 set_tests_properties("cli: train on the unbounded scene: clear the run folder" PROPERTIES
   FIXTURES_SETUP cli_unbounded_clean)
 mipnerf_add_checked_test("cli: train on the unbounded scene takes it for a 360-degree capture"
-  EXPECT "scene: 360° LLFF capture → spherified poses, world rays, cones, black background.*trained 4 steps"
+  EXPECT "scene: 360° LLFF capture → spherified poses, world rays, cones, black background; mip-NeRF unbounded as mip-NeRF 360 \\(frustums contracted, IPE 0..11 on 21 directions, proposal sampling spaced in disparity from 0.2 to 1e6\\).*proposal-sampled 16 intervals \\(reciprocal s→t\\), IPE of contracted frustums degrees 0..11 on 21 directions.*trained 4 steps"
   COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded"
-  --out "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run" --preset tiny --factor 4 --steps 4 --val_views 1)
+  --out "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run" --preset tiny --factor 4 --steps 4 --val_views 1
+  --set proposal_samples=16 --set num_samples=16 --set proposal_mlp_width=32)
 set_tests_properties("cli: train on the unbounded scene takes it for a 360-degree capture" PROPERTIES
-  FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_clean")
+  FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_clean" FIXTURES_SETUP cli_unbounded_mip)
+mipnerf_add_checked_test("cli: unbounded mipnerf: eval" EXPECT "mean PSNR [0-9.]+ dB"
+  COMMAND mipnerf-cl eval --checkpoint "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run"
+  --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded")
+set_tests_properties("cli: unbounded mipnerf: eval" PROPERTIES FIXTURES_REQUIRED cli_unbounded_mip)
+mipnerf_add_checked_test("cli: unbounded mipnerf: render an orbit" EXPECT "rendered 2 frames"
+  COMMAND mipnerf-cl render --checkpoint "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run" --path orbit --frames 2
+  --size 16x12)
+set_tests_properties("cli: unbounded mipnerf: render an orbit" PROPERTIES FIXTURES_REQUIRED cli_unbounded_mip)
+# An explicit setting against the group keeps mip-NeRF 360 out, and train says which (the paper's mip-NeRF then).
+add_test(NAME "cli: unbounded mipnerf: clear the resample run"
+  COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-resample-run")
+set_tests_properties("cli: unbounded mipnerf: clear the resample run" PROPERTIES
+  FIXTURES_SETUP cli_unbounded_resample_clean)
+mipnerf_add_checked_test("cli: unbounded mipnerf: sampler=resample keeps the spherified paper model"
+  EXPECT "; mip-NeRF not unbounded as mip-NeRF 360 [^\n]*\\(given explicitly: sampler = resample\\).*level 0: stratified.*trained 2 steps"
+  COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded"
+  --out "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-resample-run" --preset tiny --factor 4 --steps 2 --val_views 1
+  --set sampler=resample)
+set_tests_properties("cli: unbounded mipnerf: sampler=resample keeps the spherified paper model" PROPERTIES
+  FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_resample_clean")
 # Zip-NeRF on it trains unbounded with no flag (the scene's choice for the zipnerf family: contraction, proposal
 # sampling spaced by the power ladder), then evaluates and renders an orbit from the checkpoint (from near 0 to far
 # 1e6, as it trained).

@@ -114,6 +114,7 @@ TEST_CASE("transforms.json: forward-facing photos train in NDC, in the world and
   CHECK(mip.summary == "transforms.json of forward-facing photos → NDC rays, cylinders, black background, raw view "
                        "directions, density noise 1");
   CHECK(train::scene_effects(capture.file, 1, train::ModelFamily::zipnerf).zipnerf_settings.empty());
+  CHECK(train::scene_effects(capture.file, 1).mipnerf_settings.empty());
   std::string line;
   const train::TrainConfig config = train::resolve_config("quick", "mipnerf", train::with_scene_effects(mip, {}, line));
   REQUIRE(config.ray_shape == RayShape::cylinder);

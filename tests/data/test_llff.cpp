@@ -254,10 +254,29 @@ TEST_CASE("llff: a capture looking inward from all around is 360 degrees, spheri
   CHECK(effects.summary == "360° LLFF capture → spherified poses, world rays, cones, black background");
   CHECK(effects.settings.at("spherify") == "true");
   CHECK(effects.settings.at("ray_shape") == "cone");
-  // mip-NeRF (and NeRF) get no Zip-NeRF effect; Zip-NeRF gets the unbounded group, all of it or, where an explicit
-  // setting disagrees with one of them, none (the line says which).
+  // Each family gets its own unbounded group, all of it or, where an explicit setting disagrees with one of them, none
+  // (the line says which); NeRF none. mip-NeRF: mip-NeRF 360's model at the official degrees.
   CHECK(effects.zipnerf_settings.empty());
-  CHECK(train::scene_effects(dir.string(), 1, train::ModelFamily::nerf).zipnerf_settings.empty());
+  CHECK(effects.mipnerf_settings.at("unbounded") == "true");
+  CHECK(effects.mipnerf_settings.at("sampler") == "proposal");
+  CHECK(effects.mipnerf_settings.at("pos_max_deg") == "12");
+  const train::SceneEffects nerf = train::scene_effects(dir.string(), 1, train::ModelFamily::nerf);
+  CHECK(nerf.zipnerf_settings.empty());
+  CHECK(nerf.mipnerf_settings.empty());
+  {
+    std::string mip_line;
+    auto mip_settings = train::with_scene_effects(effects, {}, mip_line);
+    CHECK(mip_line.find("; mip-NeRF unbounded as mip-NeRF 360 (frustums contracted") != std::string::npos);
+    const auto mip = train::resolve_config("paper", "mipnerf", mip_settings);  // the paper preset's degrees 0..15 too
+    CHECK(mip.unbounded);
+    CHECK(mip.sampler == train::Sampler::proposal);
+    CHECK(mip.pos_max_deg == 12);
+    mip_settings = train::with_scene_effects(effects, {{"pos_max_deg", "16"}}, mip_line);
+    CHECK(mip_settings.count("unbounded") == 0);
+    CHECK(mip_line.find("mip-NeRF not unbounded as mip-NeRF 360") != std::string::npos);
+    CHECK(!train::resolve_config("quick", "mipnerf", mip_settings).unbounded);
+  }
+  CHECK(train::scene_effects(dir.string(), 1, train::ModelFamily::zipnerf).mipnerf_settings.empty());
   const train::SceneEffects zip = train::scene_effects(dir.string(), 1, train::ModelFamily::zipnerf);
   CHECK(zip.zipnerf_settings.at("unbounded") == "true");
   CHECK(zip.zipnerf_settings.at("sampler") == "proposal");

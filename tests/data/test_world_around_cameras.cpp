@@ -76,10 +76,11 @@ TEST_CASE("transforms.json: photos taken all around are an unbounded scene, load
   CHECK(traits.format == data::DatasetFormat::transforms_json);
   CHECK(traits.all_around);
   CHECK(!traits.has_alpha);
-  // mip-NeRF: the photos' effects as before (cones, black background), no Zip-NeRF group; Zip-NeRF: unbounded.
+  // mip-NeRF: the photos' effects (cones, black background) and mip-NeRF 360's group; Zip-NeRF: its own.
   const train::SceneEffects mip = train::scene_effects(file, 1);
   CHECK(mip.settings == std::map<std::string, std::string>{{"ray_shape", "cone"}, {"background", "black"}});
   CHECK(mip.zipnerf_settings.empty());
+  CHECK(mip.mipnerf_settings.at("unbounded") == "true");
   CHECK(mip.summary == "transforms.json of photos taken all around (360°) → cones, black background");
   const train::SceneEffects zip = train::scene_effects(file, 1, train::ModelFamily::zipnerf);
   CHECK(zip.zipnerf_settings.at("unbounded") == "true");
@@ -164,6 +165,7 @@ TEST_CASE("transforms.json: a rendered object seen from all around stays bounded
   CHECK(traits.all_around);
   CHECK(traits.has_alpha);
   CHECK(train::scene_effects(dir / "transforms.json", 1, train::ModelFamily::zipnerf).zipnerf_settings.empty());
+  CHECK(train::scene_effects(dir / "transforms.json", 1).mipnerf_settings.empty());
 
   // Forward-facing: every camera looks along −y from a small patch.
   for (size_t k = 0; k < single["frames"].size(); ++k) {

@@ -114,11 +114,14 @@ mipnerf_add_oclgrind_test("proposal loss kernels" test_ops
 # histograms (its three-list merge and window): the kernels --model mipnerf --set sampler=proposal adds.
 mipnerf_add_oclgrind_test("mip-NeRF 360 proposal kernels" test_ops
   "outer interlevel: forward*,dilate: the kernel*" oclgrind ON)
-# mip-NeRF 360's contraction of Gaussians and its ray warps (issue 45: not yet stages of the model): the forward and
-# backward over the hard cases (inside, on and beside the sphere, far out, rank-1 covariances) and both warps. The
-# finite-difference case relaunches the forward ~150 times and is left out.
+# mip-NeRF 360's contraction of Gaussians and its ray warps (standalone stages; the model contracts inside the
+# contracted IPE below): the forward and backward over the hard cases (inside, on and beside the sphere, far out,
+# rank-1 covariances) and both warps. The finite-difference case relaunches the forward ~150 times and is left out.
 mipnerf_add_oclgrind_test("contraction kernels" test_ops
   "contract gaussians: forward*,contract gaussians: backward kernel*,ray warp: kernels*" oclgrind ON)
+# mip-NeRF 360's encoding (the contracted Gaussian's IPE on the icosahedron's directions, in lanes of 8 with a partial
+# last group): the random and hard rays, with a sincos per degree and every 4 degrees.
+mipnerf_add_oclgrind_test("contracted IPE kernel" test_ops "contracted IPE: the kernel equals*" oclgrind ON)
 # Zip-NeRF's proposal sampler (the graph's Sampling::proposal): its one-ray closed-form cases, the clipped domain, the
 # ray with no non-empty interval and the s → t warp (small launches; the 500-ray envelope test stays on PoCL).
 mipnerf_add_oclgrind_test("proposal sampler" test_ops

@@ -390,6 +390,10 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("unbounded") == false);
   CHECK(!old.unbounded);
   written.erase("unbounded");
+  // basis_subdivisions (the contracted IPE's directions, unbounded mipnerf only) loads as the official 2.
+  CHECK(written.at("basis_subdivisions") == 2);
+  CHECK(old.basis_subdivisions == 2);
+  written.erase("basis_subdivisions");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
@@ -562,4 +566,12 @@ TEST_CASE("config: unbounded mip-NeRF is mip-NeRF 360's contracted IPE, reciproc
   CHECK(*given_load.far == 500.0);
   CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"far", "1e19"}}),
                        doctest::Contains("beyond 1e18"), Error);
+  // basis_subdivisions 1: the icosahedron's 6 directions, 2·12·6 = 144 features for every level's network.
+  const auto six = train::resolve_config(
+      "tiny", "mipnerf", {{"sampler", "proposal"}, {"unbounded", "true"}, {"pos_max_deg", "12"}, {"basis_subdivisions", "1"}});
+  const auto six_spec = train::make_graph_spec(six, false);
+  for (const auto& mlp : six_spec.mlps) CHECK(mlp.input_width == 144);
+  CHECK(six_spec.describe().find("on 6 directions") != std::string::npos);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"basis_subdivisions", "0"}}),
+                       doctest::Contains("basis_subdivisions must be 1 to 8"), Error);
 }

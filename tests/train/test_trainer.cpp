@@ -522,6 +522,7 @@ TEST_CASE("train: a forward-facing LLFF capture trains in NDC with cylinders and
   // Zip-NeRF on a forward-facing capture: the same effects, nothing unbounded (NDC is bounded already).
   const train::SceneEffects zip_effects = train::scene_effects(scene.string(), 4, train::ModelFamily::zipnerf);
   CHECK(zip_effects.zipnerf_settings.empty());
+  CHECK(effects.mipnerf_settings.empty());
   CHECK(zip_effects.settings == effects.settings);
 
   const std::string out = test::fresh_run_dir("llff");

@@ -98,13 +98,18 @@ SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::strin
   if (!traits.has_alpha && traits.forward_facing) {
     effects.summary += " (forward-facing, but not NDC: " + traits.ndc_blocker + ")";
   }
-  if (unbounded) add_zipnerf_unbounded(effects);
+  if (unbounded) add_unbounded(effects);
   return effects;
 }
 
-void add_zipnerf_unbounded(SceneEffects& effects) {
+void add_unbounded(SceneEffects& effects) {
   effects.zipnerf_settings = {{"sampler", "proposal"}, {"unbounded", "true"}, {"ray_shape", "cone"}};
   effects.zipnerf_summary = "unbounded (contraction, proposal sampling spaced by the power ladder from 0 to 1e6)";
+  effects.mipnerf_settings = {
+      {"sampler", "proposal"}, {"unbounded", "true"}, {"ray_shape", "cone"}, {"pos_max_deg", "12"}};
+  effects.mipnerf_summary =
+      "unbounded as mip-NeRF 360 (frustums contracted, IPE 0..11 on 21 directions, proposal sampling spaced in "
+      "disparity from 0.2 to 1e6)";
 }
 
 }  // namespace mipnerf::data

@@ -35,11 +35,13 @@ struct SceneTraits {
 struct SceneEffects {
   std::map<std::string, std::string> settings;  // setting name → value the data calls for
   std::string summary;                          // "forward-facing LLFF → NDC rays, cylinders, black background"
-  // What the scene calls for from the Zip-NeRF family alone (a 360° capture: proposal sampling and the unbounded
-  // contraction, which mip-NeRF's model does not have), added to `settings` when training it: as a group, all or
-  // none (train/scene_effects.hpp), and said by `zipnerf_summary` ("unbounded (contraction, …)").
+  // What the scene calls for from one model family (a 360° capture: proposal sampling and the unbounded contraction,
+  // each family its own way), added to `settings` when training that family: as a group, all or none
+  // (train/scene_effects.hpp), and said by the summary ("unbounded (contraction, …)"). The NeRF baseline has none.
   std::map<std::string, std::string> zipnerf_settings;
   std::string zipnerf_summary;
+  std::map<std::string, std::string> mipnerf_settings;
+  std::string mipnerf_summary;
 };
 
 // A render path a format defines for its captures (LLFF's official spiral or spherical circle).
@@ -110,8 +112,10 @@ SceneEffects object_or_photo_effects(const SceneTraits& traits, const std::strin
 // cylinders, a black background, the world directions as view directions, density noise 1; `kind` opens the summary.
 SceneEffects forward_facing_ndc_effects(const std::string& kind);
 
-// What a capture all around calls for from Zip-NeRF: proposal sampling, the contraction and the power ladder, as one
-// group (SceneEffects::zipnerf_settings), with its summary.
-void add_zipnerf_unbounded(SceneEffects& effects);
+// What a capture all around calls for from each family, as one group a family with its summary: Zip-NeRF proposal
+// sampling, the contraction of its grid points and the power ladder (SceneEffects::zipnerf_settings); mip-NeRF
+// mip-NeRF 360's model, its frustums contracted and IPE'd on 21 directions at the official degrees 0..11, proposal
+// sampling spaced in disparity (SceneEffects::mipnerf_settings).
+void add_unbounded(SceneEffects& effects);
 
 }  // namespace mipnerf::data

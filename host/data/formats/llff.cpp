@@ -24,14 +24,14 @@ void add_traits(const std::string& path, const LoadOptions& options, SceneTraits
 SceneEffects effects(const SceneTraits& traits) {
   SceneEffects effects;
   if (traits.all_around) {
-    // Zip-NeRF's grid can contract the background (camp_zipnerf configs/zipnerf/360.gin); mip-NeRF's IPE cannot yet.
+    // Both families contract the background (multinerf configs/360.gin, camp_zipnerf configs/zipnerf/360.gin).
     effects.settings = {{"ray_shape", "cone"},
                         {"spherify", "true"},
                         {"background", "black"},
                         {"unit_viewdirs", "true"},
                         {"density_noise", "0"}};
     effects.summary = "360° LLFF capture → spherified poses, world rays, cones, black background";
-    add_zipnerf_unbounded(effects);
+    add_unbounded(effects);
     return effects;
   }
   effects = forward_facing_ndc_effects("forward-facing LLFF");
