@@ -176,3 +176,39 @@ def unbounded_scene(exe, work, log):
     if not os.path.exists(os.path.join(folder, "poses_bounds.npy")):
         run([exe, "make-scene", folder, "--unbounded"], log)
     return folder
+
+
+def add_budget_arguments(parser, work, minutes, factor, factor_help, views_help, keys):
+    """The flags every budget study takes: the build, its work folder, the budget, seeds, factor, views, --only."""
+    parser.add_argument("--build", default="build", help="build folder holding mipnerf-cl")
+    parser.add_argument("--work", default=work, help="the scene, runs and logs")
+    parser.add_argument("--minutes", type=float, default=minutes, help="training budget of every run")
+    parser.add_argument("--seeds", default="0,1,2", help="comma-separated seeds, each model trained once per seed")
+    parser.add_argument("--factor", type=int, default=factor, help=f"the capture's downsampling ({factor_help})")
+    parser.add_argument("--views", type=int, default=5, help=f"val views scored ({views_help})")
+    parser.add_argument("--only", help=f"comma-separated model keys ({', '.join(keys)})")
+
+
+def budget_setup(args, results, models):
+    """Resolves args.exe and args.work, makes the work and results folders; returns the log path and the models
+    (key, label, arguments) that --only keeps."""
+    args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
+    args.work = os.path.abspath(args.work)
+    os.makedirs(args.work, exist_ok=True)
+    os.makedirs(results, exist_ok=True)
+    kept = [m for m in models if not args.only or m[0] in args.only.split(",")]
+    return os.path.join(args.work, "study.log"), kept
+
+
+def gain_lines(what, runs, base_runs):
+    """A report's line of PSNR gains seed by seed ("`what`, seed by seed: +x dB, … (mean +y dB)."), as lines."""
+    gains = [x["psnr"] - y["psnr"] for x, y in zip(runs, base_runs)]
+    return ["", f"{what}, seed by seed: " + ", ".join(f"{g:+.2f} dB" for g in gains)
+            + f" (mean {statistics.mean(gains):+.2f} dB)."]
+
+
+def wall_time_lines(record):
+    """The study's wall time, as lines; none when every run was reused from --work (under a minute)."""
+    if record["wall_seconds"] < 60:
+        return []
+    return ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]

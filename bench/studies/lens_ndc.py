@@ -21,14 +21,13 @@ Finished runs and scores in --work are reused.
 """
 
 import os
-import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, run, run_record,  # noqa: E402
-                          seed_table_cells, train_for_minutes)
+from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, gain_lines, run,  # noqa: E402
+                          run_record, seed_table_cells, train_for_minutes, wall_time_lines)
 
 RESULTS = report_md.results_folder("lens_ndc")
 SCRIPT = "bench/studies/lens_ndc.py"
@@ -97,11 +96,8 @@ def write_markdown(record):
     lines += report_md.table(header, "lrrrrrr", body)
     by_key = {r["key"]: r for r in rows}
     for a, b in (("now", "before"), ("now", "given")):
-        gains = [x["psnr"] - y["psnr"] for x, y in zip(by_key[a]["runs"], by_key[b]["runs"])]
-        lines += ["", f"{a} minus {b}, seed by seed: " + ", ".join(f"{g:+.2f} dB" for g in gains)
-                  + f" (mean {statistics.mean(gains):+.2f} dB)."]
-    if record["wall_seconds"] >= 60:  # not when every run was reused from --work
-        lines += ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]
+        lines += gain_lines(f"{a} minus {b}", by_key[a]["runs"], by_key[b]["runs"])
+    lines += wall_time_lines(record)
     return "\n".join(lines) + "\n"
 
 

@@ -23,13 +23,13 @@ a CPU setting, so not a row. Finished runs and scores in --work are reused.
 """
 
 import os
-import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import budget_record, budget_report_head, models_seed_by_seed  # noqa: E402
+from lib.cli_runs import (add_budget_arguments, budget_record, budget_report_head, budget_setup, gain_lines,  # noqa: E402
+                          models_seed_by_seed, wall_time_lines)
 
 RESULTS = report_md.results_folder("proposal_sampling")
 SCRIPT = "bench/studies/proposal_sampling.py"
@@ -44,25 +44,15 @@ MODELS = [
 
 
 def add_arguments(parser):
-    parser.add_argument("--build", default="build", help="build folder holding mipnerf-cl")
     parser.add_argument("--data", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                                        "../../../shared/data/llff/flower"), help="the LLFF capture")
-    parser.add_argument("--work", default="/tmp/mipnerf-proposal", help="runs and logs")
-    parser.add_argument("--minutes", type=float, default=3.0, help="training budget of every run")
-    parser.add_argument("--seeds", default="0,1,2", help="comma-separated seeds, each model trained once per seed")
-    parser.add_argument("--factor", type=int, default=8, help="the capture's downsampling (8: 504x378)")
-    parser.add_argument("--views", type=int, default=5, help="held-out views scored (flower holds out 5)")
-    parser.add_argument("--only", help="comma-separated model keys (cf, prop, prop32)")
+    add_budget_arguments(parser, "/tmp/mipnerf-proposal", 3.0, 8, "8: 504x378", "flower holds out 5",
+                         [m[0] for m in MODELS])
 
 
 def measure(args):
-    args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
-    args.work = os.path.abspath(args.work)
+    log, models = budget_setup(args, RESULTS, MODELS)
     data = os.path.abspath(args.data)
-    os.makedirs(args.work, exist_ok=True)
-    os.makedirs(RESULTS, exist_ok=True)
-    log = os.path.join(args.work, "study.log")
-    models = [m for m in MODELS if not args.only or m[0] in args.only.split(",")]
     started = time.time()
     rows = models_seed_by_seed(args, data, models, log)
     scene = f"LLFF flower (real, 34 phone photos), factor {args.factor}, its {args.views} held-out views"
@@ -77,11 +67,8 @@ def write_markdown(record):
     by_key = {r["key"]: r for r in rows}
     for key in ("prop", "prop32"):
         if key in by_key and "cf" in by_key:
-            gains = [p["psnr"] - c["psnr"] for p, c in zip(by_key[key]["runs"], by_key["cf"]["runs"])]
-            lines += ["", f"{key} minus coarse/fine, seed by seed: " + ", ".join(f"{g:+.2f} dB" for g in gains)
-                      + f" (mean {statistics.mean(gains):+.2f} dB)."]
-    if record["wall_seconds"] >= 60:  # not when every run was reused from --work
-        lines += ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]
+            lines += gain_lines(f"{key} minus coarse/fine", by_key[key]["runs"], by_key["cf"]["runs"])
+    lines += wall_time_lines(record)
     return "\n".join(lines) + "\n"
 
 

@@ -22,13 +22,13 @@ mean and sample standard deviation over seeds, and each seed's PSNR. Finished ru
 """
 
 import os
-import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import budget_record, budget_report_head, models_seed_by_seed, unbounded_scene  # noqa: E402
+from lib.cli_runs import (add_budget_arguments, budget_record, budget_report_head, budget_setup, gain_lines,  # noqa: E402
+                          models_seed_by_seed, unbounded_scene, wall_time_lines)
 
 RESULTS = report_md.results_folder("unbounded_mipnerf")
 SCRIPT = "bench/studies/unbounded_mipnerf.py"
@@ -43,23 +43,13 @@ MODELS = [
 
 
 def add_arguments(parser):
-    parser.add_argument("--build", default="build", help="build folder holding mipnerf-cl")
-    parser.add_argument("--work", default="/tmp/mipnerf-unbounded-mipnerf", help="the scene, runs and logs")
-    parser.add_argument("--minutes", type=float, default=4.0, help="training budget of every run")
-    parser.add_argument("--seeds", default="0,1,2", help="comma-separated seeds, each model trained once per seed")
-    parser.add_argument("--factor", type=int, default=4, help="the capture's downsampling (4: 64x48)")
-    parser.add_argument("--views", type=int, default=5, help="val views scored (the capture holds out 5)")
-    parser.add_argument("--only", help="comma-separated model keys (mip, m360, m360_32)")
+    add_budget_arguments(parser, "/tmp/mipnerf-unbounded-mipnerf", 4.0, 4, "4: 64x48", "the capture holds out 5",
+                         [m[0] for m in MODELS])
 
 
 def measure(args):
-    args.exe = os.path.abspath(os.path.join(args.build, "mipnerf-cl"))
-    args.work = os.path.abspath(args.work)
-    os.makedirs(args.work, exist_ok=True)
-    os.makedirs(RESULTS, exist_ok=True)
-    log = os.path.join(args.work, "study.log")
+    log, models = budget_setup(args, RESULTS, MODELS)
     data = unbounded_scene(args.exe, args.work, log)
-    models = [m for m in MODELS if not args.only or m[0] in args.only.split(",")]
     started = time.time()
     rows = models_seed_by_seed(args, data, models, log)
     scene = f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views"
@@ -74,11 +64,9 @@ def write_markdown(record):
     by_key = {r["key"]: r for r in rows}
     for key in ("m360", "m360_32"):
         if key in by_key and "mip" in by_key:
-            gains = [u["psnr"] - s["psnr"] for u, s in zip(by_key[key]["runs"], by_key["mip"]["runs"])]
-            lines += ["", f"{by_key[key]['label']} minus spherified, seed by seed: "
-                      + ", ".join(f"{g:+.2f} dB" for g in gains) + f" (mean {statistics.mean(gains):+.2f} dB)."]
-    if record["wall_seconds"] >= 60:  # not when every run was reused from --work
-        lines += ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]
+            lines += gain_lines(f"{by_key[key]['label']} minus spherified", by_key[key]["runs"],
+                                by_key["mip"]["runs"])
+    lines += wall_time_lines(record)
     return "\n".join(lines) + "\n"
 
 

@@ -29,14 +29,13 @@ Each scored by its own executable's `eval` on the val views. Finished runs and s
 import json
 import math
 import os
-import statistics
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, run, run_record,  # noqa: E402
-                          seed_table_cells, train_for_minutes)
+from lib.cli_runs import (SEED_TABLE_HEADER, commit_of, device_line, evaluate_val, gain_lines, run,  # noqa: E402
+                          run_record, seed_table_cells, train_for_minutes, wall_time_lines)
 
 RESULTS = report_md.results_folder("unbounded_photos")
 SCRIPT = "bench/studies/unbounded_photos.py"
@@ -184,11 +183,8 @@ def write_markdown(record):
     lines += report_md.table(header, "lrrrrrr", body)
     by_key = {r["key"]: r for r in rows}
     for other in (k for k in ("before", "before_centred", "stored") if k in by_key):
-        gains = [n["psnr"] - o["psnr"] for n, o in zip(by_key["now"]["runs"], by_key[other]["runs"])]
-        lines += ["", f"Now minus {other}, seed by seed: " + ", ".join(f"{g:+.2f} dB" for g in gains)
-                  + f" (mean {statistics.mean(gains):+.2f} dB)."]
-    if record["wall_seconds"] >= 60:  # not when every run was reused from --work
-        lines += ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]
+        lines += gain_lines(f"Now minus {other}", by_key["now"]["runs"], by_key[other]["runs"])
+    lines += wall_time_lines(record)
     return "\n".join(lines) + "\n"
 
 
