@@ -89,6 +89,22 @@ inline void contract_jacobian_sandwich(float3 u, float inv_r, float3 diag, float
              (((p.radial_off * inv_r) * inv_r) * inv_r) * inv_r;
 }
 
+// One Gaussian through the contraction: (mean', diag', off') = (contract(mean), J Σ Jᵀ); inside the ball a copy.
+inline void contract_gaussian(float3 mean, float3 diag, float3 off, float3* out_mean, float3* out_diag,
+                              float3* out_off) {
+  if (!contract_is_outside(mean)) {  // J = I: the Gaussian unchanged
+    *out_mean = mean;
+    *out_diag = diag;
+    *out_off = off;
+    return;
+  }
+  float3 u;
+  float inv_r;
+  contract_direction(mean, &u, &inv_r);
+  contract_jacobian_sandwich(u, inv_r, diag, off, out_diag, out_off);
+  *out_mean = (2.0f - inv_r) * u;
+}
+
 // One item per row: out_means = contract(means), (out_covs, out_cov_off) = J Σ Jᵀ.
 //   means, covs, cov_off, out_means, out_covs, out_cov_off: [rows][3]
 __kernel void contract_gaussians_fwd(__global const float* means, __global const float* covs,
@@ -96,20 +112,11 @@ __kernel void contract_gaussians_fwd(__global const float* means, __global const
                                      __global float* out_covs, __global float* out_cov_off, const uint n_rows) {
   const size_t row = get_global_id(0);
   if (row >= n_rows) return;
-  const float3 x = load3(means, row), diag = load3(covs, row), off = load3(cov_off, row);
-  if (!contract_is_outside(x)) {  // J = I: the Gaussian unchanged
-    store3(out_means, row, x);
-    store3(out_covs, row, diag);
-    store3(out_cov_off, row, off);
-    return;
-  }
-  float3 u, out_diag, out_off;
-  float inv_r;
-  contract_direction(x, &u, &inv_r);
-  contract_jacobian_sandwich(u, inv_r, diag, off, &out_diag, &out_off);
-  store3(out_means, row, (2.0f - inv_r) * u);
-  store3(out_covs, row, out_diag);
-  store3(out_cov_off, row, out_off);
+  float3 mean, diag, off;
+  contract_gaussian(load3(means, row), load3(covs, row), load3(cov_off, row), &mean, &diag, &off);
+  store3(out_means, row, mean);
+  store3(out_covs, row, diag);
+  store3(out_cov_off, row, off);
 }
 
 // One item per row: the gradients of a scalar L w.r.t. the stored inputs, given its gradients w.r.t. the outputs.

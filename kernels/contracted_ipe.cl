@@ -27,24 +27,9 @@
 inline void contracted_row_gaussian(__global const float* origins, __global const float* directions,
                                     __global const float* radii, __global const float* t_edges, size_t row,
                                     uint n_samples, float3* mean, float3* diag, float3* off) {
-  const size_t ray = row / n_samples, i = row % n_samples;
-  __global const float* t = t_edges + ray * (n_samples + 1);
-  const float3 dir = load3(directions, ray);
-  const float3 moments = interval_moments(t[i], t[i + 1], radii[ray]);
-  float3 world_mean, world_diag;
-  lift_gaussian(load3(origins, ray), dir, moments, &world_mean, &world_diag);
-  const float3 world_off = covariance_off_diagonal(dir, moments);
-  if (!contract_is_outside(world_mean)) {  // J = I inside the unit ball
-    *mean = world_mean;
-    *diag = world_diag;
-    *off = world_off;
-    return;
-  }
-  float3 u;
-  float inv_r;
-  contract_direction(world_mean, &u, &inv_r);
-  contract_jacobian_sandwich(u, inv_r, world_diag, world_off, diag, off);
-  *mean = (2.0f - inv_r) * u;
+  float3 world_mean, world_diag, world_off;
+  row_full_gaussian(origins, directions, radii, t_edges, row, n_samples, &world_mean, &world_diag, &world_off);
+  contract_gaussian(world_mean, world_diag, world_off, mean, diag, off);
 }
 
 // Directions are encoded 8 at a time (float8 projections through the vector built-ins exp and sincos: PoCL's CPU device
@@ -108,12 +93,7 @@ __kernel void contracted_ipe_fwd(__global const float* origins, __global const f
     for (uint l = 0; l < n_degrees; ++l) {
       const float scale = ldexp(1.0f, min_deg + (int)l);  // 2^l, exact
       if (l % CONTRACTED_IPE_SINCOS_EVERY == 0) {
-#ifdef MIPNERF_SEPARATE_SIN_COS
-        c = cos(m * scale);  // oclgrind (encode.cl says why)
-        s = sin(m * scale);
-#else
-        s = sincos(m * scale, &c);  // exact argument: a power-of-two scaling
-#endif
+        SIN_COS(m * scale, s, c);  // exact argument: a power-of-two scaling
       } else {
         DOUBLE_ANGLE(float8, s, c);
       }

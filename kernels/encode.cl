@@ -42,21 +42,26 @@ inline float3 attenuation(float3 var, float scale) {
   return select(exp(fmax(exponent, IPE_MIN_EXPONENT)), (float3)(0.0f), isless(exponent, (float3)(IPE_MIN_EXPONENT)));
 }
 
+// s = sin(y) and c = cos(y), for y of any float type: one sincos (the same 4-ulp bound as sin and cos). In the
+// oclgrind runs (tests/oclgrind, MIPNERF_SEPARATE_SIN_COS) sin and cos apart: its uninitialised-value check cannot
+// follow sincos's private pointer ("Work item needed to access private memory").
+#ifdef MIPNERF_SEPARATE_SIN_COS
+#define SIN_COS(y, s, c) \
+  do {                   \
+    (c) = cos(y);        \
+    (s) = sin(y);        \
+  } while (0)
+#else
+#define SIN_COS(y, s, c) ((s) = sincos((y), &(c)))
+#endif
+
 // Writes degree `degree`'s 3 sines at sin_out[0..2] and 3 cosines at cos_out[0..2] for mean μ, variance σ².
-// sincos has the same 4-ulp bound as sin and cos.
 inline void encode_degree(float3 mean, float3 var, int degree, __global float* sin_out, __global float* cos_out) {
   const float scale = ldexp(1.0f, degree);  // 2^l, exact
   const float3 y = mean * scale;            // exact: a power-of-two scaling
   const float3 atten = attenuation(var, scale);
-#ifdef MIPNERF_SEPARATE_SIN_COS
-  // Only in the oclgrind runs (tests/oclgrind): its uninitialised-value check cannot follow sincos's private
-  // pointer ("Work item needed to access private memory"). sin and cos have the same 4-ulp bound.
-  const float3 c = cos(y);
-  const float3 s = sin(y);
-#else
-  float3 c;
-  const float3 s = sincos(y, &c);
-#endif
+  float3 s, c;
+  SIN_COS(y, s, c);
   vstore3(atten * s, 0, sin_out);
   vstore3(atten * c, 0, cos_out);
 }
@@ -135,12 +140,7 @@ inline void encode_degrees(float3 mean, float3 var, int min_deg, uint l_begin, u
     const int degree = min_deg + (int)l;
     const float scale = ldexp(1.0f, degree);  // 2^l, exact
     if ((l - l_begin) % IPE_SINCOS_EVERY == 0) {
-#ifdef MIPNERF_SEPARATE_SIN_COS
-      c = cos(mean * scale);
-      s = sin(mean * scale);
-#else
-      s = sincos(mean * scale, &c);  // exact argument: a power-of-two scaling
-#endif
+      SIN_COS(mean * scale, s, c);  // exact argument: a power-of-two scaling
     } else {
       DOUBLE_ANGLE(float3, s, c);
     }
@@ -190,13 +190,8 @@ __kernel void gaussian_concat_pe_fwd(__global const float* origins, __global con
                                      const int cov_degrees) {
   const size_t row = get_global_id(0);
   if (row >= (size_t)n_rays * n_samples) return;
-  const size_t ray = row / n_samples, i = row % n_samples;
-  __global const float* t = t_edges + ray * (n_samples + 1);
-  const float3 origin = load3(origins, ray), dir = load3(directions, ray);
-  const float3 moments = interval_moments(t[i], t[i + 1], radii[ray]);
-  float3 mean, diagonal;
-  lift_gaussian(origin, dir, moments, &mean, &diagonal);
-  const float3 off = covariance_off_diagonal(dir, moments);
+  float3 mean, diagonal, off;
+  row_full_gaussian(origins, directions, radii, t_edges, row, n_samples, &mean, &diagonal, &off);
 
   const uint n_degrees = (uint)(max_deg - min_deg), identity = append_identity ? 3 : 0;
   __global float* out = features + row * (identity + 6 * n_degrees + 12 * (uint)cov_degrees);

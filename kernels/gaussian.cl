@@ -117,6 +117,19 @@ inline void row_gaussian(__global const float* origins, __global const float* di
   interval_gaussian(load3(origins, ray), load3(directions, ray), radii[ray], t[i], t[i + 1], mean, cov);
 }
 
+// The full Gaussian of row = ray·N + i: mean, the diagonal and the off-diagonal (Σ_xy, Σ_xz, Σ_yz) of its covariance
+// (official lift_gaussian with diag = False), what the concatenated PE and the contracted IPE start from.
+inline void row_full_gaussian(__global const float* origins, __global const float* directions,
+                              __global const float* radii, __global const float* t_edges, size_t row, uint n_samples,
+                              float3* mean, float3* diag, float3* off) {
+  const size_t ray = row / n_samples, i = row % n_samples;
+  __global const float* t = t_edges + ray * (n_samples + 1);
+  const float3 dir = load3(directions, ray);
+  const float3 moments = interval_moments(t[i], t[i + 1], radii[ray]);
+  lift_gaussian(load3(origins, ray), dir, moments, mean, diag);
+  *off = covariance_off_diagonal(dir, moments);
+}
+
 // One item per row: means [R][N][3], covs [R][N][3].
 // gaussian_fwd's items (the host's choice per device, ops/gaussian.hpp): GAUSSIAN_SAMPLES_PER_VECTOR = 0, one per row;
 // = 1, one per 16 consecutive samples of a ray as float16 (a ray's last, shorter run of samples row by row), which

@@ -193,7 +193,8 @@ mipnerf_add_checked_test("cli: make-scene --unbounded writes a 360-degree LLFF c
 set_tests_properties("cli: make-scene --unbounded writes a 360-degree LLFF capture" PROPERTIES
   FIXTURES_SETUP cli_unbounded)
 add_test(NAME "cli: train on the unbounded scene: clear the run folder"
-  COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run")
+  COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-run"
+  "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-resample-run")
 set_tests_properties("cli: train on the unbounded scene: clear the run folder" PROPERTIES
   FIXTURES_SETUP cli_unbounded_clean)
 mipnerf_add_checked_test("cli: train on the unbounded scene takes it for a 360-degree capture"
@@ -212,17 +213,13 @@ mipnerf_add_checked_test("cli: unbounded mipnerf: render an orbit" EXPECT "rende
   --size 16x12)
 set_tests_properties("cli: unbounded mipnerf: render an orbit" PROPERTIES FIXTURES_REQUIRED cli_unbounded_mip)
 # An explicit setting against the group keeps mip-NeRF 360 out, and train says which (the paper's mip-NeRF then).
-add_test(NAME "cli: unbounded mipnerf: clear the resample run"
-  COMMAND ${CMAKE_COMMAND} -E rm -rf "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-resample-run")
-set_tests_properties("cli: unbounded mipnerf: clear the resample run" PROPERTIES
-  FIXTURES_SETUP cli_unbounded_resample_clean)
 mipnerf_add_checked_test("cli: unbounded mipnerf: sampler=resample keeps the spherified paper model"
   EXPECT "; mip-NeRF not unbounded as mip-NeRF 360 [^\n]*\\(given explicitly: sampler = resample\\).*level 0: stratified.*trained 2 steps"
   COMMAND mipnerf-cl train --data "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded"
   --out "${CMAKE_CURRENT_BINARY_DIR}/cli-unbounded-resample-run" --preset tiny --factor 4 --steps 2 --val_views 1
   --set sampler=resample)
 set_tests_properties("cli: unbounded mipnerf: sampler=resample keeps the spherified paper model" PROPERTIES
-  FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_resample_clean")
+  FIXTURES_REQUIRED "cli_unbounded;cli_unbounded_clean")
 # Zip-NeRF on it trains unbounded with no flag (the scene's choice for the zipnerf family: contraction, proposal
 # sampling spaced by the power ladder), then evaluates and renders an orbit from the checkpoint (from near 0 to far
 # 1e6, as it trained).
