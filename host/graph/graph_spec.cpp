@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/geodesic_basis.hpp"
 #include "ops/contracted_ipe.hpp"
 
 namespace mipnerf::graph {
@@ -191,7 +192,7 @@ std::string GraphSpec::describe() const {
     } else {
       out << " degrees " << position_encoding.min_deg << ".." << position_encoding.max_deg - 1;
       if (level.encoding == Encoding::contracted_ipe) {
-        out << " on " << feature_width(level) / (2 * static_cast<size_t>(position_encoding.degrees())) << " directions";
+        out << " on " << icosahedron_basis(basis_tessellation).size() << " directions";
       }
     }
     out << ", network " << level.mlp_index;

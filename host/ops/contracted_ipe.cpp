@@ -19,14 +19,8 @@ void check_degrees(const EncodingOptions& encoding, const std::string& where) {
   }
 }
 
-// The kernel reads the basis 8 directions at a time (CONTRACTED_IPE_LANES): padded with zero rows to a multiple of 8.
+// The kernel reads the basis 8 directions at a time (CONTRACTED_IPE_LANES).
 constexpr size_t kLanes = 8;
-std::vector<float> basis_for(int tessellation) {
-  std::vector<float> basis = icosahedron_basis_floats(tessellation);
-  const size_t k = basis.size() / 3;
-  basis.resize(3 * ((k + kLanes - 1) / kLanes * kLanes), 0.0f);
-  return basis;
-}
 
 }  // namespace
 
@@ -42,8 +36,9 @@ ContractedIpe::ContractedIpe(ocl::Context& ctx, const GaussianOptions& options, 
   if (sincos_every_ > 8) {
     throw Error("ContractedIpe: sincos_every = " + std::to_string(sincos_every_) + " is not 1 to 8 (degrees per sincos)");
   }
-  n_basis_ = icosahedron_basis(tessellation).size();
-  const std::vector<float> basis = basis_for(tessellation);
+  std::vector<float> basis = icosahedron_basis_floats(tessellation);
+  n_basis_ = basis.size() / 3;
+  basis.resize(3 * ((n_basis_ + kLanes - 1) / kLanes * kLanes), 0.0f);  // zero rows to a multiple of the lanes
   basis_ = ocl::DeviceArray<float>(ctx, basis.size(), "contracted IPE basis [K][3]");
   basis_.upload(ctx, basis);
   auto& program = ctx.program({"common.cl", "gaussian.cl", "encode.cl", "contract.cl", "contracted_ipe.cl"},
