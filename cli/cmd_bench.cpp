@@ -4,8 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -19,15 +17,16 @@
 #include "bench/machine_probe.hpp"
 #include "bench/preset_bench.hpp"
 #include "bench/report.hpp"
-#include "core/error.hpp"
 #include "common.hpp"
+#include "core/error.hpp"
 #include "data/paths/camera_path.hpp"
 #include "data/synthetic/procedural.hpp"
 #include "eval/render_setup.hpp"
 #include "eval/report.hpp"
+#include "gemm/clblast_check.hpp"
+#include "interrupt.hpp"
 #include "io/atomic_file.hpp"
 #include "io/temporary_folder.hpp"
-#include "gemm/clblast_check.hpp"
 #include "progress.hpp"
 #include "train/config.hpp"
 
@@ -116,12 +115,6 @@ bool wants(const BenchArgs& a, const std::string& section) {
 
 // ---- Ctrl-C: the measurement in progress stops, what was measured is written ----
 
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void on_bench_interrupt(int) {
-  if (g_interrupted.exchange(true)) _exit(130);  // a second Ctrl-C stops at once
-}
-
 struct Interrupted {};  // thrown from progress callbacks; not a std::exception, so sections do not catch it
 
 // A section's progress line on stderr, drawn from the library's progress callback (which knows the total).
@@ -130,7 +123,7 @@ class SectionProgress {
   explicit SectionProgress(std::string what) : what_(std::move(what)) {}
   bench::ProgressFn callback() {
     return [this](const std::string& detail, size_t done, size_t total) {
-      if (g_interrupted) throw Interrupted{};
+      if (StopOnInterrupt::requested()) throw Interrupted{};
       if (!line_) line_ = std::make_unique<Progress>(what_, static_cast<int64_t>(total));
       line_->update(static_cast<int64_t>(done), detail);
     };
@@ -240,8 +233,8 @@ void run_section(bench::DeviceBench& d, const std::string& section, const std::f
   try {
     work();
   } catch (const std::exception& e) {
-    std::cerr << "mipnerf-cl: warning: bench " << section << " on " << d.device.value("name", "?") << " failed: "
-              << e.what() << "\n";
+    std::cerr << "mipnerf-cl: warning: bench " << section << " on " << d.device.value("name", "?")
+              << " failed: " << e.what() << "\n";
     d.errors.push_back({section, e.what()});
   }
 }
@@ -293,8 +286,10 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   run.presets.time_box_seconds = a.time_box;
   run.presets.render_reps = a.render_reps;
   run.presets.settings = explicit_settings(a);
-  for (const auto& preset : a.presets) train::resolve_config(preset, train::preset_variant(preset), run.presets.settings);  // bad --set
-  {  // after every argument is checked: a bad one fails at once
+  for (const auto& preset : a.presets)
+    train::resolve_config(preset, train::preset_variant(preset), run.presets.settings);  // bad --set
+  // After every argument is checked: a bad one fails at once.
+  {
     bench::MachineProbeSettings probe;  // a few seconds: the limits the stage profile's rates are held against
     probe.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     std::cerr << "mipnerf-cl: bench: probing the machine's limits (FMA peak, memory bandwidth, a large sgemm)\n";
@@ -306,15 +301,14 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
   std::string scene = a.data;
   if (wants(a, "train") && !a.presets.empty()) {
     if (scene.empty()) scene = make_scene(a, scratch.path() / "scene");
-    run.presets.scene = a.data.empty() ? "the procedural scene (" + std::to_string(a.scene_size) + "x" +
-                                             std::to_string(a.scene_size) + ", " + std::to_string(a.scene_views) +
-                                             " train views)"
-                                       : a.data;
+    run.presets.scene = a.data.empty()
+                            ? "the procedural scene (" + std::to_string(a.scene_size) + "x" +
+                                  std::to_string(a.scene_size) + ", " + std::to_string(a.scene_views) + " train views)"
+                            : a.data;
   }
 
-  g_interrupted = false;
-  auto previous_handler = std::signal(SIGINT, on_bench_interrupt);
   try {
+    StopOnInterrupt stop;  // the first Ctrl-C ends the section under way; a second one the process
     for (const auto& device : devices) {
       run.devices.emplace_back();
       bench::DeviceBench& d = run.devices.back();
@@ -335,12 +329,10 @@ void run_bench(BenchArgs& a, const CLI::App& cmd) {
       }
     }
   } catch (const Interrupted&) {
-    std::signal(SIGINT, previous_handler);
     run.host_at_end = bench::host_record();
     write_record(out, run, start);
     throw Error("interrupted: what was measured so far is in " + (out / "bench.md").string() + " and bench.json");
   }
-  std::signal(SIGINT, previous_handler);
   run.complete = true;
   run.host_at_end = bench::host_record();
   write_record(out, run, start);
@@ -389,7 +381,8 @@ void register_bench(CLI::App& app) {
   cmd->add_option("--gemm-reps", args->gemm_reps, "Timed calls per product and round")->capture_default_str();
   cmd->add_option("--gemm-rounds", args->gemm_rounds, "Rounds over the configurations")->capture_default_str();
   cmd->add_option("--kernel-rays", args->kernel_rays, "Rays of the kernel batch")->capture_default_str();
-  cmd->add_option("--kernel-samples", args->kernel_samples, "Samples per ray of the kernel batch")->capture_default_str();
+  cmd->add_option("--kernel-samples", args->kernel_samples, "Samples per ray of the kernel batch")
+      ->capture_default_str();
   cmd->add_option("--kernel-reps", args->kernel_reps, "Timed calls per kernel")->capture_default_str();
   cmd->add_option("--render-size", args->render_size, "Rendered image size, WxH")->capture_default_str();
   cmd->add_option("--render-reps", args->render_reps, "Timed renders per preset")->capture_default_str();

@@ -12,7 +12,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -25,15 +24,16 @@
 #include "bench/backend_tuning.hpp"
 #include "common.hpp"
 #include "core/error.hpp"
-#include "io/atomic_file.hpp"
-#include "io/json.hpp"
-#include "io/temporary_folder.hpp"
 #include "gemm/clblast_check.hpp"
 #include "gemm/gemm_backend.hpp"
 #include "gemm/gemm_tune_steps.hpp"
 #include "gemm/gemm_tuner.hpp"
 #include "gemm/gemm_tuning.hpp"
 #include "gemm/host_library_tuner.hpp"
+#include "interrupt.hpp"
+#include "io/atomic_file.hpp"
+#include "io/json.hpp"
+#include "io/temporary_folder.hpp"
 #include "mlp/mlp_products.hpp"
 #include "progress.hpp"
 
@@ -47,8 +47,8 @@ struct TuneArgs {
   size_t input_width = 96;  // the network tuned for: its input features, view branch, view dependence
   size_t view_branch_width = 128;
   bool no_view = false;
-  std::string output;       // default: the per-device file
-  bool if_missing = false;  // do nothing when the per-device file already exists (quick start re-runs)
+  std::string output;           // default: the per-device file
+  bool if_missing = false;      // do nothing when the per-device file already exists (quick start re-runs)
   bool host_gemm_only = false;  // only the host step: the CPU GEMM library per product (gemm/host_library_tuner.hpp)
   std::vector<std::string> host_gemm_presets{"tiny", "quick", "small", "paper"};  // whose networks' products
   int host_gemm_rounds = 5;  // timed batches per product and library (the median decides)
@@ -79,9 +79,6 @@ void run_step(const StepArgs& args) {
 }
 
 // ==== the parent: deadlines, interrupts, progress ====
-
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_tune_interrupt(int) { g_interrupted = true; }
 
 std::string self_path() {
   char buffer[4096];
@@ -126,7 +123,7 @@ class ChildStepRunner {
   // Runs one step in a child with a deadline, showing the overall progress while it runs.
   gemm::TuneStepOutcome run(const std::string& name, const io::Json& spec, double timeout_s) {
     gemm::TuneStepOutcome outcome;
-    if (g_interrupted) {
+    if (StopOnInterrupt::requested()) {
       outcome.status = "interrupted";
       return outcome;
     }
@@ -139,7 +136,7 @@ class ChildStepRunner {
     int status = 0;
     const bool timed_out = wait_for(pid, name, started, timeout_s, status);
     outcome.seconds = std::chrono::duration<double>(Clock::now() - started).count();
-    if (g_interrupted) {
+    if (StopOnInterrupt::requested()) {
       outcome.status = "interrupted";
     } else if (timed_out) {
       outcome.status = "timed out after " + format_duration(timeout_s);
@@ -183,10 +180,10 @@ class ChildStepRunner {
     while (true) {
       if (::waitpid(pid, &status, WNOHANG) == pid) return false;
       const double running = std::chrono::duration<double>(Clock::now() - started).count();
-      if (running > timeout_s || g_interrupted) {
+      if (running > timeout_s || StopOnInterrupt::requested()) {
         ::kill(pid, SIGKILL);
         ::waitpid(pid, &status, 0);
-        return !g_interrupted;
+        return !StopOnInterrupt::requested();
       }
       const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
       progress_.update(static_cast<int64_t>(std::min(elapsed, time_box_s_)),
@@ -318,8 +315,8 @@ void run_tune(const TuneArgs& args) {
   }
   // CLBlast's parameters only matter where CLBlast runs the products: with gemm_backend=auto a CPU device that
   // shares host memory uses the host BLAS instead, so the quick start need not spend minutes tuning it.
-  if (args.if_missing && gemm::resolve_gemm_backend(gemm::GemmBackend::automatic, device, gemm::host_blas_available()) ==
-                             gemm::GemmBackend::host) {
+  if (args.if_missing && gemm::resolve_gemm_backend(gemm::GemmBackend::automatic, device,
+                                                    gemm::host_blas_available()) == gemm::GemmBackend::host) {
     std::cerr << "mipnerf-cl: tune: not needed: on " << device.name
               << " the MLP's products run on the host BLAS (gemm_backend=auto); tuning matters with "
                  "gemm_backend=clblast (run tune without --if-missing)\n";
@@ -333,16 +330,15 @@ void run_tune(const TuneArgs& args) {
       [&runner](const std::string& name, const io::Json& spec, double timeout_s) {
         return runner.run(name, spec, timeout_s);
       },
-      [](LogLevel, const std::string& message) { note(message); }, [] { return g_interrupted.load(); });
-  std::signal(SIGINT, on_tune_interrupt);
-  std::signal(SIGTERM, on_tune_interrupt);
+      [](LogLevel, const std::string& message) { note(message); }, [] { return StopOnInterrupt::requested(); });
+  StopOnInterrupt stop;  // Ctrl-C or SIGTERM: the step under way is killed, the best parameters so far are kept
   std::cerr << "mipnerf-cl: tune: " << device.name << ", CLBlast " << gemm::clblast_version() << ", time box "
             << format_duration(settings.minutes * 60.0) << "; every step runs in its own process; results go to "
             << path << "\n";
   tuner.run();
   runner.finish_progress();
   print_summary(tuner, device, settings.rows);
-  if (g_interrupted) throw Error("tune interrupted; the best parameters found so far are in " + path);
+  if (StopOnInterrupt::requested()) throw Error("tune interrupted; the best parameters found so far are in " + path);
   measure_backends(device, path, args);
   tune_host_libraries(device, path, args);
 }
@@ -363,8 +359,7 @@ void register_tune(CLI::App& app) {
   cmd->add_option("--width", args->settings.width, "MLP width W")->capture_default_str();
   cmd->add_option("--input-width", args->input_width, "MLP input features (IPE: 96, NeRF PE: 63)")
       ->capture_default_str();
-  cmd->add_option("--view-branch-width", args->view_branch_width, "Width of the view branch")
-      ->capture_default_str();
+  cmd->add_option("--view-branch-width", args->view_branch_width, "Width of the view branch")->capture_default_str();
   cmd->add_flag("--no-view", args->no_view, "The MLP has no view branch");
   cmd->add_option("--output", args->output, "Write the parameters here instead of the per-device cache file");
   cmd->add_flag("--if-missing", args->if_missing, "Do nothing when the tuning file already exists");
