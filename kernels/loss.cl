@@ -14,6 +14,16 @@
 // double) adds the groups in index order. Results depend on the chunking only through float rounding,
 // and not at all when chunk sizes are multiples of LOSS_GROUP_SIZE (the groups are then the same).
 //
+// The data term and its normalisation, compile-time options (a scene pays only for the one it uses):
+//   CHARBONNIER_LOSS = 1 with CHARBONNIER_PADDING = p (a float): each channel's term is √(residual² + p²)
+//     (mip-NeRF 360's and Zip-NeRF's data loss, multinerf and camp_zipnerf train_utils.compute_data_loss,
+//     charb_padding 0.001) instead of residual²; its derivative residual / √(residual² + p²) is bounded by 1, so a
+//     large residual pulls no harder than a small one.
+//   LOSS_CHANNEL_MEAN = 1: the channel sum is divided by 3, the per-channel mean over the batch that multinerf and
+//     camp_zipnerf take (their denominator Σ lossmult counts each channel), which sets the data term's weight against
+//     their interlevel and distortion losses. 0: google/mipnerf's channel sum, as above.
+// LOSS_SUM_PLAIN stays Σ residual² in every case: the MSE and PSNR a person reads.
+//
 // Non-finite inputs are not masked: a NaN or Inf in comp_rgb or target_rgb makes that ray's gradient and
 // its group's sums NaN/Inf, so the batch's loss is non-finite and the host can detect it and skip the step.
 
@@ -21,6 +31,21 @@
 // footprint area). 0: every ray weighs 1 and `lossmult` is never read (the host may pass a null buffer).
 #ifndef MULTISCALE_LOSS
 #define MULTISCALE_LOSS 0
+#endif
+
+#ifndef CHARBONNIER_LOSS
+#define CHARBONNIER_LOSS 0
+#endif
+#if CHARBONNIER_LOSS && !defined(CHARBONNIER_PADDING)
+#error "CHARBONNIER_LOSS needs CHARBONNIER_PADDING (the official charb_padding, e.g. 0.001f)"
+#endif
+#ifndef LOSS_CHANNEL_MEAN
+#define LOSS_CHANNEL_MEAN 0
+#endif
+#if LOSS_CHANNEL_MEAN
+#define LOSS_CHANNEL_SCALE (1.0f / 3.0f)
+#else
+#define LOSS_CHANNEL_SCALE 1.0f
 #endif
 
 // Work-items per group, a power of two; the host sets it and launches with exactly this local size.
@@ -32,7 +57,7 @@
 #endif
 
 // Sums each group writes, at partials[group][LOSS_SUM_*].
-#define LOSS_SUM_WEIGHTED 0 /* Σ lossmult_r · Σ_c (comp − target)²: the numerator of loss_level */
+#define LOSS_SUM_WEIGHTED 0 /* Σ lossmult_r · Σ_c term (residual², or Charbonnier's): loss_level's numerator */
 #define LOSS_SUM_PLAIN 1    /* Σ Σ_c (comp − target)², unweighted: the true per-channel MSE is this / (3R) */
 #define LOSS_SUMS 2
 
@@ -64,9 +89,17 @@ __kernel __attribute__((reqd_work_group_size(LOSS_GROUP_SIZE, 1, 1))) void loss_
     const float mult = 1.0f;
 #endif
     plain = residual.x * residual.x + residual.y * residual.y + residual.z * residual.z;
-    weighted = mult * plain;
-    const float grad_scale = 2.0f * level_weight * inv_lossmult_sum * mult;
+#if CHARBONNIER_LOSS
+    // √(r² + p²) and its derivative r / √(r² + p²): one square root per channel serves both.
+    const float3 root = sqrt(residual * residual + CHARBONNIER_PADDING * CHARBONNIER_PADDING);
+    weighted = mult * LOSS_CHANNEL_SCALE * (root.x + root.y + root.z);
+    const float grad_scale = level_weight * inv_lossmult_sum * mult * LOSS_CHANNEL_SCALE;
+    store3(d_comp_rgb, i, grad_scale * (residual / root));
+#else
+    weighted = mult * LOSS_CHANNEL_SCALE * plain;
+    const float grad_scale = 2.0f * level_weight * inv_lossmult_sum * mult * LOSS_CHANNEL_SCALE;
     store3(d_comp_rgb, i, grad_scale * residual);
+#endif
   }
   weighted_sse[lane] = weighted;
   plain_sse[lane] = plain;

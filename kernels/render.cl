@@ -13,6 +13,12 @@
 // One work-item per ray, O(N), no atomics. Layouts: rgb [R][N][3], density [R][N], t_edges [R][N+1],
 // directions [R][3], comp_rgb [R][3], acc [R], distance [R], weights [R][N], d_weights [R][N].
 //
+// An opaque background (OPAQUE_BACKGROUND = 1; mip-NeRF 360's Model.opaque_background, multinerf
+// render.compute_alpha_weights, configs/360.gin): the last interval is made infinitely thick, s_{N−1} = ∞ whatever
+// its density or length, so α_{N−1} = 1, w_{N−1} = T_{N−1}, every ray's weights sum to 1 and T_N = 0. The backward
+// needs no other change: its ∂L/∂s_i = g_i·(T_N + Σ_{k>i} w_k) − Σ_{k>i} g_k·w_k holds with T_N = 0 and gives 0 for
+// the last sample, whose α no longer depends on its density.
+//
 // Density noise (DENSITY_NOISE, defined only when the noise is on; training only): the fused render_raw_* kernels
 // add DENSITY_NOISE·z_i to raw density i before its activation (official models.py: `raw_density += density_noise *
 // random.normal(...)` when randomized; llff.gin: 1), z_i ~ N(0, 1) keyed by (seed, step, ray index in the batch,
@@ -43,6 +49,10 @@
 #define BACKGROUND_WHITE 2
 #ifndef BACKGROUND
 #define BACKGROUND BACKGROUND_WHITE
+#endif
+
+#ifndef OPAQUE_BACKGROUND
+#define OPAQUE_BACKGROUND 0
 #endif
 
 #ifndef SAMPLES_IN_LOCKSTEP
@@ -139,6 +149,18 @@ DEFINE_RENDER_SAMPLE_MATH(float)
 DEFINE_RENDER_SAMPLE_MATH(float16)
 #endif
 
+// s_i as the rendering takes it: ∞ for the last interval with OPAQUE_BACKGROUND, else s.
+ALWAYS_INLINE float interval_thickness(float s, uint i, uint n_samples) {
+  return OPAQUE_BACKGROUND && i + 1 == n_samples ? INFINITY : s;
+}
+#if VECTOR_ITEMS
+// The same for samples i .. i + 15 (the per-vector walk).
+ALWAYS_INLINE float16 interval_thickness16(float16 s, uint i, uint n_samples) {
+  if (OPAQUE_BACKGROUND && i + VECTOR_WIDTH == n_samples) s.sf = INFINITY;
+  return s;
+}
+#endif
+
 // Density `at`: activated from a raw value with its noise draw z, or as given.
 ALWAYS_INLINE float render_density(__global const float* density, uint at, float z, const int from_raw) {
   return from_raw ? density_activation(noisy_raw_density(density[at], z)) : density[at];
@@ -204,7 +226,8 @@ ALWAYS_INLINE void render_vector_fwd(__global const float* rgb, __global const f
                                      float* optical_depth, LaneSums* sums) {
   const uint at = ray * n_samples + i, t_at = ray * (n_samples + 1) + i;
   const float16 t_near = vload16(0, t_edges + t_at), t_far = vload16(0, t_edges + t_at + 1);
-  const float16 s = optical_thickness(render_density16(density, at, noise, i, from_raw), t_near, t_far, dir_norm);
+  const float16 s = interval_thickness16(
+      optical_thickness(render_density16(density, at, noise, i, from_raw), t_near, t_far, dir_norm), i, n_samples);
   const float16 before = exclusive_prefix_sums16(s);
   const float16 depth = *optical_depth + before;  // Σ_{j<i} s_j of each lane's sample
   *optical_depth += before.sf + s.sf;
@@ -262,7 +285,8 @@ ALWAYS_INLINE void render_ray_fwd(__global const float* rgb, __global const floa
     const uint at = ray * n_samples + i;
     if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
     const float t_far = t_edges[t_first_at + i + 1];
-    const float s = optical_thickness(render_density(density, at, draws.x, from_raw), t_near, t_far, dir_norm);
+    const float s = interval_thickness(
+        optical_thickness(render_density(density, at, draws.x, from_raw), t_near, t_far, dir_norm), i, n_samples);
     draws = draws.yzwx;
     // α = 1 − exp(−s) as −expm1(−s): the same value, without cancellation for small s (official: 1 − exp).
     const float w = -expm1_nonpositive(-s) * exp_nonpositive(-optical_depth);
@@ -386,8 +410,10 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
 #if SAMPLES_PER_VECTOR
   for (uint i = 0; i < vector_end; i += VECTOR_WIDTH) {
     const uint t_at = t_first_at + i;
-    const float16 s = optical_thickness(render_density16(density, ray * n_samples + i, noise, i, from_raw),
-                                        vload16(0, t_edges + t_at), vload16(0, t_edges + t_at + 1), dir_norm);
+    const float16 s = interval_thickness16(
+        optical_thickness(render_density16(density, ray * n_samples + i, noise, i, from_raw),
+                          vload16(0, t_edges + t_at), vload16(0, t_edges + t_at + 1), dir_norm),
+        i, n_samples);
 #define DEPTH_STEP(k) optical_depth += s.s##k;
     FOR_EACH_LANE(DEPTH_STEP)
 #undef DEPTH_STEP
@@ -400,9 +426,10 @@ ALWAYS_INLINE void render_ray_bwd(__global const float* rgb, __global const floa
 #pragma clang loop vectorize(disable)
   for (uint i = vector_end; i < n_samples; ++i) {
     if (from_raw && i % 4 == 0) draws = density_noise_group(noise, i / 4);
-    optical_depth +=
+    optical_depth += interval_thickness(
         optical_thickness(render_density(density, ray * n_samples + i, draws.x, from_raw), t_edges[t_first_at + i],
-                          t_edges[t_first_at + i + 1], dir_norm);
+                          t_edges[t_first_at + i + 1], dir_norm),
+        i, n_samples);
     draws = draws.yzwx;
     END_OF_SAMPLE_STEP();
   }

@@ -7,16 +7,18 @@
 #   sanitizer  the suite built with clang++ under AddressSanitizer + UBSan, on PoCL (scripts/test-sanitize.sh), but
 #              the `quality` tests and the `sweep` tests (a training step against the double reference for variant
 #              after variant: their time under ASan is the reference's; tests/CMakeLists.txt says what runs their host
-#              code there)
+#              code there) and the reliability tests (SIGKILL at random moments, disk full: process orchestration around
+#              the checkpoint code, which the train tests and the checkpoint fuzz target run under the sanitizers; 82 s
+#              there; left out 2026-12-02 to keep the command under 45 minutes)
 #   fuzz       each fuzz target for 12 s, in that build, each with at least 1,000 inputs run
 #   tsan       the tests whose code starts threads (label `threads`: the viewer, its server, the scene writers, the host
 #              MLP's threads in training) built with clang++ under ThreadSanitizer (scripts/test-tsan.sh), on PoCL
 #   intel      the suite on Intel's CPU OpenCL runtime, a second, independent implementation (from PyPI), but the
 #              `quality` tests and the tests of what does not depend on the OpenCL runtime: the CLI's (arguments,
-#              files, messages; the device work they start is the one the library's tests run here), eval's and the
-#              viewer's (scores, image and video files, the server and its threads: their device work is the graph's
-#              forward, which the graph tests compare with the reference here; left out 2026-12-02 to keep the
-#              command under 45 minutes), the layering
+#              files, messages; the device work they start is the one the library's tests run here), eval's, the
+#              viewer's and the training loop's (scores, image and video files, the server and its threads; runs,
+#              checkpoints, resume, budgets: their device work is the graph's steps and forward, which the graph tests
+#              compare with the reference here; left out 2026-12-02 to keep the command under 45 minutes), the layering
 #              check, the reliability (SIGKILL, disk-full), bench-report and MPI tests (ranks, sharding, a killed
 #              rank: the process orchestration; each rank's kernels are the ones the other tests run here) and the
 #              bundle test (label `bundle`: it runs PoCL through the bundle's own ICD file, whatever the stage); the
@@ -146,7 +148,7 @@ fi
 # the fuzz targets' short runs.
 if wanted sanitizer || wanted fuzz; then
   if ./scripts/test-sanitize.sh --build-only; then
-    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi|quality|sweep)$'; fi
+    if wanted sanitizer; then run_ctest sanitizer "$pocl_platform" "$sanitize_dir" -LE '^(oclgrind|fuzz|mpi|quality|sweep|reliability)$'; fi
     if wanted fuzz; then run_ctest fuzz "$pocl_platform" "$sanitize_dir" -L '^fuzz$'; fi
   else
     for stage in sanitizer fuzz; do
@@ -169,7 +171,8 @@ fi
 if wanted intel; then
   if environment="$(./scripts/install-intel-opencl.sh)"; then
     eval "$environment"
-    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench|mpi|bundle)$' -E '^(cli|layers|eval|view): '
+    run_ctest intel "$INTEL_OPENCL_PLATFORM" "$build_dir" -LE '^(oclgrind|quality|reliability|bench|mpi|bundle)$' \
+      -E '^((cli|layers): |(eval|view|train):)'
     if wanted selftest; then run_selftest "$INTEL_OPENCL_PLATFORM" quick-cross; fi
   else
     record intel "-" "" "could not run: Intel's CPU runtime could not be installed (above)"

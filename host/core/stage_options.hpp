@@ -127,6 +127,9 @@ struct RenderOptions {
   // before its activation (official MipNerfModel.density_noise, llff.gin: 1), drawn per (seed, step, ray, level,
   // sample) (DensityNoiseKey). 0 compiles it out. Training only: the graph builds rendering with 0.
   float density_noise = 0.0f;
+  // OPAQUE_BACKGROUND: the last interval infinitely thick, so every ray's weights sum to 1 (mip-NeRF 360's
+  // Model.opaque_background, multinerf configs/360.gin); nothing of the background colour then shows.
+  bool opaque_background = false;
 };
 
 // What the density noise of one launch of render_raw_fwd/bwd is keyed by: the step's key (ray i of the launch is

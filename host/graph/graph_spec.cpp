@@ -208,6 +208,10 @@ std::string GraphSpec::describe() const {
       if (level.distortion_mult > 0.0f) out << ", distortion loss mult " << level.distortion_mult;
     }
   }
+  // What differs from mip-NeRF's training, said once (the mipnerf360 preset's pieces): the data term, the background.
+  if (loss.charbonnier_padding > 0.0f) out << "; Charbonnier loss (padding " << loss.charbonnier_padding << ")";
+  if (loss.channel_mean) out << (loss.charbonnier_padding > 0.0f ? ", " : "; loss ") << "a mean over channels";
+  if (render.opaque_background) out << "; opaque background (the last interval takes what is left)";
   return out.str();
 }
 

@@ -33,9 +33,19 @@ cl_uint as_uint(size_t value, const char* what) {
 }  // namespace
 
 ocl::BuildOptions loss_build_options(const LossOptions& options, size_t group_size) {
-  return ocl::BuildOptions()
-      .define("MULTISCALE_LOSS", options.multiscale ? 1 : 0)
+  if (!(options.charbonnier_padding >= 0.0f) || !std::isfinite(options.charbonnier_padding)) {
+    throw Error("loss: charbonnier_padding = " + std::to_string(options.charbonnier_padding) +
+                " must be finite and >= 0 (0: the squared error)");
+  }
+  ocl::BuildOptions built;
+  built.define("MULTISCALE_LOSS", options.multiscale ? 1 : 0)
       .define("LOSS_GROUP_SIZE", static_cast<long long>(group_size));
+  // Only when on: without them, the build options (and the kernel) as they were.
+  if (options.charbonnier_padding > 0.0f) {
+    built.define("CHARBONNIER_LOSS", 1).define_float("CHARBONNIER_PADDING", options.charbonnier_padding);
+  }
+  if (options.channel_mean) built.define("LOSS_CHANNEL_MEAN", 1);
+  return built;
 }
 
 float loss_level_weight(size_t level, size_t n_levels, float coarse_weight) {

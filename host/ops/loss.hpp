@@ -2,6 +2,8 @@
 //
 // Convention (official mip-NeRF train.py, kept exactly so λ and learning rates carry over):
 //   loss_level = Σ_rays lossmult_r · Σ_channels (comp_rgb − target)² / Σ_rays lossmult_r
+// (LossOptions: Charbonnier's term instead of the square, and the channel mean instead of the sum, for the models
+// whose official code takes them: mip-NeRF 360, Zip-NeRF.)
 //   total      = Σ_levels weight_level · loss_level,  weight = λ (0.1) on coarse, 1 on fine
 // The channel sum is not divided by 3: with lossmult = 1, loss_level = 3 × the per-channel MSE. What a
 // person reads (progress bar, CSV) is LevelLoss::mse() and psnr(): the true per-channel MSE, unweighted.
@@ -21,6 +23,12 @@ struct LossOptions {
   // MULTISCALE_LOSS: weight each ray by its lossmult (multiscale datasets: the pixel's footprint area
   // relative to full resolution). Off: every ray weighs 1 and the lossmult buffer is never read.
   bool multiscale = false;
+  // CHARBONNIER_LOSS / CHARBONNIER_PADDING: each channel's term is √(residual² + p²) with p = charbonnier_padding
+  // (mip-NeRF 360's and Zip-NeRF's data loss, official charb_padding 0.001) when > 0; residual² when 0.
+  float charbonnier_padding = 0.0f;
+  // LOSS_CHANNEL_MEAN: the channel sum divided by 3 (multinerf's and camp_zipnerf's per-channel mean, which sets the
+  // data term's weight against their interlevel and distortion losses); off: google/mipnerf's channel sum.
+  bool channel_mean = false;
 };
 
 // The build options for `options` with work-groups of `group_size` (a power of two).
@@ -47,7 +55,7 @@ struct LossChunk {
 
 // One level's sums over the batch, reduced from the partials, and what the host reports from them.
 struct LevelLoss {
-  double weighted_sse = 0.0;  // Σ_r lossmult_r · Σ_c residual²
+  double weighted_sse = 0.0;  // Σ_r lossmult_r · Σ_c residual² (the data term of LossOptions: LOSS_SUM_WEIGHTED)
   double plain_sse = 0.0;     // Σ_r Σ_c residual² (unweighted)
   double lossmult_sum = 0.0;  // Σ_r lossmult_r over the batch
   size_t n_rays = 0;          // rays in the batch
@@ -59,8 +67,8 @@ struct LevelLoss {
   // without one. Not in loss(): total_loss adds it.
   double distortion = 0.0;
 
-  // The official per-level loss: weighted_sse / lossmult_sum (= 3 × per-channel MSE when lossmult = 1), or a proposal
-  // round's interlevel loss.
+  // The official per-level loss: weighted_sse / lossmult_sum (= 3 × per-channel MSE when lossmult = 1; the data term
+  // of LossOptions otherwise), or a proposal round's interlevel loss.
   double loss() const { return proposal ? interlevel : weighted_sse / lossmult_sum; }
   // The true per-channel MSE over the batch's pixels, unweighted: plain_sse / (3 · n_rays).
   double mse() const { return plain_sse / (3.0 * static_cast<double>(n_rays)); }

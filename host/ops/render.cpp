@@ -47,6 +47,7 @@ void check_noise_key(const DensityNoiseKey& noise, size_t n_samples, const std::
 
 ocl::BuildOptions render_build_options(const RenderOptions& options, const ActivationOptions& activation) {
   auto build = activation_build_options(activation).define("BACKGROUND", static_cast<int>(options.background));
+  if (options.opaque_background) build.define("OPAQUE_BACKGROUND", 1);  // off: the build options as they were
   if (!(options.density_noise >= 0.0f) || !std::isfinite(options.density_noise)) {
     throw Error("render: density_noise must be finite and >= 0, not " + std::to_string(options.density_noise));
   }

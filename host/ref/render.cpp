@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/rng.hpp"
 #include "ref/activations.hpp"
@@ -23,8 +24,10 @@ std::vector<double> noisy_raw_density(const RenderOptions& options, const std::v
   return out;
 }
 
-// s_i = σ_i·δ_i, 0 for an empty interval (as the kernel: σ = ∞ with δ = 0 is no NaN).
-double thickness(double density, double t0, double t1, double dir_norm) {
+// s_i = σ_i·δ_i, 0 for an empty interval (as the kernel: σ = ∞ with δ = 0 is no NaN); ∞ for the last of
+// n_samples with an opaque background (OPAQUE_BACKGROUND), whatever its density and length.
+double thickness(double density, double t0, double t1, double dir_norm, bool opaque_last = false) {
+  if (opaque_last) return std::numeric_limits<double>::infinity();
   const double delta = (t1 - t0) * dir_norm;
   return delta > 0 ? density * delta : 0.0;
 }
@@ -32,14 +35,15 @@ double thickness(double density, double t0, double t1, double dir_norm) {
 // One ray's ∂L/∂σ from the gradients g [N] = ∂L/∂w on its weights w [N] (the forward's), densities σ [N] and edges
 // t [N+1]: ∂L/∂σ_i = δ_i·(g_i·T_{i+1} − Σ_{k>i} g_k·w_k), since ∂w_i/∂s_i = e^{−s_i}·T_i = T_{i+1} and
 // ∂w_k/∂s_i = −w_k for k > i (w_k = α_k·T_k, T_k = exp(−Σ_{j<k} s_j)); T_{i+1} = exp(−Σ_{j≤i} s_j) directly, the
-// suffix sum from the back; 0 on an empty interval (δ = 0: s_i does not depend on σ_i). Writes d_density [N].
+// suffix sum from the back; 0 on an empty interval (δ = 0: s_i does not depend on σ_i). With `opaque` the last
+// interval's s is ∞ (T_N = 0), so its own ∂L/∂σ is 0. Writes d_density [N].
 void density_grad_of_ray(const double* g, const double* weights, const double* density, const double* t,
-                         double dir_norm, size_t n_samples, double* d_density) {
+                         double dir_norm, size_t n_samples, bool opaque, double* d_density) {
   std::vector<double> trans_next(n_samples), delta(n_samples);
   double optical_depth = 0.0;
   for (size_t i = 0; i < n_samples; ++i) {
     delta[i] = (t[i + 1] - t[i]) * dir_norm;
-    optical_depth += thickness(density[i], t[i], t[i + 1], dir_norm);
+    optical_depth += thickness(density[i], t[i], t[i + 1], dir_norm, opaque && i + 1 == n_samples);
     trans_next[i] = std::exp(-optical_depth);  // T_{i+1}
   }
   double suffix = 0.0;  // Σ_{k>i} g_k·w_k
@@ -52,7 +56,7 @@ void density_grad_of_ray(const double* g, const double* weights, const double* d
 
 // d_density [R][N] = ∂L/∂σ from d_weights [R][N] = ∂L/∂w on activated densities: render_raw_weights_bwd before the
 // activation (density_grad_of_ray per ray, with g = d_weights).
-void render_weights_bwd(const std::vector<double>& density, const std::vector<double>& t_edges,
+void render_weights_bwd(bool opaque, const std::vector<double>& density, const std::vector<double>& t_edges,
                         const std::vector<double>& directions, const std::vector<double>& weights,
                         const std::vector<double>& d_weights, std::vector<double>& d_density, size_t n_rays,
                         size_t n_samples) {
@@ -60,7 +64,7 @@ void render_weights_bwd(const std::vector<double>& density, const std::vector<do
   for (size_t ray = 0; ray < n_rays; ++ray) {
     const size_t first = ray * n_samples;
     density_grad_of_ray(d_weights.data() + first, weights.data() + first, density.data() + first,
-                        t_edges.data() + ray * (n_samples + 1), norm3(directions.data() + 3 * ray), n_samples,
+                        t_edges.data() + ray * (n_samples + 1), norm3(directions.data() + 3 * ray), n_samples, opaque,
                         d_density.data() + first);
   }
 }
@@ -95,7 +99,8 @@ void render_fwd(const RenderOptions& options, const std::vector<double>& rgb, co
     double optical_depth = 0.0, t_weighted = 0.0, sum = 0.0;
     for (size_t i = 0; i < n_samples; ++i) {
       const size_t at = ray * n_samples + i;
-      const double s = thickness(density[at], t[i], t[i + 1], dir_norm);
+      const bool opaque_last = options.opaque_background && i + 1 == n_samples;
+      const double s = thickness(density[at], t[i], t[i + 1], dir_norm, opaque_last);
       const double w = -std::expm1(-s) * std::exp(-optical_depth);
       weights[at] = w;
       for (int c = 0; c < 3; ++c) comp_rgb[3 * ray + c] += w * rgb[3 * at + c];
@@ -133,7 +138,7 @@ void render_bwd(const RenderOptions& options, const std::vector<double>& rgb, co
     }
     density_grad_of_ray(g.data(), weights.data() + ray * n_samples, density.data() + ray * n_samples,
                         t_edges.data() + ray * (n_samples + 1), norm3(directions.data() + 3 * ray), n_samples,
-                        d_density.data() + ray * n_samples);
+                        options.opaque_background, d_density.data() + ray * n_samples);
   }
 }
 
@@ -185,7 +190,8 @@ void render_raw_weights_bwd(const RenderOptions& options, const ActivationOption
   const std::vector<double> no_colour(3 * rows, 0.0);  // activations_* take colours too; none enters the weights
   std::vector<double> density, unused_rgb, d_density, unused_d_raw_rgb;
   activations_fwd(activation, noisy, no_colour, density, unused_rgb, rows);
-  render_weights_bwd(density, t_edges, directions, weights, d_weights, d_density, n_rays, n_samples);
+  render_weights_bwd(options.opaque_background, density, t_edges, directions, weights, d_weights, d_density, n_rays,
+                     n_samples);
   activations_bwd(activation, noisy, no_colour, d_density, no_colour, d_raw_density, unused_d_raw_rgb, rows);
 }
 

@@ -21,7 +21,8 @@ namespace {
 using Member = std::variant<bool TrainConfig::*, int TrainConfig::*, int64_t TrainConfig::*, uint64_t TrainConfig::*,
                             double TrainConfig::*, Background TrainConfig::*, RayShape TrainConfig::*,
                             ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*,
-                            gemm::GemmBackend TrainConfig::*, Sampler TrainConfig::*>;
+                            gemm::GemmBackend TrainConfig::*, Sampler TrainConfig::*,
+                            DataLoss TrainConfig::*>;
 
 // One row of the table. An enum setting's `help` says what it does; its allowed values are prepended from the
 // enum's name table (with_full_help), so they are written once.
@@ -38,6 +39,11 @@ constexpr const char* kNdcProjectionKey = "ndc_projection";  // the record's JSO
 const std::vector<Entry>& table() {
   static const std::vector<Entry> entries = {
       {{"background", "what shows where the scene is empty", "scene"}, &TrainConfig::background},
+      {{"opaque_background",
+        "make each ray's last interval opaque, so its weights sum to 1 and no background shows (mip-NeRF 360's "
+        "opaque_background, official for its 360-degree and forward-facing configs)",
+        "model"},
+       &TrainConfig::opaque_background},
       {{"factor", "box-downsample the stored images by this power of two first (official factor)", "scene"},
        &TrainConfig::factor},
       {{"multiscale", "build x2 x4 x8 box-downsampled copies of the data on the fly", "scene"},
@@ -104,6 +110,11 @@ const std::vector<Entry>& table() {
       {{"mlp_skip", "trunk layer (0-based) after which the input is concatenated again", "model"},
        &TrainConfig::mlp_skip},
       {{"view_branch_width", "width of the view-dependent colour branch", "model"}, &TrainConfig::view_branch_width},
+      {{"bottleneck_width",
+        "units of the layer between the trunk and the view branch (0 = the trunk's width, mip-NeRF's; mip-NeRF 360: "
+        "256 after a 1024-wide trunk)",
+        "model"},
+       &TrainConfig::bottleneck_width},
       {{"grid_min", "zipnerf: cells a side of the grid's coarsest level", "model"}, &TrainConfig::grid_min},
       {{"grid_max", "zipnerf: cells a side of the grid's finest level", "model"}, &TrainConfig::grid_max},
       {{"grid_supersample", "zipnerf: levels per doubling of the grid size (official scale_supersample)", "model"},
@@ -187,6 +198,18 @@ const std::vector<Entry>& table() {
       {{"adam_epsilon", "Adam's epsilon", "optimisation"}, &TrainConfig::adam_epsilon},
       {{"coarse_loss_mult", "lambda: weight of the coarse level's loss", "optimisation"},
        &TrainConfig::coarse_loss_mult},
+      {{"data_loss",
+        "each colour channel's loss term: the squared error (mip-NeRF's), or Charbonnier's sqrt(residual^2 + "
+        "charb_padding^2) (mip-NeRF 360's and Zip-NeRF's)",
+        "optimisation"},
+       &TrainConfig::data_loss},
+      {{"charb_padding", "data_loss=charbonnier: the padding (official 0.001)", "optimisation"},
+       &TrainConfig::charb_padding},
+      {{"loss_channel_mean",
+        "divide the photometric loss's channel sum by 3 (multinerf's and camp_zipnerf's per-channel mean, which sets "
+        "its weight against their interlevel and distortion losses; false: mip-NeRF's sum)",
+        "optimisation"},
+       &TrainConfig::loss_channel_mean},
       {{"randomized", "jitter samples during training", "optimisation"}, &TrainConfig::randomized},
       {{"seed", "seed of every random choice", "optimisation"}, &TrainConfig::seed},
       {{"chunk_rays", "rays per chunk of a training step (0 = from device memory)", "execution"},
@@ -387,6 +410,19 @@ const std::map<std::string, Bundle>& presets() {
        {{"num_samples", "32"}, {"mlp_depth", "8"}, {"mlp_width", "128"}, {"view_branch_width", "64"},
         {"batch_size", "1024"}, {"steps", "2000"}, {"lr_init", "1e-3"}, {"lr_final", "1e-5"},
         {"lr_warmup_steps", "200"}, {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "8"}}},
+      // mip-NeRF 360 exactly (multinerf configs/360.gin and the Config defaults it keeps): proposal rounds of 64 on
+      // 4×256 density MLPs, the NeRF level's 32 on an 8×1024 MLP with a 256 bottleneck, contraction with the reciprocal
+      // warp, an opaque background, Charbonnier's loss as a per-channel mean, Adam ε 1e-6, the gradient clipped to norm
+      // 1e-3, 2e-3 → 2e-5 over 250,000 steps after a 512-step warm-up, 16,384 rays a step. Days a scene on a GPU.
+      {"mipnerf360",
+       {{"sampler", "proposal"}, {"unbounded", "true"}, {"opaque_background", "true"}, {"num_samples", "32"},
+        {"proposal_rounds", "2"}, {"proposal_samples", "64"}, {"proposal_mlp_depth", "4"},
+        {"proposal_mlp_width", "256"}, {"mlp_depth", "8"}, {"mlp_width", "1024"}, {"mlp_skip", "4"},
+        {"bottleneck_width", "256"}, {"view_branch_width", "128"}, {"pos_max_deg", "12"}, {"view_max_deg", "4"},
+        {"basis_subdivisions", "2"}, {"distortion_mult", "0.01"}, {"data_loss", "charbonnier"},
+        {"charb_padding", "0.001"}, {"loss_channel_mean", "true"}, {"batch_size", "16384"}, {"steps", "250000"},
+        {"lr_init", "2e-3"}, {"lr_final", "2e-5"}, {"lr_warmup_steps", "512"}, {"lr_warmup_mult", "0.01"},
+        {"adam_beta2", "0.999"}, {"adam_epsilon", "1e-6"}, {"grad_max_norm", "1e-3"}, {"checkpoint_every", "25000"}}},
       // Zip-NeRF's for two CPU cores (--model zipnerf picks it): a smaller grid, fewer samples, and one footprint-
       // weighted point per interval instead of 6 multisamples (bench/results/time_to_quality: +1.2 to +2.4 dB on
       // flower at every budget; zip_antialiasing: the multisamples' 5.9x dearer steps lose at equal time).
@@ -490,9 +526,16 @@ TrainConfig resolve_config(const std::string& preset, const std::string& variant
   config.variant_bundle = parsed_variant;
   if (preset_variant(preset) == "zipnerf" && config.variant != ModelFamily::zipnerf) {
     throw Error("the fast preset is Zip-NeRF's (a grid and a tiny MLP): give --model zipnerf with it, or a mip-NeRF "
-                "preset (quick, small, paper) without");
+                "preset (quick, small, paper, mipnerf360) without");
   }
-  validate(config);
+  try {
+    validate(config);
+  } catch (const Error& e) {
+    // A row of the paper's tables on mip-NeRF 360's sampler: say which two were combined, not only the setting.
+    if (preset != "mipnerf360" || parsed_variant == Variant::mipnerf) throw;
+    throw Error("the mipnerf360 preset (mip-NeRF 360's proposal sampler on the contracted IPE) does not combine with "
+                "--variant " + variant + ": " + e.what());
+  }
   return config;
 }
 
@@ -580,6 +623,9 @@ void validate(const TrainConfig& c) {
   require(c.lr_warmup_steps >= 0, "lr_warmup_steps must be >= 0");
   require(c.lr_warmup_mult > 0 && c.lr_warmup_mult <= 1, "lr_warmup_mult must be in (0, 1]");
   require(c.grad_max_norm >= 0, "grad_max_norm must be >= 0");
+  require(c.bottleneck_width >= 0, "bottleneck_width must be >= 0 (0 = the trunk's width)");
+  require(c.data_loss != DataLoss::charbonnier || (c.charb_padding > 0 && std::isfinite(c.charb_padding)),
+          "data_loss=charbonnier needs charb_padding > 0 (official 0.001)");
   require(c.coarse_loss_mult >= 0, "coarse_loss_mult must be >= 0");
   require(c.chunk_rays >= 0 && c.render_chunk_rays >= 1, "chunk sizes must be positive (chunk_rays 0 = auto)");
   require(c.log_every >= 1 && c.checkpoint_every >= 1, "log_every and checkpoint_every must be positive");

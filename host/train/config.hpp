@@ -39,6 +39,15 @@ constexpr std::array<EnumName<Sampler>, 2> enum_names(Sampler) {
   return {{{Sampler::resample, "resample"}, {Sampler::proposal, "proposal"}}};
 }
 
+// The `data_loss` setting: each colour channel's term of the photometric loss (ops::LossOptions).
+enum class DataLoss {
+  mse,          // residual²: google/mipnerf's (the paper's)
+  charbonnier,  // √(residual² + charb_padding²): mip-NeRF 360's and Zip-NeRF's official default
+};
+constexpr std::array<EnumName<DataLoss>, 2> enum_names(DataLoss) {
+  return {{{DataLoss::mse, "mse"}, {DataLoss::charbonnier, "charbonnier"}}};
+}
+
 // The --variant bundles: rows of the paper's tables, each a set of settings (variants()).
 enum class Variant {
   mipnerf,
@@ -72,6 +81,7 @@ constexpr std::array<EnumName<Variant>, 11> enum_names(Variant) {
 struct TrainConfig {
   // --- scene: what the data calls for (each switch compiles a path in or out of the kernels) ---
   Background background = Background::white;  // white for Blender scenes (paper §5)
+  bool opaque_background = false;  // the last interval takes what is left of each ray (mip-NeRF 360's 360.gin)
   int factor = 1;                    // box-downsample the stored images by this power of two first (lego 400 → 100: 4)
   bool multiscale = false;           // build ×2 ×4 ×8 box-downsampled copies of every image on the fly
   int multiscale_scales = 4;         // how many scales `multiscale` builds, full resolution included (paper: 4)
@@ -120,6 +130,7 @@ struct TrainConfig {
   int mlp_width = 256;
   int mlp_skip = 4;                 // the input is concatenated again after trunk layer index mlp_skip (0-based)
   int view_branch_width = 128;
+  int bottleneck_width = 0;         // the layer feeding the view branch; 0 = the trunk's width (mip-NeRF's)
   // Zip-NeRF's grid (variant zipnerf; camp_zipnerf's HashEncoding, its 360.gin values): levels of grid_min …
   // grid_max cells a side, 1 + grid_supersample · log2(grid_max / grid_min) of them, each a dense grid up to
   // 2^grid_hash_log2 cells and hashed into that many entries beyond; grid_features per level.
@@ -173,6 +184,12 @@ struct TrainConfig {
   double adam_beta2 = 0.999;        // Adam's second-moment decay (flax default; Zip-NeRF: 0.99)
   double adam_epsilon = 1e-8;       // Adam's ε (flax default; Zip-NeRF: 1e-15)
   double coarse_loss_mult = 0.1;    // λ on the coarse level's loss
+  // The photometric term (kernels/loss.cl): squared error or Charbonnier's (padding charb_padding, official 0.001), and
+  // whether the channel sum is divided by 3 (multinerf's and camp_zipnerf's per-channel mean, which weighs the data
+  // term against their interlevel and distortion losses; false: google/mipnerf's sum, which its λ and rates assume).
+  DataLoss data_loss = DataLoss::mse;
+  double charb_padding = 0.001;
+  bool loss_channel_mean = false;
   bool randomized = true;           // jittered stratified sampling and resampling during training
   uint64_t seed = 20200823;         // everything random is a function of (seed, step, ray)
 

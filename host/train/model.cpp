@@ -28,7 +28,7 @@ mlp::MlpConfig network(const TrainConfig& c, size_t input_width, size_t index) {
   m.view_dependence = c.view_dependence;
   m.view_width = static_cast<size_t>(3 + 6 * c.view_max_deg);
   m.view_branch_width = static_cast<size_t>(c.view_branch_width);
-  m.bottleneck_width = static_cast<size_t>(c.mlp_width);
+  m.bottleneck_width = static_cast<size_t>(c.bottleneck_width > 0 ? c.bottleneck_width : c.mlp_width);
   m.seed = c.seed + 0x9E3779B97F4A7C15ull * (index + 1);  // distinct weights per network
   return m;
 }
@@ -218,8 +218,11 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
   spec.activation.density_bias = static_cast<float>(c.density_bias);
   spec.activation.rgb_padding = static_cast<float>(c.rgb_padding);
   spec.render.background = c.background;
+  spec.render.opaque_background = c.opaque_background;
   spec.render.density_noise = static_cast<float>(c.density_noise);  // the graph adds it while training only
   spec.loss.multiscale = multiscale_data && c.area_loss;
+  spec.loss.charbonnier_padding = c.data_loss == DataLoss::charbonnier ? static_cast<float>(c.charb_padding) : 0.0f;
+  spec.loss.channel_mean = c.loss_channel_mean;
   spec.validate();
   return spec;
 }

@@ -313,7 +313,7 @@ mipnerf_add_cli_error_test("dataset import-colmap: a missing argument" PATTERN "
 mipnerf_add_cli_error_test("a pattern is checked whole, past a semicolon" PATTERN "unknown preset 'nosuch'; the presets are: none of these"
   ARGS train --preset nosuch)
 set_tests_properties("cli: a pattern is checked whole, past a semicolon" PROPERTIES WILL_FAIL TRUE)
-mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosuch'; the presets are: fast, paper, quick, small, tiny"
+mipnerf_add_cli_error_test("train: unknown preset" PATTERN "unknown preset 'nosuch'; the presets are: fast, mipnerf360, paper, quick, small, tiny"
   ARGS train --preset nosuch --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
 mipnerf_add_cli_error_test("train: bad setting value" PATTERN "setting 'num_samples' = '12x': expected an integer"
   ARGS train --num_samples 12x --out "${CMAKE_CURRENT_BINARY_DIR}/cli-train-bad")
@@ -597,7 +597,7 @@ set(MIPNERF_BENCH_TINY --sections kernels --kernel-rays 16 --kernel-samples 2 --
     --out "${CMAKE_CURRENT_BINARY_DIR}/cli-bench-bad")
 mipnerf_add_cli_error_test("bench: unknown section" PATTERN "--sections: unknown section 'gpu'; the sections are: gemm, kernels, train"
   ARGS bench ${MIPNERF_BENCH_TINY} --sections gemm,gpu)
-mipnerf_add_cli_error_test("bench: unknown preset" PATTERN "--presets: unknown preset 'huge'; the presets are: fast, paper, quick, small, tiny"
+mipnerf_add_cli_error_test("bench: unknown preset" PATTERN "--presets: unknown preset 'huge'; the presets are: fast, mipnerf360, paper, quick, small, tiny"
   ARGS bench --presets tiny,huge ${MIPNERF_BENCH_TINY})
 mipnerf_add_cli_error_test("bench: zero warm steps" PATTERN "--steps and --paper-steps must be at least 1"
   ARGS bench --steps 0 ${MIPNERF_BENCH_TINY})

@@ -282,7 +282,8 @@ ReferenceStep reference_step(const graph::GraphSpec& spec, const std::vector<std
                         R, n, noise);
     std::vector<double> d_comp(3 * R), partials(2), d_raw_rgb, d_raw_density;
     ref::loss_fwd_bwd(comp.data(), target.data(), spec.loss.multiscale ? lossmult.data() : nullptr, level.loss_weight,
-                      1.0 / lossmult_sum, d_comp.data(), partials.data(), 0, 0, R, R);
+                      1.0 / lossmult_sum, d_comp.data(), partials.data(), 0, 0, R, R,
+                      {spec.loss.charbonnier_padding, spec.loss.channel_mean});
     out.level_loss.push_back(partials[ref::loss_sum_weighted] / lossmult_sum);
     out.weighted_loss += level.loss_weight * out.level_loss.back();
     out.t_edges.push_back(t);
@@ -895,6 +896,23 @@ TEST_CASE("graph: an unbounded mip-NeRF 360 step (contracted IPE, reciprocal war
                                {{"sampler", "proposal"}, {"unbounded", "true"}, {"pos_max_deg", "12"},
                                 {"basis_subdivisions", "1"}, {"proposal_samples", "8"}, {"proposal_mlp_depth", "2"},
                                 {"proposal_mlp_width", "32"}, {"distortion_mult", "0.5"}});
+}
+
+// The mipnerf360 preset's three pieces beyond the unbounded step above: Charbonnier's data term as a per-channel mean,
+// the opaque last interval, and a bottleneck narrower than the trunk (24 after 64), at the tiny sizes.
+TEST_CASE("graph: mip-NeRF 360's official loss, opaque background and bottleneck equal the reference") {
+  const auto config = train::resolve_config(
+      "tiny", "mipnerf", {{"data_loss", "charbonnier"}, {"loss_channel_mean", "true"}, {"opaque_background", "true"},
+                          {"bottleneck_width", "24"}});
+  const auto spec = train::make_graph_spec(config, false);
+  CHECK(spec.mlps.back().bottleneck_width == 24);
+  CHECK(spec.render.opaque_background);
+  check_step_against_reference("mipnerf", test::small_scene(),
+                               {{"sampler", "proposal"}, {"unbounded", "true"}, {"pos_max_deg", "12"},
+                                {"basis_subdivisions", "1"}, {"proposal_samples", "8"}, {"proposal_mlp_depth", "2"},
+                                {"proposal_mlp_width", "32"}, {"distortion_mult", "0.5"},
+                                {"data_loss", "charbonnier"}, {"loss_channel_mean", "true"},
+                                {"opaque_background", "true"}, {"bottleneck_width", "24"}});
 }
 
 // A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at

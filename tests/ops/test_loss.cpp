@@ -97,26 +97,27 @@ DeviceResult run_device(ops::Loss& loss, const Batch& b, float level_weight, siz
 struct RefResult {
   std::vector<double> d_comp_rgb, partials;
 };
-RefResult run_ref(const Batch& b, double level_weight, size_t group_size, bool multiscale) {
+RefResult run_ref(const Batch& b, double level_weight, size_t group_size, bool multiscale,
+                  const ref::DataLossOptions& data = {}) {
   const size_t n = b.n_rays();
   const auto comp = to_double(b.comp_rgb), target = to_double(b.target_rgb), mult = to_double(b.lossmult);
   RefResult r;
   r.d_comp_rgb.resize(3 * n);
   r.partials.resize(2 * ((n + group_size - 1) / group_size));
   ref::loss_fwd_bwd(comp.data(), target.data(), multiscale ? mult.data() : nullptr, level_weight,
-                    1.0 / b.lossmult_sum(), r.d_comp_rgb.data(), r.partials.data(), 0, 0, n, group_size);
+                    1.0 / b.lossmult_sum(), r.d_comp_rgb.data(), r.partials.data(), 0, 0, n, group_size, data);
   return r;
 }
 
-// The reference level loss w_l · Σ lossmult·Σ_c residual² / Σ lossmult, for finite differences.
+// The reference level loss w_l · Σ lossmult·Σ_c term / Σ lossmult, for finite differences.
 double ref_level_loss(const std::vector<double>& comp, const std::vector<double>& target,
-                      const std::vector<double>& mult, double level_weight) {
+                      const std::vector<double>& mult, double level_weight, const ref::DataLossOptions& data = {}) {
   const size_t n = mult.size();
   double mult_sum = 0.0;
   for (double m : mult) mult_sum += m;
   std::vector<double> d_comp(3 * n), sums(2);
   ref::loss_fwd_bwd(comp.data(), target.data(), mult.data(), level_weight, 1.0 / mult_sum, d_comp.data(),
-                    sums.data(), 0, 0, n, n);
+                    sums.data(), 0, 0, n, n, data);
   return level_weight * sums[ref::loss_sum_weighted] / mult_sum;
 }
 
@@ -203,6 +204,77 @@ TEST_CASE("loss stage: the gradient equals central finite differences of the ref
   ref::loss_fwd_bwd(comp[0].data(), target.data(), mult.data(), 1.0, 1.0 / mult_sum, as_fine.data(), sums.data(),
                     0, 0, n, n);
   for (size_t i = 0; i < 3 * n; ++i) CHECK(close(as_coarse[i], 0.1 * as_fine[i], 1e-15));
+}
+
+TEST_CASE("loss stage: Charbonnier's term and the per-channel mean (mip-NeRF 360, Zip-NeRF) match the reference") {
+  auto& ctx = test::test_context();
+  for (bool multiscale : {false, true}) {
+    for (float padding : {0.0f, 0.001f, 0.1f}) {
+      CAPTURE(multiscale);
+      CAPTURE(padding);
+      ops::Loss loss(ctx, ops::LossOptions{multiscale, padding, true});
+      Batch b = random_batch(5001, multiscale, multiscale ? 13 : 14);
+      // Residuals of every scale against the padding: exact (0), far below it, about it.
+      const float offsets[] = {0.0f, 1e-6f, 3e-4f, 1e-3f, 2e-3f};
+      for (size_t r = 0; r < 300; ++r) {
+        for (size_t c = 0; c < 3; ++c) b.comp_rgb[3 * r + c] = b.target_rgb[3 * r + c] + offsets[(r + c) % 5];
+      }
+      const auto device = run_device(loss, b, 0.1f);
+      const auto expected = run_ref(b, 0.1, loss.group_size(), multiscale, {padding, true});
+      // Gradient w·(1/Σm)·m·(1/3)·r/√(r² + p²): the difference, the square, the padding's add, the square root
+      // (≤ 3 ulp in OpenCL C), the division (≤ 2.5 ulp) and four products: ≤ 10 units of 2^-24, so 2e-6; the squared
+      // error's 2r as in the test above. An exact colour's gradient is 0 in both.
+      for (size_t i = 0; i < device.d_comp_rgb.size(); ++i) {
+        REQUIRE(std::isfinite(device.d_comp_rgb[i]));
+        REQUIRE(close(device.d_comp_rgb[i], expected.d_comp_rgb[i], 2e-6));
+      }
+      // Group sums of positive terms, each within ~10 units, the channel and tree sums ≤ 9 more: 3e-6.
+      for (size_t k = 0; k < device.partials.size(); ++k) {
+        REQUIRE(close(device.partials[k], expected.partials[k], 3e-6));
+      }
+      // The squared error's sum (the MSE and PSNR a person reads) is the same whatever the data term.
+      const auto level = ops::sum_loss_partials(device.partials, device.n_groups, b.lossmult_sum(), b.n_rays());
+      const auto summed = run_ref(b, 0.1, loss.group_size(), multiscale);
+      double plain_sse = 0.0, summed_loss = 0.0;
+      for (size_t g = 0; g < device.n_groups; ++g) {
+        plain_sse += summed.partials[2 * g + 1];
+        summed_loss += summed.partials[2 * g];
+      }
+      CHECK(close(level.mse(), plain_sse / (3.0 * b.n_rays()), 2e-6));
+      // With the squared error, the channel mean is a third of google/mipnerf's channel sum.
+      if (padding == 0.0f) CHECK(close(level.loss(), summed_loss / b.lossmult_sum() / 3.0, 3e-6));
+    }
+  }
+  CHECK_THROWS_WITH_AS(ops::Loss(ctx, ops::LossOptions{false, -1e-3f, true}), doctest::Contains("charbonnier_padding"),
+                       Error);
+}
+
+TEST_CASE("loss stage: the Charbonnier gradient equals central finite differences of the reference") {
+  // The square root is not quadratic: the central difference's truncation h²/6·|f'''| is at most h²/p² relative for
+  // p = 1e-3, 1e-8 at h = 1e-7. The rounding of two totals of about 0.3 (a mean of Charbonnier terms) over 2h is about
+  // 5e-10, against gradients m/(3·Σm)·r/√(r² + p²) of 5e-4 and more over 30 rays (a larger batch divides them and
+  // leaves the rounding): 1e-6 relative and 1e-9 absolute. A third of the rays have residuals about the padding.
+  const size_t n = 30;
+  Batch b = random_batch(n, true, 24);
+  for (size_t r = 0; r < 10; ++r) b.comp_rgb[3 * r] = b.target_rgb[3 * r] + 1e-3f * static_cast<float>(r % 7) - 3e-3f;
+  const auto target = to_double(b.target_rgb), mult = to_double(b.lossmult);
+  std::vector<double> comp = to_double(b.comp_rgb);
+  for (const ref::DataLossOptions data : {ref::DataLossOptions{1e-3, true}, ref::DataLossOptions{1e-3, false}}) {
+    CAPTURE(data.channel_mean);
+    std::vector<double> d_comp(3 * n), partials(2);
+    ref::loss_fwd_bwd(comp.data(), target.data(), mult.data(), 1.0, 1.0 / b.lossmult_sum(), d_comp.data(),
+                      partials.data(), 0, 0, n, n, data);
+    for (size_t k = 0; k < 3 * n; ++k) {
+      const double h = 1e-7, saved = comp[k];
+      comp[k] = saved + h;
+      const double up = ref_level_loss(comp, target, mult, 1.0, data);
+      comp[k] = saved - h;
+      const double down = ref_level_loss(comp, target, mult, 1.0, data);
+      comp[k] = saved;
+      CAPTURE(k);
+      CHECK(close((up - down) / (2 * h), d_comp[k], 1e-6, 1e-9));
+    }
+  }
 }
 
 TEST_CASE("loss stage: chunked equals unchunked") {

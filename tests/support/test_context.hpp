@@ -18,9 +18,10 @@ ocl::Context& test_context();
 void check_test_platform(const ocl::DeviceInfo& device);
 
 // `count` (rays, rows) for a test's batch on the test device: the count itself, but a tenth of it (at least
-// `minimum`) on the oclgrind simulator, which runs every work-item through an interpreter. What the simulator
-// checks (out-of-bounds accesses, races, API misuse) does not depend on how many rays share the kernel's code; the
-// accuracy checks keep their full sizes on the real runtimes (PoCL, Intel's).
+// `minimum`) on the oclgrind simulator, which runs every work-item through an interpreter, and in the
+// AddressSanitizer build. What the simulator checks (out-of-bounds accesses, races, API misuse) and what the
+// sanitizers check (the host's accesses in the wrappers and the reference) do not depend on how many rays share the
+// code; the accuracy checks keep their full sizes on the real runtimes (PoCL, Intel's) in the plain build.
 size_t batch_for_device(size_t count, size_t minimum = 64);
 
 // Releases the context (its programs, queue and buffers) if it was made. test_main calls it after the tests, before

@@ -53,6 +53,15 @@ TEST_CASE("config: order is defaults, preset, variant, explicit settings") {
       // A preset made for another family is refused by name (the fast preset is Zip-NeRF's).
       if (train::preset_variant(name) == "zipnerf" && variant != "zipnerf") {
         CHECK_THROWS_WITH_AS(train::resolve_config(name, variant, {}), doctest::Contains("--model zipnerf"), Error);
+      } else if (name == "mipnerf360" && variant != "mipnerf") {
+        // mip-NeRF 360's sampler takes the IPE of frustums: the rows without it (NeRF's, w/o IPE, the concatenated
+        // PE, Zip-NeRF) are refused naming both; the others (w/o misc., two MLPs, no area loss) train.
+        try {
+          train::resolve_config(name, variant, {});
+        } catch (const Error& e) {
+          CHECK(std::string(e.what()).find("the mipnerf360 preset") != std::string::npos);
+          CHECK(std::string(e.what()).find("--variant " + variant) != std::string::npos);
+        }
       } else {
         CHECK_NOTHROW(train::resolve_config(name, variant, {}));
       }
@@ -394,6 +403,20 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   CHECK(written.at("basis_subdivisions") == 2);
   CHECK(old.basis_subdivisions == 2);
   written.erase("basis_subdivisions");
+  // mip-NeRF 360's training pieces (the mipnerf360 preset's) load as mip-NeRF's: no opaque background, the trunk's
+  // width for the bottleneck, the squared error summed over channels.
+  CHECK(written.at("opaque_background") == false);
+  CHECK(written.at("bottleneck_width") == 0);
+  CHECK(written.at("data_loss") == "mse");
+  CHECK(written.at("charb_padding") == 0.001);
+  CHECK(written.at("loss_channel_mean") == false);
+  CHECK(!old.opaque_background);
+  CHECK(old.bottleneck_width == 0);
+  CHECK(old.data_loss == train::DataLoss::mse);
+  CHECK(!old.loss_channel_mean);
+  for (const char* key : {"opaque_background", "bottleneck_width", "data_loss", "charb_padding", "loss_channel_mean"}) {
+    written.erase(key);
+  }
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
@@ -574,4 +597,52 @@ TEST_CASE("config: unbounded mip-NeRF is mip-NeRF 360's contracted IPE, reciproc
   CHECK(six_spec.describe().find("on 6 directions") != std::string::npos);
   CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"basis_subdivisions", "0"}}),
                        doctest::Contains("basis_subdivisions must be 1 to 8"), Error);
+}
+
+TEST_CASE("config: the mipnerf360 preset is multinerf's configs/360.gin, and its new settings reach the graph") {
+  const auto c = train::resolve_config("mipnerf360", "mipnerf", {});
+  CHECK(c.sampler == train::Sampler::proposal);
+  CHECK(c.unbounded);
+  CHECK(c.opaque_background);
+  CHECK(c.num_samples == 32);
+  CHECK(c.proposal_rounds == 2);
+  CHECK(c.proposal_samples == 64);
+  CHECK(c.batch_size == 16384);
+  CHECK(c.steps == 250000);
+  CHECK(c.lr_init == 2e-3);
+  CHECK(c.lr_final == 2e-5);
+  CHECK(c.lr_warmup_steps == 512);
+  CHECK(c.adam_epsilon == 1e-6);
+  CHECK(c.grad_max_norm == 1e-3);
+  CHECK(c.distortion_mult == 0.01);
+  const auto spec = train::make_graph_spec(c, false);
+  REQUIRE(spec.mlps.size() == 3);
+  for (size_t round = 0; round < 2; ++round) {
+    CHECK(spec.mlps[round].depth == 4);
+    CHECK(spec.mlps[round].width == 256);
+    CHECK(!spec.mlps[round].view_dependence);
+  }
+  const auto& nerf = spec.mlps[2];
+  CHECK(nerf.depth == 8);
+  CHECK(nerf.width == 1024);
+  CHECK(nerf.skip_layer == 4);
+  CHECK(nerf.bottleneck_width == 256);
+  CHECK(nerf.view_branch_width == 128);
+  CHECK(nerf.input_width == 504);
+  CHECK(spec.render.opaque_background);
+  CHECK(spec.loss.charbonnier_padding == 0.001f);
+  CHECK(spec.loss.channel_mean);
+  // The other presets keep mip-NeRF's loss, background and bottleneck: the paper path is unchanged.
+  for (const char* preset : {"paper", "quick", "small", "tiny"}) {
+    CAPTURE(preset);
+    const auto other = train::make_graph_spec(train::resolve_config(preset, "mipnerf", {}), false);
+    CHECK(!other.render.opaque_background);
+    CHECK(other.loss.charbonnier_padding == 0.0f);
+    CHECK(!other.loss.channel_mean);
+    CHECK(other.mlps[0].bottleneck_width == other.mlps[0].width);
+  }
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"data_loss", "charbonnier"}, {"charb_padding", "0"}}),
+                       doctest::Contains("charb_padding > 0"), Error);
+  CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"bottleneck_width", "-1"}}),
+                       doctest::Contains("bottleneck_width must be >= 0"), Error);
 }
