@@ -212,3 +212,29 @@ def wall_time_lines(record):
     if record["wall_seconds"] < 60:
         return []
     return ["", f"Study wall time {record['wall_seconds'] / 60:.1f} minutes."]
+
+
+def measure_budget(args, study, results, models, data, scene):
+    """A budget study's measurement: every kept model (budget_setup) trained seed by seed on `data` (a path, or a
+    function of (exe, work, log) that makes the capture, e.g. unbounded_scene), its JSON record describing it as
+    `scene` (formatted with args: {factor}, {views})."""
+    log, kept = budget_setup(args, results, models)
+    data = data(args.exe, args.work, log) if callable(data) else os.path.abspath(data)
+    started = time.time()
+    rows = models_seed_by_seed(args, data, kept, log)
+    return budget_record(study, args, scene.format(factor=args.factor, views=args.views), started, rows)
+
+
+UNBOUNDED_SCENE = "make-scene --unbounded (40 views around, 5 held out), factor {factor}, {views} val views"
+
+
+def budget_markdown(record, script, json_name, title, gains):
+    """A budget study's report: its head (budget_report_head), a line of seed-by-seed gains for each (what, key,
+    base key) of `gains` whose two rows were measured (`what` formatted with the row's {label}), the wall time."""
+    lines = budget_report_head(record, script, json_name, title)
+    by_key = {r["key"]: r for r in record["rows"]}
+    for what, key, base in gains:
+        if key in by_key and base in by_key:
+            lines += gain_lines(what.format(label=by_key[key]["label"]), by_key[key]["runs"], by_key[base]["runs"])
+    lines += wall_time_lines(record)
+    return "\n".join(lines) + "\n"

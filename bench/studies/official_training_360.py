@@ -5,8 +5,9 @@ The `mipnerf360` preset holds multinerf configs/360.gin exactly; besides the siz
 the mip-NeRF 360 model the scene picks for a 360-degree capture at the quick preset's size (bench/studies/
 unbounded_mipnerf.py): Charbonnier's data term √(r² + 0.001²) instead of the squared error, taken as a per-channel mean
 (which weighs the data term a third as much against the interlevel and distortion losses), an opaque last interval, and
-the gradient clipped to norm 1e-3 with Adam's ε at 1e-6. This study trains both on the same capture, side by side in one
-run, through the command-line tool with `train --minutes M` (the step count fixed by the tool's timed warm-up, recorded):
+the gradient clipped to norm 1e-3 with Adam's ε at 1e-6. This study trains both on the same capture, side by side in
+one run, through the command-line tool with `train --minutes M` (the step count fixed by the tool's timed warm-up,
+recorded):
   - m360_32: the scene's choice at the quick preset's size (unbounded_mipnerf's best row: proposal rounds of 32 on 4x64
     density MLPs, the contracted IPE on 21 directions, the distortion loss 0.01), mip-NeRF's squared error summed over
     channels, a see-through background, no clipping;
@@ -21,12 +22,11 @@ Finished runs and scores in --work are reused.
 
 import os
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (add_budget_arguments, budget_record, budget_report_head, budget_setup, gain_lines,  # noqa: E402
-                          models_seed_by_seed, unbounded_scene, wall_time_lines)
+from lib.cli_runs import (UNBOUNDED_SCENE, add_budget_arguments, budget_markdown, measure_budget,  # noqa: E402
+                          unbounded_scene)
 
 RESULTS = report_md.results_folder("official_training_360")
 SCRIPT = "bench/studies/official_training_360.py"
@@ -48,24 +48,13 @@ def add_arguments(parser):
 
 
 def measure(args):
-    log, models = budget_setup(args, RESULTS, MODELS)
-    data = unbounded_scene(args.exe, args.work, log)
-    started = time.time()
-    rows = models_seed_by_seed(args, data, models, log)
-    scene = f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views"
-    return budget_record("official_training_360", args, scene, started, rows)
+    return measure_budget(args, "official_training_360", RESULTS, MODELS, unbounded_scene, UNBOUNDED_SCENE)
 
 
 def write_markdown(record):
-    rows = record["rows"]
-    lines = budget_report_head(record, SCRIPT, "official_training_360.json",
-                               "mip-NeRF 360's training pieces at the quick preset's size, at equal training time")
-    by_key = {r["key"]: r for r in rows}
-    if "m360_32_official" in by_key and "m360_32" in by_key:
-        lines += gain_lines("360.gin's training minus mip-NeRF's", by_key["m360_32_official"]["runs"],
-                            by_key["m360_32"]["runs"])
-    lines += wall_time_lines(record)
-    return "\n".join(lines) + "\n"
+    return budget_markdown(record, SCRIPT, "official_training_360.json",
+                           "mip-NeRF 360's training pieces at the quick preset's size, at equal training time",
+                           [("360.gin's training minus mip-NeRF's", "m360_32_official", "m360_32")])
 
 
 if __name__ == "__main__":

@@ -24,12 +24,10 @@ a CPU setting, so not a row. Finished runs and scores in --work are reused.
 
 import os
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (add_budget_arguments, budget_record, budget_report_head, budget_setup, gain_lines,  # noqa: E402
-                          models_seed_by_seed, wall_time_lines)
+from lib.cli_runs import (add_budget_arguments, budget_markdown, measure_budget)  # noqa: E402
 
 RESULTS = report_md.results_folder("proposal_sampling")
 SCRIPT = "bench/studies/proposal_sampling.py"
@@ -51,25 +49,14 @@ def add_arguments(parser):
 
 
 def measure(args):
-    log, models = budget_setup(args, RESULTS, MODELS)
-    data = os.path.abspath(args.data)
-    started = time.time()
-    rows = models_seed_by_seed(args, data, models, log)
-    scene = f"LLFF flower (real, 34 phone photos), factor {args.factor}, its {args.views} held-out views"
-    return budget_record("proposal_sampling", args, scene, started, rows)
+    return measure_budget(args, "proposal_sampling", RESULTS, MODELS, args.data,
+                          "LLFF flower (real, 34 phone photos), factor {factor}, its {views} held-out views")
 
 
 def write_markdown(record):
-    rows = record["rows"]
-    lines = budget_report_head(record, SCRIPT, "proposal_sampling.json",
-                               "mip-NeRF with mip-NeRF 360's proposal sampling against coarse/fine, at equal training "
-                               "time")
-    by_key = {r["key"]: r for r in rows}
-    for key in ("prop", "prop32"):
-        if key in by_key and "cf" in by_key:
-            lines += gain_lines(f"{key} minus coarse/fine", by_key[key]["runs"], by_key["cf"]["runs"])
-    lines += wall_time_lines(record)
-    return "\n".join(lines) + "\n"
+    return budget_markdown(record, SCRIPT, "proposal_sampling.json",
+                           "mip-NeRF with mip-NeRF 360's proposal sampling against coarse/fine, at equal training "
+                           "time", [(f"{key} minus coarse/fine", key, "cf") for key in ("prop", "prop32")])
 
 
 if __name__ == "__main__":

@@ -20,12 +20,11 @@ mean and sample standard deviation over seeds, and each seed's PSNR. Finished ru
 
 import os
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (add_budget_arguments, budget_record, budget_report_head, budget_setup, gain_lines,  # noqa: E402
-                          models_seed_by_seed, unbounded_scene, wall_time_lines)
+from lib.cli_runs import (UNBOUNDED_SCENE, add_budget_arguments, budget_markdown, measure_budget,  # noqa: E402
+                          unbounded_scene)
 
 RESULTS = report_md.results_folder("unbounded")
 SCRIPT = "bench/studies/unbounded.py"
@@ -45,23 +44,13 @@ def add_arguments(parser):
 
 
 def measure(args):
-    log, models = budget_setup(args, RESULTS, MODELS)
-    data = unbounded_scene(args.exe, args.work, log)
-    started = time.time()
-    rows = models_seed_by_seed(args, data, models, log)
-    scene = f"make-scene --unbounded (40 views around, 5 held out), factor {args.factor}, {args.views} val views"
-    return budget_record("unbounded", args, scene, started, rows)
+    return measure_budget(args, "unbounded", RESULTS, MODELS, unbounded_scene, UNBOUNDED_SCENE)
 
 
 def write_markdown(record):
-    rows = record["rows"]
-    lines = budget_report_head(record, SCRIPT, "unbounded.json",
-                               "Unbounded 360° scenes: contraction against spherified world rays, at equal training time")
-    by_key = {r["key"]: r for r in rows}
-    if "unb" in by_key and "sph" in by_key:
-        lines += gain_lines("Contracted minus spherified", by_key["unb"]["runs"], by_key["sph"]["runs"])
-    lines += wall_time_lines(record)
-    return "\n".join(lines) + "\n"
+    return budget_markdown(record, SCRIPT, "unbounded.json",
+                           "Unbounded 360° scenes: contraction against spherified world rays, at equal training time",
+                           [("Contracted minus spherified", "unb", "sph")])
 
 
 if __name__ == "__main__":
