@@ -21,9 +21,14 @@ void loss_fwd_bwd(const double* comp_rgb, const double* target_rgb, const double
         const double residual = comp_rgb[3 * r + c] - target_rgb[3 * b + c];
         squared += residual * residual;
         // d/dr of r² is 2r; of √(r² + p²) it is r / √(r² + p²)
-        const double root = std::sqrt(residual * residual + padding * padding);
-        term += padding > 0.0 ? root : residual * residual;
-        const double d_term = padding > 0.0 ? residual / root : 2.0 * residual;
+        double d_term = 2.0 * residual;
+        if (padding > 0.0) {
+          const double root = std::sqrt(residual * residual + padding * padding);
+          term += root;
+          d_term = residual / root;
+        } else {
+          term += residual * residual;
+        }
         d_comp_rgb[3 * r + c] = level_weight * inv_lossmult_sum * mult * channel_scale * d_term;
       }
       plain += squared;
