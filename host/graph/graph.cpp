@@ -1,6 +1,8 @@
 // The host graph: one loop over levels, one chunk of rays at a time.
 #include "graph/graph.hpp"
 
+#include <cstdint>
+
 #include "core/error.hpp"
 #include "core/proposal_anneal.hpp"
 #include "graph/stage_traffic.hpp"
@@ -84,13 +86,34 @@ BufferPlan plan_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays
   return plan;
 }
 
-size_t max_rows(const GraphSpec& spec, size_t mlp_index, size_t max_chunk_rays) {
+// The MLP workspaces a graph holds: one per network for the levels that are not proposal rounds (sized for the most
+// rows among them), one per proposal round (its forward's activations wait for its backward after the last level's,
+// also when rounds share one network).
+struct WorkspaceSlot {
+  size_t mlp_index = 0;
+  size_t max_rows = 0;
+};
+struct WorkspacePlan {
+  std::vector<WorkspaceSlot> slots;
+  std::vector<size_t> level_slot;  // [levels]
+};
+WorkspacePlan workspace_slots(const GraphSpec& spec, size_t max_chunk_rays) {
   const auto intervals = spec.intervals_per_level();
-  size_t rows = 0;
+  WorkspacePlan plan;
+  plan.level_slot.assign(spec.levels.size(), 0);
+  std::vector<size_t> network_slot(spec.mlps.size(), SIZE_MAX);  // the slot of a network's non-proposal levels
   for (size_t l = 0; l < spec.levels.size(); ++l) {
-    if (spec.levels[l].mlp_index == mlp_index) rows = std::max(rows, max_chunk_rays * intervals[l]);
+    const bool round = spec.levels[l].role == LevelRole::proposal;
+    const size_t rows = std::max<size_t>(1, max_chunk_rays * intervals[l]), i = spec.levels[l].mlp_index;
+    if (!round && network_slot[i] != SIZE_MAX) {
+      plan.slots[network_slot[i]].max_rows = std::max(plan.slots[network_slot[i]].max_rows, rows);
+    } else {
+      plan.slots.push_back({i, rows});
+      if (!round) network_slot[i] = plan.slots.size() - 1;
+    }
+    plan.level_slot[l] = round ? plan.slots.size() - 1 : network_slot[i];
   }
-  return rows;
+  return plan;
 }
 
 mlp::WorkspaceMode workspace_mode(GraphMode mode) {
@@ -105,9 +128,8 @@ constexpr size_t kSmallestLossGroup = 64;
 size_t Graph::bytes_for(const GraphSpec& spec, GraphMode mode, size_t max_chunk_rays, size_t max_batch_rays) {
   size_t bytes = plan_for(spec, mode, max_chunk_rays, max_batch_rays, kSmallestLossGroup).float_count() * sizeof(float);
   bytes += ops::RayBundle::bytes_for(max_chunk_rays) + 2 * max_chunk_rays * sizeof(uint32_t);
-  for (size_t i = 0; i < spec.mlps.size(); ++i) {
-    bytes += mlp::Workspace::bytes_for(spec.mlps[i], std::max<size_t>(1, max_rows(spec, i, max_chunk_rays)),
-                                       max_chunk_rays, workspace_mode(mode));
+  for (const WorkspaceSlot& slot : workspace_slots(spec, max_chunk_rays).slots) {
+    bytes += mlp::Workspace::bytes_for(spec.mlps[slot.mlp_index], slot.max_rows, max_chunk_rays, workspace_mode(mode));
   }
   return bytes;
 }
@@ -274,10 +296,11 @@ Graph::Graph(ocl::Context& ctx, const GraphSpec& spec, std::vector<mlp::Network*
     }
     levels_.push_back(std::move(level));
   }
-  for (size_t i = 0; i < networks_.size(); ++i) {
-    workspaces_.push_back(
-        networks_[i]->make_workspace(std::max<size_t>(1, max_rows(spec_, i, R)), R, workspace_mode(mode_)));
+  const WorkspacePlan workspaces = workspace_slots(spec_, R);
+  for (const WorkspaceSlot& slot : workspaces.slots) {
+    workspaces_.push_back(networks_[slot.mlp_index]->make_workspace(slot.max_rows, R, workspace_mode(mode_)));
   }
+  level_workspace_ = workspaces.level_slot;
 }
 
 Graph::~Graph() = default;
@@ -483,7 +506,7 @@ void Graph::backward_level(size_t l, size_t n_rays, const TrainTargets& targets,
   mlp::Network& network = *networks_[level.mlp_index];
   {
     ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
-    network.backward(workspaces_[level.mlp_index], {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)},
+    network.backward(workspace_of(l), {mlp::view(d_raw_density_, 1), mlp::view(d_raw_rgb_, 3)},
                      grid_level ? mlp::view(d_features_, network.config().input_width) : mlp::MatrixView{});
   }
   if (!grid_level) return;
@@ -531,7 +554,7 @@ void Graph::backward_proposal(size_t l, ChunkRange chunk, const DensityNoiseKey&
   mlp::Network& network = *networks_[level.mlp_index];
   {
     ocl::StageScope mlp_stage(*ctx_, "mlp ReLU mask + bias sums");
-    network.backward(workspaces_[level.mlp_index], {mlp::view(d_raw_density_, 1), mlp::view(zero_d_raw_rgb_, 3)},
+    network.backward(workspace_of(l), {mlp::view(d_raw_density_, 1), mlp::view(zero_d_raw_rgb_, 3)},
                      grid_level ? mlp::view(d_features_, network.config().input_width) : mlp::MatrixView{});
   }
   if (!grid_level) return;
@@ -581,7 +604,7 @@ void Graph::train_chunk(const RaySource& source, ChunkRange chunk, const TrainTa
   for (size_t l = 0; l < spec_.levels.size(); ++l) {
     sample_level(l, chunk.count, key, first_ray);
     encode_level(l, chunk.count, rng);
-    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], noise_of(l));
+    forward_level(l, chunk.count, workspace_of(l), noise_of(l));
     // A proposal round's loss needs the last level's weights: its backward waits (below).
     if (spec_.levels[l].role == LevelRole::nerf) backward_level(l, chunk.count, targets, chunk, noise_of(l), rng);
   }
@@ -632,7 +655,7 @@ void Graph::render_chunk(const RaySource& source, ChunkRange chunk, StepKey key,
     sample_level(l, chunk.count, StepKey{}, static_cast<uint32_t>(chunk.first));
     encode_level(l, chunk.count, RngKey{});
     // Only the last level's colour is shown (a proposal round has none: forward_level).
-    forward_level(l, chunk.count, workspaces_[spec_.levels[l].mlp_index], DensityNoiseKey{},  // no noise compiled in
+    forward_level(l, chunk.count, workspace_of(l), DensityNoiseKey{},  // no noise compiled in
                   l + 1 == spec_.levels.size() || every_level_colour_);
   }
 }

@@ -219,7 +219,12 @@ class Graph {
   ocl::DeviceArray<float> chunk_ray_loss_;     // [R]
   ocl::DeviceArray<float> zero_d_raw_rgb_;     // [R·M][3] zeros: a round's colour head gets no gradient
   std::vector<LevelBuffers> levels_;
-  std::vector<mlp::Workspace> workspaces_;  // one per network
+  // One per network for the levels that are not proposal rounds (a shared network's forward and backward follow each
+  // other level by level), one per proposal round (its forward waits for the backward after the last level's, even when
+  // the rounds share a network): workspace_slots().
+  std::vector<mlp::Workspace> workspaces_;
+  std::vector<size_t> level_workspace_;  // [levels]: index into workspaces_
+  mlp::Workspace& workspace_of(size_t level) { return workspaces_[level_workspace_[level]]; }
 
   // The step in progress (training).
   size_t step_batch_rays_ = 0;

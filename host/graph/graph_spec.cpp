@@ -67,7 +67,8 @@ namespace {
 
 // The rules of proposal sampling: s-edges exist only on levels that sample by `proposal`, so a proposal-sampled level
 // reads a proposal-sampled (or no) previous level; a proposal round needs the last level's s-histogram, its own
-// network (its forward waits in its workspace for the backward after the last level's) and a grid or IPE features.
+// network or one shared with other rounds only (each round's forward waits in a workspace of its own for the backward
+// after the last level's: Graph's workspace slots) and a grid or IPE features.
 void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string& where) {
   const auto& level = spec.levels[l];
   if (level.sampling == Sampling::proposal) {
@@ -100,9 +101,9 @@ void validate_proposal_level(const GraphSpec& spec, size_t l, const std::string&
     throw Error(where + ": a proposal round reads a grid (Zip-NeRF) or the IPE of its frustums (mip-NeRF 360)");
   }
   for (size_t k = 0; k < spec.levels.size(); ++k) {
-    if (k != l && spec.levels[k].mlp_index == level.mlp_index) {
-      throw Error(where + ": a proposal round needs a network of its own, but level " + std::to_string(k) +
-                  " uses network " + std::to_string(level.mlp_index) + " too");
+    if (k != l && spec.levels[k].mlp_index == level.mlp_index && spec.levels[k].role != LevelRole::proposal) {
+      throw Error(where + ": a proposal round's network may be shared only with other proposal rounds, but level " +
+                  std::to_string(k) + " uses network " + std::to_string(level.mlp_index) + " too");
     }
   }
   const bool spline = level.interlevel.kind == ops::InterlevelKind::spline;

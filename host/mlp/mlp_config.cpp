@@ -90,13 +90,18 @@ ParameterLayout parameter_layout(const MlpConfig& config) {
   return layout;
 }
 
-std::vector<float> glorot_uniform_init(const MlpConfig& config) {
+double init_limit(WeightInit init, size_t in, size_t out) {
+  const double fan = init == WeightInit::he_uniform ? static_cast<double>(in) : static_cast<double>(in + out);
+  return std::sqrt(6.0 / fan);
+}
+
+std::vector<float> initial_parameters(const MlpConfig& config) {
   const ParameterLayout layout = parameter_layout(config);
   std::vector<float> params(layout.total, 0.0f);  // biases stay zero
   const auto layers = layout.all();
   for (size_t l = 0; l < layers.size(); ++l) {
     const DenseLayer& layer = *layers[l];
-    const double limit = std::sqrt(6.0 / static_cast<double>(layer.in + layer.out));
+    const double limit = init_limit(config.weight_init, layer.in, layer.out);
     const size_t count = layer.in * layer.out;
     for (size_t i = 0; i < count; i += 4) {
       const auto u = rng_uniform4(config.seed, static_cast<uint32_t>(i / 4), static_cast<uint32_t>(l), 0,

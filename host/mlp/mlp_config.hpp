@@ -1,4 +1,5 @@
-// The MLP's configuration (paper defaults), its flat parameter layout, and Glorot-uniform initialisation.
+// The MLP's configuration (paper defaults), its flat parameter layout, and its uniform initialisation (Glorot's, the
+// paper's; He's, multinerf's and camp_zipnerf's).
 //
 // Architecture (mip-NeRF supplement §5; google/mipnerf internal/models.py MLP):
 //   features [rows][input_width] → `depth` dense layers of `width` with ReLU; the features are concatenated
@@ -10,12 +11,24 @@
 //   bottleneck and view layers do not exist.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "core/enum_names.hpp"
+
 namespace mipnerf::mlp {
+
+// How the weights are drawn (biases start at zero either way): both uniform on (−a, a), a from the layer's widths.
+enum class WeightInit {
+  glorot_uniform,  // a = √(6 / (in + out)): flax's Dense default, google/mipnerf's (the paper's)
+  he_uniform,      // a = √(6 / in): multinerf's and camp_zipnerf's MLP weight_init 'he_uniform' (√2 × wider when in = out)
+};
+constexpr std::array<EnumName<WeightInit>, 2> enum_names(WeightInit) {
+  return {{{WeightInit::glorot_uniform, "glorot_uniform"}, {WeightInit::he_uniform, "he_uniform"}}};
+}
 
 struct MlpConfig {
   size_t input_width = 96;         // per-sample features: IPE 2·3·L = 96 for L = 16; NeRF's PE with identity: 63
@@ -28,7 +41,8 @@ struct MlpConfig {
   size_t bottleneck_width = 256;   // units of the bottleneck layer (no activation) feeding the view branch
   size_t density_outputs = 1;      // raw density channels
   size_t rgb_outputs = 3;          // raw colour channels
-  uint64_t seed = 0;               // seed of the Glorot-uniform weights (biases start at zero)
+  uint64_t seed = 0;               // seed of the initial weights (biases start at zero)
+  WeightInit weight_init = WeightInit::glorot_uniform;
 
   // Throws mipnerf::Error naming the field when a width is zero or the last trunk layer would be a skip
   // point (its concatenation would feed the heads, which this implementation does not support).
@@ -68,10 +82,11 @@ size_t widest_hidden(const MlpConfig& config);
 
 ParameterLayout parameter_layout(const MlpConfig& config);
 
-// Glorot-uniform weights, U(−√(6/(in+out)), √(6/(in+out))) with in = the layer's full (concatenated)
-// input width, and zero biases, as flax's default dense initialiser in the official code. A pure function
-// of config.seed (Philox4x32-10 on the host, so every platform draws the same numbers).
-std::vector<float> glorot_uniform_init(const MlpConfig& config);
+// The initial parameters: weights U(−a, a) with a = init_limit(config.weight_init, in, out), in = the layer's full
+// (concatenated) input width, and zero biases, as the official codes' flax Dense layers. A pure function of
+// config.seed and weight_init (Philox4x32-10 on the host, so every platform draws the same numbers).
+std::vector<float> initial_parameters(const MlpConfig& config);
+double init_limit(WeightInit init, size_t in, size_t out);
 
 // One line, e.g. "96 → 8×256 (skip after 4) → density 1; bottleneck 256 + view 27 → 128 → rgb 3; 612740 params".
 std::string describe(const MlpConfig& config);

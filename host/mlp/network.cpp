@@ -36,7 +36,7 @@ Network::Network(ocl::Context& ctx, const MlpConfig& config)
       layout_(parameter_layout(config)),
       params_(ctx, layout_.total, "mlp parameters [flat]"),
       grads_(ctx, layout_.total, "mlp gradients [flat]") {
-  params_.upload(ctx, glorot_uniform_init(config));
+  params_.upload(ctx, initial_parameters(config));
   zero_grad();
 }
 

@@ -149,7 +149,7 @@ class Network {
   void zero_grad();
 
  protected:
-  // Parameters from glorot_uniform_init(config); gradients zero.
+  // Parameters from initial_parameters(config); gradients zero.
   Network(ocl::Context& ctx, const MlpConfig& config);
   // The backend's buffers for a workspace of this size and mode.
   virtual std::unique_ptr<WorkspaceBuffers> make_workspace_buffers(size_t max_rows, size_t max_rays,

@@ -22,7 +22,7 @@ using Member = std::variant<bool TrainConfig::*, int TrainConfig::*, int64_t Tra
                             double TrainConfig::*, Background TrainConfig::*, RayShape TrainConfig::*,
                             ops::Batching TrainConfig::*, ModelFamily TrainConfig::*, DensityActivation TrainConfig::*,
                             gemm::GemmBackend TrainConfig::*, Sampler TrainConfig::*,
-                            DataLoss TrainConfig::*>;
+                            DataLoss TrainConfig::*, mlp::WeightInit TrainConfig::*>;
 
 // One row of the table. An enum setting's `help` says what it does; its allowed values are prepended from the
 // enum's name table (with_full_help), so they are written once.
@@ -115,6 +115,11 @@ const std::vector<Entry>& table() {
         "256 after a 1024-wide trunk)",
         "model"},
        &TrainConfig::bottleneck_width},
+      {{"weight_init",
+        "how every network's weights start, uniform on (-a, a): glorot_uniform a = sqrt(6/(in+out)) (google/mipnerf, "
+        "the paper), he_uniform a = sqrt(6/in) (multinerf's and camp_zipnerf's MLPs); biases start at 0",
+        "model"},
+       &TrainConfig::weight_init},
       {{"grid_min", "zipnerf: cells a side of the grid's coarsest level", "model"}, &TrainConfig::grid_min},
       {{"grid_max", "zipnerf: cells a side of the grid's finest level", "model"}, &TrainConfig::grid_max},
       {{"grid_supersample", "zipnerf: levels per doubling of the grid size (official scale_supersample)", "model"},
@@ -158,6 +163,11 @@ const std::vector<Entry>& table() {
       {{"proposal_mlp_width", "mipnerf, sampler=proposal: units per layer of each proposal round's MLP (official 256)",
         "model"},
        &TrainConfig::proposal_mlp_width},
+      {{"proposal_mlp_shared",
+        "mipnerf, sampler=proposal: every proposal round through one network (multinerf's mip-NeRF 360: one PropMLP) "
+        "instead of one network each",
+        "model"},
+       &TrainConfig::proposal_mlp_shared},
       {{"basis_subdivisions",
         "mipnerf, unbounded: how often the icosahedron's faces are tessellated for the directions its contracted IPE "
         "projects onto (official 2: 21 directions, 504 features at pos_max_deg 12; 1: 6 directions, 144)",
@@ -410,14 +420,16 @@ const std::map<std::string, Bundle>& presets() {
        {{"num_samples", "32"}, {"mlp_depth", "8"}, {"mlp_width", "128"}, {"view_branch_width", "64"},
         {"batch_size", "1024"}, {"steps", "2000"}, {"lr_init", "1e-3"}, {"lr_final", "1e-5"},
         {"lr_warmup_steps", "200"}, {"log_every", "100"}, {"checkpoint_every", "500"}, {"val_views", "8"}}},
-      // mip-NeRF 360 exactly (multinerf configs/360.gin and the Config defaults it keeps): proposal rounds of 64 on
-      // 4×256 density MLPs, the NeRF level's 32 on an 8×1024 MLP with a 256 bottleneck, contraction with the reciprocal
+      // mip-NeRF 360 exactly (multinerf configs/360.gin and the Config defaults it keeps): proposal rounds of 64 through
+      // one 4×256 density MLP, the NeRF level's 32 on an 8×1024 MLP with a 256 bottleneck, contraction with the reciprocal
       // warp, an opaque background, Charbonnier's loss as a per-channel mean, Adam ε 1e-6, the gradient clipped to norm
-      // 1e-3, 2e-3 → 2e-5 over 250,000 steps after a 512-step warm-up, 16,384 rays a step. Days a scene on a GPU.
+      // 1e-3, 2e-3 → 2e-5 over 250,000 steps after a 512-step warm-up, 16,384 rays a step, He-uniform weights. Days a
+      // scene on a GPU.
       {"mipnerf360",
        {{"sampler", "proposal"}, {"unbounded", "true"}, {"opaque_background", "true"}, {"num_samples", "32"},
         {"proposal_rounds", "2"}, {"proposal_samples", "64"}, {"proposal_mlp_depth", "4"},
-        {"proposal_mlp_width", "256"}, {"mlp_depth", "8"}, {"mlp_width", "1024"}, {"mlp_skip", "4"},
+        {"proposal_mlp_width", "256"}, {"proposal_mlp_shared", "true"}, {"weight_init", "he_uniform"},
+        {"mlp_depth", "8"}, {"mlp_width", "1024"}, {"mlp_skip", "4"},
         {"bottleneck_width", "256"}, {"view_branch_width", "128"}, {"pos_max_deg", "12"}, {"view_max_deg", "4"},
         {"basis_subdivisions", "2"}, {"distortion_mult", "0.01"}, {"data_loss", "charbonnier"},
         {"charb_padding", "0.001"}, {"loss_channel_mean", "true"}, {"batch_size", "16384"}, {"steps", "250000"},
@@ -584,6 +596,9 @@ void validate(const TrainConfig& c) {
     require(c.proposal_rounds >= 1 && c.proposal_rounds <= 4, "proposal_rounds must be in 1..4 (official 2)");
     require(c.proposal_samples >= 2, "proposal_samples must be at least 2 (proposal sampling draws >= 2 intervals)");
     require(c.proposal_mlp_depth >= 1 && c.proposal_mlp_width >= 1, "proposal_mlp_depth and _width must be positive");
+    require(!c.proposal_mlp_shared || c.variant == ModelFamily::mipnerf,
+            "proposal_mlp_shared is mip-NeRF 360's (one PropMLP on the IPE of every round); Zip-NeRF's rounds each read "
+            "a grid of their own through their own network: leave proposal_mlp_shared=false with --model zipnerf");
     mlp::GridConfig grid;
     grid.min_grid_size = c.grid_min;
     grid.scale_supersample = c.grid_supersample;

@@ -14,6 +14,7 @@
 #include "core/enum_names.hpp"
 #include "core/stage_options.hpp"
 #include "gemm/gemm_backend.hpp"
+#include "mlp/mlp_config.hpp"
 #include "ops/batch.hpp"
 
 namespace mipnerf::train {
@@ -131,6 +132,8 @@ struct TrainConfig {
   int mlp_skip = 4;                 // the input is concatenated again after trunk layer index mlp_skip (0-based)
   int view_branch_width = 128;
   int bottleneck_width = 0;         // the layer feeding the view branch; 0 = the trunk's width (mip-NeRF's)
+  // Every network's initial weights (mlp::WeightInit): Glorot's (google/mipnerf's) or He's (multinerf's, camp_zipnerf's)
+  mlp::WeightInit weight_init = mlp::WeightInit::glorot_uniform;
   // Zip-NeRF's grid (variant zipnerf; camp_zipnerf's HashEncoding, its 360.gin values): levels of grid_min …
   // grid_max cells a side, 1 + grid_supersample · log2(grid_max / grid_min) of them, each a dense grid up to
   // 2^grid_hash_log2 cells and hashed into that many entries beyond; grid_features per level.
@@ -161,6 +164,9 @@ struct TrainConfig {
   int proposal_grid_max = 2048;
   int proposal_mlp_depth = 4;
   int proposal_mlp_width = 256;
+  // mipnerf, sampler=proposal: the rounds share one network (multinerf's Model builds one PropMLP and calls it in
+  // every round) instead of one each (this tool's first choice, kept as the default: its figures were measured so)
+  bool proposal_mlp_shared = false;
   int basis_subdivisions = 2;  // unbounded mipnerf: the contracted IPE's directions (official 2: 21; GraphSpec)
   double anneal_slope = 10.0;
   double interlevel_mult = -1.0;  // < 0: the model's official (Zip-NeRF's spline loss 0.01, mip-NeRF 360's outer 1)

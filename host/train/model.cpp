@@ -30,6 +30,7 @@ mlp::MlpConfig network(const TrainConfig& c, size_t input_width, size_t index) {
   m.view_branch_width = static_cast<size_t>(c.view_branch_width);
   m.bottleneck_width = static_cast<size_t>(c.bottleneck_width > 0 ? c.bottleneck_width : c.mlp_width);
   m.seed = c.seed + 0x9E3779B97F4A7C15ull * (index + 1);  // distinct weights per network
+  m.weight_init = c.weight_init;
   return m;
 }
 
@@ -121,7 +122,10 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
                      : c.unbounded ? graph::Encoding::contracted_ipe
                                    : graph::Encoding::integrated;
     level.grid_index = grids ? static_cast<size_t>(l) : 0;
-    level.mlp_index = static_cast<size_t>(l);
+    // multinerf's mip-NeRF 360 calls one PropMLP in every round (proposal_mlp_shared): network 0 for the rounds, 1 for
+    // the NeRF level; otherwise one network a level.
+    const bool shared = !grids && c.proposal_mlp_shared;
+    level.mlp_index = shared ? (l < rounds ? 0 : 1) : static_cast<size_t>(l);
     if (l < rounds) {
       level.role = graph::LevelRole::proposal;
       level.new_samples = static_cast<size_t>(c.proposal_samples);
@@ -134,7 +138,8 @@ void add_proposal_levels(const TrainConfig& c, graph::GraphSpec& spec) {
     }
     samples_before *= static_cast<double>(level.new_samples);
     spec.levels.push_back(level);
-    const size_t input_width = spec.feature_width(level), index = static_cast<size_t>(l);
+    if (level.mlp_index < spec.mlps.size()) continue;  // a shared proposal network, made by the first round
+    const size_t input_width = spec.feature_width(level), index = level.mlp_index;
     mlp::MlpConfig m = grids || l == rounds ? network(c, input_width, index) : proposal_mlp(c, input_width, index);
     // A proposal round's network: its trunk and density, no colour to condition (official disable_rgb).
     if (l < rounds) m.view_dependence = false;

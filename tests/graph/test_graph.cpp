@@ -915,6 +915,26 @@ TEST_CASE("graph: mip-NeRF 360's official loss, opaque background and bottleneck
                                 {"opaque_background", "true"}, {"bottleneck_width", "24"}});
 }
 
+// multinerf's mip-NeRF 360 calls one PropMLP in both rounds: one network for the rounds (its gradient the sum of both
+// rounds', each round's forward kept in a workspace of its own until the backward after the NeRF level's), He-uniform
+// weights. Two networks in the spec; the step equals the reference's on every GEMM backend.
+TEST_CASE("graph: proposal rounds sharing one network (mip-NeRF 360's PropMLP) equal the reference") {
+  const train::Bundle shared{{"sampler", "proposal"},       {"unbounded", "true"},
+                             {"pos_max_deg", "12"},         {"basis_subdivisions", "1"},
+                             {"proposal_samples", "8"},     {"proposal_mlp_depth", "2"},
+                             {"proposal_mlp_width", "32"},  {"proposal_mlp_shared", "true"},
+                             {"weight_init", "he_uniform"}};
+  const auto spec = train::make_graph_spec(train::resolve_config("tiny", "mipnerf", shared), false);
+  REQUIRE(spec.levels.size() == 3);
+  REQUIRE(spec.mlps.size() == 2);
+  CHECK(spec.levels[0].mlp_index == 0);
+  CHECK(spec.levels[1].mlp_index == 0);
+  CHECK(spec.levels[2].mlp_index == 1);
+  CHECK(spec.mlps[0].weight_init == mlp::WeightInit::he_uniform);
+  CHECK_FALSE(spec.mlps[0].view_dependence);
+  check_step_against_reference("mipnerf", test::small_scene(), shared);
+}
+
 // A rendering graph of a proposal spec runs the rounds for their weights alone (no colour), deterministically and at
 // anneal 1 (the official eval: train_frac 1, no rng): what a training graph's forward gives at train fraction 1 with
 // randomization off (its rounds' forwards also feed their colour heads, which the weights never read). Every level's

@@ -36,7 +36,7 @@ Problem make_problem(bool view_dependence, unsigned seed, bool skip = true) {
   std::mt19937 rng(seed);
   const size_t rows = p.n_rays * p.samples_per_ray;
   // Glorot weights, and biases made non-zero so their gradients and the ReLU pattern are not trivial.
-  auto params = mlp::glorot_uniform_init(p.config);
+  auto params = mlp::initial_parameters(p.config);
   const auto layout = mlp::parameter_layout(p.config);
   for (const auto* layer : layout.all()) {
     const auto biases = test::random_floats(layer->out, rng, -0.3f, 0.3f);

@@ -417,6 +417,14 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   for (const char* key : {"opaque_background", "bottleneck_width", "data_loss", "charb_padding", "loss_channel_mean"}) {
     written.erase(key);
   }
+  // The networks' initialisation and the shared proposal network (mip-NeRF 360 exactly) load as before: Glorot's
+  // weights, a network per proposal round.
+  CHECK(written.at("weight_init") == "glorot_uniform");
+  CHECK(written.at("proposal_mlp_shared") == false);
+  CHECK(old.weight_init == mlp::WeightInit::glorot_uniform);
+  CHECK(!old.proposal_mlp_shared);
+  written.erase("weight_init");
+  written.erase("proposal_mlp_shared");
   CHECK(written.dump(2) == kConfigBeforeVariantBundle);
   // Written back, an old configuration stays without the key rather than claiming a variant it never recorded.
   CHECK(!nlohmann::json::parse(train::to_json(old)).contains("variant_bundle"));
@@ -616,13 +624,18 @@ TEST_CASE("config: the mipnerf360 preset is multinerf's configs/360.gin, and its
   CHECK(c.grad_max_norm == 1e-3);
   CHECK(c.distortion_mult == 0.01);
   const auto spec = train::make_graph_spec(c, false);
-  REQUIRE(spec.mlps.size() == 3);
-  for (size_t round = 0; round < 2; ++round) {
-    CHECK(spec.mlps[round].depth == 4);
-    CHECK(spec.mlps[round].width == 256);
-    CHECK(!spec.mlps[round].view_dependence);
-  }
-  const auto& nerf = spec.mlps[2];
+  // multinerf's Model builds one PropMLP and calls it in both rounds: two networks, the rounds' the first.
+  REQUIRE(spec.mlps.size() == 2);
+  REQUIRE(spec.levels.size() == 3);
+  CHECK(spec.levels[0].mlp_index == 0);
+  CHECK(spec.levels[1].mlp_index == 0);
+  CHECK(spec.levels[2].mlp_index == 1);
+  CHECK(spec.mlps[0].depth == 4);
+  CHECK(spec.mlps[0].width == 256);
+  CHECK(!spec.mlps[0].view_dependence);
+  // MLP.weight_init = 'he_uniform' in multinerf, for every network.
+  for (const auto& m : spec.mlps) CHECK(m.weight_init == mlp::WeightInit::he_uniform);
+  const auto& nerf = spec.mlps[1];
   CHECK(nerf.depth == 8);
   CHECK(nerf.width == 1024);
   CHECK(nerf.skip_layer == 4);
@@ -640,7 +653,15 @@ TEST_CASE("config: the mipnerf360 preset is multinerf's configs/360.gin, and its
     CHECK(other.loss.charbonnier_padding == 0.0f);
     CHECK(!other.loss.channel_mean);
     CHECK(other.mlps[0].bottleneck_width == other.mlps[0].width);
+    CHECK(other.mlps[0].weight_init == mlp::WeightInit::glorot_uniform);
   }
+  // The scene-chosen mip-NeRF 360 of the quick preset keeps a network per round (measured so) unless told.
+  const auto quick_360 = train::make_graph_spec(
+      train::resolve_config("quick", "mipnerf", {{"sampler", "proposal"}, {"unbounded", "true"}}), false);
+  CHECK(quick_360.mlps.size() == 3);
+  CHECK_THROWS_WITH_AS(
+      train::resolve_config("tiny", "zipnerf", {{"sampler", "proposal"}, {"proposal_mlp_shared", "true"}}),
+      doctest::Contains("proposal_mlp_shared is mip-NeRF 360's"), Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"data_loss", "charbonnier"}, {"charb_padding", "0"}}),
                        doctest::Contains("charb_padding > 0"), Error);
   CHECK_THROWS_WITH_AS(train::resolve_config("tiny", "mipnerf", {{"bottleneck_width", "-1"}}),
