@@ -231,13 +231,15 @@ def write(args, versions, state, pairs):
     base = os.path.join(args.out_dir, NAME)
     with open(base + ".json", "w") as f:
         json.dump(doc, f, indent=2)
-    report_md.write_report(base + ".md", markdown(doc), f"python3 bench/studies/{NAME}.py --report-only {base}.json")
+    report_md.write_report(base + ".md", markdown(doc),
+                           f"python3 bench/studies/{NAME}.py --report-only {os.path.relpath(base, REPO)}.json")
 
 
 def markdown(doc):
     s = doc["summary"]
     first = doc["pairs"][0]
-    lines = ["# mipnerf-cl's mip-NeRF 360 against multinerf on a 360-degree capture, at equal steps", "",
+    lines = [report_md.generated_banner(f"bench/studies/{NAME}.py", f"{NAME}.json"), "",
+             "# mipnerf-cl's mip-NeRF 360 against multinerf on a 360-degree capture, at equal steps", "",
              f"{doc['capture']}; {doc['steps']} steps, {doc['seeds']} seed(s); checkout "
              f"{doc['checkout']['commit'][:10]}{' (dirty)' if doc['checkout']['dirty'] else ''}, multinerf "
              f"{doc['multinerf_commit']}, {doc['cpu']}, {doc['date']}.", "",
@@ -259,10 +261,12 @@ def markdown(doc):
         other = "–" if c["other_cpu_cores"] is None else f"{c['other_cpu_cores']:.2f}"
         rows.append([str(p["seed"]), " then ".join(p["order"]), f"{p['ours']['mean_psnr']:.2f}",
                      f"{p['official']['mean_psnr']:.2f}", f"{p['ours']['train_seconds']:.1f}",
-                     f"{p['official']['train_seconds']:.1f}", str(p["ours"]["parameters"]), other,
+                     f"{p['official']['train_seconds']:.1f}",
+                     f"{p['ours']['parameters']} / {p['official']['parameters']}", other,
                      f"{c['load_before']} → {c['load_after']}"])
     lines += report_md.table(["seed", "order", "ours dB", "official dB", "ours train s", "official train s",
-                              "parameters (both)", "other processes' CPU, cores", "load before → after"],
+                              "parameters, ours / official", "other processes' CPU, cores",
+                              "load before → after"],
                              "l" * 9, rows)
     off = first["official"]
     lines += ["", "## The official side", "",
@@ -276,7 +280,8 @@ def markdown(doc):
 def report_only(path):
     doc = read_json(path)
     md = os.path.splitext(path)[0] + ".md"
-    report_md.write_report(md, markdown(doc), f"python3 bench/studies/{NAME}.py --report-only {path}")
+    report_md.write_report(md, markdown(doc), f"python3 bench/studies/{NAME}.py --report-only "
+                                              f"{os.path.relpath(os.path.abspath(path), REPO)}")
     print(f"wrote {md}")
 
 
