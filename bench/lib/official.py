@@ -436,6 +436,32 @@ def load_blender(np, datasets, data, factor, near, far, split="train"):
 
 
 
+def train_once(worker, path, request, recorded):
+    """A training request to `worker`, once: its reply (with `recorded` added and the call's wall time) is kept as JSON
+    at `path` and read back on a later call, so an interrupted study resumes where it stopped."""
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    before = time.time()
+    record = worker.call(**request)
+    record.update(recorded, this_call={"wall_seconds": time.time() - before})
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(record, f, indent=2)
+    return record
+
+
+def side_summary(runs):
+    """One side's test PSNRs and train seconds over its runs (dicts with mean_psnr and train_seconds)."""
+    import statistics
+    psnrs = [r["mean_psnr"] for r in runs]
+    secs = [r["train_seconds"] for r in runs]
+    return {"runs": len(runs), "mean_psnr": statistics.mean(psnrs),
+            "sd_psnr": statistics.stdev(psnrs) if len(psnrs) > 1 else 0.0, "min_psnr": min(psnrs),
+            "max_psnr": max(psnrs), "median_train_seconds": statistics.median(secs), "min_train_seconds": min(secs),
+            "max_train_seconds": max(secs)}
+
+
 def serve_requests(make_official, handlers):
     """The worker's loop: one JSON request per stdin line, one JSON reply per stdout line; handlers maps a request's
     cmd to handler(official, request). A failure (importing the official code, or a request) is a reply with

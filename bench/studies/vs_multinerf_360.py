@@ -36,7 +36,6 @@ import argparse
 import datetime
 import json
 import os
-import statistics
 import sys
 import time
 
@@ -44,7 +43,8 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) 
 from lib import report_md  # noqa: E402
 from lib.cli_runs import read_json, run, train_resumable  # noqa: E402
 from lib.machine import between, snapshot  # noqa: E402
-from lib.official import DEFAULT_VENV, OfficialError, Worker, ensure_venv, serve_requests  # noqa: E402
+from lib.official import (DEFAULT_VENV, OfficialError, Worker, ensure_venv, serve_requests, side_summary,  # noqa: E402
+                          train_once)
 from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
 NAME = "vs_multinerf_360"
@@ -134,26 +134,11 @@ def official_settings(config, steps):
 
 
 def official_run(args, worker, capture, config, steps, seed):
-    path = os.path.join(args.work, "official", f"steps{steps}_seed{seed}.json")
-    if os.path.exists(path):
-        return read_json(path)
     bindings, cfg = official_settings(config, steps)
-    before = time.time()
-    record = worker.call(cmd="train", capture=capture, bindings=bindings, config=cfg, steps=steps, seed=seed)
-    record.update(steps=steps, seed=seed, bindings=bindings, config=cfg,
-                  this_call={"wall_seconds": time.time() - before})
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w") as f:
-        json.dump(record, f, indent=2)
-    return record
-
-
-def side_summary(runs):
-    psnrs = [r["mean_psnr"] for r in runs]
-    secs = [r["train_seconds"] for r in runs]
-    return {"runs": len(runs), "mean_psnr": statistics.mean(psnrs),
-            "sd_psnr": statistics.stdev(psnrs) if len(psnrs) > 1 else 0.0, "min_psnr": min(psnrs),
-            "max_psnr": max(psnrs), "median_train_seconds": statistics.median(secs)}
+    return train_once(worker, os.path.join(args.work, "official", f"steps{steps}_seed{seed}.json"),
+                      {"cmd": "train", "capture": capture, "bindings": bindings, "config": cfg, "steps": steps,
+                       "seed": seed},
+                      {"steps": steps, "seed": seed, "bindings": bindings, "config": cfg})
 
 
 def orchestrate(args):

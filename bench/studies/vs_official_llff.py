@@ -19,7 +19,6 @@ import argparse
 import datetime
 import json
 import os
-import statistics
 import sys
 import time
 
@@ -29,7 +28,7 @@ from lib.cli_runs import read_json, run, train_resumable  # noqa: E402
 from lib.machine import between, snapshot  # noqa: E402
 from lib.official import (Official, OfficialError, Worker, add_official_arguments,  # noqa: E402
                           bind_gin, check_official_checkout, ensure_venv, install_stubs, llff_split,
-                          official_commit, official_settings, serve_requests)
+                          official_commit, official_settings, serve_requests, side_summary, train_once)
 from lib.provenance import REPO, cpu_model, tree_state  # noqa: E402
 
 NAME = "vs_official_llff"
@@ -84,27 +83,12 @@ def llff_worker(py, args, factor):
 
 
 def official_run(args, worker, config, factor, steps, seed):
-    path = os.path.join(args.work, "official", f"steps{steps}_seed{seed}.json")
-    if os.path.exists(path):
-        return read_json(path)
     model, mlp, cfg = official_llff_settings(config, steps)
-    before = time.time()
-    record = worker.call(cmd="train_llff", model=model, mlp=mlp, config=cfg, steps=steps, seed=seed,
-                         views=args.llff_views)
-    record.update(steps=steps, seed=seed, official_model=model, official_mlp=mlp, official_config=cfg,
-                  this_call={"wall_seconds": time.time() - before})
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    with open(path, "w") as f:
-        json.dump(record, f, indent=2)
-    return record
-
-
-def side_summary(runs):
-    psnrs = [r["mean_psnr"] for r in runs]
-    secs = [r["train_seconds"] for r in runs]
-    return {"runs": len(runs), "mean_psnr": statistics.mean(psnrs), "min_psnr": min(psnrs), "max_psnr": max(psnrs),
-            "median_train_seconds": statistics.median(secs), "min_train_seconds": min(secs),
-            "max_train_seconds": max(secs)}
+    return train_once(worker, os.path.join(args.work, "official", f"steps{steps}_seed{seed}.json"),
+                      {"cmd": "train_llff", "model": model, "mlp": mlp, "config": cfg, "steps": steps, "seed": seed,
+                       "views": args.llff_views},
+                      {"steps": steps, "seed": seed, "official_model": model, "official_mlp": mlp,
+                       "official_config": cfg})
 
 
 def orchestrate_llff(args):
