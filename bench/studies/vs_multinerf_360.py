@@ -213,17 +213,17 @@ def write(args, versions, state, pairs):
                        "train_seconds_ratio_per_seed": [p["official"]["train_seconds"] / p["ours"]["train_seconds"]
                                                         for p in pairs]}}
     os.makedirs(args.out_dir, exist_ok=True)
-    base = os.path.join(args.out_dir, NAME)
+    base = os.path.join(args.out_dir, args.name)
     with open(base + ".json", "w") as f:
         json.dump(doc, f, indent=2)
-    report_md.write_report(base + ".md", markdown(doc),
+    report_md.write_report(base + ".md", markdown(doc, args.name),
                            f"python3 bench/studies/{NAME}.py --report-only {os.path.relpath(base, REPO)}.json")
 
 
-def markdown(doc):
+def markdown(doc, name=NAME):
     s = doc["summary"]
     first = doc["pairs"][0]
-    lines = [report_md.generated_banner(f"bench/studies/{NAME}.py", f"{NAME}.json"), "",
+    lines = [report_md.generated_banner(f"bench/studies/{NAME}.py", f"{name}.json"), "",
              "# mipnerf-cl's mip-NeRF 360 against multinerf on a 360-degree capture, at equal steps", "",
              f"{doc['capture']}; {doc['steps']} steps, {doc['seeds']} seed(s); checkout "
              f"{doc['checkout']['commit'][:10]}{' (dirty)' if doc['checkout']['dirty'] else ''}, multinerf "
@@ -265,7 +265,8 @@ def markdown(doc):
 def report_only(path):
     doc = read_json(path)
     md = os.path.splitext(path)[0] + ".md"
-    report_md.write_report(md, markdown(doc), f"python3 bench/studies/{NAME}.py --report-only "
+    name = os.path.splitext(os.path.basename(path))[0]
+    report_md.write_report(md, markdown(doc, name), f"python3 bench/studies/{NAME}.py --report-only "
                                               f"{os.path.relpath(os.path.abspath(path), REPO)}")
     print(f"wrote {md}")
 
@@ -425,8 +426,10 @@ def parse_args(argv):
     p.add_argument("--python", default=sys.executable, help="python used to create the venv")
     p.add_argument("--steps", type=int, default=500, help="training steps, both sides (the schedule's length)")
     p.add_argument("--seeds", type=int, default=3, help="trainings per side")
-    p.add_argument("--work", default="/tmp/vs_multinerf_360", help="runs kept here, so an interrupted study resumes")
+    p.add_argument("--work", default="/tmp/vs_multinerf_360", help="runs kept here (per step count and seed), so an "
+                                                                 "interrupted study resumes")
     p.add_argument("--out-dir", default=report_md.results_folder(NAME), help="where the .json and .md go")
+    p.add_argument("--name", default=NAME, help="the results' file name (NAME.json, NAME.md)")
     p.add_argument("--allow-dirty", action="store_true", help="run on a tree with uncommitted changes")
     p.add_argument("--report-only", metavar="JSON", help="regenerate the .md from a results .json and stop")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
