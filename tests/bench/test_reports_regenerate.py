@@ -37,6 +37,8 @@ REGENERATIONS = [
      ["vs_official_llff_pocl_cpu.md"]),
     ("vs_multinerf_360", ["--report-only", "bench/results/vs_multinerf_360/vs_multinerf_360.json"],
      ["vs_multinerf_360.md"]),
+    ("vs_multinerf_360", ["--report-only", "bench/results/vs_multinerf_360/vs_multinerf_360_1500steps.json"],
+     ["vs_multinerf_360_1500steps.md"]),
     ("time_to_quality", ["--quick", "--report-only"], ["time_to_quality_quick.md"]),
     ("zip_antialiasing", ["--name", "zip_antialiasing_15min", "--report-only"], ["zip_antialiasing_15min.md"]),
 ] + [("before_after", ["--report-only", f"bench/results/before_after/{os.path.basename(p)}"],
