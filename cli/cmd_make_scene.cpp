@@ -106,12 +106,19 @@ void register_make_scene(CLI::App& app) {
                 "Instead: a 360-degree capture of the scene outdoors (an endless ground, distant pillars, a sky), from "
                 "a full orbit of cameras (--views, default 40), in the LLFF layout; --size is the image width (4:3), "
                 "default 256");
-  cmd->callback([out, options, forward, forward_facing, unbounded, grid, cmd, lens, fov] {
+  auto texture = std::make_shared<std::string>("checker");
+  cmd->add_option("--texture", *texture,
+                  "--unbounded: the ground's and pillars' surfaces: checker (a checker and stripes) or noise (the same "
+                  "colours as non-periodic noise, which COLMAP can match: photos for `dataset from-photos`)")
+      ->check(CLI::IsMember({"checker", "noise"}))
+      ->capture_default_str();
+  cmd->callback([out, options, forward, forward_facing, unbounded, grid, cmd, lens, fov, texture] {
     if (!lens->empty()) options->lens = parse_lens(*lens);
     if (cmd->count("--fov") > 0) {
       if (!(*fov > 0.0 && *fov < 170.0)) throw Error("--fov must be between 0 and 170 degrees");
       options->camera_angle_x = *fov * M_PI / 180.0;
     }
+    if (!*unbounded && cmd->count("--texture") > 0) throw Error("--texture applies to --unbounded");
     if (*unbounded) {
       if (*forward_facing) throw Error("--unbounded and --forward-facing are two different scenes: give one");
       for (const char* blender_only : {"--val-views", "--test-views", "--scales", "--lens", "--grid", "--grid-width"}) {
@@ -126,6 +133,7 @@ void register_make_scene(CLI::App& app) {
       scene.jpeg = forward->jpeg;
       scene.seed = options->seed;
       scene.threads = options->threads;
+      scene.texture = *texture == "noise" ? data::UnboundedTexture::noise : data::UnboundedTexture::checker;
       data::write_unbounded_scene(*out, scene, print_log);
       std::cout << "wrote " << *out << ": a 360-degree LLFF capture of " << scene.views << " views at "
                 << scene.width_px << "x" << scene.width_px * 3 / 4 << " (images/"

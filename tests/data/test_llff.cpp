@@ -372,6 +372,52 @@ TEST_CASE("llff: the built-in unbounded scene is a 360-degree capture whose sky 
   CHECK(data::unbounded_cameras(options)[3].camera_to_world == cameras[3].camera_to_world);  // deterministic
 }
 
+// make-scene --unbounded --texture noise: the same geometry (every depth equal), the ground's and pillars' colours from
+// non-periodic noise, so that COLMAP can match them: where the checker repeats every 2 units, the noise does not.
+TEST_CASE("llff: the unbounded scene's noise texture keeps its geometry and does not repeat") {
+  data::UnboundedOptions options;
+  options.width_px = 64;
+  options.views = 8;
+  const auto cameras = data::unbounded_cameras(options);
+  size_t differing = 0, rays = 0;
+  for (const Camera& camera : cameras) {
+    for (int j = 0; j < 12; ++j) {
+      for (int i = 0; i < 16; ++i) {
+        const Ray ray = camera_ray(camera, 4.0 * i + 2.0, 4.0 * j + 2.0);
+        const auto checker = data::trace_unbounded(ray), noise = data::trace_unbounded_noise(ray);
+        REQUIRE(checker.t == noise.t);
+        differing += checker.rgb != noise.rgb;
+        ++rays;
+      }
+    }
+  }
+  CHECK(differing > rays / 4);  // the ground and the pillars fill much of every view
+  CHECK((data::unbounded_tracer(data::UnboundedTexture::noise) == &data::trace_unbounded_noise));
+  CHECK((data::unbounded_tracer(data::UnboundedTexture::checker) == &data::trace_unbounded));
+  // Straight down onto the ground at points 2 units apart (well beyond the scene's slab, within the pillars' ring):
+  // the checker's colours repeat, the noise's do not, and the noise is not flat either.
+  auto ground = [](data::SceneHit (*trace)(const Ray&), double x, double y) {
+    Ray down;
+    down.origin_world = {x, y, 10.0};
+    down.direction_world = {0.0, 0.0, -1.0};
+    const auto hit = trace(down);
+    REQUIRE(hit.t == doctest::Approx(10.7));
+    return hit.rgb;
+  };
+  size_t noise_repeats = 0;
+  double lo = 1, hi = 0;
+  for (int k = 0; k < 16; ++k) {
+    const double x = 2.3 + 0.37 * k, y = -3.1 + 0.11 * k;
+    CHECK(ground(data::trace_unbounded, x, y) == ground(data::trace_unbounded, x + 2, y));
+    const auto a = ground(data::trace_unbounded_noise, x, y);
+    noise_repeats += a == ground(data::trace_unbounded_noise, x + 2, y);
+    lo = std::min(lo, a[0]);
+    hi = std::max(hi, a[0]);
+  }
+  CHECK(noise_repeats == 0);
+  CHECK(hi - lo > 0.1);
+}
+
 TEST_CASE("llff: malformed captures give one line naming the file") {
   auto expect = [](const fs::path& dir, const std::string& message) {
     data::LoadOptions options;

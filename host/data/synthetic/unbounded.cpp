@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 #include "core/error.hpp"
@@ -15,6 +16,63 @@ namespace {
 
 constexpr double kGroundZ = -0.7;           // just under the procedural scene's slab, as the forward-facing floor
 constexpr uint32_t kStreamOrbit = 0x5CE2u;  // host-only Philox stream of the azimuth jitter
+
+// A cheap hash of a lattice point and an octave to [0, 1): splitmix64's finaliser over a mix of the four.
+double lattice_value(int64_t i, int64_t j, uint64_t layer, int64_t k = 0) {
+  uint64_t h = static_cast<uint64_t>(i) * 0x9E3779B97F4A7C15ull ^ static_cast<uint64_t>(j) * 0xC2B2AE3D27D4EB4Full ^
+               static_cast<uint64_t>(k) * 0xD6E8FEB86659FD93ull ^ (layer + 1) * 0x165667B19E3779F9ull;
+  h ^= h >> 30;
+  h *= 0xBF58476D1CE4E5B9ull;
+  h ^= h >> 27;
+  h *= 0x94D049BB133111EBull;
+  h ^= h >> 31;
+  return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
+
+// Value noise in [0, 1]: five octaves of smoothstep-interpolated lattice values, cells from `cell` down to cell/16,
+// amplitudes halving. Not periodic, so that structure-from-motion can tell one patch from another (a checker's
+// every corner looks like every other, and COLMAP matched them across the orbit into a wrong model).
+double value_noise(double x, double y, double cell, uint64_t layer) {
+  double sum = 0, weight = 0, amplitude = 1;
+  for (int octave = 0; octave < 5; ++octave, cell *= 0.5, amplitude *= 0.5) {
+    const double u = x / cell, v = y / cell;
+    const double fu = std::floor(u), fv = std::floor(v);
+    const auto i = static_cast<int64_t>(fu), j = static_cast<int64_t>(fv);
+    const double su = (u - fu) * (u - fu) * (3 - 2 * (u - fu)), sv = (v - fv) * (v - fv) * (3 - 2 * (v - fv));
+    const uint64_t key = layer * 8 + static_cast<uint64_t>(octave);
+    const double bottom = lattice_value(i, j, key) + su * (lattice_value(i + 1, j, key) - lattice_value(i, j, key));
+    const double top =
+        lattice_value(i, j + 1, key) + su * (lattice_value(i + 1, j + 1, key) - lattice_value(i, j + 1, key));
+    sum += amplitude * (bottom + sv * (top - bottom));
+    weight += amplitude;
+  }
+  return sum / weight;
+}
+
+// Value noise in 3D, one octave, trilinear over smoothstep weights: the brightness of the central scene's surfaces.
+double value_noise3(const std::array<double, 3>& p, double cell, uint64_t layer) {
+  double s[3], fl[3];
+  int64_t c[3];
+  for (int a = 0; a < 3; ++a) {
+    fl[a] = std::floor(p[a] / cell);
+    c[a] = static_cast<int64_t>(fl[a]);
+    const double f = p[a] / cell - fl[a];
+    s[a] = f * f * (3 - 2 * f);
+  }
+  double sum = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    double w = 1;
+    for (int a = 0; a < 3; ++a) w *= (corner >> a & 1) ? s[a] : 1 - s[a];
+    sum += w * lattice_value(c[0] + (corner & 1), c[1] + (corner >> 1 & 1), layer, c[2] + (corner >> 2 & 1));
+  }
+  return sum;
+}
+
+// Blends two colours by a noise value stretched about its mean (value noise bunches around 0.5), clamped.
+std::array<double, 3> noise_colour(const std::array<double, 3>& a, const std::array<double, 3>& b, double noise) {
+  const double mix = std::clamp(0.5 + 2.5 * (noise - 0.5), 0.0, 1.0);
+  return {a[0] + mix * (b[0] - a[0]), a[1] + mix * (b[1] - a[1]), a[2] + mix * (b[2] - a[2])};
+}
 
 // A vertical box standing on the ground: centre (x, y), half-widths, height; horizontal stripes of `period`.
 struct Pillar {
@@ -32,8 +90,9 @@ const Pillar kPillars[] = {
     {25.0, -30.0, 3.0, 3.0, 20.0, 3.0, {{0.1, 0.35, 0.4}, {0.8, 0.9, 0.9}}},
 };
 
-// Slab test of a ray against a pillar's box; on a hit the distance and the stripe colour (shaded by its face).
-bool hit_pillar(const Pillar& p, const Ray& ray, double& t_hit, std::array<double, 3>& rgb) {
+// Slab test of a ray against a pillar's box; on a hit the distance and the surface colour (shaded by its face):
+// stripes, or with `noise` its two colours blended by value noise over the face (one noise layer per pillar).
+bool hit_pillar(const Pillar& p, size_t index, bool noise, const Ray& ray, double& t_hit, std::array<double, 3>& rgb) {
   const auto& o = ray.origin_world;
   const auto& d = ray.direction_world;
   const double lo[3] = {p.x - p.half_x, p.y - p.half_y, kGroundZ}, hi[3] = {p.x + p.half_x, p.y + p.half_y,
@@ -57,7 +116,13 @@ bool hit_pillar(const Pillar& p, const Ray& ray, double& t_hit, std::array<doubl
   if (axis_near < 0) return false;  // the ray starts inside: not a view from outside
   t_hit = t_near;
   const double z = o[2] + t_near * d[2];
-  const auto& albedo = p.colors[static_cast<int>(std::floor((z - kGroundZ) / p.period)) & 1];
+  std::array<double, 3> albedo = p.colors[static_cast<int>(std::floor((z - kGroundZ) / p.period)) & 1];
+  if (noise) {
+    // Across the face: x on the faces facing ±y, y on those facing ±x, x + y on the top.
+    const double along = axis_near == 1 ? o[0] + t_near * d[0] : axis_near == 0 ? o[1] + t_near * d[1]
+                                                                                : o[0] + o[1] + t_near * (d[0] + d[1]);
+    albedo = noise_colour(p.colors[0], p.colors[1], value_noise(along, z, p.period, 16 + index));
+  }
   const double light = axis_near == 2 ? 1.0 : axis_near == 0 ? 0.8 : 0.65;
   for (int c = 0; c < 3; ++c) rgb[c] = albedo[c] * light;
   return true;
@@ -81,25 +146,43 @@ std::array<double, 2> finite_depth_bounds(const Camera& camera) {
 
 }  // namespace
 
-SceneHit trace_unbounded(const Ray& ray) {
+namespace {
+
+SceneHit trace_outdoors(const Ray& ray, UnboundedTexture texture) {
+  const bool noise = texture == UnboundedTexture::noise;
   SceneHit hit = trace_procedural(ray);
-  if (hit.hit) return hit;
   const auto& o = ray.origin_world;
   const auto& d = ray.direction_world;
+  if (hit.hit) {
+    if (noise) {
+      // The central scene's checkers and stripes look alike from every side: COLMAP matched the sphere's squares
+      // across the orbit and put every camera on one side. A brightness of two noise scales tells them apart.
+      const std::array<double, 3> at{o[0] + hit.t * d[0], o[1] + hit.t * d[1], o[2] + hit.t * d[2]};
+      const double n = 0.6 * value_noise3(at, 0.25, 40) + 0.4 * value_noise3(at, 0.08, 41);
+      const double brightness = std::clamp(0.3 + 1.4 * n, 0.2, 1.2);
+      for (double& c : hit.rgb) c = std::min(1.0, c * brightness);
+    }
+    return hit;
+  }
   double best = std::numeric_limits<double>::infinity();
   if (d[2] < 0) {
     const double t = (kGroundZ - o[2]) / d[2];
     if (t > 1e-9) {
       best = t;
       const double x = o[0] + t * d[0], y = o[1] + t * d[1];
-      const bool odd = ((static_cast<int>(std::floor(x)) ^ static_cast<int>(std::floor(y))) & 1) != 0;
-      hit.rgb = odd ? std::array<double, 3>{0.32, 0.3, 0.26} : std::array<double, 3>{0.6, 0.56, 0.48};
+      const std::array<double, 3> dark{0.32, 0.3, 0.26}, light{0.6, 0.56, 0.48};
+      if (noise) {
+        hit.rgb = noise_colour(dark, light, value_noise(x, y, 1.0, 0));
+      } else {
+        const bool odd = ((static_cast<int>(std::floor(x)) ^ static_cast<int>(std::floor(y))) & 1) != 0;
+        hit.rgb = odd ? dark : light;
+      }
     }
   }
-  for (const auto& pillar : kPillars) {
+  for (size_t p = 0; p < std::size(kPillars); ++p) {
     double t = 0;
     std::array<double, 3> rgb{};
-    if (hit_pillar(pillar, ray, t, rgb) && t < best) {
+    if (hit_pillar(kPillars[p], p, noise, ray, t, rgb) && t < best) {
       best = t;
       hit.rgb = rgb;
     }
@@ -108,6 +191,15 @@ SceneHit trace_unbounded(const Ray& ray) {
   hit.t = best;
   if (!std::isfinite(best)) hit.rgb = sky(d);
   return hit;
+}
+
+}  // namespace
+
+SceneHit trace_unbounded(const Ray& ray) { return trace_outdoors(ray, UnboundedTexture::checker); }
+SceneHit trace_unbounded_noise(const Ray& ray) { return trace_outdoors(ray, UnboundedTexture::noise); }
+
+SceneHit (*unbounded_tracer(UnboundedTexture texture))(const Ray&) {
+  return texture == UnboundedTexture::noise ? trace_unbounded_noise : trace_unbounded;
 }
 
 void validate(const UnboundedOptions& o) {
@@ -147,7 +239,7 @@ std::vector<Camera> unbounded_cameras(const UnboundedOptions& options) {
 
 void write_unbounded_scene(const std::string& out_dir, const UnboundedOptions& options, const LogFn& log) {
   const auto cameras = unbounded_cameras(options);
-  write_llff_views(out_dir, cameras, trace_unbounded, llff_write_options(options, 0x55420000u));
+  write_llff_views(out_dir, cameras, unbounded_tracer(options.texture), llff_write_options(options, 0x55420000u));
   if (log) {
     log(LogLevel::info, "unbounded scene: " + std::to_string(cameras.size()) + " views around it at " +
                             std::to_string(options.width_px) + "x" + std::to_string(cameras[0].height_px) +

@@ -16,6 +16,10 @@
 
 namespace mipnerf::data {
 
+// The ground's and the pillars' surfaces: a 1-unit checker and stripes (the scene of the committed studies), or the
+// same colours blended by non-periodic value noise, which structure-from-motion can match (`from-photos` on it).
+enum class UnboundedTexture { checker, noise };
+
 struct UnboundedOptions {
   uint32_t width_px = 256;        // full-resolution images (images/), 4:3; images_<factor>/ are box-downsampled
   uint32_t views = 40;            // around the scene: two rings (heights 0.6 and 1.6), azimuths interleaved
@@ -26,6 +30,7 @@ struct UnboundedOptions {
   double camera_angle_x = 0.87;   // horizontal field of view, radians (50°)
   double camera_distance = 4.0;   // the orbit's radius (horizontal), around the scene's centre
   bool jpeg = false;              // JPEG (quality 95), else PNG
+  UnboundedTexture texture = UnboundedTexture::checker;
 };
 
 // Checks sizes and counts; throws mipnerf::Error saying what to change.
@@ -33,6 +38,9 @@ void validate(const UnboundedOptions& options);
 // What a ray sees: the procedural scene, else the nearest of the ground (z = −0.7, a 1-unit checker) and the
 // pillars (8 striped boxes 6 to 40 from the centre), else the sky (a colour of the direction, t = +∞).
 SceneHit trace_unbounded(const Ray& ray);
+// The same scene with UnboundedTexture::noise surfaces (same geometry, same depths).
+SceneHit trace_unbounded_noise(const Ray& ray);
+SceneHit (*unbounded_tracer(UnboundedTexture texture))(const Ray&);
 // The cameras, full resolution, OpenGL axes, in orbit order; near/far from the finite depths each sees (0.9× the
 // nearest, 1.1× the 99th percentile of a 32×24 grid of rays).
 std::vector<Camera> unbounded_cameras(const UnboundedOptions& options);
