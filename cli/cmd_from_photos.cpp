@@ -81,14 +81,16 @@ std::string quoted(const std::string& text) {
 }
 
 // Runs one COLMAP step, appending its output to `log`; `on_line` sees each line (for progress). Throws naming the
-// step, its exit status and its last line when it fails.
-void run_step(const std::string& what, const std::vector<std::string>& argv, std::ofstream& log,
+// step, its exit status and its last line when it fails. `work` (OUT/colmap) also takes the log files COLMAP's
+// libraries write through glog (Ceres's solver reports, ~1,300 lines a mapping), which would otherwise pile up in /tmp.
+void run_step(const std::string& what, const std::vector<std::string>& argv, const fs::path& work, std::ofstream& log,
               const std::function<void(const std::string&)>& on_line) {
   std::string command;
   for (const auto& arg : argv) command += (command.empty() ? "" : " ") + quoted(arg);
   log << "$ " << command << "\n" << std::flush;
   // COLMAP's Qt may look for a display even for command-line steps; offscreen never needs one.
-  std::FILE* pipe = ::popen(("QT_QPA_PLATFORM=offscreen " + command + " 2>&1").c_str(), "r");
+  std::FILE* pipe =
+      ::popen(("QT_QPA_PLATFORM=offscreen GLOG_log_dir=" + quoted(work.string()) + " " + command + " 2>&1").c_str(), "r");
   if (pipe == nullptr) throw Error("cannot start COLMAP's " + what);
   std::string line, last;
   char buffer[4096];
@@ -188,13 +190,13 @@ struct MappingJob {
 void run_matcher(const MappingJob& job, bool again, std::ofstream& log) {
   if (again) {
     run_step("database cleaning",
-             {job.colmap, "database_cleaner", "--database_path", job.database.string(), "--type", "matches"}, log,
+             {job.colmap, "database_cleaner", "--database_path", job.database.string(), "--type", "matches"}, job.work, log,
              [](const std::string&) {});
   }
   Progress progress("COLMAP matching", 1);
   run_step(job.matcher + " matching",
            {job.colmap, job.matcher + "_matcher", "--database_path", job.database.string(), "--SiftMatching.use_gpu", "0"},
-           log,
+           job.work, log,
            job.matcher == "exhaustive" ? counter(progress, std::regex(R"(Matching block \[(\d+)/(\d+))"))
                                        : counter(progress, std::regex(R"(Matching image \[(\d+)/(\d+)\])")));
   progress.finish();
@@ -252,7 +254,7 @@ MapperRun run_mapper(const MappingJob& job, const fs::path& out, const MapperSet
                                    job.photos, "--output_path", out.string()};
   for (const auto& option : mapper_options(settings)) argv.push_back(option);
   try {
-    run_step("mapping", argv, log, [&](const std::string& line) {
+    run_step("mapping", argv, job.work, log, [&](const std::string& line) {
       std::smatch m;
       if (std::regex_search(line, m, registered_so_far)) progress.update(std::stoll(m[1].str()), "registered");
       if (line.find("No images with matches found") != std::string::npos) run.no_matches = true;
@@ -397,7 +399,7 @@ void run_from_photos(const FromPhotosArgs& args) {
               "--image_list_path", photo_list.string(), "--ImageReader.camera_model", args.camera_model,
               "--ImageReader.single_camera", "1", "--SiftExtraction.use_gpu", "0", "--SiftExtraction.max_image_size",
               std::to_string(args.max_size), "--SiftExtraction.max_num_features", std::to_string(args.max_features)},
-             log, counter(progress, std::regex(R"(Processed file \[(\d+)/(\d+)\])")));
+             work, log, counter(progress, std::regex(R"(Processed file \[(\d+)/(\d+)\])")));
     progress.finish();
   }
   const Mapping mapping = map_photos({colmap, database, args.photos, args.matcher, work, photos},

@@ -25,13 +25,12 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench/: lib/
 from lib import report_md  # noqa: E402
-from lib.cli_runs import (UNBOUNDED_SCENE, add_budget_arguments, budget_markdown, measure_budget,  # noqa: E402
-                          unbounded_scene)
+from lib.cli_runs import (M360_QUICK_32, UNBOUNDED_SCENE, add_budget_arguments, budget_markdown,  # noqa: E402
+                          measure_budget, unbounded_scene)
 
 RESULTS = report_md.results_folder("official_training_360")
 SCRIPT = "bench/studies/official_training_360.py"
-M360_32 = ("--preset quick --set sampler=proposal --set unbounded=true --set proposal_mlp_width=64 "
-           "--set proposal_samples=32 --set distortion_mult=0.01")
+M360_32 = M360_QUICK_32
 OFFICIAL = (" --set data_loss=charbonnier --set loss_channel_mean=true --set opaque_background=true "
             "--set grad_max_norm=1e-3 --set adam_epsilon=1e-6")
 # (key, label, train arguments)
