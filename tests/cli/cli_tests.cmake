@@ -805,8 +805,8 @@ if(MIPNERF_COLMAP)
   set_tests_properties("cli: dataset from-photos maps a capture of small parallax with settings for small baselines"
     PROPERTIES FIXTURES_REQUIRED cli_photos_narrow TIMEOUT 600)
   # Photos taken all around (issue 45): the unbounded scene with its noise texture (COLMAP put the checker's and
-  # stripes' photos all on one side), 40 JPEGs of 256x192. Every photo registers (3 runs of 3 by hand, ~22 s each
-  # on 2 cores), the import sees a 360-degree capture and writes a transforms.json, and train contracts it with no
+  # stripes' photos all on one side), 40 JPEGs of 256x192. Every photo registered in each of 6 runs (~22 s each on 2
+  # cores); the test allows COLMAP's run-to-run variation to leave up to 4 out after its attempts, as above, the import sees a 360-degree capture and writes a transforms.json, and train contracts it with no
   # setting, as a user's photos around a thing would be; the orbit renders.
   mipnerf_add_checked_test("cli: photos: 40 JPEGs taken all around"
     EXPECT "a 360-degree LLFF capture of 40 views at 256x192"
@@ -814,7 +814,7 @@ if(MIPNERF_COLMAP)
   set_tests_properties("cli: photos: 40 JPEGs taken all around" PROPERTIES
     FIXTURES_REQUIRED cli_photos_clean FIXTURES_SETUP cli_photos_around)
   mipnerf_add_checked_test("cli: dataset from-photos registers photos taken all around as a 360-degree capture"
-    EXPECT "imported 40 images \\(1 camera: SIMPLE_PINHOLE\\).*layout: transforms.json, cameras looking from around the scene \\(a 360-degree capture\\)"
+    EXPECT "imported (3[6-9]|40) images \\(1 camera: SIMPLE_PINHOLE\\).*layout: transforms.json, cameras looking from around the scene \\(a 360-degree capture\\)"
     COMMAND mipnerf-cl dataset from-photos "${MIPNERF_PHOTOS}-around/images" "${MIPNERF_PHOTOS}-around-dataset"
     --max-features 2048)
   set_tests_properties("cli: dataset from-photos registers photos taken all around as a 360-degree capture" PROPERTIES
