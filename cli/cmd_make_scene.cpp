@@ -108,8 +108,8 @@ void register_make_scene(CLI::App& app) {
                 "default 256");
   auto texture = std::make_shared<std::string>("checker");
   cmd->add_option("--texture", *texture,
-                  "--unbounded: the ground's and pillars' surfaces: checker (a checker and stripes) or noise (the same "
-                  "colours as non-periodic noise, which COLMAP can match: photos for `dataset from-photos`)")
+                  "--unbounded: the surfaces: checker (checkers and stripes) or noise (the same colours under "
+                  "non-periodic noise, which COLMAP can match: photos for `dataset from-photos`)")
       ->check(CLI::IsMember({"checker", "noise"}))
       ->capture_default_str();
   cmd->callback([out, options, forward, forward_facing, unbounded, grid, cmd, lens, fov, texture] {

@@ -30,14 +30,13 @@ from lib.cli_runs import (M360_QUICK_32, UNBOUNDED_SCENE, add_budget_arguments, 
 
 RESULTS = report_md.results_folder("official_training_360")
 SCRIPT = "bench/studies/official_training_360.py"
-M360_32 = M360_QUICK_32
 OFFICIAL = (" --set data_loss=charbonnier --set loss_channel_mean=true --set opaque_background=true "
             "--set grad_max_norm=1e-3 --set adam_epsilon=1e-6")
 # (key, label, train arguments)
 MODELS = [
-    ("m360_32", "mip-NeRF 360 at quick's size (the scene's choice): squared error, channel sum", M360_32),
+    ("m360_32", "mip-NeRF 360 at quick's size (the scene's choice): squared error, channel sum", M360_QUICK_32),
     ("m360_32_official", "the same with 360.gin's training: Charbonnier, channel mean, opaque background, clipping",
-     M360_32 + OFFICIAL),
+     M360_QUICK_32 + OFFICIAL),
 ]
 
 

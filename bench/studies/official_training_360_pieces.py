@@ -28,19 +28,18 @@ from lib import report_md  # noqa: E402
 from lib.cli_runs import (M360_QUICK_32, UNBOUNDED_SCENE, add_budget_arguments, budget_markdown,  # noqa: E402
                           measure_budget, unbounded_scene)
 
-M360_32 = M360_QUICK_32
-
 RESULTS = report_md.results_folder("official_training_360_pieces")
 SCRIPT = "bench/studies/official_training_360_pieces.py"
 # (key, label, train arguments)
 MODELS = [
-    ("base", "mip-NeRF 360 at quick's size (the scene's choice): squared error summed over channels", M360_32),
+    ("base", "mip-NeRF 360 at quick's size (the scene's choice): squared error summed over channels",
+     M360_QUICK_32),
     ("charb", "+ Charbonnier's data term (padding 0.001), summed over channels",
-     M360_32 + " --set data_loss=charbonnier"),
-    ("mean", "+ the data term as a per-channel mean", M360_32 + " --set loss_channel_mean=true"),
-    ("opaque", "+ an opaque background", M360_32 + " --set opaque_background=true"),
+     M360_QUICK_32 + " --set data_loss=charbonnier"),
+    ("mean", "+ the data term as a per-channel mean", M360_QUICK_32 + " --set loss_channel_mean=true"),
+    ("opaque", "+ an opaque background", M360_QUICK_32 + " --set opaque_background=true"),
     ("clip", "+ the gradient clipped to norm 1e-3, Adam's epsilon 1e-6",
-     M360_32 + " --set grad_max_norm=1e-3 --set adam_epsilon=1e-6"),
+     M360_QUICK_32 + " --set grad_max_norm=1e-3 --set adam_epsilon=1e-6"),
 ]
 
 

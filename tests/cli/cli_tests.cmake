@@ -806,8 +806,9 @@ if(MIPNERF_COLMAP)
     PROPERTIES FIXTURES_REQUIRED cli_photos_narrow TIMEOUT 600)
   # Photos taken all around (issue 45): the unbounded scene with its noise texture (COLMAP put the checker's and
   # stripes' photos all on one side), 40 JPEGs of 256x192. Every photo registered in each of 6 runs (~22 s each on 2
-  # cores); the test allows COLMAP's run-to-run variation to leave up to 4 out after its attempts, as above, the import sees a 360-degree capture and writes a transforms.json, and train contracts it with no
-  # setting, as a user's photos around a thing would be; the orbit renders.
+  # cores); the test allows COLMAP's run-to-run variation to leave up to 4 out after its attempts, as above. The
+  # import sees a 360-degree capture and writes a transforms.json, train contracts it with no setting, as a user's
+  # photos around a thing would be, and the orbit renders.
   mipnerf_add_checked_test("cli: photos: 40 JPEGs taken all around"
     EXPECT "a 360-degree LLFF capture of 40 views at 256x192"
     COMMAND mipnerf-cl make-scene "${MIPNERF_PHOTOS}-around" --unbounded --texture noise --jpeg --factor 1)

@@ -16,8 +16,9 @@
 
 namespace mipnerf::data {
 
-// The ground's and the pillars' surfaces: a 1-unit checker and stripes (the scene of the committed studies), or the
-// same colours blended by non-periodic value noise, which structure-from-motion can match (`from-photos` on it).
+// The surfaces: the ground's 1-unit checker, the pillars' stripes and the central scene's own (the scene of the
+// committed studies), or the ground's and pillars' colours blended by non-periodic value noise and the central
+// scene's under a 3-D noise brightness, which structure-from-motion can match (`from-photos` on it).
 enum class UnboundedTexture { checker, noise };
 
 struct UnboundedOptions {
@@ -38,7 +39,7 @@ void validate(const UnboundedOptions& options);
 // What a ray sees: the procedural scene, else the nearest of the ground (z = −0.7, a 1-unit checker) and the
 // pillars (8 striped boxes 6 to 40 from the centre), else the sky (a colour of the direction, t = +∞).
 SceneHit trace_unbounded(const Ray& ray);
-// The same scene with UnboundedTexture::noise surfaces (same geometry, same depths).
+// The same scene with UnboundedTexture::noise surfaces (same geometry, same depths); unbounded_tracer picks one.
 SceneHit trace_unbounded_noise(const Ray& ray);
 SceneHit (*unbounded_tracer(UnboundedTexture texture))(const Ray&);
 // The cameras, full resolution, OpenGL axes, in orbit order; near/far from the finite depths each sees (0.9× the
