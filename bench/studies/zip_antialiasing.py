@@ -17,6 +17,8 @@ beside its budget. Every run goes through the command-line tool; finished runs a
   /usr/bin/python3 bench/studies/zip_antialiasing.py --lego ../shared/data/nerf_synthetic/lego --minutes 6
   /usr/bin/python3 bench/studies/zip_antialiasing.py --lego ../shared/data/nerf_synthetic/lego --minutes 15 \
       --only zip,plain --name zip_antialiasing_15min --work /tmp/mipnerf-zip-antialiasing-15
+  /usr/bin/python3 bench/studies/zip_antialiasing.py --lego ../shared/data/nerf_synthetic/lego --minutes 15 \
+      --only zip,plain,wide --name zip_antialiasing_footprint --work /tmp/mipnerf-zip-antialiasing-footprint
   python3 bench/studies/zip_antialiasing.py --report-only [--name NAME]   (the .md again from the .json)
 """
 
@@ -50,6 +52,11 @@ MODELS = [
      ("paired", "plain")),
     ("plain_steps", "plain hash grid at Zip-NeRF's steps (equal steps)", "--model zipnerf " + PLAIN,
      ("steps_of", "zip")),
+    # The fast preset's one point stands for six multisamples; their average blurs by each point's own footprint
+    # (0.5 · ρ, ρ = √½·r·t their distance from the axis) and by the hexagon's spread (variance ρ²/2 per axis): together
+    # √3 times the point's own. grid_scale_mult 0.866 = √3 · 0.5 gives the one point that whole footprint.
+    ("wide", "fast, one point with the six's whole footprint (grid_scale_mult 0.866)",
+     "--model zipnerf --set grid_scale_mult=0.866", "budget"),
 ]
 
 
@@ -61,7 +68,7 @@ def add_arguments(parser):
     parser.add_argument("--minutes", type=float, default=6.0, help="training budget of every model")
     parser.add_argument("--views", type=int, default=4, help="val views scored at every scale")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--only", help="comma-separated model keys (zip, zip6, plain, mip, point, plain_steps)")
+    parser.add_argument("--only", help="comma-separated model keys (zip, zip6, plain, mip, point, plain_steps, wide)")
     parser.add_argument("--name", default="zip_antialiasing",
                         help="the record's name: bench/results/zip_antialiasing/NAME.json and .md (one per budget)")
 
@@ -177,7 +184,7 @@ def write_markdown(record):
              f"{device_line(rows[0]['device'])}; commit {record['commit']}; {record['date']}.", ""]
     lines += report_md.table(header, "l" + "r" * (len(header) - 1), body)
     by_key = {r["key"]: r for r in rows}
-    against = [k for k in ("zip", "zip6", "point", "plain_steps") if k in by_key]
+    against = [k for k in ("zip", "zip6", "point", "wide", "plain_steps") if k in by_key]
     if "plain" in by_key and against:
         lines += ["", "Each minus the plain grid at equal time, per scale (issue 46's bar for Zip-NeRF: >= +1 dB at 1/4 "
                   "and 1/8):", ""]

@@ -140,6 +140,12 @@ const std::vector<Entry>& table() {
        &TrainConfig::grid_downweight},
       {{"grid_append_scale", "zipnerf: append each level's footprint weight as a feature", "model"},
        &TrainConfig::grid_append_scale},
+      {{"grid_scale_mult",
+        "zipnerf: a multisample's footprint (the standard deviation each level is faded by) as a multiple of its "
+        "distance from the ray's axis (official unscented_scale_mult 0.5; with grid_multisample=false, 0.866 gives the "
+        "one point the whole footprint of the six it stands for)",
+        "model"},
+       &TrainConfig::grid_scale_mult},
       {{"grid_weight_decay", "zipnerf: weight of each grid level's mean squared value in the loss", "optimisation"},
        &TrainConfig::grid_weight_decay},
       {{"sampler",
@@ -629,6 +635,8 @@ void validate(const TrainConfig& c) {
           "basis_subdivisions must be 1 to 8 (the icosahedron tessellated 1 to 8 times: 6 to 321 directions)");
   require(c.grid_bound >= 0, "grid_bound must be >= 0 (0 = from the scene)");
   require(c.grid_weight_decay >= 0, "grid_weight_decay must be >= 0");
+  require(c.grid_scale_mult > 0 && c.grid_scale_mult <= 100,
+          "grid_scale_mult must be in (0, 100] (the official 0.5; grid_downweight=false turns the fading off)");
   require(c.adam_beta2 > 0 && c.adam_beta2 < 1 && c.adam_epsilon > 0, "need 0 < adam_beta2 < 1 and adam_epsilon > 0");
   require(c.mlp_depth >= 1 && c.mlp_width >= 1 && c.view_branch_width >= 1, "MLP sizes must be positive");
   require(c.mlp_skip >= 0, "mlp_skip must be >= 0 (use a value >= mlp_depth for no skip)");

@@ -146,6 +146,10 @@ struct TrainConfig {
   bool grid_multisample = true;   // each frustum's 6 multisamples (false: one point at its mean, same footprint)
   bool grid_downweight = true;    // fade each level by the multisample's footprint (false: a plain hash grid)
   bool grid_append_scale = true;  // append each level's footprint weight as a feature (official append_scale)
+  // A multisample's footprint (the standard deviation its levels are faded by) = grid_scale_mult · its distance from
+  // the axis (official unscented_scale_mult 0.5). With grid_multisample=false the one point stands for six whose
+  // average also blurs by their hexagon's spread: √3 · 0.5 ≈ 0.866 gives the point the six's whole footprint.
+  double grid_scale_mult = 0.5;
   double grid_weight_decay = 0.1;  // mult of each grid level's ½·mean(value²) in the loss (official param_regularizers)
   // Zip-NeRF's proposal sampling (sampler = proposal; camp_zipnerf configs/zipnerf/360.gin): proposal_rounds
   // density-only rounds of proposal_samples intervals each, then the NeRF level's num_samples (official

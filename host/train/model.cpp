@@ -169,6 +169,7 @@ graph::GraphSpec make_graph_spec(const TrainConfig& c, bool multiscale_data) {
     spec.zip.multisample = c.grid_multisample;
     spec.zip.downweight = c.grid_downweight;
     spec.zip.append_scale = c.grid_append_scale;
+    spec.zip.scale_mult = static_cast<float>(c.grid_scale_mult);
     spec.zip.cylinder = c.ray_shape == RayShape::cylinder;
     spec.zip.randomized = c.randomized;
     spec.zip.contract = c.unbounded;

@@ -802,10 +802,16 @@ TEST_CASE("graph: a Zip-NeRF training step (multisampled grid, tiny MLP) equals 
   check_step_against_reference("zipnerf", test::small_scene(), {{"grid_max", "64"}, {"grid_hash_log2", "12"}});
 }
 
-// The fast preset's lookup: one footprint-weighted point per interval.
+// The fast preset's lookup: one footprint-weighted point per interval; and with grid_scale_mult, the footprint widened
+// to the six multisamples' whole blur (the setting reaches the features: the reference fades by the spec's multiple).
 TEST_CASE("graph: a Zip-NeRF training step with one point per interval equals the reference") {
   check_step_against_reference("zipnerf", test::small_scene(),
                                {{"grid_max", "64"}, {"grid_hash_log2", "12"}, {"grid_multisample", "false"}});
+  const auto wide = train::resolve_config("tiny", "zipnerf", {{"grid_scale_mult", "0.866"}});
+  CHECK(train::make_graph_spec(wide, false).zip.scale_mult == doctest::Approx(0.866));
+  check_step_against_reference("zipnerf", test::small_scene(),
+                               {{"grid_max", "64"}, {"grid_hash_log2", "12"}, {"grid_multisample", "false"},
+                                {"grid_scale_mult", "0.866"}});
 }
 
 // Zip-NeRF's proposal sampling: two density-only rounds (their own 1-feature grids and tiny networks, their edges drawn

@@ -378,7 +378,7 @@ TEST_CASE("config: a configuration written before the variant was recorded loads
   // default, true, is what every Zip-NeRF run before it trained with).
   for (const char* name : {"grid_min", "grid_max", "grid_supersample", "grid_hash_log2", "grid_features", "grid_bound",
                            "grid_multisample", "grid_downweight", "grid_append_scale", "grid_weight_decay",
-                           "adam_beta2", "adam_epsilon"}) {
+                           "grid_scale_mult", "adam_beta2", "adam_epsilon"}) {
     CHECK(written.contains(name));
     written.erase(name);
   }
