@@ -41,6 +41,7 @@ REGENERATIONS = [
      ["vs_multinerf_360_1500steps.md"]),
     ("time_to_quality", ["--quick", "--report-only"], ["time_to_quality_quick.md"]),
     ("zip_antialiasing", ["--name", "zip_antialiasing_15min", "--report-only"], ["zip_antialiasing_15min.md"]),
+    ("zip_antialiasing", ["--name", "zip_antialiasing_footprint", "--report-only"], ["zip_antialiasing_footprint.md"]),
 ] + [("before_after", ["--report-only", f"bench/results/before_after/{os.path.basename(p)}"],
       [os.path.basename(p)[:-5] + ".md"])
      for p in sorted(glob.glob(os.path.join(bench, "results", "before_after", "renovation*_before_after*.json")))]
