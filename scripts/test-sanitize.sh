@@ -13,9 +13,13 @@ export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v 
 # Paths below the checkout hash as relative ones, so a clean checkout elsewhere reuses the cache.
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 start=$(date +%s)
+# The kernels compiled for the main build's tests serve these tests too (tests/CMakeLists.txt,
+# MIPNERF_TEST_POCL_CACHE): same sources, same options, PoCL keys on both.
+pocl_cache="${MIPNERF_TEST_POCL_CACHE:-$PWD/${BUILD_DIR:-build}/pocl-cache}"
+mkdir -p "$pocl_cache"
 # No bench programs here: no test runs them, and the plain build compiles them.
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DMIPNERF_SANITIZE=ON -DMIPNERF_FUZZ=ON \
-  -DMIPNERF_BUILD_BENCH=OFF -DMIPNERF_MPI=OFF  # MPI is tested in the plain build; here, a build without it (refused under mpirun)
+  -DMIPNERF_TEST_POCL_CACHE="$pocl_cache" -DMIPNERF_BUILD_BENCH=OFF -DMIPNERF_MPI=OFF  # MPI is tested in the plain build; here, a build without it (refused under mpirun)
 cmake --build "$build_dir" -j "$jobs"
 built=$(date +%s)
 echo "test: sanitizer build $((built - start)) s"

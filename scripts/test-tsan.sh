@@ -12,8 +12,12 @@ jobs="${JOBS:-$(nproc)}"
 export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-$(command -v ccache || true)}"
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 start=$(date +%s)
+# The kernels compiled for the main build's tests serve these tests too (tests/CMakeLists.txt,
+# MIPNERF_TEST_POCL_CACHE): same sources, same options, PoCL keys on both.
+pocl_cache="${MIPNERF_TEST_POCL_CACHE:-$PWD/${BUILD_DIR:-build}/pocl-cache}"
+mkdir -p "$pocl_cache"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DMIPNERF_TSAN=ON \
-  -DMIPNERF_BUILD_BENCH=OFF -DMIPNERF_MPI=OFF
+  -DMIPNERF_TEST_POCL_CACHE="$pocl_cache" -DMIPNERF_BUILD_BENCH=OFF -DMIPNERF_MPI=OFF
 # The executables of the `threads` tests, and of the fixtures they need (the CLI test trains its run with mipnerf-cl).
 cmake --build "$build_dir" -j "$jobs" --target mipnerf-cl test_view test_data test_mlp test_train
 built=$(date +%s)

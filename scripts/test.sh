@@ -66,6 +66,10 @@ fi
 build_dir="${BUILD_DIR:-build}"
 sanitize_dir="${SANITIZE_BUILD_DIR:-build-sanitize}"
 jobs="${JOBS:-$(nproc)}"
+# PoCL's kernel cache of the main build's tests, for every stage on PoCL: the programs run here (the self-test, the
+# browser's `view`) and the sanitizer builds' tests (scripts/test-sanitize.sh, test-tsan.sh) are served the kernels the
+# `pocl` stage compiled, the same sources with the same options, instead of compiling them again.
+export POCL_CACHE_DIR="$(cd "$build_dir" && pwd)/pocl-cache"
 results="$(mktemp -d)"
 trap 'rm -rf "$results"' EXIT
 start_all=$(date +%s)
