@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "cross_device.hpp"
 #include "reporter.hpp"
+#include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 
 namespace {
@@ -175,6 +176,7 @@ int main(int argc, char** argv) {
   checks.setOption("no-breaks", true);
   const int status = checks.run();
   test::release_test_context();
+  test::remove_process_temp_entries();  // the checks' scenes in the system temp folder: a user's machine keeps none
 
   if (!cross_device_skipped.empty()) {
     CheckResult row;

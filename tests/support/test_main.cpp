@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "support/skip.hpp"
+#include "support/temp_scene.hpp"
 #include "support/test_context.hpp"
 
 namespace {
@@ -45,6 +46,13 @@ int main(int argc, char** argv) {
     std::cerr << "tests: no test case matched the filters given (" << argv[0]
               << "): a test that runs nothing must not pass\n";
     return 1;
+  }
+  if (result == 0) {
+    mipnerf::test::remove_process_temp_entries();
+  } else {
+    for (const auto& entry : mipnerf::test::process_temp_entries()) {
+      std::cerr << "tests: kept for a look: " << entry.string() << "\n";
+    }
   }
   if (result == 0 && mipnerf::test::any_test_skipped()) return mipnerf::test::kSkipExitCode;
   return result;
