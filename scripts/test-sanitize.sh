@@ -15,7 +15,9 @@ export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 start=$(date +%s)
 # The kernels compiled for the main build's tests serve these tests too (tests/CMakeLists.txt,
 # MIPNERF_TEST_POCL_CACHE): same sources, same options, PoCL keys on both.
-pocl_cache="${MIPNERF_TEST_POCL_CACHE:-$PWD/${BUILD_DIR:-build}/pocl-cache}"
+main_build="${BUILD_DIR:-build}"
+case "$main_build" in /*) ;; *) main_build="$PWD/$main_build" ;; esac
+pocl_cache="${MIPNERF_TEST_POCL_CACHE:-$main_build/pocl-cache}"
 mkdir -p "$pocl_cache"
 # No bench programs here: no test runs them, and the plain build compiles them.
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ -DMIPNERF_SANITIZE=ON -DMIPNERF_FUZZ=ON \
